@@ -1,0 +1,117 @@
+//! The one error type of the crate. Every fallible function returns [`Result`]; nothing reachable
+//! from user input panics.
+
+/// Why an imukit computation refused its input. Batch variants carry the flat row index of the
+/// offending element so that bindings can point at it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// A flat input slice is not a whole number of rows.
+    #[error("length {len} is not a multiple of the row size {row}")]
+    RowLength {
+        /// Length of the flat slice.
+        len: usize,
+        /// Number of scalars per row.
+        row: usize,
+    },
+    /// Input and output slices describe different numbers of rows.
+    #[error("input has {input} rows but output has room for {output}")]
+    RowCount {
+        /// Rows in the input.
+        input: usize,
+        /// Rows in the output.
+        output: usize,
+    },
+    /// An input value is NaN or infinite.
+    #[error("element {index} contains a NaN or infinite value")]
+    NonFinite {
+        /// Row index.
+        index: usize,
+    },
+    /// A finite input produced a non-finite result (magnitudes beyond what f64 can square).
+    #[error("element {index} is too large in magnitude to compute with (result overflowed)")]
+    Overflow {
+        /// Row index.
+        index: usize,
+    },
+    /// A quaternion with (numerically) zero norm, which represents no rotation.
+    #[error("element {index} is a zero-norm quaternion (norm {norm:e}), which is no rotation")]
+    ZeroQuaternion {
+        /// Row index.
+        index: usize,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A 3x3 matrix that is not a rotation (RᵀR ≠ I or det R ≤ 0).
+    #[error(
+        "element {index} is not a rotation matrix: max |RᵀR - I| = {orthogonality:e}, det = {det} \
+         (need orthonormal with det +1, tolerance {tolerance:e})"
+    )]
+    NotRotation {
+        /// Row index.
+        index: usize,
+        /// Largest absolute entry of RᵀR − I.
+        orthogonality: f64,
+        /// Determinant.
+        det: f64,
+        /// Tolerance applied to `orthogonality`.
+        tolerance: f64,
+    },
+    /// Pitch within the tolerance of ±90°, where the ZYX Euler-angle rate map is singular.
+    #[error(
+        "gimbal lock at element {index}: pitch {pitch_deg:.9}° is within {tolerance_deg:e}° of ±90°, \
+         where the ZYX Euler rate map E(χ) is singular"
+    )]
+    GimbalLock {
+        /// Row index.
+        index: usize,
+        /// The pitch angle, degrees.
+        pitch_deg: f64,
+        /// The tolerance, degrees.
+        tolerance_deg: f64,
+    },
+    /// A parameter (not array data) is out of its domain.
+    #[error("{name} must be {expected}, got {got}")]
+    Parameter {
+        /// Parameter name.
+        name: &'static str,
+        /// What was expected.
+        expected: &'static str,
+        /// What was given, formatted.
+        got: String,
+    },
+}
+
+impl Error {
+    /// The same error with its row index replaced (batch kernels report global rows).
+    pub(crate) fn at(self, row: usize) -> Self {
+        match self {
+            Error::NonFinite { .. } => Error::NonFinite { index: row },
+            Error::Overflow { .. } => Error::Overflow { index: row },
+            Error::ZeroQuaternion { norm, .. } => Error::ZeroQuaternion { index: row, norm },
+            Error::NotRotation {
+                orthogonality,
+                det,
+                tolerance,
+                ..
+            } => Error::NotRotation {
+                index: row,
+                orthogonality,
+                det,
+                tolerance,
+            },
+            Error::GimbalLock {
+                pitch_deg,
+                tolerance_deg,
+                ..
+            } => Error::GimbalLock {
+                index: row,
+                pitch_deg,
+                tolerance_deg,
+            },
+            other => other,
+        }
+    }
+}
+
+/// Result alias of the crate.
+pub type Result<T> = std::result::Result<T, Error>;

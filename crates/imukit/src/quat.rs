@@ -1,0 +1,146 @@
+//! Quaternion algebra: Hamilton (default) and JPL products, product matrices, Ω(ω), exp/log.
+//!
+//! | item | convention |
+//! |---|---|
+//! | storage | nalgebra [`Quaternion`]: `coords = [x, y, z, w]`, scalar last (`Quaternion::new` takes `w` first) |
+//! | product | Hamilton, `i j = k`: [`multiply`]; JPL (Trawny & Roumeliotis 2005), `i j = −k`: [`multiply_jpl`] |
+//! | meaning | active: `v_w = q_wb ⊗ [v_b, 0] ⊗ q_wb*` (see [`rotate`]) |
+//! | 4×4 matrices | act on `[x, y, z, w]` column vectors: `q ⊗ p = L(q) p = R(p) q` |
+//! | body rate | `q̇ = ½ q ⊗ [ω, 0] = ½ Ω(ω) q` with `Ω(ω) = R([ω, 0])` |
+//!
+//! The JPL product satisfies `q ⊗_J p = p ⊗_H q` component-wise, so `L_J = R_H` and `R_J = L_H`.
+//! A JPL quaternion of the world-to-body rotation `ᴮC_W` stores the same four numbers as the
+//! Hamilton quaternion of `R_wb`; its kinematics `q̇ = ½ Ω(ω) q` (Trawny & Roumeliotis 2005,
+//! eq. 108) therefore use the very same matrix as the Hamilton `½ q ⊗ [ω, 0]`. See
+//! `docs/conventions.md`.
+
+use nalgebra::{Matrix3, Matrix4, Quaternion, UnitQuaternion, Vector3};
+
+use crate::so3::hat;
+use crate::{Error, Result};
+
+/// Below this norm a quaternion is treated as zero: it encodes no rotation.
+pub const ZERO_NORM: f64 = 1e-12;
+
+/// Hamilton product `q ⊗ p`.
+pub fn multiply(q: &Quaternion<f64>, p: &Quaternion<f64>) -> Quaternion<f64> {
+    q * p
+}
+
+/// JPL product `q ⊗_J p` (`i j = −k`), equal to the Hamilton product `p ⊗ q`.
+pub fn multiply_jpl(q: &Quaternion<f64>, p: &Quaternion<f64>) -> Quaternion<f64> {
+    p * q
+}
+
+/// Conjugate `q* = [−x, −y, −z, w]`.
+pub fn conjugate(q: &Quaternion<f64>) -> Quaternion<f64> {
+    q.conjugate()
+}
+
+fn checked_norm(q: &Quaternion<f64>) -> Result<f64> {
+    let norm = q.norm();
+    if norm < ZERO_NORM {
+        return Err(Error::ZeroQuaternion { index: 0, norm });
+    }
+    Ok(norm)
+}
+
+/// Inverse `q⁻¹ = q* / |q|²`; errors on a zero quaternion.
+pub fn inverse(q: &Quaternion<f64>) -> Result<Quaternion<f64>> {
+    let norm = checked_norm(q)?;
+    Ok(q.conjugate() / (norm * norm))
+}
+
+/// `q / |q|`; errors on a zero quaternion.
+pub fn normalize(q: &Quaternion<f64>) -> Result<UnitQuaternion<f64>> {
+    checked_norm(q)?;
+    Ok(UnitQuaternion::new_normalize(*q))
+}
+
+/// Rotates `v` by the (normalised) rotation `q`: `q ⊗ [v, 0] ⊗ q*`.
+pub fn rotate(q: &Quaternion<f64>, v: &Vector3<f64>) -> Result<Vector3<f64>> {
+    Ok(normalize(q)? * v)
+}
+
+/// Left product matrix `L(q)`: `q ⊗ p = L(q) p` on `[x, y, z, w]` vectors (Hamilton).
+pub fn left_matrix(q: &Quaternion<f64>) -> Matrix4<f64> {
+    // q ⊗ p = [q_w p_v + p_w q_v + q_v × p_v ; q_w p_w − q_v·p_v]  (Solà 2017, eq. 12)
+    product_matrix(q, &hat(&q.imag()))
+}
+
+/// Right product matrix `R(p)`: `q ⊗ p = R(p) q` on `[x, y, z, w]` vectors (Hamilton).
+pub fn right_matrix(p: &Quaternion<f64>) -> Matrix4<f64> {
+    product_matrix(p, &-hat(&p.imag()))
+}
+
+/// JPL left product matrix: `q ⊗_J p = L_J(q) p`; equals the Hamilton [`right_matrix`].
+pub fn left_matrix_jpl(q: &Quaternion<f64>) -> Matrix4<f64> {
+    right_matrix(q)
+}
+
+/// JPL right product matrix: `q ⊗_J p = R_J(p) q`; equals the Hamilton [`left_matrix`].
+pub fn right_matrix_jpl(p: &Quaternion<f64>) -> Matrix4<f64> {
+    left_matrix(p)
+}
+
+/// `[[w I + S, v], [−vᵀ, w]]`: the shape shared by both product matrices, `S = ±[v]×`.
+fn product_matrix(q: &Quaternion<f64>, cross: &Matrix3<f64>) -> Matrix4<f64> {
+    let v = q.imag();
+    let mut m = Matrix4::identity() * q.w;
+    let mut block = m.fixed_view_mut::<3, 3>(0, 0);
+    block += cross;
+    m.fixed_view_mut::<3, 1>(0, 3).copy_from(&v);
+    m.fixed_view_mut::<1, 3>(3, 0).copy_from(&(-v.transpose()));
+    m
+}
+
+/// `Ω(ω)` with `q̇ = ½ Ω(ω) q = ½ q ⊗ [ω, 0]` for a body rate ω (Hamilton, `q = q_wb`):
+/// `[[−[ω]×, ω], [−ωᵀ, 0]]` on `[x, y, z, w]`, the right product matrix of the pure quaternion ω.
+pub fn omega_matrix(omega: &Vector3<f64>) -> Matrix4<f64> {
+    right_matrix(&pure(omega))
+}
+
+/// JPL `Ω(ω)`: `q̇ = ½ Ω(ω) q = ½ [ω, 0] ⊗_J q` for the JPL quaternion of `ᴮC_W` (Trawny &
+/// Roumeliotis 2005, eq. 108). Numerically equal to [`omega_matrix`]; kept so that ported JPL
+/// formulas read as written.
+pub fn omega_matrix_jpl(omega: &Vector3<f64>) -> Matrix4<f64> {
+    left_matrix_jpl(&pure(omega))
+}
+
+/// The pure quaternion `[v, 0]`.
+pub fn pure(v: &Vector3<f64>) -> Quaternion<f64> {
+    Quaternion::from_imag(*v)
+}
+
+/// `Exp(φ) = [sin(θ/2) φ/θ, cos(θ/2)]`, θ = |φ|, exact to rounding at θ → 0.
+pub fn exp(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
+    let theta = phi.norm();
+    let half = 0.5 * theta;
+    // sin(θ/2)/θ by its Taylor series where the quotient would lose digits.
+    let k = if theta < 1e-4 {
+        0.5 - theta * theta / 48.0
+    } else {
+        half.sin() / theta
+    };
+    UnitQuaternion::new_unchecked(Quaternion::from_parts(half.cos(), phi * k))
+}
+
+/// `Log(q)`: the rotation vector with angle in `[0, π]` of the rotation `q` (either sign of `q`).
+///
+/// Uses `θ = 2 atan2(|v|, |w|)`, accurate at 0 and at π, unlike `acos(w)`. Not nalgebra's
+/// `UnitQuaternion::ln` (nalgebra issue 1363).
+pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+    // q and −q are the same rotation; the one with w ≥ 0 has its angle in [0, π].
+    let sign = if q.w < 0.0 { -1.0 } else { 1.0 };
+    let w = sign * q.w;
+    let v = q.imag() * sign;
+    let n = v.norm();
+    // 2 atan(n / w) / n by its Taylor series for small n / w (then w ≈ 1).
+    let k = if n < 1e-6 * w {
+        let r2 = (n / w) * (n / w);
+        (2.0 / w) * (1.0 - r2 / 3.0)
+    } else {
+        2.0 * n.atan2(w) / n
+    };
+    v * k
+}

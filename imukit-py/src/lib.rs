@@ -1,0 +1,215 @@
+//! PyO3 glue for imukit: thin functions over `(n, k)` float64 arrays that copy the input, release
+//! the GIL, run an [`imukit::batch`] kernel and map its error to the `imukit` exception
+//! hierarchy. The public Python API (shapes, broadcasting, scipy interop) lives in
+//! `python/imukit`; nothing here is meant to be called directly.
+
+use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
+use numpy::{IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+/// The `imukit._errors` class for an imukit error, so Python sees one hierarchy.
+fn class_name(e: &imukit::Error) -> &'static str {
+    use imukit::Error as E;
+    match e {
+        E::RowLength { .. } | E::RowCount { .. } => "ShapeError",
+        E::NonFinite { .. } | E::Overflow { .. } => "NonFiniteError",
+        E::ZeroQuaternion { .. } => "InvalidQuaternionError",
+        E::NotRotation { .. } => "InvalidRotationError",
+        E::GimbalLock { .. } => "GimbalLockError",
+        E::Parameter { .. } => "ParameterError",
+    }
+}
+
+/// Raises `imukit.<class>("<name>: <message>")`.
+fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::fmt::Display) -> PyErr {
+    let text = format!("{name}: {message}");
+    match py
+        .import("imukit._errors")
+        .and_then(|m| m.getattr(class))
+        .and_then(|c| c.call1((text,)))
+    {
+        Ok(value) => PyErr::from_value(value),
+        Err(import_failure) => import_failure,
+    }
+}
+
+fn to_py(py: Python<'_>, name: &str, e: imukit::Error) -> PyErr {
+    raise(py, class_name(&e), name, e)
+}
+
+/// Runs `kernel` over the rows of `x` (shape `(n, width_in)`) into a new `(n, width_out)` array.
+fn run<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    width_in: usize,
+    width_out: usize,
+    kernel: impl FnOnce(&[f64], &mut [f64]) -> imukit::Result<()> + Send,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let shape = x.shape();
+    if shape[1] != width_in {
+        let got = format!("{shape:?}");
+        return Err(raise(
+            py,
+            "ShapeError",
+            name,
+            format!("expected shape (n, {width_in}), got {got}"),
+        ));
+    }
+    let rows = shape[0];
+    // Copy before releasing the GIL: another Python thread could write to the numpy buffer while
+    // the kernel reads it (rust-numpy issue 497). A flat memcpy, not a per-row conversion.
+    let input = x
+        .as_slice()
+        .map_err(|_| raise(py, "ShapeError", name, "expected a C-contiguous float64 array"))?
+        .to_vec();
+    let mut out = vec![0.0; rows * width_out];
+    py.detach(|| kernel(&input, &mut out)).map_err(|e| to_py(py, name, e))?;
+    out.into_pyarray(py).reshape([rows, width_out])
+}
+
+fn parse_convention(py: Python<'_>, convention: &str) -> PyResult<Convention> {
+    match convention {
+        "hamilton" => Ok(Convention::Hamilton),
+        "jpl" => Ok(Convention::Jpl),
+        other => Err(raise(
+            py,
+            "ParameterError",
+            "convention",
+            format!("expected 'hamilton' or 'jpl', got {other:?}"),
+        )),
+    }
+}
+
+/// A `#[pyfunction] name(x, name)` running `batch::kernel` from `(n, in)` to `(n, out)`.
+macro_rules! unary {
+    ($func:ident, $kernel:path, $width_in:expr, $width_out:expr) => {
+        #[pyfunction]
+        fn $func<'py>(
+            py: Python<'py>,
+            x: PyReadonlyArray2<'py, f64>,
+            name: &str,
+        ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+            run(py, x, name, $width_in, $width_out, $kernel)
+        }
+    };
+}
+
+unary!(so3_hat, batch::so3_hat, 3, 9);
+unary!(so3_vee, batch::so3_vee, 9, 3);
+unary!(so3_exp, batch::so3_exp, 3, 9);
+unary!(so3_log, batch::so3_log, 9, 3);
+unary!(quat_conjugate, batch::quat_conjugate, 4, 4);
+unary!(quat_inverse, batch::quat_inverse, 4, 4);
+unary!(quat_normalize, batch::quat_normalize, 4, 4);
+unary!(quat_rotate, batch::quat_rotate, 7, 3);
+unary!(quat_exp, batch::quat_exp, 3, 4);
+unary!(quat_log, batch::quat_log, 4, 3);
+unary!(euler_to_matrix, batch::euler_to_matrix, 3, 9);
+unary!(euler_from_matrix, batch::euler_from_matrix, 9, 3);
+unary!(euler_rate_matrix_inv, batch::euler_rate_matrix_inv, 3, 9);
+
+#[pyfunction]
+fn so3_jacobian<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    kind: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let kind = match kind {
+        "right" => Jacobian::Right,
+        "right_inv" => Jacobian::RightInv,
+        "left" => Jacobian::Left,
+        "left_inv" => Jacobian::LeftInv,
+        other => {
+            let message = format!("expected 'right', 'right_inv', 'left' or 'left_inv', got {other:?}");
+            return Err(raise(py, "ParameterError", "kind", message));
+        }
+    };
+    run(py, x, name, 3, 9, move |i, o| batch::so3_jacobian(kind, i, o))
+}
+
+#[pyfunction]
+fn quat_multiply<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    convention: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let convention = parse_convention(py, convention)?;
+    run(py, x, name, 8, 4, move |i, o| batch::quat_multiply(convention, i, o))
+}
+
+#[pyfunction]
+fn quat_product_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    side: &str,
+    convention: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let convention = parse_convention(py, convention)?;
+    let side = match side {
+        "left" => ProductMatrix::Left,
+        "right" => ProductMatrix::Right,
+        other => {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "side",
+                format!("expected 'left' or 'right', got {other:?}"),
+            ))
+        }
+    };
+    run(py, x, name, 4, 16, move |i, o| {
+        batch::quat_product_matrix(side, convention, i, o)
+    })
+}
+
+#[pyfunction]
+fn quat_omega_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    convention: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let convention = parse_convention(py, convention)?;
+    run(py, x, name, 3, 16, move |i, o| {
+        batch::quat_omega_matrix(convention, i, o)
+    })
+}
+
+#[pyfunction]
+fn euler_rate_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 3, 9, move |i, o| batch::euler_rate_matrix(tolerance, i, o))
+}
+
+/// Compiled core of imukit. Use the `imukit` package, not this module.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(so3_hat, m)?)?;
+    m.add_function(wrap_pyfunction!(so3_vee, m)?)?;
+    m.add_function(wrap_pyfunction!(so3_exp, m)?)?;
+    m.add_function(wrap_pyfunction!(so3_log, m)?)?;
+    m.add_function(wrap_pyfunction!(so3_jacobian, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_multiply, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_conjugate, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_inverse, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_normalize, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_rotate, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_product_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_omega_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_exp, m)?)?;
+    m.add_function(wrap_pyfunction!(quat_log, m)?)?;
+    m.add_function(wrap_pyfunction!(euler_to_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(euler_from_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(euler_rate_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(euler_rate_matrix_inv, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,39 @@
+"""imukit: IMU kinematics with a Rust core and a numpy front.
+
+Conventions (Hamilton quaternions stored xyzw, active ``R_wb``, body rates right-multiplied,
+right perturbations, intrinsic ZYX Euler angles, SI units) are tabulated with worked numbers in
+``docs/conventions.md``.
+
+>>> import numpy as np, imukit as ik
+>>> R = ik.so3.exp([0.0, 0.0, np.pi / 2])   # a quarter turn about z
+>>> np.round(R @ [1.0, 0.0, 0.0], 12)       # maps body x onto world y
+array([0., 1., 0.])
+"""
+
+from imukit import euler, quat, so3
+from imukit._core import __version__
+from imukit._errors import (
+    DTypeError,
+    GimbalLockError,
+    ImukitError,
+    InvalidQuaternionError,
+    InvalidRotationError,
+    NonFiniteError,
+    ParameterError,
+    ShapeError,
+)
+
+__all__ = [
+    "DTypeError",
+    "GimbalLockError",
+    "ImukitError",
+    "InvalidQuaternionError",
+    "InvalidRotationError",
+    "NonFiniteError",
+    "ParameterError",
+    "ShapeError",
+    "__version__",
+    "euler",
+    "quat",
+    "so3",
+]

@@ -1,0 +1,98 @@
+"""Array plumbing between the public API and the compiled core.
+
+Inputs are validated here once (dtype, trailing shape) and flattened to ``(n, k)`` C-contiguous
+float64; the core checks finiteness row by row and returns ``(n, m)``, reshaped back to the
+caller's batch shape. Leading dimensions broadcast like numpy's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imukit._errors import DTypeError, ParameterError, ShapeError
+
+FloatArray = NDArray[np.float64]
+Kernel = Callable[..., FloatArray]
+
+# xyzw <-> wxyz index maps for the scalar_first option.
+_TO_XYZW = [1, 2, 3, 0]
+_TO_WXYZ = [3, 0, 1, 2]
+
+
+def as_float_array(x: ArrayLike, name: str) -> FloatArray:
+    """``x`` as a float64 array, refusing dtypes that are not real numbers."""
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "fiub":
+        raise DTypeError(f"{name}: expected real numbers, got an array of dtype {arr.dtype}")
+    if arr.dtype.kind == "b":
+        raise DTypeError(f"{name}: expected real numbers, got booleans")
+    return arr.astype(np.float64, copy=False)
+
+
+def _shape_text(tail: tuple[int, ...]) -> str:
+    return "(..., " + ", ".join(str(d) for d in tail) + ")"
+
+
+def check_tail(arr: FloatArray, name: str, tail: tuple[int, ...]) -> None:
+    """Raise :class:`ShapeError` unless ``arr.shape`` ends with ``tail``."""
+    if arr.ndim < len(tail) or arr.shape[arr.ndim - len(tail) :] != tail:
+        raise ShapeError(f"{name}: expected shape {_shape_text(tail)}, got {arr.shape}")
+
+
+def batched(
+    kernel: Kernel,
+    inputs: list[tuple[ArrayLike, str, tuple[int, ...]]],
+    out_tail: tuple[int, ...],
+    *options: Any,
+) -> FloatArray:
+    """Broadcast ``inputs`` over their leading dimensions, run ``kernel`` once, reshape back.
+
+    Several inputs are concatenated row-wise (``[q, p]`` for a product), so the core sees one
+    contiguous ``(n, sum of widths)`` array. The error name given to the core is the first
+    input's when there is one input, else all names joined.
+    """
+    arrays = []
+    for x, name, tail in inputs:
+        arr = as_float_array(x, name)
+        check_tail(arr, name, tail)
+        arrays.append(arr)
+    try:
+        batch = np.broadcast_shapes(*(a.shape[: a.ndim - len(t)] for a, (_, _, t) in zip(arrays, inputs)))
+    except ValueError:
+        shapes = ", ".join(f"{n} {a.shape}" for a, (_, n, _) in zip(arrays, inputs))
+        raise ShapeError(f"leading dimensions do not broadcast: {shapes}") from None
+    rows = [np.broadcast_to(a, batch + t).reshape(-1, int(np.prod(t))) for a, (_, _, t) in zip(arrays, inputs)]
+    flat = np.ascontiguousarray(rows[0] if len(rows) == 1 else np.concatenate(rows, axis=1))
+    name = " / ".join(n for _, n, _ in inputs)
+    out = kernel(flat, name, *options)
+    return out.reshape(batch + out_tail)
+
+
+def to_xyzw(q: ArrayLike, name: str, scalar_first: bool) -> ArrayLike:
+    """Reorder ``wxyz`` input to the core's ``xyzw`` when ``scalar_first``."""
+    if not scalar_first:
+        return q
+    arr = as_float_array(q, name)
+    check_tail(arr, name, (4,))
+    return arr[..., _TO_XYZW]
+
+
+def quat_out(q: FloatArray, scalar_first: bool) -> FloatArray:
+    """Reorder core ``xyzw`` output to ``wxyz`` when ``scalar_first``."""
+    return np.ascontiguousarray(q[..., _TO_WXYZ]) if scalar_first else q
+
+
+def matrix4_out(m: FloatArray, scalar_first: bool) -> FloatArray:
+    """Re-express a 4x4 operator on ``xyzw`` vectors as one on ``wxyz`` vectors when ``scalar_first``."""
+    return np.ascontiguousarray(m[..., _TO_WXYZ, :][..., :, _TO_WXYZ]) if scalar_first else m
+
+
+def choice(value: str, name: str, allowed: tuple[str, ...]) -> str:
+    """Validate a string option."""
+    if value not in allowed:
+        raise ParameterError(f"{name}: expected one of {allowed}, got {value!r}")
+    return value

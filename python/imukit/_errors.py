@@ -1,0 +1,51 @@
+"""The imukit exception hierarchy.
+
+Every error imukit raises on bad input is an :class:`ImukitError`; the ones about a value also
+derive from :class:`ValueError` (and dtype errors from :class:`TypeError`), so callers can catch
+either. Messages start with the name of the offending argument.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DTypeError",
+    "GimbalLockError",
+    "ImukitError",
+    "InvalidQuaternionError",
+    "InvalidRotationError",
+    "NonFiniteError",
+    "ParameterError",
+    "ShapeError",
+]
+
+
+class ImukitError(Exception):
+    """Base class of every exception imukit raises on purpose."""
+
+
+class ShapeError(ImukitError, ValueError):
+    """An array has the wrong shape (the message names the expected one)."""
+
+
+class DTypeError(ImukitError, TypeError):
+    """An array has a dtype that cannot be read as real numbers (object, complex, str, ...)."""
+
+
+class NonFiniteError(ImukitError, ValueError):
+    """An input holds NaN or ±inf, or finite input is too large to compute with."""
+
+
+class InvalidQuaternionError(ImukitError, ValueError):
+    """A quaternion has zero norm and so represents no rotation."""
+
+
+class InvalidRotationError(ImukitError, ValueError):
+    """A 3x3 matrix is not a rotation (not orthonormal, or det ≠ +1)."""
+
+
+class GimbalLockError(ImukitError, ValueError):
+    """Pitch is within the tolerance of ±90°, where the ZYX Euler-angle rate map is singular."""
+
+
+class ParameterError(ImukitError, ValueError):
+    """A keyword option has a value outside its domain."""
