@@ -4,6 +4,28 @@
 import numpy as np
 from numpy.typing import NDArray
 
+__all__ = [
+    "__version__",
+    "so3_hat",
+    "so3_vee",
+    "so3_exp",
+    "so3_log",
+    "so3_jacobian",
+    "quat_multiply",
+    "quat_conjugate",
+    "quat_inverse",
+    "quat_normalize",
+    "quat_rotate",
+    "quat_product_matrix",
+    "quat_omega_matrix",
+    "quat_exp",
+    "quat_log",
+    "euler_to_matrix",
+    "euler_from_matrix",
+    "euler_rate_matrix",
+    "euler_rate_matrix_inv",
+]
+
 __version__: str
 
 def so3_hat(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...

@@ -4,7 +4,7 @@
 //! |---|---|
 //! | angle vector | `χ = [ψ, θ, φ]` = `[yaw, pitch, roll]`, radians, the order of scipy's `as_euler("ZYX")` |
 //! | rotation | intrinsic z–y′–x″: `R_wb = Rz(ψ) Ry(θ) Rx(φ)` |
-//! | ranges from [`from_rotation`] | `ψ, φ ∈ (−π, π]`, `θ ∈ [−π/2, π/2]` |
+//! | ranges from [`from_rotation`] | `ψ, φ ∈ (−π, π]`, `θ ∈ [−π/2, π/2]`; roll 0 at gimbal lock |
 //! | rate map | `χ̇ = E(χ) ω_b` for the body rate ω_b of `Ṙ = R [ω_b]×` ([`rate_matrix`]) |
 //! | singularity | `cos θ = 0`: E is undefined; [`rate_matrix`] returns [`Error::GimbalLock`] |
 //!
@@ -36,19 +36,32 @@ pub fn to_rotation(chi: &Vector3<f64>) -> Rotation3<f64> {
     ))
 }
 
-/// `χ = [ψ, θ, φ]` of R. Pitch uses `atan2(−R₂₀, √(R₀₀² + R₁₀²))`, accurate near ±π/2 where
-/// `asin` loses half its digits. At exact gimbal lock (`R₀₀ = R₁₀ = 0`) roll is set to 0 and
-/// the whole rotation about the vertical is reported as yaw.
+/// `χ = [ψ, θ, φ]` of R, reproducing R to rounding everywhere, gimbal lock included.
+///
+/// Pitch uses `atan2(−R₂₀, √(R₀₀² + R₁₀²))`, accurate near ±π/2 where `asin` loses half its
+/// digits. Roll is solved from `Rx(φ) = Ry(θ)ᵀ Rz(ψ)ᵀ R` given the yaw actually chosen, so yaw
+/// noise near the singularity moves into roll instead of breaking `to_rotation(χ) = R`. Within
+/// [`GIMBAL_LOCK_COS`] of the singularity yaw takes the whole rotation about the vertical and
+/// roll comes out 0 (only ψ ∓ φ is observable there).
 pub fn from_rotation(r: &Rotation3<f64>) -> Vector3<f64> {
     let m = r.matrix();
-    let pitch = (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)]));
-    if m[(0, 0)] == 0.0 && m[(1, 0)] == 0.0 {
-        // R = Rz(ψ ∓ φ) Ry(±π/2): only the difference (or sum) is observable.
-        let yaw = (-m[(0, 1)]).atan2(m[(1, 1)]);
-        return Vector3::new(yaw, pitch, 0.0);
-    }
-    Vector3::new(m[(1, 0)].atan2(m[(0, 0)]), pitch, m[(2, 1)].atan2(m[(2, 2)]))
+    let cos_pitch = m[(0, 0)].hypot(m[(1, 0)]);
+    let pitch = (-m[(2, 0)]).atan2(cos_pitch);
+    let yaw = if cos_pitch < GIMBAL_LOCK_COS {
+        // R = Rz(ψ ∓ φ) Ry(±π/2): the second column is [−sin, cos, 0] of the yaw with roll 0.
+        (-m[(0, 1)]).atan2(m[(1, 1)])
+    } else {
+        m[(1, 0)].atan2(m[(0, 0)])
+    };
+    let (sy, cy) = yaw.sin_cos();
+    // Row 1 of Rz(ψ)ᵀ R is [0, cos φ, −sin φ]; Ry(θ)ᵀ leaves row 1 unchanged.
+    let roll = (sy * m[(0, 2)] - cy * m[(1, 2)]).atan2(cy * m[(1, 1)] - sy * m[(0, 1)]);
+    Vector3::new(yaw, pitch, roll)
 }
+
+/// `cos θ` below which [`from_rotation`] treats the pitch as ±π/2 (yaw and roll are then no longer
+/// separately determined to better than `ε / cos θ`).
+pub const GIMBAL_LOCK_COS: f64 = 1e-12;
 
 /// `E(χ)` with `χ̇ = E(χ) ω_b`:
 ///

@@ -1,0 +1,40 @@
+"""Shared fixtures and comparison helpers for the pytest suite."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
+
+N_RANDOM = 10_000
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20261122)
+
+
+@pytest.fixture
+def rotvecs(rng: np.random.Generator) -> np.ndarray:
+    """10,000 rotation vectors with uniformly random rotations (angles in [0, π])."""
+    return Rotation.random(N_RANDOM, rng=rng).as_rotvec()
+
+
+def quat_distance(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """Largest componentwise gap between quaternions, taking q and -q as equal."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return np.minimum(np.abs(a - b).max(axis=-1), np.abs(a + b).max(axis=-1))
+
+
+def assert_quat_close(a: ArrayLike, b: ArrayLike, atol: float) -> None:
+    """Assert two (batches of) quaternions are the same rotation up to sign, to ``atol``."""
+    gap = quat_distance(a, b)
+    worst = int(np.argmax(gap)) if np.ndim(gap) else 0
+    assert np.all(gap <= atol), f"quaternions differ by {np.max(gap):.3e} (> {atol:.1e}) at {worst}"
+
+
+def rotation_angle_between(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """Angle (rad) of aᵀ b for (..., 3, 3) rotation matrices."""
+    rel = np.swapaxes(np.asarray(a), -1, -2) @ np.asarray(b)
+    return Rotation.from_matrix(rel.reshape(-1, 3, 3)).magnitude().reshape(rel.shape[:-2])
