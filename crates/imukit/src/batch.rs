@@ -23,13 +23,13 @@ pub fn map_rows<const I: usize, const O: usize, F>(input: &[f64], out: &mut [f64
 where
     F: Fn(&[f64; I]) -> Result<[f64; O]> + Sync,
 {
-    if input.len() % I != 0 {
+    if !input.len().is_multiple_of(I) {
         return Err(Error::RowLength {
             len: input.len(),
             row: I,
         });
     }
-    if out.len() % O != 0 {
+    if !out.len().is_multiple_of(O) {
         return Err(Error::RowLength { len: out.len(), row: O });
     }
     let rows = input.len() / I;

@@ -44,8 +44,30 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
 /// `Exp(φ) = I + (sin θ/θ) [φ]× + ((1 − cos θ)/θ²) [φ]×²` (Rodrigues), series-safe at θ → 0.
 pub fn exp(phi: &Vector3<f64>) -> Rotation3<f64> {
     let theta = phi.norm();
-    let k = hat(phi);
-    Rotation3::from_matrix_unchecked(Matrix3::identity() + k * sinc(theta) + k * k * one_minus_cos_over_sq(theta))
+    // One sin_cos of θ/2 gives both coefficients: sin θ = 2 s c, 1 − cos θ = 2 s².
+    let (a, b) = if theta < 1e-4 {
+        let t2 = theta * theta;
+        (1.0 - t2 / 6.0, 0.5 - t2 / 24.0)
+    } else {
+        let (s, c) = (0.5 * theta).sin_cos();
+        let s_over = s / theta;
+        (2.0 * c * s_over, 2.0 * s_over * s_over)
+    };
+    // [φ]×² = φ φᵀ − θ² I, written out to skip the matrix product.
+    let (x, y, z) = (phi.x, phi.y, phi.z);
+    let (bxy, bxz, byz) = (b * x * y, b * x * z, b * y * z);
+    let (ax, ay, az) = (a * x, a * y, a * z);
+    Rotation3::from_matrix_unchecked(Matrix3::new(
+        1.0 - b * (y * y + z * z),
+        bxy - az,
+        bxz + ay,
+        bxy + az,
+        1.0 - b * (x * x + z * z),
+        byz - ax,
+        bxz - ay,
+        byz + ax,
+        1.0 - b * (x * x + y * y),
+    ))
 }
 
 /// `Log(R)` with angle in `[0, π]`, accurate at identity and at π (via the quaternion of R and
