@@ -46,10 +46,16 @@ def main() -> None:
     cases = [
         ("exp: rotvec -> matrix", lambda: ik.so3.exp(phi), lambda: Rotation.from_rotvec(phi).as_matrix()),
         ("log: matrix -> rotvec", lambda: ik.so3.log(matrices), lambda: Rotation.from_matrix(matrices).as_rotvec()),
-        ("log: vs Rotation.as_rotvec (scipy already holds quaternions)", lambda: ik.so3.log(matrices), rotations.as_rotvec),
+        (
+            "log: vs Rotation.as_rotvec (scipy already holds quaternions)",
+            lambda: ik.so3.log(matrices),
+            rotations.as_rotvec,
+        ),
     ]
-    print(f"n = {args.n:,}, median of {args.repeats}; numpy {np.__version__}, scipy {scipy.__version__}, "
-          f"imukit {ik.__version__}, {platform.machine()}, {os.cpu_count()} cpus")
+    print(
+        f"n = {args.n:,}, median of {args.repeats}; numpy {np.__version__}, scipy {scipy.__version__}, "
+        f"imukit {ik.__version__}, {platform.machine()}, {os.cpu_count()} cpus"
+    )
     print(f"{'case':62s} {'imukit ms':>10s} {'scipy ms':>10s} {'scipy/imukit':>13s}")
     for name, ours, theirs in cases:
         t_ours, t_theirs = median_ms(ours, args.repeats), median_ms(theirs, args.repeats)
