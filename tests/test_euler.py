@@ -50,8 +50,21 @@ def test_gimbal_tolerance_is_respected() -> None:
     assert np.isfinite(ik.euler.rate_matrix(just_outside)).all()
     with pytest.raises(ik.GimbalLockError):
         ik.euler.rate_matrix(just_outside, tolerance_rad=1e-3)
-    with pytest.raises(ik.ParameterError, match="tolerance"):
-        ik.euler.rate_matrix(just_outside, tolerance_rad=-1.0)
+    for bad in (-1.0, np.nan, np.inf):
+        with pytest.raises(ik.ParameterError, match="^tolerance_rad: expected a finite, non-negative"):
+            ik.euler.rate_matrix(just_outside, tolerance_rad=bad)
+
+
+def test_angles_lie_in_half_open_interval() -> None:
+    """atan2 returns -π for a -0.0 numerator; the documented range is (-π, π]."""
+    m = np.diag([-1.0, -1.0, 1.0])
+    m[1, 0] = -0.0
+    m[2, 1] = -0.0
+    chi = ik.euler.from_rotation(np.stack([m, m.T]))
+    assert np.array_equal(chi[:, 0], [np.pi, np.pi])
+    roll_pi = np.diag([1.0, -1.0, -1.0])
+    roll_pi[2, 1] = -0.0
+    assert ik.euler.from_rotation(roll_pi)[2] == np.pi
 
 
 def test_from_rotation_at_exact_gimbal_lock_reproduces_the_rotation() -> None:

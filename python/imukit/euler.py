@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, batched
+from imukit._errors import ParameterError
 
 __all__ = ["from_rotation", "rate_matrix", "rate_matrix_inv", "to_rotation"]
 
@@ -49,7 +50,10 @@ def rate_matrix(angles: ArrayLike, *, degrees: bool = False, tolerance_rad: floa
     :class:`imukit.GimbalLockError` (naming the element) when |pitch| is within ``tolerance_rad``
     radians of 90°. With ``degrees=True`` only the input angles are in degrees; E is unitless.
     """
-    return batched(_core.euler_rate_matrix, [(_radians(angles, degrees), "angles", (3,))], (3, 3), float(tolerance_rad))
+    tolerance = float(tolerance_rad)
+    if not (np.isfinite(tolerance) and tolerance >= 0.0):
+        raise ParameterError(f"tolerance_rad: expected a finite, non-negative angle in radians, got {tolerance_rad!r}")
+    return batched(_core.euler_rate_matrix, [(_radians(angles, degrees), "angles", (3,))], (3, 3), tolerance)
 
 
 def rate_matrix_inv(angles: ArrayLike, *, degrees: bool = False) -> FloatArray:

@@ -56,7 +56,16 @@ pub fn from_rotation(r: &Rotation3<f64>) -> Vector3<f64> {
     let (sy, cy) = yaw.sin_cos();
     // Row 1 of Rz(ψ)ᵀ R is [0, cos φ, −sin φ]; Ry(θ)ᵀ leaves row 1 unchanged.
     let roll = (sy * m[(0, 2)] - cy * m[(1, 2)]).atan2(cy * m[(1, 1)] - sy * m[(0, 1)]);
-    Vector3::new(yaw, pitch, roll)
+    Vector3::new(half_open(yaw), pitch, half_open(roll))
+}
+
+/// Maps atan2's `−π` (returned for a `−0.0` numerator) to `π`, so angles lie in `(−π, π]`.
+fn half_open(angle: f64) -> f64 {
+    if angle <= -std::f64::consts::PI {
+        std::f64::consts::PI
+    } else {
+        angle
+    }
 }
 
 /// `cos θ` below which [`from_rotation`] treats the pitch as ±π/2 (yaw and roll are then no longer
