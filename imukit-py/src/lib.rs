@@ -3,20 +3,26 @@
 //! hierarchy. The public Python API (shapes, broadcasting, scipy interop) lives in
 //! `python/imukit`; nothing here is meant to be called directly.
 
+use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use nalgebra::{Quaternion, UnitQuaternion};
+use numpy::{
+    PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
 /// The `imukit._errors` class for an imukit error, so Python sees one hierarchy.
 fn class_name(e: &imukit::Error) -> &'static str {
     use imukit::Error as E;
-    match e {
+    match e.root() {
         E::RowLength { .. } | E::RowCount { .. } => "ShapeError",
         E::NonFinite { .. } | E::Overflow { .. } => "NonFiniteError",
         E::ZeroQuaternion { .. } => "InvalidQuaternionError",
         E::NotRotation { .. } => "InvalidRotationError",
         E::GimbalLock { .. } => "GimbalLockError",
-        E::Parameter { .. } => "ParameterError",
+        E::NonIncreasingTime { .. } => "TimestampError",
+        E::Parameter { .. } | E::Unsupported { .. } => "ParameterError",
+        E::Argument { .. } => "ImukitError",
     }
 }
 
@@ -57,24 +63,37 @@ fn run<'py>(
         ));
     }
     let rows = shape[0];
-    // Copy before releasing the GIL: another Python thread could write to the caller's buffer
-    // while the kernel reads it (rust-numpy issue 497); nobody else holds the copy. Both arrays
-    // come from numpy's allocator, which asks for huge pages: a Rust Vec of the same size costs
-    // three times as much in page faults.
-    let input = x.as_any().call_method0("copy")?.cast_into::<PyArray2<f64>>()?;
+    let input = private_copy(py, &x)?;
     let input = input.readonly();
-    let input = input
-        .as_slice()
-        .map_err(|_| raise(py, "ShapeError", name, "expected a C-contiguous float64 array"))?;
+    let input = contiguous(py, name, &input)?;
     let out = PyArray2::<f64>::zeros(py, [rows, width_out], false);
     {
         let mut guard = out.readwrite();
-        let out_slice = guard
-            .as_slice_mut()
-            .map_err(|_| raise(py, "ShapeError", name, "internal: output not contiguous"))?;
+        let out_slice = guard.as_slice_mut()?;
         py.detach(|| kernel(input, out_slice)).map_err(|e| to_py(py, name, e))?;
     }
     Ok(out)
+}
+
+/// A copy of `x` that no other Python code can see, so its buffer may be read with the GIL
+/// released: another thread could write to the caller's array meanwhile (rust-numpy issue 497).
+/// numpy allocates it (and [`run`]'s outputs) because numpy asks for huge pages: a Rust Vec of the
+/// same size costs three times as much in page faults.
+fn private_copy<'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    x: &PyReadonlyArray<'py, f64, D>,
+) -> PyResult<Bound<'py, PyArray<f64, D>>> {
+    let _ = py;
+    Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
+}
+
+fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    name: &str,
+    x: &'a PyReadonlyArray<'py, f64, D>,
+) -> PyResult<&'a [f64]> {
+    x.as_slice()
+        .map_err(|_| raise(py, "ShapeError", name, "expected a C-contiguous float64 array"))
 }
 
 fn parse_convention(py: Python<'_>, convention: &str) -> PyResult<Convention> {
@@ -198,6 +217,67 @@ fn euler_rate_matrix<'py>(
     run(py, x, name, 3, 9, move |i, o| batch::euler_rate_matrix(tolerance, i, o))
 }
 
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate_attitude
+fn attitude_integrate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    initial: [f64; 4],
+    scheme: &str,
+    representation: &str,
+    gimbal_tolerance: f64,
+    final_only: bool,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let name = "integrate_attitude";
+    let scheme = match scheme {
+        "euler" => Scheme::Euler,
+        "exp" => Scheme::Exp,
+        "midpoint" => Scheme::Midpoint,
+        "rk4" => Scheme::Rk4,
+        "magnus" => Scheme::Magnus,
+        other => {
+            let message = format!("expected 'euler', 'exp', 'midpoint', 'rk4' or 'magnus', got {other:?}");
+            return Err(raise(py, "ParameterError", "scheme", message));
+        }
+    };
+    let representation = match representation {
+        "quaternion" => Representation::Quaternion,
+        "matrix" => Representation::Matrix,
+        "euler" => Representation::Euler,
+        other => {
+            let message = format!("expected 'quaternion', 'matrix' or 'euler', got {other:?}");
+            return Err(raise(py, "ParameterError", "representation", message));
+        }
+    };
+    let options = attitude::Options {
+        scheme,
+        representation,
+        gimbal_tolerance,
+    };
+    let [x, y, z, w] = initial;
+    // Python passes a scipy Rotation's quaternion: unit already, renormalised here regardless.
+    let initial = UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z));
+    let (t, gyro) = (private_copy(py, &t)?, private_copy(py, &gyro)?);
+    let (t, gyro) = (t.readonly(), gyro.readonly());
+    let (t, gyro) = (contiguous(py, "t", &t)?, contiguous(py, "gyro", &gyro)?);
+    let rows = if final_only { 1 } else { t.len() };
+    let out = PyArray2::<f64>::zeros(py, [rows, 4], false);
+    {
+        let mut guard = out.readwrite();
+        let out_slice = guard.as_slice_mut()?;
+        py.detach(|| {
+            let last = attitude::integrate(t, gyro, &initial, &options, (!final_only).then_some(&mut *out_slice))?;
+            if final_only {
+                out_slice.copy_from_slice(&[last.i, last.j, last.k, last.w]);
+            }
+            Ok(())
+        })
+        .map_err(|e| to_py(py, name, e))?;
+    }
+    Ok(out)
+}
+
 /// Compiled core of imukit. Use the `imukit` package, not this module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -219,6 +299,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(euler_from_matrix, m)?)?;
     m.add_function(wrap_pyfunction!(euler_rate_matrix, m)?)?;
     m.add_function(wrap_pyfunction!(euler_rate_matrix_inv, m)?)?;
+    m.add_function(wrap_pyfunction!(attitude_integrate, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

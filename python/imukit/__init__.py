@@ -11,6 +11,7 @@ array([0., 1., 0.])
 """
 
 from imukit import euler, quat, so3
+from imukit.attitude import integrate_attitude
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
@@ -21,6 +22,7 @@ from imukit._errors import (
     NonFiniteError,
     ParameterError,
     ShapeError,
+    TimestampError,
 )
 
 __all__ = [
@@ -32,8 +34,10 @@ __all__ = [
     "NonFiniteError",
     "ParameterError",
     "ShapeError",
+    "TimestampError",
     "__version__",
     "euler",
+    "integrate_attitude",
     "quat",
     "so3",
 ]

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from imukit._errors import DTypeError, ParameterError, ShapeError
 
@@ -96,3 +97,38 @@ def choice(value: str, name: str, allowed: tuple[str, ...]) -> str:
     if value not in allowed:
         raise ParameterError(f"{name}: expected one of {allowed}, got {value!r}")
     return value
+
+
+def rotation_from_unit_quat(q: FloatArray) -> Rotation:
+    """A scipy ``Rotation`` from xyzw quaternions that are unit to rounding already.
+
+    ``Rotation.from_quat`` renormalises at about 100 ns per rotation, more than imukit's whole
+    integration step; the constructor with ``normalize=False`` takes the array as it is.
+    """
+    try:
+        return Rotation(q, normalize=False, copy=False)
+    except TypeError:  # a scipy without these keywords
+        return Rotation.from_quat(q)
+
+
+def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
+    """Float seconds from float64 seconds or int64 nanoseconds (relative to the first sample).
+
+    Integer timestamps are nanoseconds (EuRoC / ROS style); they are converted as offsets from
+    the first stamp, so a 1e18 ns epoch loses nothing. Integer steps under 1 µs are refused:
+    they are almost surely seconds or sample indices given as integers.
+    """
+    raw = np.asarray(t)
+    if raw.ndim != 1:
+        raise ShapeError(f"{name}: expected shape (N,), got {raw.shape}")
+    if raw.dtype.kind in "iu":
+        stamps = raw.astype(np.int64)
+        if len(stamps) > 1:
+            steps = np.diff(stamps)
+            if np.median(steps) < 1000:
+                raise ParameterError(
+                    f"{name}: integer timestamps are read as nanoseconds, but the median step is "
+                    f"{np.median(steps)} ns; pass float seconds instead"
+                )
+        return np.ascontiguousarray((stamps - stamps[:1]).astype(np.float64) * 1e-9)
+    return np.ascontiguousarray(as_float_array(raw, name))

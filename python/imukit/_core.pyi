@@ -6,6 +6,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "__version__",
+    "attitude_integrate",
     "euler_from_matrix",
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
@@ -46,3 +47,12 @@ def euler_to_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: .
 def euler_from_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def euler_rate_matrix(x: NDArray[np.float64], name: str, tolerance: float) -> NDArray[np.float64]: ...
 def euler_rate_matrix_inv(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
+def attitude_integrate(
+    t: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    initial: NDArray[np.float64],
+    scheme: str,
+    representation: str,
+    gimbal_tolerance: float,
+    final_only: bool,
+) -> NDArray[np.float64]: ...

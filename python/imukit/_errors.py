@@ -16,6 +16,7 @@ __all__ = [
     "NonFiniteError",
     "ParameterError",
     "ShapeError",
+    "TimestampError",
 ]
 
 
@@ -49,3 +50,7 @@ class GimbalLockError(ImukitError, ValueError):
 
 class ParameterError(ImukitError, ValueError):
     """A keyword option has a value outside its domain."""
+
+
+class TimestampError(ImukitError, ValueError):
+    """Timestamps that are not strictly increasing (the message names the first bad sample)."""

@@ -69,6 +69,32 @@ pub enum Error {
         /// The tolerance, degrees.
         tolerance_deg: f64,
     },
+    /// Timestamps that do not strictly increase.
+    #[error("time must increase strictly: step into sample {index} has dt = {dt:e} s")]
+    NonIncreasingTime {
+        /// The later sample of the offending pair.
+        index: usize,
+        /// `t[index] − t[index − 1]`.
+        dt: f64,
+    },
+    /// A scheme that the chosen representation does not support.
+    #[error("scheme {scheme:?} is not available for representation {representation:?}; it supports {supported:?}")]
+    Unsupported {
+        /// The scheme asked for.
+        scheme: &'static str,
+        /// The representation asked for.
+        representation: &'static str,
+        /// The schemes it does support.
+        supported: Vec<&'static str>,
+    },
+    /// An error in one named input of a function with several.
+    #[error("{name}: {source}")]
+    Argument {
+        /// The argument's name.
+        name: &'static str,
+        /// What is wrong with it.
+        source: Box<Error>,
+    },
     /// A parameter (not array data) is out of its domain.
     #[error("{name} must be {expected}, got {got}")]
     Parameter {
@@ -108,6 +134,24 @@ impl Error {
                 pitch_deg,
                 tolerance_deg,
             },
+            other => other,
+        }
+    }
+}
+
+impl Error {
+    /// Attributes this error to the input argument `name`.
+    pub fn in_argument(self, name: &'static str) -> Self {
+        Error::Argument {
+            name,
+            source: Box::new(self),
+        }
+    }
+
+    /// The innermost error, past any [`Error::Argument`] wrappers.
+    pub fn root(&self) -> &Error {
+        match self {
+            Error::Argument { source, .. } => source.root(),
             other => other,
         }
     }

@@ -22,10 +22,13 @@
 //! assert!((quat::exp(&phi) * Vector3::x() - Vector3::y()).norm() < 1e-15);
 //! ```
 
+pub mod attitude;
 pub mod batch;
 mod error;
 pub mod euler;
+pub mod interp;
 pub mod quat;
 pub mod so3;
+pub mod time;
 
 pub use error::{Error, Result};
