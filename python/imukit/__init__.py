@@ -11,7 +11,6 @@ array([0., 1., 0.])
 """
 
 from imukit import euler, quat, so3
-from imukit.attitude import integrate_attitude
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
@@ -24,6 +23,7 @@ from imukit._errors import (
     ShapeError,
     TimestampError,
 )
+from imukit.attitude import integrate_attitude
 
 __all__ = [
     "DTypeError",
