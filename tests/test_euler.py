@@ -51,7 +51,7 @@ def test_gimbal_tolerance_is_respected() -> None:
     with pytest.raises(ik.GimbalLockError):
         ik.euler.rate_matrix(just_outside, tolerance_rad=1e-3)
     for bad in (-1.0, np.nan, np.inf):
-        with pytest.raises(ik.ParameterError, match="^tolerance_rad: expected a finite, non-negative"):
+        with pytest.raises(ik.ParameterError, match=r"^tolerance_rad: expected a finite, non-negative"):
             ik.euler.rate_matrix(just_outside, tolerance_rad=bad)
 
 
