@@ -129,14 +129,16 @@ where
 
 /// Rotation vectors whose angle lies within ±2 % of a point where imukit switches between a
 /// Taylor series and a closed form (θ = 2e-6 for the quaternion log, 1e-4 for sinc, 2e-4 for
-/// (1 − cos θ)/θ², 0.2 for the Jacobian coefficients): a wrong series term shows up here, where
-/// it is largest, and not at θ ≈ 1e-8, where every series term past the first is below rounding.
+/// (1 − cos θ)/θ², 0.2 for the Jacobian coefficients, 0.5 for the quaternion exp): a wrong series
+/// term shows up here, where it is largest, and not at θ ≈ 1e-8, where every series term past
+/// the first is below rounding. Extend the list when a new switch point appears.
 pub fn series_switch_vector() -> BoxedStrategy<Vector3<f64>> {
     let angle = prop_oneof![
         (1.96e-6..2.04e-6f64),
         (0.98e-4..1.02e-4f64),
         (1.96e-4..2.04e-4f64),
         (0.196..0.204f64),
+        (0.49..0.51f64),
     ];
     (unit_vector(), angle).prop_map(|(u, a)| u * a).boxed()
 }

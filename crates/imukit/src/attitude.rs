@@ -296,10 +296,10 @@ fn run<S: State>(
     t: &[f64],
     gyro: &[f64],
     options: &Options,
-    mut out: Option<&mut [f64]>,
+    out: Option<&mut [f64]>,
 ) -> Result<UnitQuaternion<f64>> {
     let (rates, _) = gyro.as_chunks::<3>();
-    let mut out = out.as_deref_mut().map(|o| o.as_chunks_mut::<4>().0);
+    let mut out = out.map(|o| o.as_chunks_mut::<4>().0);
     let cubic = Cubic::new(t, gyro);
     let tol = options.gimbal_tolerance;
     let f = |y: &S, w: &Vector3<f64>, k: usize| y.derivative(w, tol).map_err(|e| e.at(k));
