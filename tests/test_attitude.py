@@ -180,3 +180,34 @@ def test_gimbal_lock_names_the_sample() -> None:
     # the group representations pass straight through
     r = ik.integrate_attitude(t, w, representation="quaternion", scheme="rk4", final_only=True)
     assert angle_error(r, Rotation.from_rotvec([0.0, 2.0, 0.0])) < 1e-12
+
+
+def _rk4_linear_rate_error(h: float) -> float:
+    """Classical RK4 on q̇ = ½ q ⊗ [ω, 0] with the mid-step rate taken as the mean of the two
+    samples (a straight line between samples), written here in numpy."""
+    n = round(3.0 / h) + 1
+    t = np.linspace(0.0, 3.0, n)
+    w = body_rate(t)
+    q = attitude(t[:1])[0].as_quat()
+
+    def f(q: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return 0.5 * ik.quat.multiply(q, np.append(w, 0.0))
+
+    for k in range(n - 1):
+        wm = 0.5 * (w[k] + w[k + 1])
+        k1 = f(q, w[k])
+        k2 = f(q + 0.5 * h * k1, wm)
+        k3 = f(q + 0.5 * h * k2, wm)
+        k4 = f(q + h * k3, w[k + 1])
+        q = q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        q /= np.linalg.norm(q)
+    return float(angle_error(Rotation.from_quat(q), attitude(t[-1:])[0]))
+
+
+def test_a_straight_line_between_samples_caps_rk4_at_second_order() -> None:
+    """Why rk4 and magnus interpolate with a cubic: with linear rates RK4 is only order 2."""
+    steps = np.array([0.04, 0.02, 0.01, 0.005])
+    errors = [_rk4_linear_rate_error(h) for h in steps]
+    slope = float(np.polyfit(np.log(steps), np.log(errors), 1)[0])
+    assert abs(slope - 2) < 0.3
+    assert final_error("rk4", "quaternion", 0.01) < 1e-2 * _rk4_linear_rate_error(0.01)
