@@ -35,8 +35,9 @@ def to_rotation(angles: ArrayLike, *, degrees: bool = False) -> Rotation:
 def from_rotation(rotation: Rotation | ArrayLike, *, degrees: bool = False) -> FloatArray:
     """``[yaw, pitch, roll]`` of a ``Rotation`` or of ``(..., 3, 3)`` matrices.
 
-    Reproduces the rotation everywhere. Within 1e-12 of cos(pitch) = 0 roll is reported as 0 and the
-    whole rotation about the vertical as yaw (only yaw ∓ roll is observable there).
+    ``to_rotation`` of the result reproduces the rotation to rounding, except where cos(pitch) < 1e-12:
+    there roll is reported as 0 and the whole rotation about the vertical as yaw (only yaw ∓ roll is
+    observable), which moves the rotation by at most 2e-12.
     """
     matrices = rotation.as_matrix() if isinstance(rotation, Rotation) else rotation
     angles = batched(_core.euler_from_matrix, [(matrices, "rotation", (3, 3))], (3,))

@@ -36,7 +36,9 @@ pub fn to_rotation(chi: &Vector3<f64>) -> Rotation3<f64> {
     ))
 }
 
-/// `χ = [ψ, θ, φ]` of R, reproducing R to rounding everywhere, gimbal lock included.
+/// `χ = [ψ, θ, φ]` of R; `to_rotation(χ)` reproduces R to rounding, except within
+/// [`GIMBAL_LOCK_COS`] of gimbal lock, where setting roll to 0 moves R by at most `2 cos θ`
+/// (≤ 2e-12).
 ///
 /// Pitch uses `atan2(−R₂₀, √(R₀₀² + R₁₀²))`, accurate near ±π/2 where `asin` loses half its
 /// digits. Roll is solved from `Rx(φ) = Ry(θ)ᵀ Rz(ψ)ᵀ R` given the yaw actually chosen, so yaw
@@ -115,8 +117,12 @@ pub fn rate_matrix_inv(chi: &Vector3<f64>) -> Matrix3<f64> {
     )
 }
 
-/// Errors when the pitch is within `tolerance` of ±π/2 (or the tolerance itself is invalid).
+/// Errors when the pitch is within `tolerance` of ±π/2, is not finite, or the tolerance itself
+/// is invalid.
 pub fn check_pitch(pitch: f64, tolerance: f64) -> Result<()> {
+    if !pitch.is_finite() {
+        return Err(Error::NonFinite { index: 0 });
+    }
     if !(tolerance.is_finite() && tolerance >= 0.0) {
         return Err(Error::Parameter {
             name: "tolerance",

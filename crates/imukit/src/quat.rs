@@ -47,24 +47,27 @@ pub fn conjugate(q: &Quaternion<f64>) -> Quaternion<f64> {
     q.conjugate()
 }
 
-fn checked_norm(q: &Quaternion<f64>) -> Result<f64> {
-    let norm = q.norm();
+/// `(q / m, m)` with `m = max |q_i|`, so that norms of finite quaternions never overflow
+/// (`|q|²` does beyond 1.3e154); errors on a zero quaternion.
+fn scaled(q: &Quaternion<f64>) -> Result<(Quaternion<f64>, f64)> {
+    let m = q.coords.amax();
+    let unit_scale = if m > 0.0 { q / m } else { *q };
+    let norm = m * unit_scale.norm();
     if norm < ZERO_NORM {
         return Err(Error::ZeroQuaternion { index: 0, norm });
     }
-    Ok(norm)
+    Ok((unit_scale, m))
 }
 
 /// Inverse `q⁻¹ = q* / |q|²`; errors on a zero quaternion.
 pub fn inverse(q: &Quaternion<f64>) -> Result<Quaternion<f64>> {
-    let norm = checked_norm(q)?;
-    Ok(q.conjugate() / (norm * norm))
+    let (s, m) = scaled(q)?;
+    Ok(s.conjugate() / (s.norm_squared() * m))
 }
 
 /// `q / |q|`; errors on a zero quaternion.
 pub fn normalize(q: &Quaternion<f64>) -> Result<UnitQuaternion<f64>> {
-    checked_norm(q)?;
-    Ok(UnitQuaternion::new_normalize(*q))
+    Ok(UnitQuaternion::new_normalize(scaled(q)?.0))
 }
 
 /// Rotates `v` by the (normalised) rotation `q`: `q ⊗ [v, 0] ⊗ q*`.

@@ -38,7 +38,12 @@ pub fn hat(phi: &Vector3<f64>) -> Matrix3<f64> {
 /// Inverse of [`hat`]. For a matrix that is not exactly skew it returns the vector of its skew
 /// part `(M − Mᵀ)/2`, the nearest element of so(3) in the Frobenius norm.
 pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
-    0.5 * Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)])
+    // Halve before subtracting: entries near f64::MAX must not overflow.
+    Vector3::new(
+        0.5 * m[(2, 1)] - 0.5 * m[(1, 2)],
+        0.5 * m[(0, 2)] - 0.5 * m[(2, 0)],
+        0.5 * m[(1, 0)] - 0.5 * m[(0, 1)],
+    )
 }
 
 /// `Exp(φ) = I + (sin θ/θ) [φ]× + ((1 − cos θ)/θ²) [φ]×²` (Rodrigues), series-safe at θ → 0.
