@@ -29,7 +29,7 @@ use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
 use rayon::prelude::*;
 
-use crate::interp::Cubic;
+use crate::interp::{Cubic, StepInterpolator};
 use crate::{euler, so3, time, Error, Result};
 
 /// Integration scheme; see the module table.
@@ -300,7 +300,8 @@ fn run<S: State>(
 ) -> Result<UnitQuaternion<f64>> {
     let (rates, _) = gyro.as_chunks::<3>();
     let mut out = out.map(|o| o.as_chunks_mut::<4>().0);
-    let cubic = Cubic::new(t, gyro);
+    let gauss = gauss_nodes(t, gyro);
+    let midstep = StepInterpolator::new(Cubic::new(t, gyro), [0.5]);
     let tol = options.gimbal_tolerance;
     let f = |y: &S, w: &Vector3<f64>, k: usize| y.derivative(w, tol).map_err(|e| e.at(k));
     let mut store = |k: usize, y: &S| {
@@ -323,13 +324,13 @@ fn run<S: State>(
         let (w0, w1) = (Vector3::from(ww[0]), Vector3::from(ww[1]));
         y = match options.scheme {
             Scheme::Euler => (y + f(&y, &w0, k)? * h).project(),
-            Scheme::Exp | Scheme::Magnus => y.compose_exp(&group_increment(options.scheme, &cubic, &w0, h, k)),
+            Scheme::Exp | Scheme::Magnus => y.compose_exp(&group_increment(options.scheme, &gauss, &w0, h, k)),
             Scheme::Midpoint => {
                 let mid = y + f(&y, &w0, k)? * (0.5 * h);
                 (y + f(&mid, &((w0 + w1) * 0.5), k)? * h).project()
             }
             Scheme::Rk4 => {
-                let [wm] = cubic.at(k, [0.5 * h]);
+                let [wm] = midstep.at(k);
                 let k1 = f(&y, &w0, k)?;
                 let k2 = f(&(y + k1 * (0.5 * h)), &wm, k)?;
                 let k3 = f(&(y + k2 * (0.5 * h)), &wm, k)?;
@@ -346,11 +347,22 @@ fn run<S: State>(
     Ok(y.quaternion())
 }
 
+/// The rates at the two Gauss–Legendre nodes of every step.
+fn gauss_nodes<'a>(t: &'a [f64], gyro: &'a [f64]) -> StepInterpolator<'a, 2> {
+    StepInterpolator::new(Cubic::new(t, gyro), [0.5 - GAUSS_OFFSET, 0.5 + GAUSS_OFFSET])
+}
+
 /// The rotation vector θ of step k for the closed-form schemes: `R ← R Exp(θ)`.
 #[inline]
-fn group_increment(scheme: Scheme, cubic: &Cubic<'_>, w0: &Vector3<f64>, h: f64, k: usize) -> Vector3<f64> {
+fn group_increment(
+    scheme: Scheme,
+    gauss: &StepInterpolator<'_, 2>,
+    w0: &Vector3<f64>,
+    h: f64,
+    k: usize,
+) -> Vector3<f64> {
     if scheme == Scheme::Magnus {
-        let [a, b] = cubic.at(k, [h * (0.5 - GAUSS_OFFSET), h * (0.5 + GAUSS_OFFSET)]);
+        let [a, b] = gauss.at(k);
         (a + b) * (0.5 * h) + a.cross(&b) * (MAGNUS_WEIGHT * h * h)
     } else {
         w0 * h
@@ -374,7 +386,7 @@ fn quaternion_product(
 ) -> Result<UnitQuaternion<f64>> {
     let (rates, _) = gyro.as_chunks::<3>();
     let (out, _) = out.as_chunks_mut::<4>();
-    let cubic = Cubic::new(t, gyro);
+    let gauss = gauss_nodes(t, gyro);
     if !(t[0].is_finite() && rates[0].iter().all(|v| v.is_finite())) {
         return Err(input_error(t, gyro));
     }
@@ -384,7 +396,7 @@ fn quaternion_product(
             let k = c * CHUNK + j;
             let h = t[k + 1] - t[k];
             let ok = h > 0.0 && h <= f64::MAX && rates[k + 1].iter().all(|v| v.is_finite());
-            let dq = crate::quat::exp(&group_increment(scheme, &cubic, &Vector3::from(rates[k]), h, k));
+            let dq = crate::quat::exp(&group_increment(scheme, &gauss, &Vector3::from(rates[k]), h, k));
             *slot = [dq.i, dq.j, dq.k, dq.w];
             ok
         })
