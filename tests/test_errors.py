@@ -19,7 +19,7 @@ VEC3 = [
     (ik.so3.left_jacobian, "phi"),
     (ik.so3.left_jacobian_inv, "phi"),
     (ik.quat.exp, "phi"),
-    (ik.quat.omega_matrix, "omega"),
+    (ik.quat.omega_matrix, "w"),
     (ik.euler.rate_matrix, "angles"),
     (ik.euler.rate_matrix_inv, "angles"),
     (ik.euler.to_rotation, "angles"),

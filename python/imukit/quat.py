@@ -88,8 +88,8 @@ def _product_matrix(q: ArrayLike, side: str, scalar_first: bool, convention: str
     return matrix4_out(out, scalar_first)
 
 
-def omega_matrix(omega: ArrayLike, *, convention: str = "hamilton", scalar_first: bool = False) -> FloatArray:
-    """``Ω(ω)`` with ``q̇ = ½ Ω(ω) q`` for body rates ω [rad/s]: ``(..., 3)`` → ``(..., 4, 4)``.
+def omega_matrix(w: ArrayLike, *, convention: str = "hamilton", scalar_first: bool = False) -> FloatArray:
+    """``Ω(ω)`` with ``q̇ = ½ Ω(ω) q`` for body rates ``w`` = ω [rad/s]: ``(..., 3)`` → ``(..., 4, 4)``.
 
     Hamilton: ``Ω(ω) = R([ω, 0])``, i.e. ``q̇ = ½ q ⊗ [ω, 0]`` for ``q = q_wb``. JPL: ``Ω(ω) =
     L_J([ω, 0])``, i.e. ``q̇ = ½ [ω, 0] ⊗_J q`` for the JPL quaternion of the world-to-body
@@ -97,7 +97,7 @@ def omega_matrix(omega: ArrayLike, *, convention: str = "hamilton", scalar_first
     Roumeliotis eq. 108); ``scalar_first=True`` re-expresses it for wxyz vectors.
     """
     choice(convention, "convention", _CONVENTIONS)
-    out = batched(_core.quat_omega_matrix, [(omega, "omega", (3,))], (4, 4), convention)
+    out = batched(_core.quat_omega_matrix, [(w, "w", (3,))], (4, 4), convention)
     return matrix4_out(out, scalar_first)
 
 
