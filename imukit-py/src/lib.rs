@@ -5,7 +5,8 @@
 
 use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
-use nalgebra::{Quaternion, UnitQuaternion};
+use imukit::{propagate, strapdown};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
     PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
@@ -278,6 +279,142 @@ fn attitude_integrate<'py>(
     Ok(out)
 }
 
+fn parse_strapdown_scheme(py: Python<'_>, scheme: &str) -> PyResult<strapdown::Scheme> {
+    use strapdown::Scheme as S;
+    match scheme {
+        "euler" => Ok(S::Euler),
+        "midpoint" => Ok(S::Midpoint),
+        "rk4" => Ok(S::Rk4),
+        "exp" => Ok(S::Exp),
+        other => {
+            let message = format!("expected 'euler', 'midpoint', 'rk4' or 'exp', got {other:?}");
+            Err(raise(py, "ParameterError", "scheme", message))
+        }
+    }
+}
+
+/// `[p, v, q(xyzw)]` and `[b_g, b_a]` as the core's types.
+fn nav_state(initial: [f64; 10]) -> strapdown::NavState {
+    let [px, py_, pz, vx, vy, vz, x, y, z, w] = initial;
+    strapdown::NavState {
+        position: Vector3::new(px, py_, pz),
+        velocity: Vector3::new(vx, vy, vz),
+        rotation: UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z)),
+    }
+}
+
+fn bias(values: [f64; 6]) -> strapdown::Bias {
+    let [gx, gy, gz, ax, ay, az] = values;
+    strapdown::Bias {
+        gyro: Vector3::new(gx, gy, gz),
+        accel: Vector3::new(ax, ay, az),
+    }
+}
+
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate
+fn strapdown_integrate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    initial: [f64; 10],
+    bias_values: [f64; 6],
+    gravity: [f64; 3],
+    scheme: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let options = strapdown::Options {
+        scheme: parse_strapdown_scheme(py, scheme)?,
+        gravity: Vector3::from(gravity),
+    };
+    let (t, gyro, accel) = (
+        private_copy(py, &t)?,
+        private_copy(py, &gyro)?,
+        private_copy(py, &accel)?,
+    );
+    let (t, gyro, accel) = (t.readonly(), gyro.readonly(), accel.readonly());
+    let samples = strapdown::Samples {
+        t: contiguous(py, "t", &t)?,
+        gyro: contiguous(py, "gyro", &gyro)?,
+        accel: contiguous(py, "accel", &accel)?,
+    };
+    let out = PyArray2::<f64>::zeros(py, [samples.t.len(), strapdown::STATE_WIDTH], false);
+    {
+        let mut guard = out.readwrite();
+        let out_slice = guard.as_slice_mut()?;
+        let (initial, bias) = (nav_state(initial), bias(bias_values));
+        py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out_slice)))
+            .map_err(|e| to_py(py, "integrate", e))?;
+    }
+    Ok(out)
+}
+
+type StatesAndCovariances<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.propagate
+fn strapdown_propagate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    initial: [f64; 10],
+    covariance: PyReadonlyArray2<'py, f64>,
+    bias_values: [f64; 6],
+    noise: [f64; 4],
+    gravity: [f64; 3],
+    scheme: &str,
+    every: usize,
+) -> PyResult<StatesAndCovariances<'py>> {
+    let options = strapdown::Options {
+        scheme: parse_strapdown_scheme(py, scheme)?,
+        gravity: Vector3::from(gravity),
+    };
+    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
+    let noise = propagate::Noise {
+        gyro_density,
+        accel_density,
+        gyro_random_walk,
+        accel_random_walk,
+    };
+    if covariance.shape() != [15, 15] {
+        let got = format!("{:?}", covariance.shape());
+        return Err(raise(
+            py,
+            "ShapeError",
+            "covariance",
+            format!("expected shape (15, 15), got {got}"),
+        ));
+    }
+    let p0 = propagate::Covariance::from_row_slice(contiguous(py, "covariance", &covariance)?);
+    let (t, gyro, accel) = (
+        private_copy(py, &t)?,
+        private_copy(py, &gyro)?,
+        private_copy(py, &accel)?,
+    );
+    let (t, gyro, accel) = (t.readonly(), gyro.readonly(), accel.readonly());
+    let samples = strapdown::Samples {
+        t: contiguous(py, "t", &t)?,
+        gyro: contiguous(py, "gyro", &gyro)?,
+        accel: contiguous(py, "accel", &accel)?,
+    };
+    let n = samples.t.len();
+    let states = PyArray2::<f64>::zeros(py, [n, strapdown::STATE_WIDTH], false);
+    let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
+    {
+        let (mut s_guard, mut c_guard) = (states.readwrite(), covariances.readwrite());
+        let outputs = propagate::Outputs {
+            states: Some(s_guard.as_slice_mut()?),
+            covariances: c_guard.as_slice_mut()?,
+            every,
+        };
+        let (initial, bias) = (nav_state(initial), bias(bias_values));
+        py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))
+            .map_err(|e| to_py(py, "propagate", e))?;
+    }
+    Ok((states, covariances))
+}
+
 /// Compiled core of imukit. Use the `imukit` package, not this module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -300,6 +437,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(euler_rate_matrix, m)?)?;
     m.add_function(wrap_pyfunction!(euler_rate_matrix_inv, m)?)?;
     m.add_function(wrap_pyfunction!(attitude_integrate, m)?)?;
+    m.add_function(wrap_pyfunction!(strapdown_integrate, m)?)?;
+    m.add_function(wrap_pyfunction!(strapdown_propagate, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -27,8 +27,10 @@ pub mod batch;
 mod error;
 pub mod euler;
 pub mod interp;
+pub mod propagate;
 pub mod quat;
 pub mod so3;
+pub mod strapdown;
 pub mod time;
 
 pub use error::{Error, Result};

@@ -116,6 +116,17 @@ pub fn left_jacobian_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
     jacobian_inv(phi)
 }
 
+/// `Γ₂(φ) = ∫₀¹ (1 − s) Exp(s φ) ds = ½ I + ((θ − sin θ)/θ³) [φ]× + ((θ²/2 + cos θ − 1)/θ⁴) [φ]×²`.
+///
+/// With [`left_jacobian`] `J_l(φ) = Γ₁(φ) = ∫₀¹ Exp(s φ) ds` it integrates a body-frame specific
+/// force held constant while the body turns at a constant rate: over a step h with `φ = ω h`,
+/// `Δv = R Γ₁(φ) a h` and `Δp = R Γ₂(φ) a h²` (Eckenhoff, Geneva & Huang, IJRR 2019, eqs. 16–17).
+pub fn exp_double_integral(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let theta = phi.norm();
+    let k = hat(phi);
+    Matrix3::identity() * 0.5 + k * theta_minus_sin_over_cube(theta) + k * k * cos_remainder(theta)
+}
+
 /// `J_l(φ)`; `J_r` is this at `−φ`.
 fn jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     let theta = phi.norm();
@@ -156,6 +167,17 @@ fn theta_minus_sin_over_cube(theta: f64) -> f64 {
         1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362_880.0 + t2 * t2 * t2 * t2 / 39_916_800.0
     } else {
         (theta - theta.sin()) / (theta * theta * theta)
+    }
+}
+
+/// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ²`.
+fn cos_remainder(theta: f64) -> f64 {
+    if theta < 0.2 {
+        // Σ (−1)ᵏ θ²ᵏ/(2k + 4)!
+        let t2 = theta * theta;
+        1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40_320.0 - t2 * t2 * t2 / 3_628_800.0 + t2 * t2 * t2 * t2 / 479_001_600.0
+    } else {
+        (0.5 - one_minus_cos_over_sq(theta)) / (theta * theta)
     }
 }
 
@@ -213,6 +235,14 @@ mod tests {
                 0.1013211836423377714,
             ),
         ];
+        for (theta, d) in [
+            (1e-8, 0.041_666_666_666_666_666_53),
+            (0.199_999, 0.041_611_151_330_780_503_33),
+            (0.200_001, 0.041_611_150_221_255_636_03),
+            (3.0, 0.030_987_746_955_550_056_08),
+        ] {
+            assert!((cos_remainder(theta) - d).abs() < 3e-15, "d at {theta}");
+        }
         for (theta, a, b, c) in cases {
             assert!((one_minus_cos_over_sq(theta) - a).abs() < 1e-15, "a at {theta}");
             assert!((theta_minus_sin_over_cube(theta) - b).abs() < 3e-15, "b at {theta}");

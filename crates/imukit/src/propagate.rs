@@ -1,0 +1,312 @@
+//! Error-state covariance propagation along a strapdown integration (ESKF; Solà, "Quaternion
+//! kinematics for the error-state Kalman filter", 2017, §5.4).
+//!
+//! | item | convention |
+//! |---|---|
+//! | error state δx (15) | `[δp, δv, δθ, δb_a, δb_g]` (Solà's order) |
+//! | perturbations | `p = p̂ + δp`, `v = v̂ + δv`, `R = R̂ Exp(δθ)` (right, local), `b = b̂ + δb` |
+//! | impulses i (12) | `[v_i, θ_i, a_i, ω_i]`: velocity, angle, accelerometer-bias and gyro-bias steps |
+//! | `Q_i` | `diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃` from continuous densities ([`Noise`]) |
+//!
+//! The discrete step whose Jacobians are used is the first-order one, with impulses:
+//! `p⁺ = p + v h + ½(R â + g) h²`, `v⁺ = v + (R â + g) h + v_i`, `R⁺ = R Exp(ω̂ h + θ_i)`,
+//! `b_a⁺ = b_a + a_i`, `b_g⁺ = b_g + ω_i` with `â = a_m − b_a`, `ω̂ = ω_m − b_g`. Its exact
+//! Jacobians (tested against central differences) are, in 3×3 blocks,
+//!
+//! ```text
+//!       δp   δv    δθ              δb_a        δb_g                v_i  θ_i     a_i  ω_i
+//! F_x = I    hI   −½h² R[â]×      −½h² R      0             F_i = 0    0       0    0
+//!       0    I    −h R[â]×        −h R        0                   I    0       0    0
+//!       0    0    Exp(ω̂h)ᵀ        0           −h J_r(ω̂h)          0    J_r(ω̂h) 0    0
+//!       0    0    0               I           0                   0    0       I    0
+//!       0    0    0               0           I                   0    0       0    I
+//! ```
+//!
+//! Solà's §5.4.3 drops the h² terms of the position row and uses `I` for `J_r`; both are kept here
+//! because they cost nothing in the block product. The mean may be integrated with any
+//! [`strapdown::Scheme`](crate::strapdown::Scheme); the covariance always uses these Jacobians at
+//! the state and sample at the start of each step (their difference from the scheme's own
+//! Jacobians is O(h) relative per step).
+
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+use crate::strapdown::{self, Bias, NavState, Options, Samples, Stepper};
+use crate::{so3, Error, Result};
+
+/// 15×15 error-state covariance, order `[δp, δv, δθ, δb_a, δb_g]`.
+pub type Covariance = SMatrix<f64, 15, 15>;
+
+/// Continuous-time noise densities (Kalibr convention).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Noise {
+    /// Gyro white noise σ_g [rad/s/√Hz].
+    pub gyro_density: f64,
+    /// Accelerometer white noise σ_a [m/s²/√Hz].
+    pub accel_density: f64,
+    /// Gyro bias random walk σ_bg [rad/s²/√Hz].
+    pub gyro_random_walk: f64,
+    /// Accelerometer bias random walk σ_ba [m/s³/√Hz].
+    pub accel_random_walk: f64,
+}
+
+impl Noise {
+    fn check(&self) -> Result<()> {
+        let all = [
+            self.gyro_density,
+            self.accel_density,
+            self.gyro_random_walk,
+            self.accel_random_walk,
+        ];
+        if all.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            Ok(())
+        } else {
+            Err(Error::Parameter {
+                name: "noise",
+                expected: "finite, non-negative densities",
+                got: format!("{all:?}"),
+            })
+        }
+    }
+}
+
+/// The step Jacobians as dense matrices (the propagation itself uses their block structure).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepJacobians {
+    /// `∂δx⁺/∂δx`, 15×15.
+    pub f_x: Covariance,
+    /// `∂δx⁺/∂i`, 15×12.
+    pub f_i: SMatrix<f64, 15, 12>,
+}
+
+/// Blocks of one step: `R`, `[â]×`, `Exp(ω̂h)ᵀ`, `J_r(ω̂h)`.
+struct StepBlocks {
+    r: Matrix3<f64>,
+    a_cross: Matrix3<f64>,
+    phi_t: Matrix3<f64>,
+    jr: Matrix3<f64>,
+}
+
+impl StepBlocks {
+    fn new(x: &NavState, w_hat: &Vector3<f64>, a_hat: &Vector3<f64>, h: f64) -> Self {
+        let theta = w_hat * h;
+        Self {
+            r: *x.rotation.to_rotation_matrix().matrix(),
+            a_cross: so3::hat(a_hat),
+            phi_t: so3::exp(&theta).matrix().transpose(),
+            jr: so3::right_jacobian(&theta),
+        }
+    }
+}
+
+/// Dense `F_x`, `F_i` of the first-order step from `x` with bias-corrected inputs `ω̂`, `â`.
+pub fn step_jacobians(x: &NavState, w_hat: &Vector3<f64>, a_hat: &Vector3<f64>, h: f64) -> StepJacobians {
+    let b = StepBlocks::new(x, w_hat, a_hat, h);
+    let i3 = Matrix3::identity();
+    let mut f_x = Covariance::identity();
+    let mut set = |r: usize, c: usize, m: Matrix3<f64>| f_x.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&m);
+    set(0, 1, i3 * h);
+    set(0, 2, -b.r * b.a_cross * (0.5 * h * h));
+    set(0, 3, -b.r * (0.5 * h * h));
+    set(1, 2, -b.r * b.a_cross * h);
+    set(1, 3, -b.r * h);
+    set(2, 2, b.phi_t);
+    set(2, 4, -b.jr * h);
+    let mut f_i = SMatrix::<f64, 15, 12>::zeros();
+    f_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&i3);
+    f_i.fixed_view_mut::<3, 3>(6, 3).copy_from(&b.jr);
+    f_i.fixed_view_mut::<3, 3>(9, 6).copy_from(&i3);
+    f_i.fixed_view_mut::<3, 3>(12, 9).copy_from(&i3);
+    StepJacobians { f_x, f_i }
+}
+
+/// `Q_i` for a step of `h` seconds.
+pub fn impulse_covariance(noise: &Noise, h: f64) -> SMatrix<f64, 12, 12> {
+    let d = [
+        noise.accel_density,
+        noise.gyro_density,
+        noise.accel_random_walk,
+        noise.gyro_random_walk,
+    ];
+    SMatrix::<f64, 12, 12>::from_diagonal(&SMatrix::<f64, 12, 1>::from_fn(|i, _| d[i / 3] * d[i / 3] * h))
+}
+
+/// The covariance as 5×5 blocks of 3×3, the form the propagation works in.
+type Blocks = [[Matrix3<f64>; 5]; 5];
+const P: usize = 0;
+const V: usize = 1;
+const TH: usize = 2;
+const BA: usize = 3;
+const BG: usize = 4;
+
+fn to_blocks(c: &Covariance) -> Blocks {
+    std::array::from_fn(|i| std::array::from_fn(|j| c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()))
+}
+
+fn write_blocks(b: &Blocks, out: &mut [f64]) {
+    // Row-major 15×15.
+    for (i, row) in b.iter().enumerate() {
+        for (j, block) in row.iter().enumerate() {
+            for r in 0..3 {
+                for c in 0..3 {
+                    out[15 * (3 * i + r) + 3 * j + c] = block[(r, c)];
+                }
+            }
+        }
+    }
+}
+
+#[allow(clippy::needless_range_loop)] // block indices name error-state components (P, V, TH, …)
+/// `P ← F_x P F_xᵀ + F_i Q_i F_iᵀ` using the block structure of `F_x`: about 10 3×3 products per
+/// block row instead of a dense 15×15 triple product, and only the upper block triangle.
+fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
+    let half_h2 = 0.5 * h * h;
+    // A = F_x P: rows δp, δv, δθ change; δb rows are P's.
+    let mut a: Blocks = *p;
+    for j in 0..5 {
+        let n = b.r * (b.a_cross * p[TH][j] + p[BA][j]);
+        a[P][j] = p[P][j] + p[V][j] * h - n * half_h2;
+        a[V][j] = p[V][j] - n * h;
+        a[TH][j] = b.phi_t * p[TH][j] - b.jr * p[BG][j] * h;
+    }
+    // P' = A F_xᵀ, upper block triangle, then mirrored.
+    let (rt, at) = (b.r.transpose(), b.a_cross.transpose());
+    let (phi, jrt) = (b.phi_t.transpose(), b.jr.transpose());
+    for i in 0..3 {
+        let n = (a[i][TH] * at + a[i][BA]) * rt;
+        if i == P {
+            p[P][P] = a[P][P] + a[P][V] * h - n * half_h2;
+        }
+        if i <= V {
+            p[i][V] = a[i][V] - n * h;
+        }
+        p[i][TH] = a[i][TH] * phi - a[i][BG] * jrt * h;
+        p[i][BA] = a[i][BA];
+        p[i][BG] = a[i][BG];
+    }
+    let q = |d: f64| d * d * h;
+    p[V][V] += Matrix3::identity() * q(noise.accel_density);
+    p[TH][TH] += b.jr * jrt * q(noise.gyro_density);
+    p[BA][BA] += Matrix3::identity() * q(noise.accel_random_walk);
+    p[BG][BG] += Matrix3::identity() * q(noise.gyro_random_walk);
+    for i in 0..5 {
+        // Exact symmetry on the diagonal blocks, mirrored blocks below it.
+        p[i][i] = (p[i][i] + p[i][i].transpose()) * 0.5;
+        for j in i + 1..5 {
+            p[j][i] = p[i][j].transpose();
+        }
+    }
+}
+
+/// Output buffers of [`propagate`].
+#[derive(Debug)]
+pub struct Outputs<'a> {
+    /// Every state, `[p, v, q]` rows ([`strapdown::STATE_WIDTH`]), or `None`.
+    pub states: Option<&'a mut [f64]>,
+    /// Covariances (row-major 15×15) at samples `0, every, 2·every, …` and the last sample.
+    pub covariances: &'a mut [f64],
+    /// Stride of the stored covariances (≥ 1).
+    pub every: usize,
+}
+
+/// How many covariances [`propagate`] stores for `n` samples with stride `every`.
+pub fn covariance_count(n: usize, every: usize) -> usize {
+    if n == 0 || every == 0 {
+        return 0;
+    }
+    (n - 1) / every + 1 + usize::from(!(n - 1).is_multiple_of(every))
+}
+
+/// Integrates the mean with `options.scheme` and propagates `covariance` (initial, at sample 0)
+/// with the step Jacobians of the module docs. Returns the final state and covariance.
+pub fn propagate(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    covariance: &Covariance,
+    bias: &Bias,
+    noise: &Noise,
+    options: &Options,
+    outputs: Outputs<'_>,
+) -> Result<(NavState, Covariance)> {
+    samples.check_shapes()?;
+    noise.check()?;
+    strapdown::check_parameters(initial, bias, options)?;
+    let n = samples.t.len();
+    let Outputs {
+        mut states,
+        covariances,
+        every,
+    } = outputs;
+    if every == 0 {
+        return Err(Error::Parameter {
+            name: "every",
+            expected: "a stride of at least 1",
+            got: "0".into(),
+        });
+    }
+    if covariances.len() != 225 * covariance_count(n, every) {
+        let e = Error::RowCount {
+            input: covariance_count(n, every),
+            output: covariances.len() / 225,
+        };
+        return Err(e.in_argument("covariances"));
+    }
+    if let Some(out) = states.as_deref() {
+        if out.len() != strapdown::STATE_WIDTH * n {
+            let e = Error::RowCount {
+                input: n,
+                output: out.len() / strapdown::STATE_WIDTH,
+            };
+            return Err(e.in_argument("states"));
+        }
+    }
+    if !(covariance.iter().all(|v| v.is_finite())
+        && (covariance - covariance.transpose()).amax() <= 1e-9 * covariance.amax())
+    {
+        return Err(Error::Parameter {
+            name: "covariance",
+            expected: "a finite, symmetric 15×15 matrix",
+            got: "a non-finite or asymmetric one".into(),
+        });
+    }
+    if !samples.first_ok() {
+        return Err(samples.value_error());
+    }
+    let stepper = Stepper::new(*samples, *bias, *options);
+    let mut x = *initial;
+    let mut p = to_blocks(covariance);
+    let mut stored = 0;
+    let mut store_cov = |p: &Blocks, stored: &mut usize| {
+        write_blocks(p, &mut covariances[225 * *stored..225 * (*stored + 1)]);
+        *stored += 1;
+    };
+    if let Some(out) = states.as_deref_mut() {
+        strapdown::store(out, 0, &x);
+    }
+    store_cov(&p, &mut stored);
+    for k in 0..n - 1 {
+        if !samples.step_ok(k) {
+            return Err(samples.value_error());
+        }
+        let h = samples.t[k + 1] - samples.t[k];
+        let w_hat = samples.gyro_at(k) - bias.gyro;
+        let a_hat = samples.accel_at(k) - bias.accel;
+        propagate_blocks(&mut p, &StepBlocks::new(&x, &w_hat, &a_hat, h), noise, h);
+        x = stepper.step(&x, k);
+        if let Some(out) = states.as_deref_mut() {
+            strapdown::store(out, k + 1, &x);
+        }
+        if (k + 1).is_multiple_of(every) || k + 2 == n {
+            store_cov(&p, &mut stored);
+        }
+    }
+    let mut last = Covariance::zeros();
+    for (i, row) in p.iter().enumerate() {
+        for (j, block) in row.iter().enumerate() {
+            last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
+        }
+    }
+    if !last.iter().all(|v| v.is_finite()) {
+        return Err(Error::Overflow { index: n - 1 });
+    }
+    Ok((x, last))
+}

@@ -1,0 +1,333 @@
+//! Strapdown integration: position, velocity and attitude from IMU samples.
+//!
+//! | item | convention |
+//! |---|---|
+//! | state | `p` [m], `v` [m/s] in the world frame, `q = q_wb` (body to world, Hamilton) |
+//! | inputs | `ω_m` [rad/s] and specific force `a_m` [m/s²] in the body frame, biases `b_g`, `b_a` |
+//! | model | `ṗ = v`, `v̇ = R (a_m − b_a) + g`, `Ṙ = R [ω_m − b_g]×`; g added (default `(0, 0, −9.81)`) |
+//! | output row | `[p (3), v (3), q (4, xyzw)]` per sample, element 0 = the initial state |
+//!
+//! Schemes over step `k → k+1`, `h = t[k+1] − t[k]`, `â = a_m − b_a`, `ω̂ = ω_m − b_g`:
+//!
+//! | scheme | update | order |
+//! |---|---|---|
+//! | [`Scheme::Euler`] | `a = R_k â_k + g`; `p += v h + ½ a h²`; `v += a h`; `R ← R Exp(ω̂_k h)` | 1 |
+//! | [`Scheme::Midpoint`] | `R⁺ = R Exp(½(ω̂_k + ω̂_{k+1}) h)`; `a = ½(R_k â_k + R⁺ â_{k+1}) + g`; then as euler | 2 |
+//! | [`Scheme::Rk4`] | classical RK4 on the ODE; mid-step `ω`, `a` from the local cubic | 4 |
+//! | [`Scheme::Exp`] | exact for `ω̂_k`, `â_k` held over the step: `v += R Γ₁ â h + g h`, `p += v h + R Γ₂ â h² + ½ g h²` | 1 (exact for constant input) |
+//!
+//! `Γ₁ = J_l(ω̂ h)` and `Γ₂` = [`so3::exp_double_integral`]`(ω̂ h)`. The seed's discrete model
+//! omits the ½ on the position term; with it, the euler scheme is the exact solution for a
+//! world-frame acceleration held over the step.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use crate::interp::{Cubic, StepInterpolator};
+use crate::{quat, so3, time, Error, Result};
+
+/// Integration scheme; see the module table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// First order, samples at the start of the step.
+    Euler,
+    /// VINS-style midpoint: averaged rates, specific force rotated at both ends.
+    Midpoint,
+    /// Classical Runge–Kutta with cubic-interpolated inputs.
+    Rk4,
+    /// Closed form for inputs held constant over the step (zero-order hold).
+    Exp,
+}
+
+impl Scheme {
+    /// Name used by the bindings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Euler => "euler",
+            Scheme::Midpoint => "midpoint",
+            Scheme::Rk4 => "rk4",
+            Scheme::Exp => "exp",
+        }
+    }
+}
+
+/// Position, velocity and attitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavState {
+    /// Position in the world frame [m].
+    pub position: Vector3<f64>,
+    /// Velocity in the world frame [m/s].
+    pub velocity: Vector3<f64>,
+    /// Attitude `q_wb` (body to world).
+    pub rotation: UnitQuaternion<f64>,
+}
+
+/// Constant sensor biases subtracted from the samples.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Bias {
+    /// Gyro bias [rad/s].
+    pub gyro: Vector3<f64>,
+    /// Accelerometer bias [m/s²].
+    pub accel: Vector3<f64>,
+}
+
+/// The samples of one integration: times [s] (n), and flat `3n` gyro and accelerometer rows.
+#[derive(Debug, Clone, Copy)]
+pub struct Samples<'a> {
+    /// Timestamps [s], strictly increasing.
+    pub t: &'a [f64],
+    /// Body rates [rad/s], flat `3n`.
+    pub gyro: &'a [f64],
+    /// Specific force [m/s²], flat `3n`.
+    pub accel: &'a [f64],
+}
+
+impl Samples<'_> {
+    /// Checks lengths (values are checked during the run).
+    pub fn check_shapes(&self) -> Result<()> {
+        let n = self.t.len();
+        if n == 0 {
+            return Err(Error::Parameter {
+                name: "t",
+                expected: "at least one sample",
+                got: "0 samples".into(),
+            });
+        }
+        for (name, data) in [("gyro", self.gyro), ("accel", self.accel)] {
+            if data.len() != 3 * n {
+                return Err(Error::RowCount {
+                    input: n,
+                    output: data.len() / 3,
+                }
+                .in_argument(name));
+            }
+        }
+        Ok(())
+    }
+
+    /// The precise error for samples that failed a fast in-loop check: first bad index.
+    pub fn value_error(&self) -> Error {
+        if let Err(e) = time::check_increasing(self.t) {
+            return e.in_argument("t");
+        }
+        for (name, data) in [("gyro", self.gyro), ("accel", self.accel)] {
+            if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+                return Error::NonFinite { index: i / 3 }.in_argument(name);
+            }
+        }
+        Error::Parameter {
+            name: "samples",
+            expected: "values that failed the in-loop check",
+            got: "none found on the second look".into(),
+        }
+    }
+
+    /// Whether step k (into sample k+1) is usable: positive finite dt, finite samples at k+1.
+    #[inline]
+    pub(crate) fn step_ok(&self, k: usize) -> bool {
+        let h = self.t[k + 1] - self.t[k];
+        h > 0.0
+            && h <= f64::MAX
+            && self.gyro[3 * k + 3..3 * k + 6].iter().all(|v| v.is_finite())
+            && self.accel[3 * k + 3..3 * k + 6].iter().all(|v| v.is_finite())
+    }
+
+    /// Whether sample 0 is usable.
+    pub(crate) fn first_ok(&self) -> bool {
+        self.t[0].is_finite() && self.gyro[..3].iter().chain(&self.accel[..3]).all(|v| v.is_finite())
+    }
+
+    #[inline]
+    pub(crate) fn gyro_at(&self, k: usize) -> Vector3<f64> {
+        Vector3::new(self.gyro[3 * k], self.gyro[3 * k + 1], self.gyro[3 * k + 2])
+    }
+
+    #[inline]
+    pub(crate) fn accel_at(&self, k: usize) -> Vector3<f64> {
+        Vector3::new(self.accel[3 * k], self.accel[3 * k + 1], self.accel[3 * k + 2])
+    }
+}
+
+/// Options of [`integrate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Integration scheme.
+    pub scheme: Scheme,
+    /// Gravity in the world frame [m/s²], added to the rotated specific force.
+    pub gravity: Vector3<f64>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            scheme: Scheme::Midpoint,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+        }
+    }
+}
+
+/// Values per stored state: `[p, v, q]`.
+pub const STATE_WIDTH: usize = 10;
+
+pub(crate) fn store(out: &mut [f64], k: usize, x: &NavState) {
+    let q = x.rotation.coords;
+    let row = &mut out[STATE_WIDTH * k..STATE_WIDTH * (k + 1)];
+    row[..3].copy_from_slice(x.position.as_slice());
+    row[3..6].copy_from_slice(x.velocity.as_slice());
+    row[6..].copy_from_slice(&[q.x, q.y, q.z, q.w]);
+}
+
+/// One step of the chosen scheme from sample k to k+1, biases already removed by `inputs`.
+pub(crate) struct Stepper<'a> {
+    samples: Samples<'a>,
+    bias: Bias,
+    options: Options,
+    mid_gyro: StepInterpolator<'a, 1>,
+    mid_accel: StepInterpolator<'a, 1>,
+}
+
+impl<'a> Stepper<'a> {
+    pub(crate) fn new(samples: Samples<'a>, bias: Bias, options: Options) -> Self {
+        Self {
+            samples,
+            bias,
+            options,
+            mid_gyro: StepInterpolator::new(Cubic::new(samples.t, samples.gyro), [0.5]),
+            mid_accel: StepInterpolator::new(Cubic::new(samples.t, samples.accel), [0.5]),
+        }
+    }
+
+    /// The state at sample k+1 from the state at sample k.
+    #[inline]
+    pub(crate) fn step(&self, x: &NavState, k: usize) -> NavState {
+        let s = &self.samples;
+        let h = s.t[k + 1] - s.t[k];
+        let g = self.options.gravity;
+        let w0 = s.gyro_at(k) - self.bias.gyro;
+        let a0 = s.accel_at(k) - self.bias.accel;
+        let (p, v, q) = (x.position, x.velocity, x.rotation);
+        match self.options.scheme {
+            Scheme::Euler => {
+                let acc = q * a0 + g;
+                NavState {
+                    position: p + v * h + acc * (0.5 * h * h),
+                    velocity: v + acc * h,
+                    rotation: compose(&q, &(w0 * h)),
+                }
+            }
+            Scheme::Midpoint => {
+                let w1 = s.gyro_at(k + 1) - self.bias.gyro;
+                let a1 = s.accel_at(k + 1) - self.bias.accel;
+                let q1 = compose(&q, &((w0 + w1) * (0.5 * h)));
+                let acc = (q * a0 + q1 * a1) * 0.5 + g;
+                NavState {
+                    position: p + v * h + acc * (0.5 * h * h),
+                    velocity: v + acc * h,
+                    rotation: q1,
+                }
+            }
+            Scheme::Exp => {
+                let phi = w0 * h;
+                let dv = q * (so3::left_jacobian(&phi) * a0) * h;
+                let dp = q * (so3::exp_double_integral(&phi) * a0) * (h * h);
+                NavState {
+                    position: p + v * h + dp + g * (0.5 * h * h),
+                    velocity: v + dv + g * h,
+                    rotation: compose(&q, &phi),
+                }
+            }
+            Scheme::Rk4 => {
+                let [wm] = self.mid_gyro.at(k);
+                let [am] = self.mid_accel.at(k);
+                let wm = wm - self.bias.gyro;
+                let am = am - self.bias.accel;
+                let w1 = s.gyro_at(k + 1) - self.bias.gyro;
+                let a1 = s.accel_at(k + 1) - self.bias.accel;
+                // y = (p, v, q) with q unnormalised inside the step; R(q) uses q/|q|.
+                let f = |v: &Vector3<f64>, q: &Quaternion<f64>, w: &Vector3<f64>, a: &Vector3<f64>| {
+                    let rot = UnitQuaternion::new_normalize(*q);
+                    (*v, rot * a + g, quat::multiply(q, &Quaternion::from_imag(*w)) * 0.5)
+                };
+                let q0 = q.into_inner();
+                let (dp1, dv1, dq1) = f(&v, &q0, &w0, &a0);
+                let (dp2, dv2, dq2) = f(&(v + dv1 * (0.5 * h)), &(q0 + dq1 * (0.5 * h)), &wm, &am);
+                let (dp3, dv3, dq3) = f(&(v + dv2 * (0.5 * h)), &(q0 + dq2 * (0.5 * h)), &wm, &am);
+                let (dp4, dv4, dq4) = f(&(v + dv3 * h), &(q0 + dq3 * h), &w1, &a1);
+                let c = h / 6.0;
+                NavState {
+                    position: p + (dp1 + dp2 * 2.0 + dp3 * 2.0 + dp4) * c,
+                    velocity: v + (dv1 + dv2 * 2.0 + dv3 * 2.0 + dv4) * c,
+                    rotation: UnitQuaternion::new_normalize(q0 + (dq1 + dq2 * 2.0 + dq3 * 2.0 + dq4) * c),
+                }
+            }
+        }
+    }
+}
+
+/// `q ⊗ Exp(θ)`, renormalised: a step's worth of rounding never accumulates.
+#[inline]
+fn compose(q: &UnitQuaternion<f64>, theta: &Vector3<f64>) -> UnitQuaternion<f64> {
+    let r = quat::multiply(q.quaternion(), quat::exp(theta).quaternion());
+    // One Newton step on 1/|r| (|r| is 1 to rounding): no square root on the hot path.
+    UnitQuaternion::new_unchecked(r * (1.5 - 0.5 * r.norm_squared()))
+}
+
+/// Integrates the samples from `initial`, writing every state (`[p, v, q]`, see
+/// [`STATE_WIDTH`]) to `out` when given; returns the final state. No allocation per sample.
+pub fn integrate(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    bias: &Bias,
+    options: &Options,
+    mut out: Option<&mut [f64]>,
+) -> Result<NavState> {
+    samples.check_shapes()?;
+    let n = samples.t.len();
+    if let Some(out) = out.as_deref() {
+        if out.len() != STATE_WIDTH * n {
+            let e = Error::RowCount {
+                input: n,
+                output: out.len() / STATE_WIDTH,
+            };
+            return Err(e.in_argument("out"));
+        }
+    }
+    check_parameters(initial, bias, options)?;
+    if !samples.first_ok() {
+        return Err(samples.value_error());
+    }
+    let stepper = Stepper::new(*samples, *bias, *options);
+    let mut x = *initial;
+    if let Some(out) = out.as_deref_mut() {
+        store(out, 0, &x);
+    }
+    for k in 0..n - 1 {
+        if !samples.step_ok(k) {
+            return Err(samples.value_error());
+        }
+        x = stepper.step(&x, k);
+        if let Some(out) = out.as_deref_mut() {
+            store(out, k + 1, &x);
+        }
+    }
+    if !(x.position.iter().chain(x.velocity.iter()).all(|v| v.is_finite())) {
+        return Err(Error::Overflow { index: n - 1 });
+    }
+    Ok(x)
+}
+
+/// Finite initial state, biases and gravity.
+pub(crate) fn check_parameters(initial: &NavState, bias: &Bias, options: &Options) -> Result<()> {
+    let finite = |name: &'static str, values: &[f64]| {
+        if values.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(Error::NonFinite { index: 0 }.in_argument(name))
+        }
+    };
+    finite("initial.position", initial.position.as_slice())?;
+    finite("initial.velocity", initial.velocity.as_slice())?;
+    finite("initial.rotation", initial.rotation.coords.as_slice())?;
+    finite("bias.gyro", bias.gyro.as_slice())?;
+    finite("bias.accel", bias.accel.as_slice())?;
+    finite("gravity", options.gravity.as_slice())
+}
