@@ -60,3 +60,24 @@ def coning_body_rate(t: np.ndarray) -> np.ndarray:
     cross = np.cross(phi, dphi)
     cross2 = np.cross(phi, cross)
     return dphi - (1 - np.cos(b)) / b**2 * cross + (b - np.sin(b)) / b**3 * cross2
+
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def position(t: np.ndarray) -> np.ndarray:
+    """p(t) [m] of the strapdown test trajectory (with :func:`attitude` as its attitude)."""
+    return np.stack([2.0 * np.sin(0.7 * t), 1.5 * np.cos(0.5 * t), 0.3 * np.sin(1.1 * t)], axis=-1)
+
+
+def velocity(t: np.ndarray) -> np.ndarray:
+    return np.stack([1.4 * np.cos(0.7 * t), -0.75 * np.sin(0.5 * t), 0.33 * np.cos(1.1 * t)], axis=-1)
+
+
+def acceleration(t: np.ndarray) -> np.ndarray:
+    return np.stack([-0.98 * np.sin(0.7 * t), -0.375 * np.cos(0.5 * t), -0.363 * np.sin(1.1 * t)], axis=-1)
+
+
+def specific_force(t: np.ndarray) -> np.ndarray:
+    """What an ideal accelerometer reads: Rᵀ (a − g), body frame [m/s²]."""
+    return attitude(t).inv().apply(acceleration(t) - GRAVITY)

@@ -10,10 +10,11 @@ right perturbations, intrinsic ZYX Euler angles, SI units) are tabulated with wo
 array([0., 1., 0.])
 """
 
-from imukit import euler, quat, so3
+from imukit import euler, io, quat, so3
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
+    FileFormatError,
     GimbalLockError,
     ImukitError,
     InvalidQuaternionError,
@@ -24,20 +25,32 @@ from imukit._errors import (
     TimestampError,
 )
 from imukit.attitude import integrate_attitude
+from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.state import NavState, Trajectory
+from imukit.strapdown import integrate, propagate
 
 __all__ = [
     "DTypeError",
+    "FileFormatError",
     "GimbalLockError",
+    "ImuBias",
+    "ImuData",
+    "ImuNoise",
     "ImukitError",
     "InvalidQuaternionError",
     "InvalidRotationError",
+    "NavState",
     "NonFiniteError",
     "ParameterError",
     "ShapeError",
     "TimestampError",
+    "Trajectory",
     "__version__",
     "euler",
+    "integrate",
     "integrate_attitude",
+    "io",
+    "propagate",
     "quat",
     "so3",
 ]

@@ -8,16 +8,17 @@ caller's batch shape. Leading dimensions broadcast like numpy's.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from imukit._errors import DTypeError, ParameterError, ShapeError
+from imukit._errors import DTypeError, NonFiniteError, ParameterError, ShapeError, TimestampError
 
 FloatArray = NDArray[np.float64]
 Kernel = Callable[..., FloatArray]
+_T = TypeVar("_T", bound=np.generic)
 
 # xyzw <-> wxyz index maps for the scalar_first option.
 _TO_XYZW = [1, 2, 3, 0]
@@ -130,5 +131,55 @@ def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
                     f"{name}: integer timestamps are read as nanoseconds, but the median step is "
                     f"{np.median(steps)} ns; pass float seconds instead"
                 )
-        return np.ascontiguousarray((stamps - stamps[:1]).astype(np.float64) * 1e-9)
+        return seconds_from_ns(stamps - stamps[:1])
     return np.ascontiguousarray(as_float_array(raw, name))
+
+
+def seconds_from_ns(t_ns: NDArray[np.int64]) -> FloatArray:
+    """Float seconds of int64 nanosecond stamps, within one rounding of the exact value.
+
+    Whole seconds and the nanosecond remainder are converted separately, so a 1.4e18 ns epoch
+    gives the float nearest ``t_ns / 1e9`` (bar a tie), not the 256 ns-coarse ``float(t_ns)`` scaled.
+    """
+    whole, frac = np.divmod(t_ns, np.int64(1_000_000_000))
+    return np.ascontiguousarray(whole.astype(np.float64) + frac.astype(np.float64) / 1e9)
+
+
+def readonly_copy(arr: NDArray[_T]) -> NDArray[_T]:
+    """A C-contiguous copy of ``arr`` with the writeable flag cleared."""
+    out = np.array(arr, order="C", copy=True)
+    out.flags.writeable = False
+    return out
+
+
+def check_finite_rows(arr: FloatArray, name: str, what: str = "sample") -> None:
+    """Raise :class:`NonFiniteError` naming the first row (along axis 0) holding NaN or ±inf."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        k = int(np.argmax(bad.reshape(len(arr), -1).any(axis=1)))
+        raise NonFiniteError(f"{name}: non-finite value at {what} {k}: {arr[k].tolist()}")
+
+
+def check_increasing(t: NDArray[np.int64] | FloatArray, name: str, unit: str) -> None:
+    """Raise :class:`TimestampError` naming the first sample whose step from the previous is ≤ 0."""
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise TimestampError(
+            f"{name}: time must increase strictly: step into sample {k + 1} has dt = {steps[k]} {unit}"
+        )
+
+
+def readonly_array(
+    x: ArrayLike, name: str, shape: tuple[int, ...], shape_text: str, what: str = "sample"
+) -> FloatArray:
+    """``x`` as a finite float64 array of exactly ``shape``, copied and read-only.
+
+    ``shape_text`` is how the message states the expected shape, e.g. ``"(N, 3) with N = len(t) = 5"``.
+    """
+    arr = as_float_array(x, name)
+    if arr.shape != shape:
+        raise ShapeError(f"{name}: expected shape {shape_text}, got {arr.shape}")
+    check_finite_rows(arr, name, what)
+    return readonly_copy(arr)

@@ -25,6 +25,8 @@ __all__ = [
     "so3_jacobian",
     "so3_log",
     "so3_vee",
+    "strapdown_integrate",
+    "strapdown_propagate",
 ]
 
 __version__: str
@@ -56,3 +58,24 @@ def attitude_integrate(
     gimbal_tolerance: float,
     final_only: bool,
 ) -> NDArray[np.float64]: ...
+def strapdown_integrate(
+    t: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+    initial: list[float],
+    bias_values: list[float],
+    gravity: list[float],
+    scheme: str,
+) -> NDArray[np.float64]: ...
+def strapdown_propagate(
+    t: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+    initial: list[float],
+    covariance: NDArray[np.float64],
+    bias_values: list[float],
+    noise: list[float],
+    gravity: list[float],
+    scheme: str,
+    every: int,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...

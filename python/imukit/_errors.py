@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     "DTypeError",
+    "FileFormatError",
     "GimbalLockError",
     "ImukitError",
     "InvalidQuaternionError",
@@ -54,3 +55,7 @@ class ParameterError(ImukitError, ValueError):
 
 class TimestampError(ImukitError, ValueError):
     """Timestamps that are not strictly increasing (the message names the first bad sample)."""
+
+
+class FileFormatError(ImukitError, ValueError):
+    """A file line that cannot be read (the message names the file and the line number)."""

@@ -1,0 +1,353 @@
+"""IMU data types: samples (:class:`ImuData`), biases (:class:`ImuBias`), noise (:class:`ImuNoise`).
+
+=====================  ===========================================================================
+frame                  gyro and accel are in the body (IMU) frame ``b``
+gyro                   ``(N, 3)`` angular rate ω_b [rad/s]
+accel                  ``(N, 3)`` specific force ``a_m = R_wbᵀ (a_w − g_w)`` [m/s²]; +9.81 on the up
+                       axis at rest (``docs/conventions.md``, row 7)
+time                   ``t`` float64 seconds, or integer nanoseconds (EuRoC / ROS), told apart by
+                       dtype (row 10); every ``dt`` comes from the stamps
+noise                  continuous-time densities, Kalibr style (row 11); :meth:`ImuNoise.discrete`
+                       turns them into per-sample variances for the actual ``dt``
+=====================  ===========================================================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imukit._arrays import (
+    FloatArray,
+    check_finite_rows,
+    check_increasing,
+    readonly_array,
+    readonly_copy,
+    seconds_from_ns,
+)
+from imukit._errors import DTypeError, ParameterError, ShapeError, TimestampError
+
+__all__ = ["DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "ImuNoise"]
+
+# Integer stamps whose median step is below this many ns are almost surely not nanoseconds.
+_MIN_NS_STEP = 1000
+
+
+class ImuData:
+    """Validated, immutable IMU samples: ``t`` (N,), ``gyro`` (N, 3) [rad/s], ``accel`` (N, 3) [m/s²].
+
+    Parameters
+    ----------
+    t
+        ``(N,)`` sample times, strictly increasing, N ≥ 1: float **seconds**, or integer
+        **nanoseconds** (the dtype decides, as in :func:`imukit.integrate_attitude`; integer stamps
+        whose median step is under 1 µs are refused with :class:`imukit.ParameterError`).
+    gyro
+        ``(N, 3)`` body angular rates ω_b [rad/s]; row k taken at ``t[k]``.
+    accel
+        ``(N, 3)`` body specific force [m/s²]; row k taken at ``t[k]``.
+    max_gap
+        If given [s], a step ``t[k] − t[k-1]`` larger than it is an error
+        (:class:`imukit.TimestampError` naming sample k): dropped samples are reported, not
+        integrated over.
+
+    Attributes
+    ----------
+    t
+        ``(N,)`` float64 seconds: the float input, or ``t_ns / 1e9`` (nearest float) for integer
+        input. Absolute epoch seconds resolve only ~0.24 µs: integrate over :attr:`seconds`.
+    t_ns
+        ``(N,)`` int64 nanoseconds for integer input, else None.
+    gyro, accel
+        ``(N, 3)`` float64, C-contiguous, read-only copies of the input.
+
+    Raises
+    ------
+    ShapeError, DTypeError, NonFiniteError, TimestampError, ParameterError
+        Messages start with the argument name and name the first bad sample.
+    """
+
+    __slots__ = ("_seconds", "accel", "gyro", "t", "t_ns")
+
+    t: FloatArray
+    t_ns: NDArray[np.int64] | None
+    gyro: FloatArray
+    accel: FloatArray
+    _seconds: FloatArray
+
+    def __init__(self, t: ArrayLike, gyro: ArrayLike, accel: ArrayLike, *, max_gap: float | None = None) -> None:
+        raw = np.asarray(t)
+        if raw.ndim != 1 or len(raw) == 0:
+            raise ShapeError(f"t: expected shape (N,) with N ≥ 1, got {raw.shape}")
+        if raw.dtype.kind in "iu":
+            if raw.dtype.kind == "u" and raw.max() > np.iinfo(np.int64).max:
+                raise ParameterError(f"t: integer nanoseconds exceed the int64 range (max {raw.max()})")
+            t_ns = raw.astype(np.int64)
+            steps_ns = np.diff(t_ns)
+            check_increasing(t_ns, "t", "ns")
+            if len(steps_ns) and np.median(steps_ns) < _MIN_NS_STEP:
+                raise ParameterError(
+                    f"t: integer timestamps are read as nanoseconds, but the median step is "
+                    f"{np.median(steps_ns)} ns; pass float seconds instead"
+                )
+            seconds = seconds_from_ns(t_ns - t_ns[0])
+            t_s = seconds_from_ns(t_ns)
+            frozen_ns: NDArray[np.int64] | None = readonly_copy(t_ns)
+        elif raw.dtype.kind == "f":
+            t_s = raw.astype(np.float64)
+            check_finite_rows(t_s, "t")
+            check_increasing(t_s, "t", "s")
+            seconds = t_s - t_s[0]
+            frozen_ns = None
+        else:
+            raise DTypeError(f"t: expected float seconds or integer nanoseconds, got an array of dtype {raw.dtype}")
+        n = len(raw)
+        gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")
+        accel_arr = readonly_array(accel, "accel", (n, 3), f"(N, 3) with N = len(t) = {n}")
+        if max_gap is not None:
+            gap = _number(max_gap, "max_gap", positive=True, what="a positive number of seconds or None")
+            steps = np.diff(seconds)
+            over = np.flatnonzero(steps > gap)
+            if over.size:
+                k = int(over[0])
+                step = f"{steps[k]:.12g} s" if frozen_ns is None else f"{int(frozen_ns[k + 1] - frozen_ns[k])} ns"
+                raise TimestampError(f"t: gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s")
+        set_ = object.__setattr__
+        set_(self, "t", readonly_copy(t_s))
+        set_(self, "t_ns", frozen_ns)
+        set_(self, "gyro", gyro_arr)
+        set_(self, "accel", accel_arr)
+        set_(self, "_seconds", readonly_copy(seconds))
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"ImuData is immutable: cannot set {name!r}")
+
+    @property
+    def seconds(self) -> FloatArray:
+        """``(N,)`` float64 seconds since the first sample (read-only); exact from ``t_ns`` when present.
+
+        For integer input the offsets are taken in int64 and rounded once, so every ``dt`` is
+        right to far below a nanosecond even at a 1.4e18 ns epoch. Integrators consume this.
+        """
+        return self._seconds
+
+    @property
+    def dt(self) -> FloatArray:
+        """``(N-1,)`` steps [s], ``np.diff(seconds)``."""
+        return np.diff(self._seconds)
+
+    @property
+    def rate_hz(self) -> float:
+        """Median sample rate ``median(1 / dt)`` [Hz]; needs at least 2 samples."""
+        if len(self) < 2:
+            raise ShapeError("rate_hz: a single sample has no rate")
+        return float(np.median(1.0 / self.dt))
+
+    @property
+    def duration(self) -> float:
+        """``t[-1] − t[0]`` [s] (0 for one sample)."""
+        return float(self._seconds[-1])
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __getitem__(self, index: slice) -> ImuData:
+        """A slice of the samples as a new ``ImuData``; the step must be positive and the slice non-empty."""
+        if not isinstance(index, slice):
+            raise TypeError(f"ImuData indices must be slices, got {type(index).__name__}")
+        start, stop, step = index.indices(len(self))
+        if step <= 0 or len(range(start, stop, step)) == 0:
+            raise ShapeError(f"index: ImuData slices need a positive step and at least 1 sample, got {index}")
+        t = self.t if self.t_ns is None else self.t_ns
+        return ImuData(t[index], self.gyro[index], self.accel[index])
+
+    def __repr__(self) -> str:
+        stamps = "int64 ns" if self.t_ns is not None else "float s"
+        rate = f", {self.rate_hz:.6g} Hz" if len(self) > 1 else ""
+        return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps})"
+
+
+class ImuBias:
+    """Constant IMU biases in the body frame: ``gyro`` (3,) [rad/s], ``accel`` (3,) [m/s²]; immutable.
+
+    The measurement model is ``ω_m = ω_b + b_g + n_g`` and ``a_m = R_wbᵀ (a_w − g_w) + b_a + n_a``,
+    so a bias is subtracted from the readings to correct them.
+    """
+
+    __slots__ = ("accel", "gyro")
+
+    gyro: FloatArray
+    accel: FloatArray
+
+    def __init__(self, gyro: ArrayLike = (0.0, 0.0, 0.0), accel: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        object.__setattr__(self, "gyro", readonly_array(gyro, "gyro", (3,), "(3,)", "element"))
+        object.__setattr__(self, "accel", readonly_array(accel, "accel", (3,), "(3,)", "element"))
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"ImuBias is immutable: cannot set {name!r}")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ImuBias):
+            return NotImplemented
+        return bool(np.array_equal(self.gyro, other.gyro) and np.array_equal(self.accel, other.accel))
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"ImuBias(gyro={self.gyro.tolist()}, accel={self.accel.tolist()})"
+
+
+class DiscreteNoise(NamedTuple):
+    """Per-sample VARIANCES for one step ``dt`` (see :meth:`ImuNoise.discrete`)."""
+
+    gyro_var: float
+    """White gyro noise of one sample, ``σ_g² / dt`` [(rad/s)²]."""
+    accel_var: float
+    """White accelerometer noise of one sample, ``σ_a² / dt`` [(m/s²)²]."""
+    gyro_bias_var: float
+    """Gyro bias change over the step, ``σ_bg² dt`` [(rad/s)²]."""
+    accel_bias_var: float
+    """Accelerometer bias change over the step, ``σ_ba² dt`` [(m/s²)²]."""
+
+
+class DiscreteSigmas(NamedTuple):
+    """Per-sample STANDARD DEVIATIONS at a fixed rate (see :meth:`ImuNoise.to_discrete_sigmas`).
+
+    Field names match the keywords of :meth:`ImuNoise.from_discrete`, so
+    ``ImuNoise.from_discrete(**s._asdict(), rate_hz=r)`` inverts ``to_discrete_sigmas(r)``.
+    """
+
+    gyro_sigma: float
+    """White gyro noise of one sample [rad/s]."""
+    accel_sigma: float
+    """White accelerometer noise of one sample [m/s²]."""
+    gyro_walk_sigma: float
+    """Std of the gyro bias change per sample [rad/s]."""
+    accel_walk_sigma: float
+    """Std of the accelerometer bias change per sample [m/s²]."""
+
+
+def _number(value: object, name: str, *, positive: bool, what: str) -> float:
+    """``value`` as a finite float that is ≥ 0 (or > 0 when ``positive``), else :class:`ParameterError`."""
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        x = math.nan
+    if not (math.isfinite(x) and (x > 0.0 if positive else x >= 0.0)):
+        raise ParameterError(f"{name}: expected {what}, got {value!r}")
+    return x
+
+
+def _density(value: float, name: str) -> float:
+    return _number(value, name, positive=False, what="a finite, non-negative number")
+
+
+def _rate(rate_hz: float) -> float:
+    return _number(rate_hz, "rate_hz", positive=True, what="a positive, finite rate in Hz")
+
+
+@dataclass(frozen=True)
+class ImuNoise:
+    """Continuous-time IMU noise densities (Kalibr / Allan-variance convention), scalars for all axes.
+
+    =====================  ======  ===========  =================================
+    field                  symbol  unit         per sample of length dt
+    =====================  ======  ===========  =================================
+    ``gyro_density``       σ_g     rad/s/√Hz    white: σ = σ_g / √dt [rad/s]
+    ``accel_density``      σ_a     m/s²/√Hz     white: σ = σ_a / √dt [m/s²]
+    ``gyro_random_walk``   σ_bg    rad/s²/√Hz   bias step: σ = σ_bg √dt [rad/s]
+    ``accel_random_walk``  σ_ba    m/s³/√Hz     bias step: σ = σ_ba √dt [m/s²]
+    =====================  ======  ===========  =================================
+
+    Worked example, EuRoC's Kalibr values at 200 Hz (dt = 0.005 s, √200 = 14.1421):
+    gyroscope_noise_density 1.6968e-04 → σ = 1.6968e-04 · 14.1421 = 2.3996e-03 rad/s;
+    accelerometer_noise_density 2.0e-03 → 2.8284e-02 m/s²; gyroscope_random_walk 1.9393e-05 →
+    bias step 1.9393e-05 / 14.1421 = 1.3713e-06 rad/s; accelerometer_random_walk 3.0e-03 →
+    2.1213e-04 m/s². Discretise with the actual dt of each step, never a nominal rate
+    (``docs/conventions.md``, row 11). All four must be finite and ≥ 0.
+    """
+
+    gyro_density: float
+    accel_density: float
+    gyro_random_walk: float
+    accel_random_walk: float
+
+    def __post_init__(self) -> None:
+        for name in ("gyro_density", "accel_density", "gyro_random_walk", "accel_random_walk"):
+            object.__setattr__(self, name, _density(getattr(self, name), name))
+
+    @classmethod
+    def from_kalibr(
+        cls,
+        *,
+        gyroscope_noise_density: float,
+        accelerometer_noise_density: float,
+        gyroscope_random_walk: float,
+        accelerometer_random_walk: float,
+    ) -> ImuNoise:
+        """From the four entries of a Kalibr ``imu.yaml``: same units, no conversion."""
+        return cls(
+            gyro_density=gyroscope_noise_density,
+            accel_density=accelerometer_noise_density,
+            gyro_random_walk=gyroscope_random_walk,
+            accel_random_walk=accelerometer_random_walk,
+        )
+
+    @classmethod
+    def from_discrete(
+        cls,
+        *,
+        gyro_sigma: float,
+        accel_sigma: float,
+        gyro_walk_sigma: float,
+        accel_walk_sigma: float,
+        rate_hz: float,
+    ) -> ImuNoise:
+        """From per-sample standard deviations at ``rate_hz``.
+
+        White noise: ``σ_c = σ_d / √rate_hz`` (``gyro_sigma`` [rad/s] → σ_g [rad/s/√Hz]). Bias
+        random walk: ``σ_w = σ_step · √rate_hz``, σ_step being the std of the bias change per sample
+        (``gyro_walk_sigma`` [rad/s] → σ_bg [rad/s²/√Hz]). Example at 200 Hz: ``gyro_sigma`` 2.3996e-03
+        gives σ_g = 2.3996e-03 / 14.1421 = 1.6968e-04; ``gyro_walk_sigma`` 1.3713e-06 gives
+        σ_bg = 1.3713e-06 · 14.1421 = 1.9393e-05. Check which a configuration file holds: the same
+        key names are used for densities in some projects and per-sample σ in others.
+        """
+        root = math.sqrt(_rate(rate_hz))
+        return cls(
+            gyro_density=_density(gyro_sigma, "gyro_sigma") / root,
+            accel_density=_density(accel_sigma, "accel_sigma") / root,
+            gyro_random_walk=_density(gyro_walk_sigma, "gyro_walk_sigma") * root,
+            accel_random_walk=_density(accel_walk_sigma, "accel_walk_sigma") * root,
+        )
+
+    def to_discrete_sigmas(self, rate_hz: float) -> DiscreteSigmas:
+        """Per-sample standard deviations at ``rate_hz``, the inverse of :meth:`from_discrete`.
+
+        ``gyro_sigma = σ_g √rate_hz``, ``gyro_walk_sigma = σ_bg / √rate_hz`` (same for accel).
+        """
+        root = math.sqrt(_rate(rate_hz))
+        return DiscreteSigmas(
+            gyro_sigma=self.gyro_density * root,
+            accel_sigma=self.accel_density * root,
+            gyro_walk_sigma=self.gyro_random_walk / root,
+            accel_walk_sigma=self.accel_random_walk / root,
+        )
+
+    def discrete(self, dt: float) -> DiscreteNoise:
+        """Per-sample variances for a step ``dt`` [s] (> 0), per axis.
+
+        ``gyro_var = σ_g² / dt``, ``accel_var = σ_a² / dt``, ``gyro_bias_var = σ_bg² dt``,
+        ``accel_bias_var = σ_ba² dt``. Example: σ_g = 1.6968e-04 and dt = 0.005 give
+        ``gyro_var`` = 2.8791e-08 / 0.005 = 5.7582e-06 (rad/s)², i.e. σ = 2.3996e-03 rad/s.
+        """
+        step = _number(dt, "dt", positive=True, what="a positive, finite step in seconds")
+        return DiscreteNoise(
+            gyro_var=self.gyro_density**2 / step,
+            accel_var=self.accel_density**2 / step,
+            gyro_bias_var=self.gyro_random_walk**2 * step,
+            accel_bias_var=self.accel_random_walk**2 * step,
+        )

@@ -1,0 +1,120 @@
+"""Strapdown integration and error-state covariance propagation: ``integrate``, ``propagate``.
+
+Model (``docs/strapdown.md``): ``ṗ = v``, ``v̇ = R (a_m − b_a) + g``, ``Ṙ = R [ω_m − b_g]×`` with
+``g`` added (default ``(0, 0, −9.81)``, z up; NED users pass ``(0, 0, +9.81)``); ``a_m`` is the
+specific force the accelerometer reads (+9.81 on the up axis at rest). Positions and velocities
+are in the world frame, rotations ``R_wb`` map body to world.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from imukit import _core
+from imukit._arrays import FloatArray, as_float_array, choice, rotation_from_unit_quat
+from imukit._errors import ParameterError, ShapeError
+from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.state import NavState, Trajectory
+
+__all__ = ["SCHEMES", "integrate", "propagate"]
+
+SCHEMES = ("euler", "midpoint", "rk4", "exp")
+_DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _common(
+    imu: ImuData, initial: NavState, bias: ImuBias | None, gravity: ArrayLike, scheme: str
+) -> tuple[list[float], list[float], list[float]]:
+    if not isinstance(imu, ImuData):
+        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+    if not isinstance(initial, NavState):
+        raise ParameterError(f"initial: expected an imukit.NavState, got {type(initial).__name__}")
+    if bias is not None and not isinstance(bias, ImuBias):
+        raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
+    choice(scheme, "scheme", SCHEMES)
+    g = as_float_array(gravity, "gravity")
+    if g.shape != (3,):
+        raise ShapeError(f"gravity: expected shape (3,), got {g.shape}")
+    b = bias or ImuBias()
+    state = [*initial.position, *initial.velocity, *initial.rotation.as_quat()]
+    return state, [*b.gyro, *b.accel], [float(v) for v in g]
+
+
+def _trajectory(imu: ImuData, states: FloatArray, **covariance: FloatArray) -> Trajectory:
+    return Trajectory(
+        imu.t,
+        states[:, 0:3],
+        states[:, 3:6],
+        rotation_from_unit_quat(np.ascontiguousarray(states[:, 6:10])),
+        t_ns=imu.t_ns,
+        **covariance,
+    )
+
+
+def integrate(
+    imu: ImuData,
+    *,
+    initial: NavState,
+    gravity: ArrayLike = _DEFAULT_GRAVITY,
+    bias: ImuBias | None = None,
+    scheme: str = "midpoint",
+) -> Trajectory:
+    """Integrate IMU samples into positions, velocities and attitudes, one per sample.
+
+    Schemes over ``h = t[k+1] − t[k]`` with bias-corrected samples ``â = a_m − b_a``, ``ω̂ = ω_m − b_g``:
+
+    - ``"euler"`` (order 1): ``a = R_k â_k + g``; ``p += v h + ½ a h²``; ``v += a h``; ``R ← R Exp(ω̂_k h)``;
+    - ``"midpoint"`` (order 2, VINS-Mono's): ``R⁺ = R Exp(½(ω̂_k + ω̂_{k+1}) h)``,
+      ``a = ½(R_k â_k + R⁺ â_{k+1}) + g``, then as euler;
+    - ``"rk4"`` (order 4): classical Runge-Kutta; the mid-step samples come from the cubic through
+      samples k-1 … k+2 (see ``docs/attitude.md``);
+    - ``"exp"``: exact when ``ω̂_k`` and ``â_k`` are held over the step (zero-order hold; order 1 on
+      smooth motion): ``v += R Γ₁(ω̂h) â h + g h``, ``p += v h + R Γ₂(ω̂h) â h² + ½ g h²``.
+
+    ``initial`` is the state at the first sample; ``bias`` (constant) is subtracted from the samples.
+    Returns a :class:`Trajectory` with the IMU's timestamps (``t_ns`` kept when the IMU has it).
+    """
+    state, bias_values, g = _common(imu, initial, bias, gravity, scheme)
+    states = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, state, bias_values, g, scheme)
+    return _trajectory(imu, states)
+
+
+def propagate(
+    imu: ImuData,
+    *,
+    initial: NavState,
+    covariance: ArrayLike,
+    noise: ImuNoise,
+    bias: ImuBias | None = None,
+    gravity: ArrayLike = _DEFAULT_GRAVITY,
+    scheme: str = "midpoint",
+    covariance_every: int = 1,
+) -> Trajectory:
+    """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).
+
+    Error state ``δx = [δp, δv, δθ, δb_a, δb_g]`` with the **right** (local) rotation perturbation
+    ``R = R̂ Exp(δθ)`` and additive ``p = p̂ + δp``, ``v``, ``b`` alike. ``covariance`` is the
+    initial 15×15 covariance in that order. Per step ``P ← F_x P F_xᵀ + F_i Q_i F_iᵀ`` with the exact
+    Jacobians of the first-order step and ``Q_i = diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃`` from
+    ``noise`` (continuous densities) and the actual step ``h``; the formulas are in
+    ``docs/strapdown.md``. The covariance is kept at samples ``0, covariance_every, 2·covariance_every,
+    …`` and at the last sample (``Trajectory.covariance`` with times ``covariance_t``), so memory stays
+    bounded for long recordings.
+    """
+    state, bias_values, g = _common(imu, initial, bias, gravity, scheme)
+    if not isinstance(noise, ImuNoise):
+        raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
+    p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
+    if p0.shape != (15, 15):
+        raise ShapeError(f"covariance: expected shape (15, 15), got {p0.shape}")
+    every = int(covariance_every)
+    if every < 1:
+        raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}")
+    densities = [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk]
+    states, covs = _core.strapdown_propagate(
+        imu.seconds, imu.gyro, imu.accel, state, p0, bias_values, densities, g, scheme, every
+    )
+    n = len(imu)
+    kept = np.unique(np.append(np.arange(0, n, every), n - 1))
+    return _trajectory(imu, states, covariance=covs.reshape(-1, 15, 15), covariance_t=imu.t[kept])
