@@ -17,7 +17,13 @@ fn inputs() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         .collect();
     let accel = t
         .iter()
-        .flat_map(|&s| [0.5 * (0.9 * s).sin(), 0.4 * (0.3 * s).cos(), 9.81 + 0.2 * (1.7 * s).sin()])
+        .flat_map(|&s| {
+            [
+                0.5 * (0.9 * s).sin(),
+                0.4 * (0.3 * s).cos(),
+                9.81 + 0.2 * (1.7 * s).sin(),
+            ]
+        })
         .collect();
     (t, gyro, accel)
 }
@@ -44,7 +50,15 @@ fn strapdown(c: &mut Criterion) {
             ..Options::default()
         };
         group.bench_with_input(BenchmarkId::new("integrate", scheme.name()), &options, |b, options| {
-            b.iter(|| integrate(black_box(&samples), &initial, &Bias::default(), options, Some(&mut states)))
+            b.iter(|| {
+                integrate(
+                    black_box(&samples),
+                    &initial,
+                    &Bias::default(),
+                    options,
+                    Some(&mut states),
+                )
+            })
         });
     }
     let noise = Noise {
@@ -62,7 +76,15 @@ fn strapdown(c: &mut Criterion) {
                 covariances: &mut covariances,
                 every: 100,
             };
-            propagate(black_box(&samples), &initial, &p0, &Bias::default(), &noise, &Options::default(), outputs)
+            propagate(
+                black_box(&samples),
+                &initial,
+                &p0,
+                &Bias::default(),
+                &noise,
+                &Options::default(),
+                outputs,
+            )
         })
     });
     group.finish();

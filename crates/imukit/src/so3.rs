@@ -49,10 +49,9 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
 /// `Exp(φ) = I + (sin θ/θ) [φ]× + ((1 − cos θ)/θ²) [φ]×²` (Rodrigues), series-safe at θ → 0.
 pub fn exp(phi: &Vector3<f64>) -> Rotation3<f64> {
     let theta = phi.norm();
-    // One sin_cos of θ/2 gives both coefficients: sin θ = 2 s c, 1 − cos θ = 2 s².
-    let (a, b) = if theta < 1e-4 {
-        let t2 = theta * theta;
-        (1.0 - t2 / 6.0, 0.5 - t2 / 24.0)
+    // Series below θ = 0.5; above, one sin_cos of θ/2 gives both: sin θ = 2 s c, 1 − cos θ = 2 s².
+    let (a, b) = if theta < 0.5 {
+        (sinc(theta), one_minus_cos_over_sq(theta))
     } else {
         let (s, c) = (0.5 * theta).sin_cos();
         let s_over = s / theta;
@@ -142,51 +141,90 @@ fn jacobian_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 // The scalar coefficients below switch to Taylor series where the closed form cancels
-// catastrophically; the thresholds keep both the truncation and the rounding error near 1e-15
-// absolute (checked in tests against 50-digit values).
+// catastrophically or where a series is cheaper than libm (most IMU steps have θ ≪ 1); the
+// thresholds keep both the truncation and the rounding error near 1e-15 absolute (checked in tests
+// against 50-digit values). Series coefficients are constants: a division by a literal is not
+// folded into a multiplication and would cost more than the libm call it replaces.
 
-/// `sin θ / θ`.
+/// `Σ cₖ xᵏ` by Horner's rule.
+#[inline(always)]
+fn horner(x: f64, c: &[f64]) -> f64 {
+    c.iter().rev().fold(0.0, |acc, c| acc * x + c)
+}
+
+/// `sin θ / θ = Σ (−1)ᵏ θ²ᵏ/(2k+1)!` (series below θ = 0.5, first omitted term < 5e-17).
+#[inline]
 fn sinc(theta: f64) -> f64 {
-    if theta < 1e-4 {
-        1.0 - theta * theta / 6.0
+    const C: [f64; 7] = [
+        1.0,
+        -1.0 / 6.0,
+        1.0 / 120.0,
+        -1.0 / 5_040.0,
+        1.0 / 362_880.0,
+        -1.0 / 39_916_800.0,
+        1.0 / 6_227_020_800.0,
+    ];
+    if theta < 0.5 {
+        horner(theta * theta, &C)
     } else {
         theta.sin() / theta
     }
 }
 
 /// `(1 − cos θ)/θ² = ½ (sin(θ/2)/(θ/2))²`, written with the half angle to avoid cancellation.
+#[inline]
 fn one_minus_cos_over_sq(theta: f64) -> f64 {
     let s = sinc(0.5 * theta);
     0.5 * s * s
 }
 
-/// `(θ − sin θ)/θ³`.
+/// `(θ − sin θ)/θ³ = Σ (−1)ᵏ θ²ᵏ/(2k+3)!`.
+#[inline]
 fn theta_minus_sin_over_cube(theta: f64) -> f64 {
+    const C: [f64; 5] = [
+        1.0 / 6.0,
+        -1.0 / 120.0,
+        1.0 / 5_040.0,
+        -1.0 / 362_880.0,
+        1.0 / 39_916_800.0,
+    ];
     if theta < 0.2 {
-        let t2 = theta * theta;
-        1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362_880.0 + t2 * t2 * t2 * t2 / 39_916_800.0
+        horner(theta * theta, &C)
     } else {
         (theta - theta.sin()) / (theta * theta * theta)
     }
 }
 
-/// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ²`.
+/// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ² = Σ (−1)ᵏ θ²ᵏ/(2k+4)!`.
+#[inline]
 fn cos_remainder(theta: f64) -> f64 {
+    const C: [f64; 5] = [
+        1.0 / 24.0,
+        -1.0 / 720.0,
+        1.0 / 40_320.0,
+        -1.0 / 3_628_800.0,
+        1.0 / 479_001_600.0,
+    ];
     if theta < 0.2 {
-        // Σ (−1)ᵏ θ²ᵏ/(2k + 4)!
-        let t2 = theta * theta;
-        1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40_320.0 - t2 * t2 * t2 / 3_628_800.0 + t2 * t2 * t2 * t2 / 479_001_600.0
+        horner(theta * theta, &C)
     } else {
         (0.5 - one_minus_cos_over_sq(theta)) / (theta * theta)
     }
 }
 
 /// `(1 − (θ/2) cot(θ/2))/θ²`, equal to `1/θ² − (1 + cos θ)/(2 θ sin θ)` but finite at θ = π.
+#[inline]
 fn inv_coefficient(theta: f64) -> f64 {
+    // (1 − x cot x)/(4x²) with x = θ/2, from x cot x = 1 − Σ 4ⁿ|B₂ₙ| x²ⁿ/(2n)!.
+    const C: [f64; 5] = [
+        1.0 / 12.0,
+        1.0 / 720.0,
+        1.0 / 30_240.0,
+        1.0 / 1_209_600.0,
+        1.0 / 47_900_160.0,
+    ];
     if theta < 0.2 {
-        // (1 − x cot x)/(4x²) with x = θ/2, from x cot x = 1 − Σ 4ⁿ|B₂ₙ| x²ⁿ/(2n)!.
-        let t2 = theta * theta;
-        1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30_240.0 + t2 * t2 * t2 / 1_209_600.0 + t2 * t2 * t2 * t2 / 47_900_160.0
+        horner(theta * theta, &C)
     } else {
         let half = 0.5 * theta;
         (1.0 - half * half.cos() / half.sin()) / (theta * theta)
