@@ -8,7 +8,7 @@ use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{propagate, strapdown};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
-    PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -322,7 +322,7 @@ fn strapdown_integrate<'py>(
     bias_values: [f64; 6],
     gravity: [f64; 3],
     scheme: &str,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let options = strapdown::Options {
         scheme: parse_strapdown_scheme(py, scheme)?,
         gravity: Vector3::from(gravity),
@@ -338,7 +338,7 @@ fn strapdown_integrate<'py>(
         gyro: contiguous(py, "gyro", &gyro)?,
         accel: contiguous(py, "accel", &accel)?,
     };
-    let out = PyArray2::<f64>::zeros(py, [samples.t.len(), strapdown::STATE_WIDTH], false);
+    let out = PyArray1::<f64>::zeros(py, [samples.t.len() * strapdown::STATE_WIDTH], false);
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
@@ -349,7 +349,7 @@ fn strapdown_integrate<'py>(
     Ok(out)
 }
 
-type StatesAndCovariances<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+type StatesAndCovariances<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
 
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.propagate
@@ -399,7 +399,7 @@ fn strapdown_propagate<'py>(
         accel: contiguous(py, "accel", &accel)?,
     };
     let n = samples.t.len();
-    let states = PyArray2::<f64>::zeros(py, [n, strapdown::STATE_WIDTH], false);
+    let states = PyArray1::<f64>::zeros(py, [n * strapdown::STATE_WIDTH], false);
     let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
     {
         let (mut s_guard, mut c_guard) = (states.readwrite(), covariances.readwrite());

@@ -66,7 +66,7 @@ def strapdown_integrate(
     bias_values: list[float],
     gravity: list[float],
     scheme: str,
-) -> NDArray[np.float64]: ...
+) -> NDArray[np.float64]: ...  # flat 10N: N rows [p, v], then N rows q (xyzw)
 def strapdown_propagate(
     t: NDArray[np.float64],
     gyro: NDArray[np.float64],

@@ -157,6 +157,38 @@ class Trajectory:
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"Trajectory is immutable: cannot set {name!r}")
 
+    @classmethod
+    def _from_core(
+        cls,
+        imu_t: FloatArray,
+        imu_t_ns: NDArray[np.int64] | None,
+        states: FloatArray,
+        rotation: Rotation,
+        covariance: FloatArray | None = None,
+        covariance_t: FloatArray | None = None,
+    ) -> Trajectory:
+        """A trajectory over arrays the compiled core has just produced, without re-validating or
+        copying them (they are fresh, finite and correctly shaped by construction; copying 10⁶ states
+        cost more than integrating them). ``states`` is the core's ``(N, 6)`` ``[p, v]`` block,
+        made read-only here; the timestamps are an ImuData's, which are read-only already.
+        """
+        states.setflags(write=False)
+        if covariance is not None:
+            covariance.setflags(write=False)
+        traj = object.__new__(cls)
+        set_ = object.__setattr__
+        for name, value in (
+            ("t", imu_t),
+            ("t_ns", imu_t_ns),
+            ("position", states[:, 0:3]),
+            ("velocity", states[:, 3:6]),
+            ("rotation", rotation),
+            ("covariance", covariance),
+            ("covariance_t", covariance_t),
+        ):
+            set_(traj, name, value)
+        return traj
+
     def __len__(self) -> int:
         return len(self.t)
 

@@ -41,15 +41,14 @@ def _common(
     return state, [*b.gyro, *b.accel], [float(v) for v in g]
 
 
-def _trajectory(imu: ImuData, states: FloatArray, **covariance: FloatArray) -> Trajectory:
-    return Trajectory(
-        imu.t,
-        states[:, 0:3],
-        states[:, 3:6],
-        rotation_from_unit_quat(np.ascontiguousarray(states[:, 6:10])),
-        t_ns=imu.t_ns,
-        **covariance,
-    )
+def _trajectory(
+    imu: ImuData, states: FloatArray, covariance: FloatArray | None = None, covariance_t: FloatArray | None = None
+) -> Trajectory:
+    # The core's layout: N rows [p, v], then N quaternion rows; both blocks are contiguous.
+    n = len(imu)
+    pv = states[: 6 * n].reshape(n, 6)
+    rotation = rotation_from_unit_quat(states[6 * n :].reshape(n, 4))
+    return Trajectory._from_core(imu.t, imu.t_ns, pv, rotation, covariance, covariance_t)
 
 
 def integrate(
@@ -117,4 +116,4 @@ def propagate(
     )
     n = len(imu)
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
-    return _trajectory(imu, states, covariance=covs.reshape(-1, 15, 15), covariance_t=imu.t[kept])
+    return _trajectory(imu, states, covs.reshape(-1, 15, 15), imu.t[kept])

@@ -223,7 +223,7 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
 /// Output buffers of [`propagate`].
 #[derive(Debug)]
 pub struct Outputs<'a> {
-    /// Every state, `[p, v, q]` rows ([`strapdown::STATE_WIDTH`]), or `None`.
+    /// Every state in the [`strapdown`] output layout, or `None`.
     pub states: Option<&'a mut [f64]>,
     /// Covariances (row-major 15×15) at samples `0, every, 2·every, …` and the last sample.
     pub covariances: &'a mut [f64],

@@ -5,7 +5,7 @@
 //! | state | `p` [m], `v` [m/s] in the world frame, `q = q_wb` (body to world, Hamilton) |
 //! | inputs | `ω_m` [rad/s] and specific force `a_m` [m/s²] in the body frame, biases `b_g`, `b_a` |
 //! | model | `ṗ = v`, `v̇ = R (a_m − b_a) + g`, `Ṙ = R [ω_m − b_g]×`; g added (default `(0, 0, −9.81)`) |
-//! | output row | `[p (3), v (3), q (4, xyzw)]` per sample, element 0 = the initial state |
+//! | output | `10n` values: `n` rows `[p (3), v (3)]`, then `n` rows `q (4, xyzw)`; row 0 = the initial state |
 //!
 //! Schemes over step `k → k+1`, `h = t[k+1] − t[k]`, `â = a_m − b_a`, `ω̂ = ω_m − b_g`:
 //!
@@ -171,15 +171,17 @@ impl Default for Options {
     }
 }
 
-/// Values per stored state: `[p, v, q]`.
+/// Values per stored state: `[p, v]` and `q`.
 pub const STATE_WIDTH: usize = 10;
 
+/// Stores state k in the output layout: `[p, v]` rows first, then the quaternion rows, so that
+/// both blocks are contiguous `(n, 6)` and `(n, 4)` arrays (scipy wants the quaternions so).
 pub(crate) fn store(out: &mut [f64], k: usize, x: &NavState) {
+    let n = out.len() / STATE_WIDTH;
     let q = x.rotation.coords;
-    let row = &mut out[STATE_WIDTH * k..STATE_WIDTH * (k + 1)];
-    row[..3].copy_from_slice(x.position.as_slice());
-    row[3..6].copy_from_slice(x.velocity.as_slice());
-    row[6..].copy_from_slice(&[q.x, q.y, q.z, q.w]);
+    out[6 * k..6 * k + 3].copy_from_slice(x.position.as_slice());
+    out[6 * k + 3..6 * k + 6].copy_from_slice(x.velocity.as_slice());
+    out[6 * n + 4 * k..6 * n + 4 * k + 4].copy_from_slice(&[q.x, q.y, q.z, q.w]);
 }
 
 /// One step of the chosen scheme from sample k to k+1, biases already removed by `inputs`.
@@ -332,8 +334,8 @@ fn compose(q: &UnitQuaternion<f64>, theta: &Vector3<f64>) -> UnitQuaternion<f64>
 /// dependent chain as long as the product itself, off most steps (it cost 18 ns a sample).
 const RENORMALIZE_EVERY: usize = 16;
 
-/// Integrates the samples from `initial`, writing every state (`[p, v, q]`, see
-/// [`STATE_WIDTH`]) to `out` when given; returns the final state. No allocation per sample.
+/// Integrates the samples from `initial`, writing every state (layout in the module docs,
+/// [`STATE_WIDTH`] values per sample) to `out` when given; returns the final state. No allocation per sample.
 pub fn integrate(
     samples: &Samples<'_>,
     initial: &NavState,
