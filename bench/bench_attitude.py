@@ -11,24 +11,13 @@ the script checks that they agree before timing.
 from __future__ import annotations
 
 import argparse
-import time
-from collections.abc import Callable
 
 import numpy as np
 import quaternion  # numpy-quaternion
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-
-
-def median_s(f: Callable[[], object], repeats: int) -> float:
-    f()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+from _timing import median_s
 
 
 def numpy_quaternion(dt: float, gyro: np.ndarray) -> np.ndarray:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import time
 from collections.abc import Callable
 
 import numpy as np
@@ -18,16 +17,11 @@ import scipy
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+from _timing import median_s
 
 
 def median_ms(f: Callable[[], object], repeats: int) -> float:
-    f()  # warm-up: page in the code and the allocator
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - start)
-    return 1e3 * float(np.median(times))
+    return 1e3 * median_s(f, repeats)
 
 
 def main() -> None:

@@ -10,23 +10,12 @@ construction (validation, read-only copies) is reported on its own line.
 from __future__ import annotations
 
 import argparse
-import time
-from collections.abc import Callable
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-
-
-def median_s(f: Callable[[], object], repeats: int) -> float:
-    f()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+from _timing import median_s
 
 
 def python_midpoint(imu: ik.ImuData, x0: ik.NavState) -> np.ndarray:

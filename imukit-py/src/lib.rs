@@ -8,7 +8,8 @@ use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{propagate, strapdown};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
-    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -303,6 +304,44 @@ fn nav_state(initial: [f64; 10]) -> strapdown::NavState {
     }
 }
 
+fn strapdown_options(py: Python<'_>, scheme: &str, gravity: [f64; 3]) -> PyResult<strapdown::Options> {
+    Ok(strapdown::Options {
+        scheme: parse_strapdown_scheme(py, scheme)?,
+        gravity: Vector3::from(gravity),
+    })
+}
+
+/// Private copies of a sample set ([`private_copy`]), alive while a kernel borrows them
+/// without the GIL.
+struct SampleCopies<'py> {
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+}
+
+impl<'py> SampleCopies<'py> {
+    fn new(
+        py: Python<'py>,
+        t: &PyReadonlyArray1<'py, f64>,
+        gyro: &PyReadonlyArray2<'py, f64>,
+        accel: &PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            t: private_copy(py, t)?.readonly(),
+            gyro: private_copy(py, gyro)?.readonly(),
+            accel: private_copy(py, accel)?.readonly(),
+        })
+    }
+
+    fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<strapdown::Samples<'s>> {
+        Ok(strapdown::Samples {
+            t: contiguous(py, "t", &self.t)?,
+            gyro: contiguous(py, "gyro", &self.gyro)?,
+            accel: contiguous(py, "accel", &self.accel)?,
+        })
+    }
+}
+
 fn bias(values: [f64; 6]) -> strapdown::Bias {
     let [gx, gy, gz, ax, ay, az] = values;
     strapdown::Bias {
@@ -323,21 +362,9 @@ fn strapdown_integrate<'py>(
     gravity: [f64; 3],
     scheme: &str,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let options = strapdown::Options {
-        scheme: parse_strapdown_scheme(py, scheme)?,
-        gravity: Vector3::from(gravity),
-    };
-    let (t, gyro, accel) = (
-        private_copy(py, &t)?,
-        private_copy(py, &gyro)?,
-        private_copy(py, &accel)?,
-    );
-    let (t, gyro, accel) = (t.readonly(), gyro.readonly(), accel.readonly());
-    let samples = strapdown::Samples {
-        t: contiguous(py, "t", &t)?,
-        gyro: contiguous(py, "gyro", &gyro)?,
-        accel: contiguous(py, "accel", &accel)?,
-    };
+    let options = strapdown_options(py, scheme, gravity)?;
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
     let out = PyArray1::<f64>::zeros(py, [samples.t.len() * strapdown::STATE_WIDTH], false);
     {
         let mut guard = out.readwrite();
@@ -366,10 +393,7 @@ fn strapdown_propagate<'py>(
     scheme: &str,
     every: usize,
 ) -> PyResult<StatesAndCovariances<'py>> {
-    let options = strapdown::Options {
-        scheme: parse_strapdown_scheme(py, scheme)?,
-        gravity: Vector3::from(gravity),
-    };
+    let options = strapdown_options(py, scheme, gravity)?;
     let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
     let noise = propagate::Noise {
         gyro_density,
@@ -387,17 +411,8 @@ fn strapdown_propagate<'py>(
         ));
     }
     let p0 = propagate::Covariance::from_row_slice(contiguous(py, "covariance", &covariance)?);
-    let (t, gyro, accel) = (
-        private_copy(py, &t)?,
-        private_copy(py, &gyro)?,
-        private_copy(py, &accel)?,
-    );
-    let (t, gyro, accel) = (t.readonly(), gyro.readonly(), accel.readonly());
-    let samples = strapdown::Samples {
-        t: contiguous(py, "t", &t)?,
-        gyro: contiguous(py, "gyro", &gyro)?,
-        accel: contiguous(py, "accel", &accel)?,
-    };
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
     let n = samples.t.len();
     let states = PyArray1::<f64>::zeros(py, [n * strapdown::STATE_WIDTH], false);
     let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
