@@ -47,11 +47,21 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
 }
 
 /// `Exp(φ) = I + (sin θ/θ) [φ]× + ((1 − cos θ)/θ²) [φ]×²` (Rodrigues), series-safe at θ → 0.
+#[inline]
 pub fn exp(phi: &Vector3<f64>) -> Rotation3<f64> {
     let theta = phi.norm();
     // Series below θ = 0.5; above, one sin_cos of θ/2 gives both: sin θ = 2 s c, 1 − cos θ = 2 s².
     let (a, b) = if theta < 0.5 {
-        (sinc(theta), one_minus_cos_over_sq(theta))
+        // sin θ/θ = Σ (−1)ᵏ θ²ᵏ/(2k+1)!, (1 − cos θ)/θ² = Σ (−1)ᵏ θ²ᵏ/(2k+2)!, written out: the
+        // iterator form of `horner` here made every call (not just this branch) 70% slower.
+        let t = theta * theta;
+        let a = 1.0
+            - t * (1.0 / 6.0
+                - t * (1.0 / 120.0 - t * (1.0 / 5_040.0 - t * (1.0 / 362_880.0 - t * (1.0 / 39_916_800.0)))));
+        let b = 0.5
+            - t * (1.0 / 24.0
+                - t * (1.0 / 720.0 - t * (1.0 / 40_320.0 - t * (1.0 / 3_628_800.0 - t * (1.0 / 479_001_600.0)))));
+        (a, b)
     } else {
         let (s, c) = (0.5 * theta).sin_cos();
         let s_over = s / theta;
@@ -148,8 +158,12 @@ fn jacobian_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
 
 /// `Σ cₖ xᵏ` by Horner's rule.
 #[inline(always)]
-fn horner(x: f64, c: &[f64]) -> f64 {
-    c.iter().rev().fold(0.0, |acc, c| acc * x + c)
+fn horner<const N: usize>(x: f64, c: &[f64; N]) -> f64 {
+    let mut acc = 0.0;
+    for k in (0..N).rev() {
+        acc = acc * x + c[k];
+    }
+    acc
 }
 
 /// `sin θ / θ = Σ (−1)ᵏ θ²ᵏ/(2k+1)!` (series below θ = 0.5, first omitted term < 5e-17).
