@@ -27,6 +27,7 @@ pub mod batch;
 mod error;
 pub mod euler;
 pub mod interp;
+pub mod preint;
 pub mod propagate;
 pub mod quat;
 pub mod so3;
