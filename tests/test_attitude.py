@@ -211,3 +211,24 @@ def test_a_straight_line_between_samples_caps_rk4_at_second_order() -> None:
     slope = float(np.polyfit(np.log(steps), np.log(errors), 1)[0])
     assert abs(slope - 2) < 0.3
     assert final_error("rk4", "quaternion", 0.01) < 1e-2 * _rk4_linear_rate_error(0.01)
+
+
+def test_jumping_across_gimbal_lock_between_samples_is_refused() -> None:
+    """With h = 0.01 s and a pitch rate of 1 rad/s no sample lands within 1e-6 rad of 90°: the sign
+    change of cos(pitch) between samples still raises, naming the sample after the jump."""
+    t = np.arange(300) * 0.01
+    w = np.tile([0.0, 1.0, 0.001], (300, 1))
+    for scheme in ("euler", "midpoint", "rk4"):
+        with pytest.raises(ik.GimbalLockError, match=r"element 15[78]: .*passed"):
+            ik.integrate_attitude(t, w, representation="euler", scheme=scheme)
+
+
+def test_overflowing_rates_are_an_error_and_tolerance_is_validated() -> None:
+    t = np.arange(5) * 0.01
+    for scheme in ik.attitude.SCHEMES:
+        for final_only in (False, True):
+            with pytest.raises(ik.NonFiniteError, match="too large"):
+                ik.integrate_attitude(t, np.full((5, 3), 1e200), scheme=scheme, final_only=final_only)
+    for bad in (np.pi / 2, 1.6, -1.0, np.nan):
+        with pytest.raises(ik.ParameterError, match="gimbal_tolerance"):
+            ik.integrate_attitude(t, np.zeros((5, 3)), gimbal_tolerance_rad=bad)

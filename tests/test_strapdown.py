@@ -130,3 +130,76 @@ def test_acceleration_helper_is_the_derivative_of_velocity() -> None:
     assert np.abs((position(t + h) - position(t - h)) / (2 * h) - velocity(t)).max() < 1e-8
     assert np.abs((velocity(t + h) - velocity(t - h)) / (2 * h) - acceleration(t)).max() < 1e-8
     assert np.allclose(GRAVITY, [0.0, 0.0, -9.81])
+
+
+def test_rk4_does_not_amplify_noise_across_a_gap() -> None:
+    """Across a gap the cubic's weights grow to ±25; steps there fall back to the straight line."""
+    rng = np.random.default_rng(7)
+    t = np.concatenate([np.arange(100) * 0.005, 0.995 + 0.5 + np.arange(100) * 0.005])
+    w, f = np.array([0.1, -0.2, 0.3]), np.array([0.2, 0.1, 9.81])
+    x0 = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    truth = ik.integrate(ik.ImuData(t, np.tile(w, (200, 1)), np.tile(f, (200, 1))), initial=x0, scheme="exp")
+    errors = {}
+    for scheme in ("midpoint", "rk4"):
+        e = []
+        for _ in range(10):
+            noisy = ik.ImuData(t, w + 0.0024 * rng.standard_normal((200, 3)), f + 0.028 * rng.standard_normal((200, 3)))
+            traj = ik.integrate(noisy, initial=x0, scheme=scheme)
+            e.append(np.linalg.norm(traj.velocity[-1] - truth.velocity[-1]))
+        errors[scheme] = np.median(e)
+    assert errors["rk4"] < 2 * errors["midpoint"], errors
+
+
+def test_finite_input_that_overflows_is_an_error_not_nan() -> None:
+    t = np.arange(5) * 0.01
+    x0 = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    gyro = np.zeros((5, 3))
+    gyro[2] = 1e200
+    with pytest.raises(ik.NonFiniteError, match="too large"):
+        ik.integrate(ik.ImuData(t, gyro, np.zeros((5, 3))), initial=x0, scheme="euler")
+    accel = np.zeros((5, 3))
+    accel[-1] = [0.0, 0.0, 1e308]
+    imu = ik.ImuData(t, np.zeros((5, 3)), accel)
+    for scheme in EXPECTED:  # euler and exp never use the last sample; rk4 overflows on it
+        try:
+            traj = ik.integrate(imu, initial=x0, scheme=scheme)
+        except ik.NonFiniteError as e:
+            assert "element 4 is too large" in str(e)
+        else:
+            assert np.isfinite(traj.velocity).all() and np.isfinite(traj.rotation.as_quat()).all()
+    with pytest.raises(ik.NonFiniteError):
+        ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=ik.ImuNoise(1e-3, 1e-2, 1e-5, 1e-4), scheme="rk4")
+    # huge but finite samples whose sum overflows are not mistaken for bad input
+    big = ik.ImuData(t, np.full((5, 3), 1e308), np.full((5, 3), 1e308))
+    with pytest.raises(ik.NonFiniteError, match="too large"):
+        ik.integrate(big, initial=x0)
+
+
+def test_trajectory_outputs_are_guarded() -> None:
+    t = np.arange(11) * 0.01
+    imu = ik.ImuData(t, np.zeros((11, 3)), np.tile([0.0, 0.0, 9.81], (11, 1)))
+    x0 = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    traj = ik.propagate(
+        imu, initial=x0, covariance=np.eye(15), noise=ik.ImuNoise(1e-3, 1e-2, 1e-5, 1e-4), covariance_every=4
+    )
+    assert traj.covariance_t is not None and traj.covariance is not None
+    assert np.array_equal(traj.covariance_t, t[[0, 4, 8, 10]])
+    for arr in (traj.position, traj.velocity, traj.covariance, traj.covariance_t):
+        assert not arr.flags.writeable
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = 1.0
+    # a stride past the end keeps the first and the last sample
+    long = ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=ik.ImuNoise(0, 0, 0, 0), covariance_every=10**30)
+    assert np.array_equal(long.covariance_t, t[[0, 10]])
+    for bad in (2.7, "3", True, 0):
+        with pytest.raises(ik.ParameterError, match="covariance_every"):
+            ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=ik.ImuNoise(0, 0, 0, 0), covariance_every=bad)  # type: ignore[arg-type]
+    negative = np.eye(15)
+    negative[3, 3] = -1.0
+    with pytest.raises(ik.ParameterError, match="non-negative diagonal"):
+        ik.propagate(imu, initial=x0, covariance=negative, noise=ik.ImuNoise(0, 0, 0, 0))
+    # a Trajectory keeps its own copy of the rotations it was given
+    r = Rotation.from_rotvec(np.zeros((2, 3)))
+    user = ik.Trajectory([0.0, 1.0], np.zeros((2, 3)), None, r)
+    r[0] = Rotation.from_rotvec([1.0, 0.0, 0.0])
+    assert user.rotation[0].magnitude() == 0.0

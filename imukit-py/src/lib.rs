@@ -8,8 +8,7 @@ use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{propagate, strapdown};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
-    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2,
-    PyUntypedArrayMethods,
+    PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -350,6 +349,15 @@ fn bias(values: [f64; 6]) -> strapdown::Bias {
     }
 }
 
+/// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
+type States<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+/// States and `(M, 225)` covariances.
+type StatesAndCovariances<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate
 fn strapdown_integrate<'py>(
@@ -361,22 +369,27 @@ fn strapdown_integrate<'py>(
     bias_values: [f64; 6],
     gravity: [f64; 3],
     scheme: &str,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
+) -> PyResult<States<'py>> {
     let options = strapdown_options(py, scheme, gravity)?;
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
-    let out = PyArray1::<f64>::zeros(py, [samples.t.len() * strapdown::STATE_WIDTH], false);
+    let n = samples.t.len();
+    let (pv, rot) = (
+        PyArray2::<f64>::zeros(py, [n, 6], false),
+        PyArray2::<f64>::zeros(py, [n, 4], false),
+    );
     {
-        let mut guard = out.readwrite();
-        let out_slice = guard.as_slice_mut()?;
+        let (mut pv_guard, mut rot_guard) = (pv.readwrite(), rot.readwrite());
+        let out = strapdown::StatesOut {
+            position_velocity: pv_guard.as_slice_mut()?,
+            rotation: rot_guard.as_slice_mut()?,
+        };
         let (initial, bias) = (nav_state(initial), bias(bias_values));
-        py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out_slice)))
+        py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out)))
             .map_err(|e| to_py(py, "integrate", e))?;
     }
-    Ok(out)
+    Ok((pv, rot))
 }
-
-type StatesAndCovariances<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
 
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.propagate
@@ -414,12 +427,18 @@ fn strapdown_propagate<'py>(
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
     let n = samples.t.len();
-    let states = PyArray1::<f64>::zeros(py, [n * strapdown::STATE_WIDTH], false);
+    let (pv, rot) = (
+        PyArray2::<f64>::zeros(py, [n, 6], false),
+        PyArray2::<f64>::zeros(py, [n, 4], false),
+    );
     let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
     {
-        let (mut s_guard, mut c_guard) = (states.readwrite(), covariances.readwrite());
+        let (mut pv_guard, mut rot_guard, mut c_guard) = (pv.readwrite(), rot.readwrite(), covariances.readwrite());
         let outputs = propagate::Outputs {
-            states: Some(s_guard.as_slice_mut()?),
+            states: Some(strapdown::StatesOut {
+                position_velocity: pv_guard.as_slice_mut()?,
+                rotation: rot_guard.as_slice_mut()?,
+            }),
             covariances: c_guard.as_slice_mut()?,
             every,
         };
@@ -427,7 +446,7 @@ fn strapdown_propagate<'py>(
         py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))
             .map_err(|e| to_py(py, "propagate", e))?;
     }
-    Ok((states, covariances))
+    Ok((pv, rot, covariances))
 }
 
 /// Compiled core of imukit. Use the `imukit` package, not this module.

@@ -66,7 +66,7 @@ def strapdown_integrate(
     bias_values: list[float],
     gravity: list[float],
     scheme: str,
-) -> NDArray[np.float64]: ...  # flat 10N: N rows [p, v], then N rows q (xyzw)
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...  # (N, 6) [p, v] and (N, 4) q (xyzw)
 def strapdown_propagate(
     t: NDArray[np.float64],
     gyro: NDArray[np.float64],
@@ -78,4 +78,4 @@ def strapdown_propagate(
     gravity: list[float],
     scheme: str,
     every: int,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...

@@ -53,7 +53,8 @@ def integrate_attitude(
         - ``"magnus"``: ``R ← R Exp(½h(ω₁+ω₂) + (√3/12)h² ω₁×ω₂)`` with ω₁, ω₂ from the cubic at
           the Gauss nodes ``h(½ ∓ √3/6)`` (order 4; exact for constant rate).
     representation
-        ``"quaternion"`` (renormalised each step), ``"matrix"`` (re-orthonormalised each step) or
+        ``"quaternion"`` (renormalised), ``"matrix"`` (re-orthonormalised: after every step for the ODE
+        schemes, every 16 steps for the exact-rotation ``exp``/``magnus``) or
         ``"euler"`` (ZYX angles through ``χ̇ = E(χ) ω``; ``euler``, ``midpoint`` and ``rk4`` only;
         raises :class:`imukit.GimbalLockError` naming the sample where pitch comes within
         ``gimbal_tolerance_rad`` of ±90°).

@@ -25,6 +25,7 @@ from imukit._arrays import (
     check_increasing,
     readonly_array,
     readonly_copy,
+    rotation_from_unit_quat,
     seconds_from_ns,
 )
 from imukit._errors import DTypeError, ParameterError, ShapeError, TimestampError
@@ -141,7 +142,8 @@ class Trajectory:
             )
             length = f" of length {len(rotation)}" if isinstance(rotation, Rotation) and not rotation.single else ""
             raise ShapeError(f"rotation: expected a scipy Rotation of length N = len(t) = {n}, got {got}{length}")
-        set_(self, "rotation", rotation)
+        # A copy: the caller's Rotation could be modified in place (Rotation.__setitem__).
+        set_(self, "rotation", rotation_from_unit_quat(rotation.as_quat()))
         if (covariance is None) != (covariance_t is None):
             raise ParameterError("covariance: give covariance and covariance_t together, or neither")
         if covariance is None or covariance_t is None:
@@ -169,12 +171,11 @@ class Trajectory:
     ) -> Trajectory:
         """A trajectory over arrays the compiled core has just produced, without re-validating or
         copying them (they are fresh, finite and correctly shaped by construction; copying 10⁶ states
-        cost more than integrating them). ``states`` is the core's ``(N, 6)`` ``[p, v]`` block,
-        made read-only here; the timestamps are an ImuData's, which are read-only already.
+        cost more than integrating them). ``states`` is the core's ``(N, 6)`` ``[p, v]`` array, made
+        read-only here; the timestamps are an ImuData's, read-only already. As everywhere in numpy, the
+        read-only flag is a guard, not a lock: the owner of a buffer can set it writeable again.
         """
         states.setflags(write=False)
-        if covariance is not None:
-            covariance.setflags(write=False)
         traj = object.__new__(cls)
         set_ = object.__setattr__
         for name, value in (

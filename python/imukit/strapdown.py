@@ -8,11 +8,13 @@ are in the world frame, rotations ``R_wb`` map body to world.
 
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 from numpy.typing import ArrayLike
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, choice, rotation_from_unit_quat
+from imukit._arrays import FloatArray, as_float_array, choice, readonly_copy, rotation_from_unit_quat
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
@@ -42,13 +44,15 @@ def _common(
 
 
 def _trajectory(
-    imu: ImuData, states: FloatArray, covariance: FloatArray | None = None, covariance_t: FloatArray | None = None
+    imu: ImuData,
+    position_velocity: FloatArray,
+    quaternions: FloatArray,
+    covariance: FloatArray | None = None,
+    covariance_t: FloatArray | None = None,
 ) -> Trajectory:
-    # The core's layout: N rows [p, v], then N quaternion rows; both blocks are contiguous.
-    n = len(imu)
-    pv = states[: 6 * n].reshape(n, 6)
-    rotation = rotation_from_unit_quat(states[6 * n :].reshape(n, 4))
-    return Trajectory._from_core(imu.t, imu.t_ns, pv, rotation, covariance, covariance_t)
+    # Fresh arrays from the core: the quaternions become the Rotation's own buffer.
+    rotation = rotation_from_unit_quat(quaternions)
+    return Trajectory._from_core(imu.t, imu.t_ns, position_velocity, rotation, covariance, covariance_t)
 
 
 def integrate(
@@ -75,8 +79,8 @@ def integrate(
     Returns a :class:`Trajectory` with the IMU's timestamps (``t_ns`` kept when the IMU has it).
     """
     state, bias_values, g = _common(imu, initial, bias, gravity, scheme)
-    states = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, state, bias_values, g, scheme)
-    return _trajectory(imu, states)
+    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, state, bias_values, g, scheme)
+    return _trajectory(imu, pv, quaternions)
 
 
 def propagate(
@@ -107,13 +111,18 @@ def propagate(
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
     if p0.shape != (15, 15):
         raise ShapeError(f"covariance: expected shape (15, 15), got {p0.shape}")
-    every = int(covariance_every)
-    if every < 1:
+    try:
+        every = operator.index(covariance_every)
+    except TypeError:
+        raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}") from None
+    if every < 1 or isinstance(covariance_every, bool):
         raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}")
+    n = len(imu)
+    every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
     densities = [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk]
-    states, covs = _core.strapdown_propagate(
+    pv, quaternions, covs = _core.strapdown_propagate(
         imu.seconds, imu.gyro, imu.accel, state, p0, bias_values, densities, g, scheme, every
     )
-    n = len(imu)
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
-    return _trajectory(imu, states, covs.reshape(-1, 15, 15), imu.t[kept])
+    covs.setflags(write=False)
+    return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))

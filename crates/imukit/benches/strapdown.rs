@@ -3,7 +3,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use imukit::propagate::{covariance_count, propagate, Covariance, Noise, Outputs};
-use imukit::strapdown::{integrate, Bias, NavState, Options, Samples, Scheme, STATE_WIDTH};
+use imukit::strapdown::{integrate, Bias, NavState, Options, Samples, Scheme, StatesOut};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::hint::black_box;
 
@@ -40,7 +40,7 @@ fn strapdown(c: &mut Criterion) {
         velocity: Vector3::zeros(),
         rotation: UnitQuaternion::identity(),
     };
-    let mut states = vec![0.0; STATE_WIDTH * N];
+    let (mut pv, mut rot) = (vec![0.0; 6 * N], vec![0.0; 4 * N]);
     let mut group = c.benchmark_group("strapdown_1e6");
     group.throughput(Throughput::Elements(N as u64));
     group.sample_size(10);
@@ -51,13 +51,11 @@ fn strapdown(c: &mut Criterion) {
         };
         group.bench_with_input(BenchmarkId::new("integrate", scheme.name()), &options, |b, options| {
             b.iter(|| {
-                integrate(
-                    black_box(&samples),
-                    &initial,
-                    &Bias::default(),
-                    options,
-                    Some(&mut states),
-                )
+                let out = StatesOut {
+                    position_velocity: &mut pv,
+                    rotation: &mut rot,
+                };
+                integrate(black_box(&samples), &initial, &Bias::default(), options, Some(out))
             })
         });
     }
@@ -72,7 +70,10 @@ fn strapdown(c: &mut Criterion) {
     group.bench_function("propagate_cov_every_100/midpoint", |b| {
         b.iter(|| {
             let outputs = Outputs {
-                states: Some(&mut states),
+                states: Some(StatesOut {
+                    position_velocity: &mut pv,
+                    rotation: &mut rot,
+                }),
                 covariances: &mut covariances,
                 every: 100,
             };

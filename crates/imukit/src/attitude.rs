@@ -23,7 +23,10 @@
 //!
 //! Representation × scheme: quaternion and matrix take all five; ZYX Euler angles have no group
 //! structure and take `euler`, `midpoint` and `rk4` only. Quaternions are renormalised and
-//! matrices re-orthonormalised (nearest rotation, Björck–Bowie iteration) after every step.
+//! matrices re-orthonormalised (nearest rotation, Björck–Bowie iteration) after every step of the
+//! ODE schemes, and every [`RENORMALIZE_EVERY`] steps of `exp`/`magnus`, which multiply exact
+//! rotations. Euler angles are refused within the gimbal tolerance of ±90°, and when cos(pitch)
+//! changes sign between two samples (the path jumped across the singularity).
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
@@ -125,6 +128,11 @@ trait State: Copy + std::ops::Add<Output = Self> + std::ops::Mul<f64, Output = S
     fn admissible(&self, _tolerance: f64) -> Result<()> {
         Ok(())
     }
+    /// The pitch (degrees) if the path from `previous` to `self` jumped across a singularity
+    /// between samples (Euler angles: cos(pitch) changed sign without landing within the tolerance).
+    fn crossed_singularity(&self, _previous: &Self) -> Option<f64> {
+        None
+    }
     fn project(self) -> Self;
     fn quaternion(&self) -> UnitQuaternion<f64>;
     /// `y ⊕ θ = y Exp(θ)`, not re-projected (see [`RENORMALIZE_EVERY`]); only called for group
@@ -193,6 +201,17 @@ impl State for Vector3<f64> {
         euler::check_pitch(self.y, tolerance)
     }
     #[inline]
+    fn crossed_singularity(&self, previous: &Self) -> Option<f64> {
+        // Near ±90° the ZYX rates grow like tan θ: a step that crosses cos θ = 0, or that turns yaw
+        // or roll by more than MAX_EULER_STEP, has not resolved the dynamics (the integrated pitch
+        // then turns back instead of passing through 90°).
+        let wrapped = |d: f64| (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let jump = wrapped(self.x - previous.x)
+            .abs()
+            .max(wrapped(self.z - previous.z).abs());
+        (self.y.cos() * previous.y.cos() <= 0.0 || jump > MAX_EULER_STEP).then(|| self.y.to_degrees())
+    }
+    #[inline]
     fn project(self) -> Self {
         self
     }
@@ -205,6 +224,10 @@ impl State for Vector3<f64> {
         *self
     }
 }
+
+/// Largest yaw or roll change [rad] one Euler-angle step may make before it counts as jumping over
+/// the singularity (1 rad: 200 rad/s at 200 Hz, far beyond any gyro's range).
+const MAX_EULER_STEP: f64 = 1.0;
 
 /// Checks the shapes shared by every integrator (values are checked during the run).
 fn check(t: &[f64], gyro: &[f64], out_len: Option<usize>) -> Result<()> {
@@ -262,7 +285,14 @@ pub fn integrate(
             supported: options.representation.schemes().iter().map(|s| s.name()).collect(),
         });
     }
-    euler::check_pitch(0.0, options.gimbal_tolerance)?;
+    let tol = options.gimbal_tolerance;
+    if !(tol.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&tol)) {
+        return Err(Error::Parameter {
+            name: "gimbal_tolerance",
+            expected: "a finite angle in [0, π/2) radians",
+            got: format!("{tol}"),
+        });
+    }
     if !initial.coords.iter().all(|v| v.is_finite()) {
         return Err(Error::NonFinite { index: 0 }.in_argument("initial"));
     }
@@ -315,6 +345,7 @@ fn run<S: State>(
     }
     y.admissible(tol)?;
     store(0, &y);
+    let mut previous = y;
     for (k, (tt, ww)) in t.windows(2).zip(rates.windows(2)).enumerate() {
         let h = tt[1] - tt[0];
         // Validated on the fly, one pass over the data; the slow path finds the first bad index.
@@ -342,9 +373,31 @@ fn run<S: State>(
             y = y.project();
         }
         y.admissible(tol).map_err(|e| e.at(k + 1))?;
+        if let Some(pitch_deg) = y.crossed_singularity(&previous) {
+            return Err(Error::GimbalLock {
+                index: k + 1,
+                pitch_deg,
+                tolerance_deg: tol.to_degrees(),
+            });
+        }
+        previous = y;
         store(k + 1, &y);
     }
-    Ok(y.quaternion())
+    let last = y.quaternion();
+    check_finite_quaternions(&last, out.as_deref().map(|o| o.as_flattened()), t.len())?;
+    Ok(last)
+}
+
+/// Finite rates can still overflow (e.g. 1e200 rad/s): refuse a non-finite result, naming the
+/// first non-finite stored attitude when there is a store, else the last sample.
+fn check_finite_quaternions(last: &UnitQuaternion<f64>, out: Option<&[f64]>, n: usize) -> Result<()> {
+    if last.coords.iter().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    let index = out
+        .and_then(|o| o.chunks_exact(4).position(|q| q.iter().any(|v| !v.is_finite())))
+        .unwrap_or(n - 1);
+    Err(Error::Overflow { index })
 }
 
 /// The rates at the two Gauss–Legendre nodes of every step.
@@ -414,7 +467,9 @@ fn quaternion_product(
         }
         *slot = [q.i, q.j, q.k, q.w];
     }
-    Ok(UnitQuaternion::new_unchecked(q))
+    let last = UnitQuaternion::new_unchecked(q);
+    check_finite_quaternions(&last, Some(out.as_flattened()), t.len())?;
+    Ok(last)
 }
 
 /// The precise error for inputs that failed the fast in-loop check.

@@ -56,10 +56,11 @@ pub enum Error {
         /// Tolerance applied to `orthogonality`.
         tolerance: f64,
     },
-    /// Pitch within the tolerance of ±90°, where the ZYX Euler-angle rate map is singular.
+    /// Pitch within the tolerance of ±90° (or past it between two samples), where the ZYX
+    /// Euler-angle rate map is singular.
     #[error(
-        "gimbal lock at element {index}: pitch {pitch_deg:.9}° is within {tolerance_deg:e}° of ±90°, \
-         where the ZYX Euler rate map E(χ) is singular"
+        "gimbal lock at element {index}: pitch {pitch_deg:.9}° is within {tolerance_deg:e}° of, or has \
+         passed, ±90°, where the ZYX Euler rate map E(χ) is singular"
     )]
     GimbalLock {
         /// Row index.

@@ -83,6 +83,12 @@ impl<'a> Cubic<'a> {
 /// differ in the last bits) still take the fast path.
 const UNIFORM_TOLERANCE: f64 = 1e-9;
 
+/// Spacing ratio (longest over shortest step of a stencil) above which a step takes the straight
+/// line between its own two samples instead of the cubic: across a gap the cubic's nodes come in
+/// far-apart pairs, its weights grow to ±25 and it amplifies sensor noise tenfold. Jittered
+/// sampling (ratios up to ~3) keeps the cubic.
+const MAX_SPACING_RATIO: f64 = 4.0;
+
 /// The cubic evaluated at fixed fractions `u` of every step (`t[k] + u h_k`), with the Lagrange
 /// weights of uniformly spaced stencils computed once instead of once per step.
 #[derive(Debug, Clone)]
@@ -140,6 +146,18 @@ impl<'a, const M: usize> StepInterpolator<'a, M> {
                 return out;
             }
         }
+        if n >= 4 {
+            let s = k.saturating_sub(1).min(n - 4);
+            let g = &t[s..s + 4];
+            let steps = [g[1] - g[0], g[2] - g[1], g[3] - g[2]];
+            let (lo, hi) = steps
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), d| (lo.min(*d), hi.max(*d)));
+            if hi > MAX_SPACING_RATIO * lo {
+                let (v0, v1) = (self.cubic.value(k), self.cubic.value(k + 1));
+                return self.fractions.map(|u| v0 + (v1 - v0) * u);
+            }
+        }
         let mut tau = self.fractions;
         tau.iter_mut().for_each(|u| *u *= h);
         self.cubic.at(k, tau)
@@ -174,6 +192,7 @@ mod tests {
     fn step_interpolator_matches_the_cubic() {
         let f = |x: f64| Vector3::new((1.3 * x).sin(), (0.7 * x).cos(), x * x * x - x);
         for jitter in [0.0, 1e-12, 0.3] {
+            // (spacing ratios stay below MAX_SPACING_RATIO here, so the cubic is used throughout)
             let t: Vec<f64> = (0..12)
                 .map(|k| k as f64 * 0.01 + jitter * 0.01 * ((k * k) as f64).sin())
                 .collect();
@@ -191,6 +210,22 @@ mod tests {
                     assert!((a - b).norm() < 1e-13, "jitter {jitter}, k {k}: {a} vs {b}");
                 }
             }
+        }
+    }
+
+    /// Across a gap (spacing ratio above 4) a step uses the straight line between its samples.
+    #[test]
+    fn gaps_fall_back_to_the_line() {
+        let t = [0.0, 0.01, 0.02, 1.0, 1.01, 1.02];
+        let values: Vec<f64> = t.iter().flat_map(|&x| [x * x, 1.0, -x]).collect();
+        let fast = StepInterpolator::new(Cubic::new(&t, &values), [0.5]);
+        for k in [1, 2, 3] {
+            let [mid] = fast.at(k);
+            let (a, b) = (
+                Vector3::new(t[k] * t[k], 1.0, -t[k]),
+                Vector3::new(t[k + 1] * t[k + 1], 1.0, -t[k + 1]),
+            );
+            assert!((mid - (a + b) * 0.5).norm() < 1e-15, "k = {k}");
         }
     }
 

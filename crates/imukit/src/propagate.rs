@@ -30,7 +30,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::strapdown::{self, Bias, NavState, Options, Samples, Stepper};
+use crate::strapdown::{self, Bias, NavState, Options, Samples, StatesOut, Stepper};
 use crate::{so3, Error, Result};
 
 /// 15×15 error-state covariance, order `[δp, δv, δθ, δb_a, δb_g]`.
@@ -223,8 +223,8 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
 /// Output buffers of [`propagate`].
 #[derive(Debug)]
 pub struct Outputs<'a> {
-    /// Every state in the [`strapdown`] output layout, or `None`.
-    pub states: Option<&'a mut [f64]>,
+    /// Every state, or `None`.
+    pub states: Option<StatesOut<'a>>,
     /// Covariances (row-major 15×15) at samples `0, every, 2·every, …` and the last sample.
     pub covariances: &'a mut [f64],
     /// Stride of the stored covariances (≥ 1).
@@ -273,22 +273,16 @@ pub fn propagate(
         };
         return Err(e.in_argument("covariances"));
     }
-    if let Some(out) = states.as_deref() {
-        if out.len() != strapdown::STATE_WIDTH * n {
-            let e = Error::RowCount {
-                input: n,
-                output: out.len() / strapdown::STATE_WIDTH,
-            };
-            return Err(e.in_argument("states"));
-        }
+    if let Some(out) = states.as_ref() {
+        out.check(n)?;
     }
-    if !(covariance.iter().all(|v| v.is_finite())
-        && (covariance - covariance.transpose()).amax() <= 1e-9 * covariance.amax())
-    {
+    let symmetric = (covariance - covariance.transpose()).amax() <= 1e-9 * covariance.amax();
+    let nonnegative_diagonal = covariance.diagonal().iter().all(|v| *v >= 0.0);
+    if !(covariance.iter().all(|v| v.is_finite()) && symmetric && nonnegative_diagonal) {
         return Err(Error::Parameter {
             name: "covariance",
-            expected: "a finite, symmetric 15×15 matrix",
-            got: "a non-finite or asymmetric one".into(),
+            expected: "a finite, symmetric 15×15 matrix with a non-negative diagonal",
+            got: "one that is not".into(),
         });
     }
     let mut p = to_blocks(covariance);
@@ -297,8 +291,8 @@ pub fn propagate(
         write_blocks(p, &mut covariances[225 * *stored..225 * (*stored + 1)]);
         *stored += 1;
     };
-    if let Some(out) = states.as_deref_mut() {
-        strapdown::store(out, 0, initial);
+    if let Some(out) = states.as_mut() {
+        out.store(0, initial);
     }
     store_cov(&p, &mut stored);
     let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, x, next| {
@@ -306,8 +300,8 @@ pub fn propagate(
         let w_hat = samples.gyro_at(k) - bias.gyro;
         let a_hat = samples.accel_at(k) - bias.accel;
         propagate_blocks(&mut p, &StepBlocks::new(x, &w_hat, &a_hat, h), noise, h);
-        if let Some(out) = states.as_deref_mut() {
-            strapdown::store(out, k + 1, next);
+        if let Some(out) = states.as_mut() {
+            out.store(k + 1, next);
         }
         if (k + 1).is_multiple_of(every) || k + 2 == n {
             store_cov(&p, &mut stored);
@@ -320,6 +314,7 @@ pub fn propagate(
             last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
         }
     }
+    strapdown::check_finite_result(&x, states.as_ref(), n)?;
     if !last.iter().all(|v| v.is_finite()) {
         return Err(Error::Overflow { index: n - 1 });
     }

@@ -5,7 +5,7 @@
 //! | state | `p` [m], `v` [m/s] in the world frame, `q = q_wb` (body to world, Hamilton) |
 //! | inputs | `ω_m` [rad/s] and specific force `a_m` [m/s²] in the body frame, biases `b_g`, `b_a` |
 //! | model | `ṗ = v`, `v̇ = R (a_m − b_a) + g`, `Ṙ = R [ω_m − b_g]×`; g added (default `(0, 0, −9.81)`) |
-//! | output | `10n` values: `n` rows `[p (3), v (3)]`, then `n` rows `q (4, xyzw)`; row 0 = the initial state |
+//! | output | [`StatesOut`]: `n` rows `[p (3), v (3)]` and `n` rows `q (4, xyzw)`; row 0 = the initial state |
 //!
 //! Schemes over step `k → k+1`, `h = t[k+1] − t[k]`, `â = a_m − b_a`, `ω̂ = ω_m − b_g`:
 //!
@@ -132,8 +132,9 @@ impl Samples<'_> {
     pub(crate) fn step_ok(&self, k: usize) -> bool {
         let h = self.t[k + 1] - self.t[k];
         let (g, a) = (self.gyro_at(k + 1), self.accel_at(k + 1));
-        // x·0 is 0 for every finite x and NaN for ±inf and NaN: one branch for six values.
-        let zero = (g.x + a.x) * 0.0 + (g.y + a.y) * 0.0 + (g.z + a.z) * 0.0;
+        // x·0 is 0 for every finite x and NaN for ±inf and NaN; summing the products (not the
+        // values) cannot overflow: one branch for six values.
+        let zero = (g * 0.0).sum() + (a * 0.0).sum();
         h > 0.0 && h <= f64::MAX && zero == 0.0
     }
 
@@ -171,17 +172,46 @@ impl Default for Options {
     }
 }
 
-/// Values per stored state: `[p, v]` and `q`.
-pub const STATE_WIDTH: usize = 10;
+/// Where every state goes: two separate buffers, so that the quaternions form a contiguous
+/// `(n, 4)` array that scipy can own while the `(n, 6)` positions and velocities stay read-only.
+#[derive(Debug)]
+pub struct StatesOut<'a> {
+    /// `6n` values: rows `[p, v]`.
+    pub position_velocity: &'a mut [f64],
+    /// `4n` values: rows `q` (`[x, y, z, w]`).
+    pub rotation: &'a mut [f64],
+}
 
-/// Stores state k in the output layout: `[p, v]` rows first, then the quaternion rows, so that
-/// both blocks are contiguous `(n, 6)` and `(n, 4)` arrays (scipy wants the quaternions so).
-pub(crate) fn store(out: &mut [f64], k: usize, x: &NavState) {
-    let n = out.len() / STATE_WIDTH;
-    let q = x.rotation.coords;
-    out[6 * k..6 * k + 3].copy_from_slice(x.position.as_slice());
-    out[6 * k + 3..6 * k + 6].copy_from_slice(x.velocity.as_slice());
-    out[6 * n + 4 * k..6 * n + 4 * k + 4].copy_from_slice(&[q.x, q.y, q.z, q.w]);
+impl StatesOut<'_> {
+    pub(crate) fn check(&self, n: usize) -> Result<()> {
+        for (name, len, width) in [
+            ("states", self.position_velocity.len(), 6),
+            ("states", self.rotation.len(), 4),
+        ] {
+            if len != width * n {
+                return Err(Error::RowCount {
+                    input: n,
+                    output: len / width,
+                }
+                .in_argument(name));
+            }
+        }
+        Ok(())
+    }
+
+    pub(crate) fn store(&mut self, k: usize, x: &NavState) {
+        let q = x.rotation.coords;
+        self.position_velocity[6 * k..6 * k + 3].copy_from_slice(x.position.as_slice());
+        self.position_velocity[6 * k + 3..6 * k + 6].copy_from_slice(x.velocity.as_slice());
+        self.rotation[4 * k..4 * k + 4].copy_from_slice(&[q.x, q.y, q.z, q.w]);
+    }
+
+    /// The first stored state with a non-finite value.
+    fn first_non_finite(&self) -> Option<usize> {
+        let pv = self.position_velocity.chunks_exact(6);
+        pv.zip(self.rotation.chunks_exact(4))
+            .position(|(a, b)| a.iter().chain(b).any(|v| !v.is_finite()))
+    }
 }
 
 /// One step of the chosen scheme from sample k to k+1, biases already removed by `inputs`.
@@ -334,40 +364,48 @@ fn compose(q: &UnitQuaternion<f64>, theta: &Vector3<f64>) -> UnitQuaternion<f64>
 /// dependent chain as long as the product itself, off most steps (it cost 18 ns a sample).
 const RENORMALIZE_EVERY: usize = 16;
 
-/// Integrates the samples from `initial`, writing every state (layout in the module docs,
-/// [`STATE_WIDTH`] values per sample) to `out` when given; returns the final state. No allocation per sample.
+/// Integrates the samples from `initial`, writing every state to `out` when given; returns the
+/// final state. No allocation per sample.
 pub fn integrate(
     samples: &Samples<'_>,
     initial: &NavState,
     bias: &Bias,
     options: &Options,
-    mut out: Option<&mut [f64]>,
+    mut out: Option<StatesOut<'_>>,
 ) -> Result<NavState> {
     samples.check_shapes()?;
     let n = samples.t.len();
-    if let Some(out) = out.as_deref() {
-        if out.len() != STATE_WIDTH * n {
-            let e = Error::RowCount {
-                input: n,
-                output: out.len() / STATE_WIDTH,
-            };
-            return Err(e.in_argument("out"));
-        }
+    if let Some(out) = out.as_ref() {
+        out.check(n)?;
     }
     check_parameters(initial, bias, options)?;
-    if let Some(out) = out.as_deref_mut() {
-        store(out, 0, initial);
+    if let Some(out) = out.as_mut() {
+        out.store(0, initial);
     }
     let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, _, next| {
-        if let Some(out) = out.as_deref_mut() {
-            store(out, k + 1, next);
+        if let Some(out) = out.as_mut() {
+            out.store(k + 1, next);
         }
         Ok(())
     })?;
-    if !(x.position.iter().chain(x.velocity.iter()).all(|v| v.is_finite())) {
-        return Err(Error::Overflow { index: n - 1 });
-    }
+    check_finite_result(&x, out.as_ref(), n)?;
     Ok(x)
+}
+
+/// Finite inputs can still overflow (e.g. 1e200 rad/s): refuse a non-finite result, naming the
+/// first non-finite stored state when there is a store, else the last sample.
+pub(crate) fn check_finite_result(x: &NavState, out: Option<&StatesOut<'_>>, n: usize) -> Result<()> {
+    let finite = x
+        .position
+        .iter()
+        .chain(x.velocity.iter())
+        .chain(x.rotation.coords.iter())
+        .all(|v| v.is_finite());
+    if finite {
+        return Ok(());
+    }
+    let index = out.and_then(StatesOut::first_non_finite).unwrap_or(n - 1);
+    Err(Error::Overflow { index })
 }
 
 /// Finite initial state, biases and gravity.
