@@ -5,10 +5,11 @@
 
 use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
-use imukit::{propagate, strapdown};
+use imukit::{preint, propagate, strapdown};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
-    PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -449,6 +450,113 @@ fn strapdown_propagate<'py>(
     Ok((pv, rot, covariances))
 }
 
+/// Streaming preintegration state (Forster euler scheme); wrapped by `imukit.PreintegratedImu`.
+#[pyclass(name = "Preintegrator", module = "imukit._core")]
+struct PyPreintegrator {
+    inner: preint::Preintegrator,
+}
+
+fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(Vector3::from(v))
+    } else {
+        Err(raise(
+            py,
+            "NonFiniteError",
+            name,
+            format!("expected finite values, got {v:?}"),
+        ))
+    }
+}
+
+#[pymethods]
+impl PyPreintegrator {
+    #[new]
+    fn new(bias_values: [f64; 6], noise: [f64; 4]) -> Self {
+        let b = bias(bias_values);
+        let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
+        let noise = propagate::Noise {
+            gyro_density,
+            accel_density,
+            gyro_random_walk,
+            accel_random_walk,
+        };
+        Self {
+            inner: preint::Preintegrator::new(b.gyro, b.accel, noise),
+        }
+    }
+
+    /// One interval of `dt` seconds with `accel`, `gyro` held over it.
+    fn integrate_measurement(&mut self, py: Python<'_>, accel: [f64; 3], gyro: [f64; 3], dt: f64) -> PyResult<()> {
+        let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "dt",
+                format!("expected a positive, finite step, got {dt}"),
+            ));
+        }
+        self.inner.integrate_measurement(&a, &w, dt);
+        Ok(())
+    }
+
+    /// Intervals `[t_k, t_k+1)` with sample k held over each (N samples → N − 1 intervals).
+    fn integrate(
+        &mut self,
+        py: Python<'_>,
+        t: PyReadonlyArray1<'_, f64>,
+        gyro: PyReadonlyArray2<'_, f64>,
+        accel: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+        let samples = copies.samples(py)?;
+        samples.check_shapes().map_err(|e| to_py(py, "integrate", e))?;
+        // Validate everything first, so a bad sample leaves the preintegration untouched.
+        let bad = !samples.first_ok() || (0..samples.t.len() - 1).any(|k| !samples.step_ok(k));
+        if bad {
+            return Err(to_py(py, "integrate", samples.value_error()));
+        }
+        let inner = &mut self.inner;
+        py.detach(|| {
+            for k in 0..samples.t.len() - 1 {
+                let h = samples.t[k + 1] - samples.t[k];
+                inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+            }
+        });
+        Ok(())
+    }
+
+    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
+    #[allow(clippy::type_complexity)] // a plain tuple is the simplest thing to unpack in Python
+    fn state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        f64,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+    )> {
+        let p = &self.inner;
+        let rows = |m: &[f64], r: usize, c: usize| -> PyResult<Bound<'py, PyArray2<f64>>> {
+            // nalgebra is column-major: transpose through the index.
+            let data: Vec<f64> = (0..r * c).map(|i| m[(i % c) * r + i / c]).collect();
+            PyArray1::from_vec(py, data).reshape([r, c])
+        };
+        Ok((
+            rows(p.delta_rotation.as_slice(), 3, 3)?,
+            PyArray1::from_slice(py, p.delta_velocity.as_slice()),
+            PyArray1::from_slice(py, p.delta_position.as_slice()),
+            p.delta_t,
+            rows(p.covariance.as_slice(), 9, 9)?,
+            rows(p.bias_jacobian().as_slice(), 9, 6)?,
+        ))
+    }
+}
+
 /// Compiled core of imukit. Use the `imukit` package, not this module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -473,6 +581,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(attitude_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(strapdown_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(strapdown_propagate, m)?)?;
+    m.add_class::<PyPreintegrator>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -26,6 +26,7 @@ from imukit._errors import (
 )
 from imukit.attitude import integrate_attitude
 from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.preint import PreintegratedImu, preintegrate
 from imukit.state import NavState, Trajectory
 from imukit.strapdown import integrate, propagate
 
@@ -42,6 +43,7 @@ __all__ = [
     "NavState",
     "NonFiniteError",
     "ParameterError",
+    "PreintegratedImu",
     "ShapeError",
     "TimestampError",
     "Trajectory",
@@ -50,6 +52,7 @@ __all__ = [
     "integrate",
     "integrate_attitude",
     "io",
+    "preintegrate",
     "propagate",
     "quat",
     "so3",

@@ -1,10 +1,13 @@
 # Stubs of the compiled module (checked by mypy.stubtest). Every function takes a C-contiguous
 # float64 array of shape (n, k), the argument name used in error messages, and options; it returns
 # a new (n, m) float64 array. Use the public modules (imukit.so3, imukit.quat, imukit.euler).
+from typing import final
+
 import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "Preintegrator",
     "__version__",
     "attitude_integrate",
     "euler_from_matrix",
@@ -79,3 +82,14 @@ def strapdown_propagate(
     scheme: str,
     every: int,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+
+@final
+class Preintegrator:
+    def __new__(cls, bias_values: list[float], noise: list[float]) -> Preintegrator: ...
+    def integrate_measurement(self, accel: list[float], gyro: list[float], dt: float) -> None: ...
+    def integrate(self, t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> None: ...
+    def state(
+        self,
+    ) -> tuple[
+        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64], NDArray[np.float64]
+    ]: ...

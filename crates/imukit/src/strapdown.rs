@@ -129,7 +129,7 @@ impl Samples<'_> {
 
     /// Whether step k (into sample k+1) is usable: positive finite dt, finite samples at k+1.
     #[inline(always)]
-    pub(crate) fn step_ok(&self, k: usize) -> bool {
+    pub fn step_ok(&self, k: usize) -> bool {
         let h = self.t[k + 1] - self.t[k];
         let (g, a) = (self.gyro_at(k + 1), self.accel_at(k + 1));
         // x·0 is 0 for every finite x and NaN for ±inf and NaN; summing the products (not the
@@ -139,17 +139,19 @@ impl Samples<'_> {
     }
 
     /// Whether sample 0 is usable.
-    pub(crate) fn first_ok(&self) -> bool {
+    pub fn first_ok(&self) -> bool {
         self.t[0].is_finite() && self.gyro[..3].iter().chain(&self.accel[..3]).all(|v| v.is_finite())
     }
 
+    /// Gyro sample k.
     #[inline]
-    pub(crate) fn gyro_at(&self, k: usize) -> Vector3<f64> {
+    pub fn gyro_at(&self, k: usize) -> Vector3<f64> {
         Vector3::new(self.gyro[3 * k], self.gyro[3 * k + 1], self.gyro[3 * k + 2])
     }
 
+    /// Accelerometer sample k.
     #[inline]
-    pub(crate) fn accel_at(&self, k: usize) -> Vector3<f64> {
+    pub fn accel_at(&self, k: usize) -> Vector3<f64> {
         Vector3::new(self.accel[3 * k], self.accel[3 * k + 1], self.accel[3 * k + 2])
     }
 }

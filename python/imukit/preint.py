@@ -1,0 +1,150 @@
+"""IMU preintegration: ``preintegrate`` and ``PreintegratedImu`` (Forster et al., T-RO 2017).
+
+=====================  ===========================================================================
+deltas                 ``ΔR_ij`` (scipy ``Rotation``), ``Δv_ij``, ``Δp_ij`` in the body frame at i,
+                       gravity-free; ``Δt_ij``
+scheme                 ``"euler"``: sample k held over ``[t_k, t_k+1)``, exact rotation steps
+covariance             9×9 of ``[δθ, δv, δp]``, right perturbation ``ΔR = ΔR̂ Exp(δθ)``
+bias Jacobian          9×6, rows ``[θ, v, p]``, columns ``[b_g, b_a]``
+prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``, ``p_j = p_i + v_i Δt + ½ g Δt² + R_i Δp``
+=====================  ===========================================================================
+
+Gravity is added as everywhere in imukit (default ``(0, 0, −9.81)``, z up). Formulas: the module
+docs of ``crates/imukit/src/preint.rs``. Still to come with the preintegration issue: the VINS
+midpoint scheme, the 15×15 combined covariance, residual Jacobians, merge and keyframe windows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
+
+from imukit import _core
+from imukit._arrays import FloatArray, as_float_array, choice
+from imukit._errors import ParameterError, ShapeError
+from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.state import NavState
+
+__all__ = ["PreintegratedImu", "preintegrate"]
+
+_SCHEMES = ("euler",)
+
+
+def _vector(x: ArrayLike, name: str) -> FloatArray:
+    v = as_float_array(x, name)
+    if v.shape != (3,):
+        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
+    return v
+
+
+class PreintegratedImu:
+    """Preintegrated IMU measurements between two keyframes i and j; see the module docs.
+
+    Build it with :func:`preintegrate`, or empty and then feed it with :meth:`integrate_measurement`
+    (one interval, GTSAM-style) or :meth:`integrate` (a batch of samples).
+    """
+
+    def __init__(
+        self,
+        *,
+        noise: ImuNoise,
+        bias: ImuBias | None = None,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        scheme: str = "euler",
+    ) -> None:
+        if not isinstance(noise, ImuNoise):
+            raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
+        if bias is not None and not isinstance(bias, ImuBias):
+            raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
+        choice(scheme, "scheme", _SCHEMES)
+        self.bias = bias or ImuBias()
+        self.noise = noise
+        self.gravity = _vector(gravity, "gravity")
+        self.scheme = scheme
+        densities = [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk]
+        self._core = _core.Preintegrator([*self.bias.gyro, *self.bias.accel], densities)
+
+    def integrate_measurement(self, accel: ArrayLike, gyro: ArrayLike, dt: float) -> None:
+        """Add one interval of ``dt`` seconds with ``accel`` [m/s²] and ``gyro`` [rad/s] held over it."""
+        self._core.integrate_measurement([*_vector(accel, "accel")], [*_vector(gyro, "gyro")], float(dt))
+
+    def integrate(self, imu: ImuData) -> None:
+        """Add the N − 1 intervals of ``imu`` (sample k held over ``[t_k, t_k+1)``), GIL released."""
+        if not isinstance(imu, ImuData):
+            raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+        self._core.integrate(imu.seconds, imu.gyro, imu.accel)
+
+    def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
+        return self._core.state()
+
+    @property
+    def delta_rotation(self) -> Rotation:
+        """``ΔR_ij``."""
+        return Rotation.from_matrix(self._state()[0])
+
+    @property
+    def delta_velocity(self) -> FloatArray:
+        """``Δv_ij`` [m/s], gravity-free, frame i."""
+        return self._state()[1]
+
+    @property
+    def delta_position(self) -> FloatArray:
+        """``Δp_ij`` [m], gravity-free, frame i."""
+        return self._state()[2]
+
+    @property
+    def delta_t(self) -> float:
+        """``Δt_ij`` [s]."""
+        return self._state()[3]
+
+    @property
+    def covariance(self) -> FloatArray:
+        """9×9 covariance of ``[δθ, δv, δp]``."""
+        return self._state()[4]
+
+    @property
+    def bias_jacobian(self) -> FloatArray:
+        """9×6 ``∂(θ, v, p)/∂(b_g, b_a)``."""
+        return self._state()[5]
+
+    def corrected(self, bias: ImuBias) -> tuple[Rotation, FloatArray, FloatArray]:
+        """Deltas for ``bias`` to first order, without re-integration (rotation right-applied):
+        ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb`` with ``δb = bias − integration bias``."""
+        r, v, p, _, _, jac = self._state()
+        db = np.concatenate([bias.gyro - self.bias.gyro, bias.accel - self.bias.accel])
+        d = jac @ db
+        return Rotation.from_matrix(r) * Rotation.from_rotvec(d[0:3]), v + d[3:6], p + d[6:9]
+
+    def predict(self, state_i: NavState, bias: ImuBias | None = None) -> NavState:
+        """The state at j from the state at i (deltas corrected to ``bias`` when given)."""
+        dr, dv, dp = self.corrected(bias) if bias is not None else (self.delta_rotation, *self._state()[1:3])
+        dt, g, r_i = self.delta_t, self.gravity, state_i.rotation
+        return NavState(
+            state_i.position + state_i.velocity * dt + 0.5 * g * dt * dt + r_i.apply(dp),
+            state_i.velocity + g * dt + r_i.apply(dv),
+            r_i * dr,
+        )
+
+    def residual(self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None) -> FloatArray:
+        """``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``."""
+        dr, dv, dp = self.corrected(bias) if bias is not None else (self.delta_rotation, *self._state()[1:3])
+        dt, g, r_i = self.delta_t, self.gravity, state_i.rotation
+        r_v = r_i.inv().apply(state_j.velocity - state_i.velocity - g * dt) - dv
+        r_p = r_i.inv().apply(state_j.position - state_i.position - state_i.velocity * dt - 0.5 * g * dt * dt) - dp
+        r_theta = (dr.inv() * r_i.inv() * state_j.rotation).as_rotvec()
+        return np.concatenate([r_theta, r_v, r_p])
+
+
+def preintegrate(
+    imu: ImuData,
+    *,
+    noise: ImuNoise,
+    bias: ImuBias | None = None,
+    gravity: ArrayLike = (0.0, 0.0, -9.81),
+    scheme: str = "euler",
+) -> PreintegratedImu:
+    """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`."""
+    pim = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme)
+    pim.integrate(imu)
+    return pim
