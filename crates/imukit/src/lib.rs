@@ -27,6 +27,7 @@ pub mod batch;
 mod error;
 pub mod euler;
 pub mod interp;
+mod mat3;
 pub mod preint;
 pub mod propagate;
 pub mod quat;

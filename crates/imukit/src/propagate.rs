@@ -30,6 +30,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+use crate::mat3::{mul, mul_t};
 use crate::strapdown::{self, Bias, NavState, Options, Samples, StatesOut, Stepper};
 use crate::{so3, Error, Result};
 
@@ -153,19 +154,6 @@ fn write_blocks(b: &Blocks, out: &mut [f64]) {
             }
         }
     }
-}
-
-/// `a b` for 3×3 blocks, written out: nalgebra's generic product compiles to about twice the
-/// instructions, and this function runs ~30 times per covariance step.
-#[inline(always)]
-fn mul(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
-    Matrix3::from_fn(|r, c| a[(r, 0)] * b[(0, c)] + a[(r, 1)] * b[(1, c)] + a[(r, 2)] * b[(2, c)])
-}
-
-/// `a bᵀ` for 3×3 blocks.
-#[inline(always)]
-fn mul_t(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
-    Matrix3::from_fn(|r, c| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)])
 }
 
 #[allow(clippy::needless_range_loop)] // block indices name error-state components (P, V, TH, …)

@@ -200,3 +200,26 @@ fn covariance_matches_monte_carlo() {
     assert!(rel < 0.1, "relative Frobenius error {rel}");
     assert!((sample - nominal.covariance * 2.0).norm() / (nominal.covariance.norm() * 2.0) > 0.1);
 }
+
+#[test]
+fn block_covariance_update_equals_the_dense_reference() {
+    let noise = Noise {
+        gyro_density: 2e-3,
+        accel_density: 2e-2,
+        ..Noise::default()
+    };
+    let bias = (Vector3::new(0.01, -0.02, 0.005), Vector3::new(0.1, 0.05, -0.2));
+    let mut p = Preintegrator::new(bias.0, bias.1, noise);
+    let mut dense = SMatrix::<f64, 9, 9>::zeros();
+    for (k, (a, w)) in samples().iter().enumerate() {
+        let h = H * (1.0 + 0.3 * (k as f64).sin()); // uneven steps
+        let m = p.step_matrices(a, w, h);
+        let var_a = noise.accel_density * noise.accel_density / h;
+        let var_g = noise.gyro_density * noise.gyro_density / h;
+        dense = m.a * dense * m.a.transpose() + m.b * m.b.transpose() * var_a + m.c * m.c.transpose() * var_g;
+        p.integrate_measurement(a, w, h);
+    }
+    let err = (p.covariance - dense).amax() / dense.amax();
+    assert!(err < 1e-12, "relative error {err:e}");
+    assert_eq!(p.covariance, p.covariance.transpose());
+}
