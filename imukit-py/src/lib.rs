@@ -551,7 +551,7 @@ impl PyPreintegrator {
             PyArray1::from_slice(py, p.delta_velocity.as_slice()),
             PyArray1::from_slice(py, p.delta_position.as_slice()),
             p.delta_t,
-            rows(p.covariance.as_slice(), 9, 9)?,
+            rows(p.covariance().as_slice(), 9, 9)?,
             rows(p.bias_jacobian().as_slice(), 9, 6)?,
         ))
     }

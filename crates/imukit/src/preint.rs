@@ -50,17 +50,15 @@ pub struct StepMatrices {
 /// 3×3 products instead of two dense 9×9 ones. `B Σ_a Bᵀ` reduces to multiples of I because ΔR
 /// is orthonormal.
 fn propagate_blocks(
-    cov: &Covariance9,
+    cov: &CovarianceBlocks,
     phi: &Matrix3<f64>,
     m: &Matrix3<f64>,
     jr: &Matrix3<f64>,
     h: f64,
     var_a: f64,
     var_g: f64,
-) -> Covariance9 {
-    let block = |i: usize, j: usize| cov.fixed_view::<3, 3>(3 * i, 3 * j).into_owned();
-    let (tt, tv, tp) = (block(0, 0), block(0, 1), block(0, 2));
-    let (vv, vp, pp) = (block(1, 1), block(1, 2), block(2, 2));
+) -> CovarianceBlocks {
+    let [tt, tv, tp, vv, vp, pp] = *cov;
     let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
     let half_h2 = 0.5 * h * h;
     // Rows of A Σ.
@@ -83,18 +81,26 @@ fn propagate_blocks(
     let new_vv = a_vt_mt * h + a_vv + Matrix3::identity() * (var_a * h * h);
     let new_vp = a_vt_mt * half_h2 + a_vv * h + a_vp + Matrix3::identity() * (var_a * h * half_h2);
     let new_pp = mul_t(&a_pt, m) * half_h2 + a_pv * h + a_pp + Matrix3::identity() * (var_a * half_h2 * half_h2);
+    let symmetric = |b: Matrix3<f64>| (b + b.transpose()) * 0.5;
+    [
+        symmetric(new_tt),
+        new_tv,
+        new_tp,
+        symmetric(new_vv),
+        new_vp,
+        symmetric(new_pp),
+    ]
+}
+
+/// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
+type CovarianceBlocks = [Matrix3<f64>; 6];
+
+/// The 9×9 matrix of the blocks.
+fn assemble(blocks: &CovarianceBlocks) -> Covariance9 {
     let mut out = Covariance9::zeros();
-    let blocks = [
-        (0, 0, new_tt),
-        (0, 1, new_tv),
-        (0, 2, new_tp),
-        (1, 1, new_vv),
-        (1, 2, new_vp),
-        (2, 2, new_pp),
-    ];
-    for (i, j, b) in blocks {
-        let b = if i == j { (b + b.transpose()) * 0.5 } else { b };
-        out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&b);
+    let places = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+    for ((i, j), b) in places.into_iter().zip(blocks) {
+        out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(b);
         out.fixed_view_mut::<3, 3>(3 * j, 3 * i).copy_from(&b.transpose());
     }
     out
@@ -117,8 +123,7 @@ pub struct Preintegrator {
     pub delta_position: Vector3<f64>,
     /// `Δt_ij` [s].
     pub delta_t: f64,
-    /// Covariance of `[δθ, δv, δp]`.
-    pub covariance: Covariance9,
+    covariance: CovarianceBlocks,
     d_rot_d_bg: Matrix3<f64>,
     d_vel_d_bg: Matrix3<f64>,
     d_vel_d_ba: Matrix3<f64>,
@@ -137,7 +142,7 @@ impl Preintegrator {
             delta_velocity: Vector3::zeros(),
             delta_position: Vector3::zeros(),
             delta_t: 0.0,
-            covariance: Covariance9::zeros(),
+            covariance: [Matrix3::zeros(); 6],
             d_rot_d_bg: Matrix3::zeros(),
             d_vel_d_bg: Matrix3::zeros(),
             d_vel_d_ba: Matrix3::zeros(),
@@ -153,7 +158,7 @@ impl Preintegrator {
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
         let a_cross = so3::hat(&a);
-        let r_a_cross = r * a_cross;
+        let r_a_cross = mul(&r, &a_cross);
         let step = so3::exp(&(w * h));
         let step_t = step.matrix().transpose();
         let jr = so3::right_jacobian(&(w * h));
@@ -165,16 +170,18 @@ impl Preintegrator {
         self.covariance = propagate_blocks(&self.covariance, &step_t, &(-r_a_cross), &jr, h, var_a, var_g);
 
         // Bias Jacobians, position before velocity before rotation.
+        let ra_drot = mul(&r_a_cross, &self.d_rot_d_bg);
         self.d_pos_d_ba += self.d_vel_d_ba * h - r * half_h2;
-        self.d_pos_d_bg += self.d_vel_d_bg * h - r_a_cross * self.d_rot_d_bg * half_h2;
+        self.d_pos_d_bg += self.d_vel_d_bg * h - ra_drot * half_h2;
         self.d_vel_d_ba -= r * h;
-        self.d_vel_d_bg -= r_a_cross * self.d_rot_d_bg * h;
-        self.d_rot_d_bg = step_t * self.d_rot_d_bg - jr * h;
+        self.d_vel_d_bg -= ra_drot * h;
+        self.d_rot_d_bg = mul(&step_t, &self.d_rot_d_bg) - jr * h;
 
         // Deltas.
-        self.delta_position += self.delta_velocity * h + r * a * half_h2;
-        self.delta_velocity += r * a * h;
-        self.delta_rotation = r * step.matrix();
+        let ra = r * a;
+        self.delta_position += self.delta_velocity * h + ra * half_h2;
+        self.delta_velocity += ra * h;
+        self.delta_rotation = mul(&r, step.matrix());
         self.delta_t += h;
     }
 
@@ -199,6 +206,11 @@ impl Preintegrator {
         c_m.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(so3::right_jacobian(&(w * h)) * h));
         StepMatrices { a: a_m, b: b_m, c: c_m }
+    }
+
+    /// Covariance of `[δθ, δv, δp]` (9×9).
+    pub fn covariance(&self) -> Covariance9 {
+        assemble(&self.covariance)
     }
 
     /// The bias Jacobian `∂(θ, v, p)/∂(b_g, b_a)`.

@@ -175,7 +175,7 @@ fn covariance_matches_monte_carlo() {
     let mut rng = Normal(0x1234_5678_9ABC_DEF1);
     let mut sample = SMatrix::<f64, 9, 9>::zeros();
     let mut nees = 0.0;
-    let inv = nominal.covariance.try_inverse().unwrap();
+    let inv = nominal.covariance().try_inverse().unwrap();
     for _ in 0..runs {
         let noisy: Vec<_> = data
             .iter()
@@ -196,9 +196,9 @@ fn covariance_matches_monte_carlo() {
     // χ² with 9·2000 dof, 99% interval of the mean: 9 ± 2.576 √(18/2000)
     let half_width = 2.576 * (18.0f64 / runs as f64).sqrt();
     assert!((mean_nees - 9.0).abs() < half_width, "mean NEES {mean_nees}");
-    let rel = (sample - nominal.covariance).norm() / nominal.covariance.norm();
+    let rel = (sample - nominal.covariance()).norm() / nominal.covariance().norm();
     assert!(rel < 0.1, "relative Frobenius error {rel}");
-    assert!((sample - nominal.covariance * 2.0).norm() / (nominal.covariance.norm() * 2.0) > 0.1);
+    assert!((sample - nominal.covariance() * 2.0).norm() / (nominal.covariance().norm() * 2.0) > 0.1);
 }
 
 #[test]
@@ -219,7 +219,7 @@ fn block_covariance_update_equals_the_dense_reference() {
         dense = m.a * dense * m.a.transpose() + m.b * m.b.transpose() * var_a + m.c * m.c.transpose() * var_g;
         p.integrate_measurement(a, w, h);
     }
-    let err = (p.covariance - dense).amax() / dense.amax();
+    let err = (p.covariance() - dense).amax() / dense.amax();
     assert!(err < 1e-12, "relative error {err:e}");
-    assert_eq!(p.covariance, p.covariance.transpose());
+    assert_eq!(p.covariance(), p.covariance().transpose());
 }
