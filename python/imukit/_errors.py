@@ -59,3 +59,19 @@ class TimestampError(ImukitError, ValueError):
 
 class FileFormatError(ImukitError, ValueError):
     """A file line that cannot be read (the message names the file and the line number)."""
+
+
+# Tracebacks and reprs name the public path (imukit.GimbalLockError), not this private module.
+for _cls in (
+    ImukitError,
+    ShapeError,
+    DTypeError,
+    NonFiniteError,
+    InvalidQuaternionError,
+    InvalidRotationError,
+    GimbalLockError,
+    ParameterError,
+    TimestampError,
+    FileFormatError,
+):
+    _cls.__module__ = "imukit"
