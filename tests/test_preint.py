@@ -88,3 +88,20 @@ def test_bad_input() -> None:
     with pytest.raises(ik.ParameterError, match="scheme"):
         ik.preintegrate(imu, noise=NOISE, scheme="rk4")
     assert pim.delta_t == 0.0  # nothing was added by the refused calls
+
+
+def test_combined_covariance() -> None:
+    imu, _ = window()
+    plain = ik.preintegrate(imu, noise=NOISE)
+    assert plain.covariance_combined is None
+    pim = ik.preintegrate(imu, noise=NOISE, combined=True)
+    c = pim.covariance_combined
+    assert c is not None and c.shape == (15, 15)
+    assert np.array_equal(c, c.T)
+    # the bias blocks are the accumulated random walk: σ² Δt on the diagonal
+    assert np.allclose(np.diag(c)[9:12], NOISE.gyro_random_walk**2 * pim.delta_t, rtol=1e-12)
+    assert np.allclose(np.diag(c)[12:15], NOISE.accel_random_walk**2 * pim.delta_t, rtol=1e-12)
+    # the walk adds to the 9×9 part, and the cross terms are nonzero
+    assert np.all(np.diag(c)[:9] > np.diag(plain.covariance))
+    assert np.abs(c[:9, 9:]).max() > 0
+    assert np.all(np.linalg.eigvalsh(c) > 0)

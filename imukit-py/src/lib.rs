@@ -472,7 +472,7 @@ fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
 #[pymethods]
 impl PyPreintegrator {
     #[new]
-    fn new(bias_values: [f64; 6], noise: [f64; 4]) -> Self {
+    fn new(bias_values: [f64; 6], noise: [f64; 4], combined: bool) -> Self {
         let b = bias(bias_values);
         let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
         let noise = propagate::Noise {
@@ -481,9 +481,19 @@ impl PyPreintegrator {
             gyro_random_walk,
             accel_random_walk,
         };
+        let inner = preint::Preintegrator::new(b.gyro, b.accel, noise);
         Self {
-            inner: preint::Preintegrator::new(b.gyro, b.accel, noise),
+            inner: if combined { inner.with_bias_walk() } else { inner },
         }
+    }
+
+    /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
+    fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let Some(c) = self.inner.covariance_combined() else {
+            return Ok(None);
+        };
+        // Symmetric: column-major storage reads the same as row-major.
+        Ok(Some(PyArray1::from_slice(py, c.as_slice()).reshape([15, 15])?))
     }
 
     /// One interval of `dt` seconds with `accel`, `gyro` held over it.

@@ -11,7 +11,7 @@ prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``, ``p_j
 
 Gravity is added as everywhere in imukit (default ``(0, 0, −9.81)``, z up). Formulas: the module
 docs of ``crates/imukit/src/preint.rs``. Still to come with the preintegration issue: the VINS
-midpoint scheme, the 15×15 combined covariance, residual Jacobians, merge and keyframe windows.
+midpoint scheme, residual Jacobians, merge and keyframe windows.
 """
 
 from __future__ import annotations
@@ -52,6 +52,7 @@ class PreintegratedImu:
         bias: ImuBias | None = None,
         gravity: ArrayLike = (0.0, 0.0, -9.81),
         scheme: str = "euler",
+        combined: bool = False,
     ) -> None:
         if not isinstance(noise, ImuNoise):
             raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
@@ -63,7 +64,7 @@ class PreintegratedImu:
         self.gravity = _vector(gravity, "gravity")
         self.scheme = scheme
         densities = [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk]
-        self._core = _core.Preintegrator([*self.bias.gyro, *self.bias.accel], densities)
+        self._core = _core.Preintegrator([*self.bias.gyro, *self.bias.accel], densities, bool(combined))
 
     def integrate_measurement(self, accel: ArrayLike, gyro: ArrayLike, dt: float) -> None:
         """Add one interval of ``dt`` seconds with ``accel`` [m/s²] and ``gyro`` [rad/s] held over it."""
@@ -102,6 +103,12 @@ class PreintegratedImu:
     def covariance(self) -> FloatArray:
         """9×9 covariance of ``[δθ, δv, δp]``."""
         return self._state()[4]
+
+    @property
+    def covariance_combined(self) -> FloatArray | None:
+        """15×15 covariance of ``[δθ, δv, δp, δb_g, δb_a]`` including the bias random walk between i
+        and j (``ImuNoise`` random-walk densities); None unless built with ``combined=True``."""
+        return self._core.covariance_combined()
 
     @property
     def bias_jacobian(self) -> FloatArray:
@@ -143,8 +150,13 @@ def preintegrate(
     bias: ImuBias | None = None,
     gravity: ArrayLike = (0.0, 0.0, -9.81),
     scheme: str = "euler",
+    combined: bool = False,
 ) -> PreintegratedImu:
-    """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`."""
-    pim = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme)
+    """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
+
+    ``combined=True`` also tracks the 15×15 covariance with the bias random walk
+    (``covariance_combined``), at about twice the cost per sample.
+    """
+    pim = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme, combined=combined)
     pim.integrate(imu)
     return pim

@@ -106,6 +106,60 @@ fn assemble(blocks: &CovarianceBlocks) -> Covariance9 {
     out
 }
 
+/// 15×15 combined covariance, order `[δθ, δv, δp, δb_g, δb_a]`.
+pub type Covariance15 = SMatrix<f64, 15, 15>;
+
+impl BiasWalk {
+    /// Adds the bias terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
+    /// and propagates the cross and bias blocks, with `F = [[A, G_b], [0, I]]`,
+    /// `G_b = [[−J_r h, 0], [0, −ΔR h], [0, −½ ΔR h²]]` (Forster 2017, the combined form).
+    #[allow(clippy::too_many_arguments)] // the step's shared blocks, passed as computed
+    fn step(
+        &mut self,
+        cov: &mut CovarianceBlocks,
+        phi: &Matrix3<f64>,
+        m: &Matrix3<f64>,
+        jr: &Matrix3<f64>,
+        r: &Matrix3<f64>,
+        h: f64,
+        noise: &Noise,
+    ) {
+        let half_h2 = 0.5 * h * h;
+        let [[xtg, xta], [xvg, xva], [xpg, xpa]] = self.cross;
+        // Y = A X.
+        let (m_tg, m_ta) = (mul(m, &xtg), mul(m, &xta));
+        let y = [
+            [mul(phi, &xtg), mul(phi, &xta)],
+            [m_tg * h + xvg, m_ta * h + xva],
+            [m_tg * half_h2 + xvg * h + xpg, m_ta * half_h2 + xva * h + xpa],
+        ];
+        // Y G_bᵀ + G_b Yᵀ + G_b S_b G_bᵀ on the upper blocks [θθ, θv, θp, vv, vp, pp].
+        let (jsj, rsr) = (mul_t(&mul(jr, &self.gyro), jr), mul_t(&mul(r, &self.accel), r));
+        let y_tg_jt = mul_t(&y[0][0], jr);
+        let y_ta_rt = mul_t(&y[0][1], r);
+        let y_va_rt = mul_t(&y[1][1], r);
+        let y_pa_rt = mul_t(&y[2][1], r);
+        cov[0] += -(y_tg_jt + y_tg_jt.transpose()) * h + jsj * (h * h);
+        cov[1] += -y_ta_rt * h - mul_t(jr, &y[1][0]) * h;
+        cov[2] += -y_ta_rt * half_h2 - mul_t(jr, &y[2][0]) * h;
+        cov[3] += -(y_va_rt + y_va_rt.transpose()) * h + rsr * (h * h);
+        cov[4] += -y_va_rt * half_h2 - y_pa_rt.transpose() * h + rsr * (h * half_h2);
+        cov[5] += -(y_pa_rt + y_pa_rt.transpose()) * half_h2 + rsr * (half_h2 * half_h2);
+        for d in [0, 3, 5] {
+            cov[d] = (cov[d] + cov[d].transpose()) * 0.5;
+        }
+        // X' = A X + G_b S_b, then S_b' = S_b + Q_b.
+        let (jg, ra) = (mul(jr, &self.gyro) * h, mul(r, &self.accel));
+        self.cross = [
+            [y[0][0] - jg, y[0][1]],
+            [y[1][0], y[1][1] - ra * h],
+            [y[2][0], y[2][1] - ra * half_h2],
+        ];
+        self.gyro += Matrix3::identity() * (noise.gyro_random_walk * noise.gyro_random_walk * h);
+        self.accel += Matrix3::identity() * (noise.accel_random_walk * noise.accel_random_walk * h);
+    }
+}
+
 /// Streaming preintegrator: one sample interval at a time, no allocation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Preintegrator {
@@ -129,6 +183,18 @@ pub struct Preintegrator {
     d_vel_d_ba: Matrix3<f64>,
     d_pos_d_bg: Matrix3<f64>,
     d_pos_d_ba: Matrix3<f64>,
+    /// Bias random walk during the interval, when tracked (see [`Preintegrator::with_bias_walk`]).
+    bias_walk: Option<BiasWalk>,
+}
+
+/// The bias part of the 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`: the 9×6 cross
+/// covariance `X` as 3×2 blocks (rows θ, v, p; columns b_g, b_a) and the bias covariances, which
+/// stay block-diagonal (independent walks, starting from zero at i).
+#[derive(Debug, Clone, PartialEq)]
+struct BiasWalk {
+    cross: [[Matrix3<f64>; 2]; 3],
+    gyro: Matrix3<f64>,
+    accel: Matrix3<f64>,
 }
 
 impl Preintegrator {
@@ -148,7 +214,19 @@ impl Preintegrator {
             d_vel_d_ba: Matrix3::zeros(),
             d_pos_d_bg: Matrix3::zeros(),
             d_pos_d_ba: Matrix3::zeros(),
+            bias_walk: None,
         }
+    }
+
+    /// Also track the bias random walk between i and j, for [`Preintegrator::covariance_combined`]
+    /// (about twice the work per sample, as GTSAM's combined factor).
+    pub fn with_bias_walk(mut self) -> Self {
+        self.bias_walk = Some(BiasWalk {
+            cross: [[Matrix3::zeros(); 2]; 3],
+            gyro: Matrix3::zeros(),
+            accel: Matrix3::zeros(),
+        });
+        self
     }
 
     /// Adds one interval of `h` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]
@@ -167,7 +245,11 @@ impl Preintegrator {
         // Covariance first: A, B, C use the state before the update.
         let var_a = self.noise.accel_density * self.noise.accel_density / h;
         let var_g = self.noise.gyro_density * self.noise.gyro_density / h;
-        self.covariance = propagate_blocks(&self.covariance, &step_t, &(-r_a_cross), &jr, h, var_a, var_g);
+        let old = self.covariance;
+        self.covariance = propagate_blocks(&old, &step_t, &(-r_a_cross), &jr, h, var_a, var_g);
+        if let Some(walk) = self.bias_walk.as_mut() {
+            walk.step(&mut self.covariance, &step_t, &(-r_a_cross), &jr, &r, h, &self.noise);
+        }
 
         // Bias Jacobians, position before velocity before rotation.
         let ra_drot = mul(&r_a_cross, &self.d_rot_d_bg);
@@ -206,6 +288,23 @@ impl Preintegrator {
         c_m.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(so3::right_jacobian(&(w * h)) * h));
         StepMatrices { a: a_m, b: b_m, c: c_m }
+    }
+
+    /// Covariance of `[δθ, δv, δp, δb_g, δb_a]` (15×15) including the bias random walk between i
+    /// and j; `None` unless built [`Preintegrator::with_bias_walk`].
+    pub fn covariance_combined(&self) -> Option<Covariance15> {
+        let walk = self.bias_walk.as_ref()?;
+        let mut out = Covariance15::zeros();
+        out.fixed_view_mut::<9, 9>(0, 0).copy_from(&assemble(&self.covariance));
+        for (i, row) in walk.cross.iter().enumerate() {
+            for (j, b) in row.iter().enumerate() {
+                out.fixed_view_mut::<3, 3>(3 * i, 9 + 3 * j).copy_from(b);
+                out.fixed_view_mut::<3, 3>(9 + 3 * j, 3 * i).copy_from(&b.transpose());
+            }
+        }
+        out.fixed_view_mut::<3, 3>(9, 9).copy_from(&walk.gyro);
+        out.fixed_view_mut::<3, 3>(12, 12).copy_from(&walk.accel);
+        Some(out)
     }
 
     /// Covariance of `[δθ, δv, δp]` (9×9).

@@ -223,3 +223,110 @@ fn block_covariance_update_equals_the_dense_reference() {
     assert!(err < 1e-12, "relative error {err:e}");
     assert_eq!(p.covariance(), p.covariance().transpose());
 }
+
+/// The combined 15×15 covariance: dense `F Σ Fᵀ + G Q Gᵀ` with `F = [[A, G_b], [0, I]]`.
+#[test]
+fn combined_covariance_equals_the_dense_reference() {
+    let noise = Noise {
+        gyro_density: 2e-3,
+        accel_density: 2e-2,
+        gyro_random_walk: 1e-3,
+        accel_random_walk: 1e-2,
+    };
+    let mut p = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), noise).with_bias_walk();
+    let mut dense = SMatrix::<f64, 15, 15>::zeros();
+    for (k, (a, w)) in samples().iter().enumerate() {
+        let h = H * (1.0 + 0.3 * (k as f64).sin());
+        let m = p.step_matrices(a, w, h);
+        let mut f = SMatrix::<f64, 15, 15>::identity();
+        f.fixed_view_mut::<9, 9>(0, 0).copy_from(&m.a);
+        // G_b: θ ← −J_r h δb_g (= −C), v ← −ΔR h δb_a, p ← −½ ΔR h² δb_a (= −B)
+        f.fixed_view_mut::<9, 3>(0, 9).copy_from(&(-m.c));
+        f.fixed_view_mut::<9, 3>(0, 12).copy_from(&(-m.b));
+        let mut g = SMatrix::<f64, 15, 12>::zeros();
+        g.fixed_view_mut::<9, 3>(0, 0).copy_from(&m.c);
+        g.fixed_view_mut::<9, 3>(0, 3).copy_from(&m.b);
+        g.fixed_view_mut::<3, 3>(9, 6).copy_from(&Matrix3::identity());
+        g.fixed_view_mut::<3, 3>(12, 9).copy_from(&Matrix3::identity());
+        let q = [
+            noise.gyro_density.powi(2) / h,
+            noise.accel_density.powi(2) / h,
+            noise.gyro_random_walk.powi(2) * h,
+            noise.accel_random_walk.powi(2) * h,
+        ];
+        let q = SMatrix::<f64, 12, 12>::from_diagonal(&SVector::<f64, 12>::from_fn(|i, _| q[i / 3]));
+        dense = f * dense * f.transpose() + g * q * g.transpose();
+        p.integrate_measurement(a, w, h);
+    }
+    let combined = p.covariance_combined().unwrap();
+    let err = (combined - dense).amax() / dense.amax();
+    assert!(err < 1e-12, "relative error {err:e}");
+    assert_eq!(combined, combined.transpose());
+    assert_eq!(combined.fixed_view::<9, 9>(0, 0), p.covariance());
+    // and the bias terms matter: the 9×9 part differs from the walk-free covariance
+    let plain = run(Vector3::zeros(), Vector3::zeros(), noise, &[]).covariance();
+    assert_eq!(plain, SMatrix::<f64, 9, 9>::zeros());
+    assert!(Preintegrator::new(Vector3::zeros(), Vector3::zeros(), noise)
+        .covariance_combined()
+        .is_none());
+}
+
+#[test]
+fn combined_covariance_matches_monte_carlo_with_bias_random_walk() {
+    let data = samples();
+    let noise = Noise {
+        gyro_density: 2e-3,
+        accel_density: 2e-2,
+        gyro_random_walk: 2e-2,
+        accel_random_walk: 2e-1,
+    };
+    let truth = run(Vector3::zeros(), Vector3::zeros(), Noise::default(), &data);
+    let mut nominal = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), noise).with_bias_walk();
+    for (a, w) in &data {
+        nominal.integrate_measurement(a, w, H);
+    }
+    let p15 = nominal.covariance_combined().unwrap();
+    let inv = p15.try_inverse().unwrap();
+    let runs = 2000;
+    let mut rng = Normal(0x0DDB_1A5E_5BAD_5EED);
+    let (mut sample, mut nees) = (SMatrix::<f64, 15, 15>::zeros(), 0.0);
+    for _ in 0..runs {
+        let (mut bg, mut ba) = (Vector3::zeros(), Vector3::zeros());
+        let mut noisy = Vec::with_capacity(N);
+        for (a, w) in &data {
+            noisy.push((
+                a + ba + rng.vector() * (noise.accel_density / H.sqrt()),
+                w + bg + rng.vector() * (noise.gyro_density / H.sqrt()),
+            ));
+            bg += rng.vector() * (noise.gyro_random_walk * H.sqrt());
+            ba += rng.vector() * (noise.accel_random_walk * H.sqrt());
+        }
+        let est = run(Vector3::zeros(), Vector3::zeros(), Noise::default(), &noisy);
+        // δx = truth ⊖ estimate, the bias errors being the true biases at j (estimate: 0)
+        let mut e = SVector::<f64, 15>::zeros();
+        e.fixed_rows_mut::<9>(0).copy_from(&chart(&est, deltas(&truth)));
+        e.fixed_rows_mut::<3>(9).copy_from(&bg);
+        e.fixed_rows_mut::<3>(12).copy_from(&ba);
+        sample += e * e.transpose();
+        nees += (e.transpose() * inv * e)[0];
+    }
+    sample /= runs as f64;
+    let mean_nees = nees / runs as f64;
+    let half_width = 2.576 * (30.0f64 / runs as f64).sqrt(); // χ² with 15·2000 dof, 99%
+    assert!((mean_nees - 15.0).abs() < half_width, "mean NEES {mean_nees}");
+    let rel = (sample - p15).norm() / p15.norm();
+    assert!(rel < 0.1, "relative Frobenius error {rel}");
+    // the walk matters: the 9×9 block without it is clearly too small
+    let without = run(
+        Vector3::zeros(),
+        Vector3::zeros(),
+        Noise {
+            gyro_random_walk: 0.0,
+            accel_random_walk: 0.0,
+            ..noise
+        },
+        &data,
+    );
+    let gap = (sample.fixed_view::<9, 9>(0, 0) - without.covariance()).norm() / without.covariance().norm();
+    assert!(gap > 0.1, "bias walk changed the 9×9 block by only {gap}");
+}
