@@ -105,3 +105,17 @@ def test_combined_covariance() -> None:
     assert np.all(np.diag(c)[:9] > np.diag(plain.covariance))
     assert np.abs(c[:9, 9:]).max() > 0
     assert np.all(np.linalg.eigvalsh(c) > 0)
+
+
+def test_merge_equals_one_preintegration() -> None:
+    imu, x0 = window()
+    whole = ik.preintegrate(imu, noise=NOISE)
+    merged = ik.preintegrate(imu[:81], noise=NOISE).merge(ik.preintegrate(imu[80:], noise=NOISE))
+    assert merged.delta_t == pytest.approx(whole.delta_t, abs=1e-15)
+    assert np.abs(merged.delta_position - whole.delta_position).max() < 1e-13
+    assert np.abs(merged.covariance - whole.covariance).max() < 1e-12 * np.abs(whole.covariance).max()
+    assert np.abs(merged.bias_jacobian - whole.bias_jacobian).max() < 1e-12 * np.abs(whole.bias_jacobian).max()
+    pred = merged.predict(x0)
+    assert np.abs(pred.position - whole.predict(x0).position).max() < 1e-12
+    with pytest.raises(ik.ParameterError, match="same bias"):
+        whole.merge(ik.preintegrate(imu, noise=NOISE, bias=ik.ImuBias(gyro=[0.1, 0, 0])))

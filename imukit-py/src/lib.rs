@@ -487,6 +487,19 @@ impl PyPreintegrator {
         }
     }
 
+    /// This preintegration followed by `next`, as one.
+    fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
+        match self.inner.merge(&next.inner) {
+            Some(inner) => Ok(PyPreintegrator { inner }),
+            None => Err(raise(
+                py,
+                "ParameterError",
+                "other",
+                "expected a preintegration with the same bias and noise",
+            )),
+        }
+    }
+
     /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
     fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
         let Some(c) = self.inner.covariance_combined() else {

@@ -11,7 +11,7 @@ prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``, ``p_j
 
 Gravity is added as everywhere in imukit (default ``(0, 0, −9.81)``, z up). Formulas: the module
 docs of ``crates/imukit/src/preint.rs``. Still to come with the preintegration issue: the VINS
-midpoint scheme, residual Jacobians, merge and keyframe windows.
+midpoint scheme, residual Jacobians and keyframe windows.
 """
 
 from __future__ import annotations
@@ -75,6 +75,19 @@ class PreintegratedImu:
         if not isinstance(imu, ImuData):
             raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
         self._core.integrate(imu.seconds, imu.gyro, imu.accel)
+
+    def merge(self, other: PreintegratedImu) -> PreintegratedImu:
+        """This preintegration (i → j) followed by ``other`` (j → k) as one (i → k), covariance and
+        bias Jacobian included. Both need the same bias, noise and gravity. The bias random walk is
+        not merged: the result has no ``covariance_combined``."""
+        if not isinstance(other, PreintegratedImu):
+            raise ParameterError(f"other: expected an imukit.PreintegratedImu, got {type(other).__name__}")
+        if not np.array_equal(self.gravity, other.gravity):
+            raise ParameterError("other: expected the same gravity")
+        merged = object.__new__(PreintegratedImu)
+        merged.bias, merged.noise, merged.gravity, merged.scheme = self.bias, self.noise, self.gravity, self.scheme
+        merged._core = self._core.merge(other._core)
+        return merged
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
         return self._core.state()

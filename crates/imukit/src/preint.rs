@@ -307,6 +307,63 @@ impl Preintegrator {
         Some(out)
     }
 
+    /// The preintegration over i → k of this one (i → j) followed by `next` (j → k), covariance
+    /// and bias Jacobians included: `ΔR_ik = ΔR_ij ΔR_jk`, `Δv_ik = Δv_ij + ΔR_ij Δv_jk`,
+    /// `Δp_ik = Δp_ij + Δv_ij Δt_jk + ΔR_ij Δp_jk`; errors compose through
+    /// `δθ_ik = ΔR_jkᵀ δθ_ij + δθ_jk`, `δv_ik = δv_ij − ΔR_ij[Δv_jk]× δθ_ij + ΔR_ij δv_jk`,
+    /// `δp_ik = δp_ij + Δt_jk δv_ij − ΔR_ij[Δp_jk]× δθ_ij + ΔR_ij δp_jk`. Both must share the bias
+    /// and noise (`None` otherwise); the bias random walk is not merged (`covariance_combined` of the
+    /// result is `None`).
+    pub fn merge(&self, next: &Preintegrator) -> Option<Preintegrator> {
+        if self.bias_gyro != next.bias_gyro || self.bias_accel != next.bias_accel || self.noise != next.noise {
+            return None;
+        }
+        let r = self.delta_rotation;
+        let r_jk_t = next.delta_rotation.transpose();
+        let dt_jk = next.delta_t;
+        let rv = -mul(&r, &so3::hat(&next.delta_velocity));
+        let rp = -mul(&r, &so3::hat(&next.delta_position));
+        // J1 (w.r.t. the first segment's errors) and J2 (the second's), dense 9×9: merging is rare.
+        let mut j1 = Covariance9::identity();
+        j1.fixed_view_mut::<3, 3>(0, 0).copy_from(&r_jk_t);
+        j1.fixed_view_mut::<3, 3>(3, 0).copy_from(&rv);
+        j1.fixed_view_mut::<3, 3>(6, 0).copy_from(&rp);
+        j1.fixed_view_mut::<3, 3>(6, 3)
+            .copy_from(&(Matrix3::identity() * dt_jk));
+        let mut j2 = Covariance9::zeros();
+        j2.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
+        j2.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+        j2.fixed_view_mut::<3, 3>(6, 6).copy_from(&r);
+        let cov = j1 * self.covariance() * j1.transpose() + j2 * next.covariance() * j2.transpose();
+        let block = |i: usize, j: usize| cov.fixed_view::<3, 3>(3 * i, 3 * j).into_owned();
+        Some(Preintegrator {
+            bias_gyro: self.bias_gyro,
+            bias_accel: self.bias_accel,
+            noise: self.noise,
+            delta_rotation: mul(&r, &next.delta_rotation),
+            delta_velocity: self.delta_velocity + r * next.delta_velocity,
+            delta_position: self.delta_position + self.delta_velocity * dt_jk + r * next.delta_position,
+            delta_t: self.delta_t + dt_jk,
+            covariance: [
+                block(0, 0),
+                block(0, 1),
+                block(0, 2),
+                block(1, 1),
+                block(1, 2),
+                block(2, 2),
+            ],
+            d_rot_d_bg: mul(&r_jk_t, &self.d_rot_d_bg) + next.d_rot_d_bg,
+            d_vel_d_bg: self.d_vel_d_bg + mul(&rv, &self.d_rot_d_bg) + mul(&r, &next.d_vel_d_bg),
+            d_vel_d_ba: self.d_vel_d_ba + mul(&r, &next.d_vel_d_ba),
+            d_pos_d_bg: self.d_pos_d_bg
+                + self.d_vel_d_bg * dt_jk
+                + mul(&rp, &self.d_rot_d_bg)
+                + mul(&r, &next.d_pos_d_bg),
+            d_pos_d_ba: self.d_pos_d_ba + self.d_vel_d_ba * dt_jk + mul(&r, &next.d_pos_d_ba),
+            bias_walk: None,
+        })
+    }
+
     /// Covariance of `[δθ, δv, δp]` (9×9).
     pub fn covariance(&self) -> Covariance9 {
         assemble(&self.covariance)

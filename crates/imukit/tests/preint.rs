@@ -330,3 +330,27 @@ fn combined_covariance_matches_monte_carlo_with_bias_random_walk() {
     let gap = (sample.fixed_view::<9, 9>(0, 0) - without.covariance()).norm() / without.covariance().norm();
     assert!(gap > 0.1, "bias walk changed the 9×9 block by only {gap}");
 }
+
+#[test]
+fn merge_equals_one_preintegration_over_both_segments() {
+    let data = samples();
+    let noise = Noise {
+        gyro_density: 2e-3,
+        accel_density: 2e-2,
+        ..Noise::default()
+    };
+    let (bg, ba) = (Vector3::new(0.01, -0.02, 0.005), Vector3::new(0.1, 0.05, -0.2));
+    let whole = run(bg, ba, noise, &data);
+    let (first, second) = data.split_at(73);
+    let merged = run(bg, ba, noise, first).merge(&run(bg, ba, noise, second)).unwrap();
+    assert!((merged.delta_rotation - whole.delta_rotation).amax() < 1e-14);
+    assert!((merged.delta_velocity - whole.delta_velocity).amax() < 1e-13);
+    assert!((merged.delta_position - whole.delta_position).amax() < 1e-13);
+    assert!((merged.delta_t - whole.delta_t).abs() < 1e-15);
+    let cov_err = (merged.covariance() - whole.covariance()).amax() / whole.covariance().amax();
+    assert!(cov_err < 1e-12, "covariance off by {cov_err:e}");
+    let jac_err = (merged.bias_jacobian() - whole.bias_jacobian()).amax() / whole.bias_jacobian().amax();
+    assert!(jac_err < 1e-12, "bias Jacobian off by {jac_err:e}");
+    // different biases do not merge
+    assert!(run(bg, ba, noise, first).merge(&run(ba, bg, noise, second)).is_none());
+}
