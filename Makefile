@@ -44,6 +44,9 @@ test: lint rust-test py-test
 
 bench: build
 	$(VPY) bench/bench_so3.py
+	$(VPY) bench/bench_attitude.py
+	$(VPY) bench/bench_strapdown.py
+	$(VPY) bench/bench_preint.py
 	cargo bench --locked -p imukit
 
 # Re-pin the Python closure after editing requirements/dev.in.
