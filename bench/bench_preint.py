@@ -13,7 +13,7 @@ import argparse
 import numpy as np
 
 import imukit as ik
-from _timing import median_s
+from _timing import median_s, synthetic_imu
 
 
 def main() -> None:
@@ -23,9 +23,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
 
-    t = np.arange(args.n) * 0.005
-    gyro = np.stack([0.3 * np.sin(1.1 * t), 0.2 * np.cos(0.7 * t), 0.5 * np.sin(1.3 * t)], axis=-1)
-    accel = np.stack([0.5 * np.sin(0.9 * t), 0.4 * np.cos(0.3 * t), 9.81 + 0.2 * np.sin(1.7 * t)], axis=-1)
+    t, gyro, accel = synthetic_imu(args.n)
     imu = ik.ImuData(t, gyro, accel)
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
 

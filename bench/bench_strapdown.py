@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-from _timing import median_s
+from _timing import median_s, synthetic_imu
 
 
 def python_midpoint(imu: ik.ImuData, x0: ik.NavState) -> np.ndarray:
@@ -43,9 +43,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
 
-    t = np.arange(args.n) * 0.005
-    gyro = np.stack([0.3 * np.sin(1.1 * t), 0.2 * np.cos(0.7 * t), 0.5 * np.sin(1.3 * t)], axis=-1)
-    accel = np.stack([0.5 * np.sin(0.9 * t), 0.4 * np.cos(0.3 * t), 9.81 + 0.2 * np.sin(1.7 * t)], axis=-1)
+    t, gyro, accel = synthetic_imu(args.n)
     imu = ik.ImuData(t, gyro, accel)
     x0 = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)

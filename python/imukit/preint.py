@@ -160,10 +160,17 @@ class PreintegratedImu:
         d = jac @ db
         return Rotation.from_matrix(r) * Rotation.from_rotvec(d[0:3]), v + d[3:6], p + d[6:9]
 
+    def _deltas(self, bias: ImuBias | None) -> tuple[Rotation, FloatArray, FloatArray, float]:
+        """``(ΔR, Δv, Δp, Δt)``, corrected to ``bias`` when given, from one read of the core state."""
+        if bias is not None:
+            return (*self.corrected(bias), self.delta_t)
+        r, v, p, dt, _, _ = self._state()
+        return Rotation.from_matrix(r), v, p, dt
+
     def predict(self, state_i: NavState, bias: ImuBias | None = None) -> NavState:
         """The state at j from the state at i (deltas corrected to ``bias`` when given)."""
-        dr, dv, dp = self.corrected(bias) if bias is not None else (self.delta_rotation, *self._state()[1:3])
-        dt, g, r_i = self.delta_t, self.gravity, state_i.rotation
+        dr, dv, dp, dt = self._deltas(bias)
+        g, r_i = self.gravity, state_i.rotation
         return NavState(
             state_i.position + state_i.velocity * dt + 0.5 * g * dt * dt + r_i.apply(dp),
             state_i.velocity + g * dt + r_i.apply(dv),
@@ -172,8 +179,8 @@ class PreintegratedImu:
 
     def residual(self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None) -> FloatArray:
         """``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``."""
-        dr, dv, dp = self.corrected(bias) if bias is not None else (self.delta_rotation, *self._state()[1:3])
-        dt, g, r_i = self.delta_t, self.gravity, state_i.rotation
+        dr, dv, dp, dt = self._deltas(bias)
+        g, r_i = self.gravity, state_i.rotation
         r_v = r_i.inv().apply(state_j.velocity - state_i.velocity - g * dt) - dv
         r_p = r_i.inv().apply(state_j.position - state_i.position - state_i.velocity * dt - 0.5 * g * dt * dt) - dp
         r_theta = (dr.inv() * r_i.inv() * state_j.rotation).as_rotvec()
