@@ -1,9 +1,16 @@
 """Preintegration from Python, 10^6 samples at 200 Hz, euler scheme, 9×9 covariance and bias
 Jacobians: ``imukit.preintegrate`` (one call, GIL released) against the streaming
-``PreintegratedImu.integrate_measurement`` loop over a subset, measured in the same run.
+``PreintegratedImu.integrate_measurement`` loop over a subset, and against GTSAM's
+``integrateMeasurement`` called per sample from Python (``PreintegratedImuMeasurementsManifold``, the
+same Forster scheme, and the default ``PreintegratedImuMeasurements``, which in the PyPI wheels is the
+tangent scheme), all measured in the same run.
 
-Usage: ``python bench/bench_preint.py [--n 1000000] [--repeats 7]``; medians per sample. Compare
-with ``cargo bench -p imukit --bench preint`` for the Rust figure.
+GTSAM has no batch fast path from Python: the C++ ``integrateMeasurements(accs, omegas, dts)`` (a
+loop over matrix columns) is not wrapped in gtsam 4.3.0, so per-sample calls are the only way in.
+
+Usage: ``python bench/bench_preint.py [--n 1000000] [--loop-n 20000] [--gtsam-n 100000]
+[--repeats 7]``; medians per sample. Compare with ``cargo bench -p imukit --bench preint`` for the
+Rust figure.
 """
 
 from __future__ import annotations
@@ -15,11 +22,17 @@ import numpy as np
 import imukit as ik
 from _timing import median_s, synthetic_imu
 
+try:
+    import gtsam
+except ImportError:  # a dev peer (requirements/dev.txt); the imukit rows still run without it
+    gtsam = None
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=1_000_000)
     parser.add_argument("--loop-n", type=int, default=20_000)
+    parser.add_argument("--gtsam-n", type=int, default=100_000)
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
 
@@ -28,23 +41,60 @@ def main() -> None:
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
 
     def stream(m: int) -> ik.PreintegratedImu:
-        pim = ik.PreintegratedImu(noise=noise)
+        pim = ik.PreintegratedImu(noise=noise, scheme="euler")
         for k in range(m - 1):
             pim.integrate_measurement(accel[k], gyro[k], 0.005)
         return pim
 
     m = args.loop_n
-    gap = np.abs(stream(m).delta_position - ik.preintegrate(imu[:m], noise=noise).delta_position).max()
+    gap = np.abs(stream(m).delta_position - ik.preintegrate(imu[:m], noise=noise, scheme="euler").delta_position).max()
     rows = [
-        ("preintegrate (batch)", median_s(lambda: ik.preintegrate(imu, noise=noise), args.repeats) / args.n),
-        ("preintegrate combined=True", median_s(lambda: ik.preintegrate(imu, noise=noise, combined=True), 3) / args.n),
+        (
+            "preintegrate (batch)",
+            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler"), args.repeats) / args.n,
+        ),
+        (
+            "preintegrate combined=True",
+            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler", combined=True), 3) / args.n,
+        ),
         ("integrate_measurement loop", median_s(lambda: stream(m), 1) / m),
     ]
     print(f"n = {args.n:,}; batch vs streaming over {m:,} samples: max |Δp| gap = {gap:.1e} m")
+    if gtsam is not None:
+        g = min(args.gtsam_n, args.n)
+        params = gtsam.PreintegrationParams.MakeSharedU(9.81)
+        params.setGyroscopeCovariance(noise.gyro_density**2 * np.eye(3))
+        params.setAccelerometerCovariance(noise.accel_density**2 * np.eye(3))
+        params.setIntegrationCovariance(np.zeros((3, 3)))
+
+        steps = np.diff(t[:g]).tolist()  # the batch's own intervals, as Python floats
+
+        def gtsam_loop(cls: type) -> object:
+            pim = cls(params)
+            for k in range(g - 1):
+                pim.integrateMeasurement(accel[k], gyro[k], steps[k])
+            return pim
+
+        manifold = gtsam_loop(gtsam.PreintegratedImuMeasurementsManifold)
+        ours = ik.preintegrate(imu[:g], noise=noise, scheme="euler")
+        gtsam_gap = np.abs(manifold.deltaPij() - ours.delta_position).max() / np.abs(ours.delta_position).max()
+        print(f"imukit batch vs GTSAM manifold over {g:,} samples: max |Δp| gap = {gtsam_gap:.1e} relative")
+        rows += [
+            (
+                "GTSAM manifold loop (Python)",
+                median_s(lambda: gtsam_loop(gtsam.PreintegratedImuMeasurementsManifold), 1) / g,
+            ),
+            ("GTSAM default (tangent) loop", median_s(lambda: gtsam_loop(gtsam.PreintegratedImuMeasurements), 1) / g),
+        ]
+    else:
+        print("gtsam not installed (pip install -r requirements/dev.txt): GTSAM rows skipped")
     base = rows[0][1]
     print(f"{'case':30s} {'ns/sample':>10s} {'÷ batch':>9s}")
     for name, seconds in rows:
         print(f"{name:30s} {seconds * 1e9:10.1f} {seconds / base:8.1f}x")
+    if gtsam is not None:
+        ratio = rows[0][1] / rows[3][1]
+        print(f"imukit batch / GTSAM manifold loop = {ratio:.3f} (time per sample; imukit {1 / ratio:.1f}x faster)")
 
 
 if __name__ == "__main__":

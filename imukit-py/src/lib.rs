@@ -5,11 +5,12 @@
 
 use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
-use imukit::{preint, propagate, strapdown};
+use imukit::{propagate, strapdown};
+
+mod preint_glue;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
-    PyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2,
-    PyUntypedArrayMethods,
+    PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -29,7 +30,7 @@ fn class_name(e: &imukit::Error) -> &'static str {
 }
 
 /// Raises `imukit.<class>("<name>: <message>")`.
-fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::fmt::Display) -> PyErr {
+pub(crate) fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::fmt::Display) -> PyErr {
     let text = format!("{name}: {message}");
     match py
         .import("imukit._errors")
@@ -41,7 +42,7 @@ fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::fmt::Displa
     }
 }
 
-fn to_py(py: Python<'_>, name: &str, e: imukit::Error) -> PyErr {
+pub(crate) fn to_py(py: Python<'_>, name: &str, e: imukit::Error) -> PyErr {
     raise(py, class_name(&e), name, e)
 }
 
@@ -81,7 +82,7 @@ fn run<'py>(
 /// released: another thread could write to the caller's array meanwhile (rust-numpy issue 497).
 /// numpy allocates it (and [`run`]'s outputs) because numpy asks for huge pages: a Rust Vec of the
 /// same size costs three times as much in page faults.
-fn private_copy<'py, D: numpy::ndarray::Dimension>(
+pub(crate) fn private_copy<'py, D: numpy::ndarray::Dimension>(
     py: Python<'py>,
     x: &PyReadonlyArray<'py, f64, D>,
 ) -> PyResult<Bound<'py, PyArray<f64, D>>> {
@@ -89,7 +90,7 @@ fn private_copy<'py, D: numpy::ndarray::Dimension>(
     Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
 }
 
-fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
+pub(crate) fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
     py: Python<'py>,
     name: &str,
     x: &'a PyReadonlyArray<'py, f64, D>,
@@ -313,14 +314,14 @@ fn strapdown_options(py: Python<'_>, scheme: &str, gravity: [f64; 3]) -> PyResul
 
 /// Private copies of a sample set ([`private_copy`]), alive while a kernel borrows them
 /// without the GIL.
-struct SampleCopies<'py> {
+pub(crate) struct SampleCopies<'py> {
     t: PyReadonlyArray1<'py, f64>,
     gyro: PyReadonlyArray2<'py, f64>,
     accel: PyReadonlyArray2<'py, f64>,
 }
 
 impl<'py> SampleCopies<'py> {
-    fn new(
+    pub(crate) fn new(
         py: Python<'py>,
         t: &PyReadonlyArray1<'py, f64>,
         gyro: &PyReadonlyArray2<'py, f64>,
@@ -333,7 +334,7 @@ impl<'py> SampleCopies<'py> {
         })
     }
 
-    fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<strapdown::Samples<'s>> {
+    pub(crate) fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<strapdown::Samples<'s>> {
         Ok(strapdown::Samples {
             t: contiguous(py, "t", &self.t)?,
             gyro: contiguous(py, "gyro", &self.gyro)?,
@@ -342,7 +343,18 @@ impl<'py> SampleCopies<'py> {
     }
 }
 
-fn bias(values: [f64; 6]) -> strapdown::Bias {
+/// `[σ_g, σ_a, σ_bg, σ_ba]` as the core's noise densities.
+pub(crate) fn noise_of(values: [f64; 4]) -> propagate::Noise {
+    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = values;
+    propagate::Noise {
+        gyro_density,
+        accel_density,
+        gyro_random_walk,
+        accel_random_walk,
+    }
+}
+
+pub(crate) fn bias(values: [f64; 6]) -> strapdown::Bias {
     let [gx, gy, gz, ax, ay, az] = values;
     strapdown::Bias {
         gyro: Vector3::new(gx, gy, gz),
@@ -408,13 +420,7 @@ fn strapdown_propagate<'py>(
     every: usize,
 ) -> PyResult<StatesAndCovariances<'py>> {
     let options = strapdown_options(py, scheme, gravity)?;
-    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
-    let noise = propagate::Noise {
-        gyro_density,
-        accel_density,
-        gyro_random_walk,
-        accel_random_walk,
-    };
+    let noise = noise_of(noise);
     if covariance.shape() != [15, 15] {
         let got = format!("{:?}", covariance.shape());
         return Err(raise(
@@ -450,136 +456,6 @@ fn strapdown_propagate<'py>(
     Ok((pv, rot, covariances))
 }
 
-/// Streaming preintegration state (Forster euler scheme); wrapped by `imukit.PreintegratedImu`.
-#[pyclass(name = "Preintegrator", module = "imukit._core")]
-struct PyPreintegrator {
-    inner: preint::Preintegrator,
-}
-
-fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(Vector3::from(v))
-    } else {
-        Err(raise(
-            py,
-            "NonFiniteError",
-            name,
-            format!("expected finite values, got {v:?}"),
-        ))
-    }
-}
-
-#[pymethods]
-impl PyPreintegrator {
-    #[new]
-    fn new(bias_values: [f64; 6], noise: [f64; 4], combined: bool) -> Self {
-        let b = bias(bias_values);
-        let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = noise;
-        let noise = propagate::Noise {
-            gyro_density,
-            accel_density,
-            gyro_random_walk,
-            accel_random_walk,
-        };
-        let inner = preint::Preintegrator::new(b.gyro, b.accel, noise);
-        Self {
-            inner: if combined { inner.with_bias_walk() } else { inner },
-        }
-    }
-
-    /// This preintegration followed by `next`, as one.
-    fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
-        match self.inner.merge(&next.inner) {
-            Some(inner) => Ok(PyPreintegrator { inner }),
-            None => Err(raise(
-                py,
-                "ParameterError",
-                "other",
-                "expected a preintegration with the same bias and noise",
-            )),
-        }
-    }
-
-    /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
-    fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        let Some(c) = self.inner.covariance_combined() else {
-            return Ok(None);
-        };
-        // Symmetric: column-major storage reads the same as row-major.
-        Ok(Some(PyArray1::from_slice(py, c.as_slice()).reshape([15, 15])?))
-    }
-
-    /// One interval of `dt` seconds with `accel`, `gyro` held over it.
-    fn integrate_measurement(&mut self, py: Python<'_>, accel: [f64; 3], gyro: [f64; 3], dt: f64) -> PyResult<()> {
-        let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(raise(
-                py,
-                "ParameterError",
-                "dt",
-                format!("expected a positive, finite step, got {dt}"),
-            ));
-        }
-        self.inner.integrate_measurement(&a, &w, dt);
-        Ok(())
-    }
-
-    /// Intervals `[t_k, t_k+1)` with sample k held over each (N samples → N − 1 intervals).
-    fn integrate(
-        &mut self,
-        py: Python<'_>,
-        t: PyReadonlyArray1<'_, f64>,
-        gyro: PyReadonlyArray2<'_, f64>,
-        accel: PyReadonlyArray2<'_, f64>,
-    ) -> PyResult<()> {
-        let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
-        let samples = copies.samples(py)?;
-        samples.check_shapes().map_err(|e| to_py(py, "integrate", e))?;
-        // Validate everything first, so a bad sample leaves the preintegration untouched.
-        let bad = !samples.first_ok() || (0..samples.t.len() - 1).any(|k| !samples.step_ok(k));
-        if bad {
-            return Err(to_py(py, "integrate", samples.value_error()));
-        }
-        let inner = &mut self.inner;
-        py.detach(|| {
-            for k in 0..samples.t.len() - 1 {
-                let h = samples.t[k + 1] - samples.t[k];
-                inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
-            }
-        });
-        Ok(())
-    }
-
-    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
-    #[allow(clippy::type_complexity)] // a plain tuple is the simplest thing to unpack in Python
-    fn state<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(
-        Bound<'py, PyArray2<f64>>,
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray1<f64>>,
-        f64,
-        Bound<'py, PyArray2<f64>>,
-        Bound<'py, PyArray2<f64>>,
-    )> {
-        let p = &self.inner;
-        let rows = |m: &[f64], r: usize, c: usize| -> PyResult<Bound<'py, PyArray2<f64>>> {
-            // nalgebra is column-major: transpose through the index.
-            let data: Vec<f64> = (0..r * c).map(|i| m[(i % c) * r + i / c]).collect();
-            PyArray1::from_vec(py, data).reshape([r, c])
-        };
-        Ok((
-            rows(p.delta_rotation.as_slice(), 3, 3)?,
-            PyArray1::from_slice(py, p.delta_velocity.as_slice()),
-            PyArray1::from_slice(py, p.delta_position.as_slice()),
-            p.delta_t,
-            rows(p.covariance().as_slice(), 9, 9)?,
-            rows(p.bias_jacobian().as_slice(), 9, 6)?,
-        ))
-    }
-}
-
 /// Compiled core of imukit. Use the `imukit` package, not this module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -604,7 +480,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(attitude_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(strapdown_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(strapdown_propagate, m)?)?;
-    m.add_class::<PyPreintegrator>()?;
+    m.add_class::<preint_glue::PyPreintegrator>()?;
+    m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -26,7 +26,7 @@ from imukit._errors import (
 )
 from imukit.attitude import integrate_attitude
 from imukit.imu import ImuBias, ImuData, ImuNoise
-from imukit.preint import PreintegratedImu, preintegrate
+from imukit.preint import PreintegratedImu, ResidualJacobians, preintegrate, preintegrate_windows
 from imukit.state import NavState, Trajectory
 from imukit.strapdown import integrate, propagate
 
@@ -44,6 +44,7 @@ __all__ = [
     "NonFiniteError",
     "ParameterError",
     "PreintegratedImu",
+    "ResidualJacobians",
     "ShapeError",
     "TimestampError",
     "Trajectory",
@@ -53,6 +54,7 @@ __all__ = [
     "integrate_attitude",
     "io",
     "preintegrate",
+    "preintegrate_windows",
     "propagate",
     "quat",
     "so3",

@@ -14,6 +14,7 @@ __all__ = [
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
     "euler_to_matrix",
+    "preint_windows",
     "quat_conjugate",
     "quat_exp",
     "quat_inverse",
@@ -85,7 +86,7 @@ def strapdown_propagate(
 
 @final
 class Preintegrator:
-    def __new__(cls, bias_values: list[float], noise: list[float], combined: bool) -> Preintegrator: ...
+    def __new__(cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str) -> Preintegrator: ...
     def covariance_combined(self) -> NDArray[np.float64] | None: ...
     def merge(self, next: Preintegrator) -> Preintegrator: ...
     def integrate_measurement(self, accel: list[float], gyro: list[float], dt: float) -> None: ...
@@ -95,3 +96,15 @@ class Preintegrator:
     ) -> tuple[
         NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64], NDArray[np.float64]
     ]: ...
+
+def preint_windows(
+    t: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+    boundaries: NDArray[np.float64],
+    bias_values: list[float],
+    noise: list[float],
+    combined: bool,
+    scheme: str,
+    threads: int,
+) -> list[Preintegrator]: ...

@@ -2,6 +2,8 @@
 //! proptest strategies for the four regimes every Jacobian is checked in, and rotation
 //! comparison that reports the angle between two rotations.
 
+pub mod preint;
+
 use nalgebra::{Matrix3, Rotation3, SMatrix, SVector, Vector3};
 use proptest::prelude::*;
 

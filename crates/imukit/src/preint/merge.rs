@@ -1,0 +1,119 @@
+//! Two consecutive preintegrations (i → j, j → k) composed into one (i → k).
+//!
+//! `ΔR_ik = ΔR_ij ΔR_jk`, `Δv_ik = Δv_ij + ΔR_ij Δv_jk`, `Δp_ik = Δp_ij + Δv_ij Δt_jk + ΔR_ij Δp_jk`;
+//! errors compose as `δx_ik = J_1 δx_ij + J_2 δx_jk` with
+//! `δθ_ik = ΔR_jkᵀ δθ_ij + δθ_jk`, `δv_ik = δv_ij − ΔR_ij[Δv_jk]× δθ_ij + ΔR_ij δv_jk`,
+//! `δp_ik = δp_ij + Δt_jk δv_ij − ΔR_ij[Δp_jk]× δθ_ij + ΔR_ij δp_jk`, so the bias Jacobians
+//! compose as `J_1 J_b,ij + J_2 J_b,jk` and the covariance as `J_1 Σ_ij J_1ᵀ + J_2 Σ_jk J_2ᵀ`, plus,
+//! in the midpoint scheme, the correlation through the shared sample j:
+//! `Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Cov(n_j)⁻¹ Cov(n_j, δx_jk)`.
+
+use nalgebra::{Matrix3, SMatrix};
+
+use super::blocks::{self, Cross};
+use super::{Covariance9, Preintegrator, Scheme};
+use crate::error::{Error, Result};
+use crate::so3;
+
+fn mismatch(expected: &'static str, got: String) -> Error {
+    Error::Parameter {
+        name: "next",
+        expected,
+        got,
+    }
+}
+
+impl Preintegrator {
+    /// The preintegration over i → k of this one (i → j) followed by `next` (j → k), covariance
+    /// and bias Jacobians included (module docs of `merge.rs`). Both must share the scheme, bias
+    /// and noise, and in the midpoint scheme `next` must start with this one's last sample. The bias
+    /// random walk is not merged (`covariance_combined` of the result is `None`).
+    pub fn merge(&self, next: &Preintegrator) -> Result<Preintegrator> {
+        if self.scheme != next.scheme {
+            let got = format!("{:?} after {:?}", next.scheme, self.scheme);
+            return Err(mismatch("a preintegration with the same scheme", got));
+        }
+        if self.bias_gyro != next.bias_gyro || self.bias_accel != next.bias_accel || self.noise != next.noise {
+            return Err(mismatch(
+                "a preintegration with the same bias and noise",
+                "a different bias or noise".into(),
+            ));
+        }
+        if self.scheme == Scheme::Midpoint {
+            match (&self.ends.last, &next.ends.first) {
+                (None, _) => {
+                    return Ok(Preintegrator {
+                        bias_walk: None,
+                        ..next.clone()
+                    })
+                }
+                (_, None) => {
+                    return Ok(Preintegrator {
+                        bias_walk: None,
+                        ..self.clone()
+                    })
+                }
+                (Some(last), Some(first)) if (last.accel, last.gyro) != (first.accel, first.gyro) => {
+                    return Err(mismatch(
+                        "a midpoint preintegration starting with this one's last sample",
+                        format!("first sample accel {:?}, gyro {:?}", first.accel, first.gyro),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        let r = self.delta_rotation;
+        let dt_jk = next.delta_t;
+        let mut j1 = Covariance9::identity();
+        j1.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&next.delta_rotation.transpose());
+        j1.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(-r * so3::hat(&next.delta_velocity)));
+        j1.fixed_view_mut::<3, 3>(6, 0)
+            .copy_from(&(-r * so3::hat(&next.delta_position)));
+        j1.fixed_view_mut::<3, 3>(6, 3)
+            .copy_from(&(Matrix3::identity() * dt_jk));
+        let mut j2 = Covariance9::zeros();
+        j2.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
+        j2.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+        j2.fixed_view_mut::<3, 3>(6, 6).copy_from(&r);
+        // Dense 9×9 products: merging is rare.
+        let mut cov = j1 * self.covariance() * j1.transpose() + j2 * next.covariance() * j2.transpose();
+        let transport = |m: &Covariance9, x: &Cross| blocks::cross_of(&(m * blocks::cross_matrix(x)));
+        let mut ends = next.ends.clone();
+        if let (Scheme::Midpoint, Some(first)) = (self.scheme, &next.ends.first) {
+            // Cov(δx_jk, n_j) Cov(n_j)⁻¹ is n_j's sensitivity D; Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Dᵀ.
+            let [q_g, q_a] = first.var.unwrap_or([0.0; 2]);
+            let inv = |q: f64| if q > 0.0 { 1.0 / q } else { 0.0 };
+            let d = blocks::cross_matrix(&next.ends.start_cross)
+                * SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
+                    inv(q_g),
+                    inv(q_g),
+                    inv(q_g),
+                    inv(q_a),
+                    inv(q_a),
+                    inv(q_a),
+                ));
+            let between = j1 * blocks::cross_matrix(&self.ends.end_cross) * d.transpose() * j2.transpose();
+            cov += between + between.transpose();
+            ends.first = self.ends.first;
+            ends.start_cross = transport(&j1, &self.ends.start_cross);
+            ends.end_cross = transport(&j2, &next.ends.end_cross);
+        }
+        let jac = j1 * blocks::cross_matrix(&self.jac) + j2 * blocks::cross_matrix(&next.jac);
+        Ok(Preintegrator {
+            scheme: self.scheme,
+            bias_gyro: self.bias_gyro,
+            bias_accel: self.bias_accel,
+            noise: self.noise,
+            delta_rotation: r * next.delta_rotation,
+            delta_velocity: self.delta_velocity + r * next.delta_velocity,
+            delta_position: self.delta_position + self.delta_velocity * dt_jk + r * next.delta_position,
+            delta_t: self.delta_t + dt_jk,
+            covariance: blocks::blocks_of(&((cov + cov.transpose()) * 0.5)),
+            jac: blocks::cross_of(&jac),
+            bias_walk: None,
+            ends,
+        })
+    }
+}

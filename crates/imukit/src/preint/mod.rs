@@ -1,0 +1,286 @@
+//! On-manifold IMU preintegration between two keyframes i and j, in two schemes: `euler`
+//! (Forster, Carlone, Dellaert & Scaramuzza, "On-Manifold Preintegration for Real-Time
+//! Visual-Inertial Odometry", T-RO 2017: sample k held over `[t_k, t_k+1)`, exact rotation steps)
+//! and `midpoint` (VINS-Mono's formulation, Qin, Li & Shen, T-RO 2018: averaged rates,
+//! specific forces rotated at both ends of each interval), each with the exact linearisation of
+//! its own discrete model for the covariance and the bias Jacobians.
+//!
+//! | item | convention |
+//! |---|---|
+//! | deltas | `ΔR_ij`, `Δv_ij`, `Δp_ij` in the body frame at i, gravity-free; `Δt_ij` |
+//! | bias | `b̄ = (b_g, b_a)` fixed during integration; `ω̂ = ω_m − b_g`, `â = a_m − b_a` |
+//! | covariance (9) | `[δθ, δv, δp]` with `ΔR = ΔR̂ Exp(δθ)` (right), `Δv = Δv̂ + δv`, `Δp = Δp̂ + δp` |
+//! | combined (15) | `[δθ, δv, δp, δb_g, δb_a]` ([`Preintegrator::with_bias_walk`]) |
+//! | bias Jacobian (9×6) | rows `[θ, v, p]`, columns `[b_g, b_a]` |
+//! | noise | continuous densities σ_g, σ_a; each sample's white noise has variance `σ²/h I` (h: its interval) |
+//! | `integrate_measurement(a, ω, h)` | euler: the sample at the start of an interval of `h`; midpoint: the sample at its end (the window's first call only records the first sample) |
+//!
+//! One euler interval of length `h` (all right-hand sides use the values before the update):
+//!
+//! ```text
+//! Δp ← Δp + Δv h + ½ ΔR â h²       ∂Δp/∂b_a ← ∂Δp/∂b_a + ∂Δv/∂b_a h − ½ ΔR h²
+//! Δv ← Δv + ΔR â h                  ∂Δp/∂b_g ← ∂Δp/∂b_g + ∂Δv/∂b_g h − ½ ΔR [â]× ∂ΔR/∂b_g h²
+//! ΔR ← ΔR Exp(ω̂ h)                  ∂Δv/∂b_a ← ∂Δv/∂b_a − ΔR h
+//!                                   ∂Δv/∂b_g ← ∂Δv/∂b_g − ΔR [â]× ∂ΔR/∂b_g h
+//!                                   ∂ΔR/∂b_g ← Exp(ω̂h)ᵀ ∂ΔR/∂b_g − J_r(ω̂h) h
+//! Σ ← A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ,
+//! A = [[Exp(ω̂h)ᵀ, 0, 0], [−ΔR[â]× h, I, 0], [−½ΔR[â]× h², h I, I]],
+//! B = [0; ΔR h; ½ ΔR h²],  C = [J_r(ω̂h) h; 0; 0]      (Forster eqs. 62–63, 69)
+//! ```
+//!
+//! The midpoint step, its linearisation and its noise model: `preint/midpoint.rs`; merging two
+//! windows: `preint/merge.rs`.
+
+mod blocks;
+mod merge;
+mod midpoint;
+mod windows;
+
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+use crate::mat3::mul;
+use crate::propagate::Noise;
+use crate::so3;
+use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
+pub use midpoint::MidpointStepMatrices;
+pub use windows::preintegrate_windows;
+
+/// 9×9 covariance of `[δθ, δv, δp]`.
+pub type Covariance9 = SMatrix<f64, 9, 9>;
+/// 9×6 bias Jacobian, rows `[θ, v, p]`, columns `[b_g, b_a]`.
+pub type BiasJacobian = SMatrix<f64, 9, 6>;
+/// 15×15 combined covariance, order `[δθ, δv, δp, δb_g, δb_a]`.
+pub type Covariance15 = SMatrix<f64, 15, 15>;
+
+/// How the samples of an interval enter it (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// Forster's: sample k held over `[t_k, t_k+1)`, exact rotation steps.
+    Euler,
+    /// VINS-Mono's: averaged rates, specific forces rotated at both ends.
+    Midpoint,
+}
+
+/// Dense `A` (9×9), `B`, `C` (9×3) of one euler interval: `Σ ← A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepMatrices {
+    /// Error-state transition.
+    pub a: Covariance9,
+    /// Accelerometer-noise input.
+    pub b: SMatrix<f64, 9, 3>,
+    /// Gyro-noise input.
+    pub c: SMatrix<f64, 9, 3>,
+}
+
+/// The bias part of the 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`: the 9×6 cross
+/// covariance `X` and the bias variances, which stay multiples of I (independent isotropic walks
+/// starting from zero at i).
+#[derive(Debug, Clone, PartialEq)]
+struct BiasWalk {
+    cross: Cross,
+    var_gyro: f64,
+    var_accel: f64,
+}
+
+impl BiasWalk {
+    /// Adds the bias terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
+    /// and propagates the cross and bias blocks, with `F = [[A, G_b], [0, I]]` and `G_b` the step's
+    /// response to a bias change (Forster 2017, the combined form); the bias is held over each
+    /// interval and steps at its end.
+    fn step(&mut self, cov: &mut CovarianceBlocks, phi: &Matrix3<f64>, m: &Matrix3<f64>, g_b: &Input, noise: &Noise) {
+        let h = 2.0 * g_b.half_h;
+        let y = blocks::transition(&self.cross, phi, m, h);
+        g_b.add_cross(cov, &y);
+        g_b.add_quadratic(cov, self.var_gyro, self.var_accel);
+        for d in [0, 3, 5] {
+            cov[d] = blocks::symmetric(cov[d]);
+        }
+        self.cross = blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel));
+        self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
+        self.var_accel += noise.accel_random_walk * noise.accel_random_walk * h;
+    }
+}
+
+/// Streaming preintegrator: one sample at a time, no allocation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Preintegrator {
+    /// Integration scheme.
+    pub scheme: Scheme,
+    /// Gyro bias used for integration [rad/s].
+    pub bias_gyro: Vector3<f64>,
+    /// Accelerometer bias used for integration [m/s²].
+    pub bias_accel: Vector3<f64>,
+    /// Noise densities.
+    pub noise: Noise,
+    /// `ΔR_ij`.
+    pub delta_rotation: Matrix3<f64>,
+    /// `Δv_ij` [m/s].
+    pub delta_velocity: Vector3<f64>,
+    /// `Δp_ij` [m].
+    pub delta_position: Vector3<f64>,
+    /// `Δt_ij` [s].
+    pub delta_t: f64,
+    covariance: CovarianceBlocks,
+    /// The bias Jacobian; it evolves as `J ← A J + G_b` (`∂ΔR/∂b_a` stays 0).
+    jac: Cross,
+    /// Bias random walk during the interval, when tracked (see [`Preintegrator::with_bias_walk`]).
+    bias_walk: Option<BiasWalk>,
+    /// The midpoint scheme's memory of the samples at the window's ends.
+    ends: midpoint::Ends,
+}
+
+impl Preintegrator {
+    /// An empty euler preintegration with the given bias estimate and noise.
+    pub fn new(bias_gyro: Vector3<f64>, bias_accel: Vector3<f64>, noise: Noise) -> Self {
+        Self {
+            scheme: Scheme::Euler,
+            bias_gyro,
+            bias_accel,
+            noise,
+            delta_rotation: Matrix3::identity(),
+            delta_velocity: Vector3::zeros(),
+            delta_position: Vector3::zeros(),
+            delta_t: 0.0,
+            covariance: [Matrix3::zeros(); 6],
+            jac: ZERO_CROSS,
+            bias_walk: None,
+            ends: midpoint::Ends::default(),
+        }
+    }
+
+    /// The same, integrating with `scheme`.
+    pub fn with_scheme(mut self, scheme: Scheme) -> Self {
+        self.scheme = scheme;
+        self
+    }
+
+    /// Also track the bias random walk between i and j, for [`Preintegrator::covariance_combined`]
+    /// (about twice the work per sample, as GTSAM's combined factor).
+    pub fn with_bias_walk(mut self) -> Self {
+        self.bias_walk = Some(BiasWalk {
+            cross: ZERO_CROSS,
+            var_gyro: 0.0,
+            var_accel: 0.0,
+        });
+        self
+    }
+
+    /// Adds one interval of `h` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]:
+    /// in the euler scheme, held over the interval; in the midpoint scheme, sampled at its end (the
+    /// first call of a window records its first sample and ignores `h`). The caller validates
+    /// finiteness and `h > 0`.
+    pub fn integrate_measurement(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
+        match self.scheme {
+            Scheme::Euler => self.integrate_euler(accel, gyro, h),
+            Scheme::Midpoint => self.integrate_midpoint(accel, gyro, h),
+        }
+    }
+
+    fn integrate_euler(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
+        let a = accel - self.bias_accel;
+        let w = gyro - self.bias_gyro;
+        let r = self.delta_rotation;
+        let r_a_cross = mul(&r, &so3::hat(&a));
+        let step = so3::exp(&(w * h));
+        let step_t = step.matrix().transpose();
+        let jr = so3::right_jacobian(&(w * h));
+        let half_h2 = 0.5 * h * h;
+
+        // Covariance first: A, B, C use the state before the update.
+        let var_a = self.noise.accel_density * self.noise.accel_density / h;
+        let var_g = self.noise.gyro_density * self.noise.gyro_density / h;
+        let m = -r_a_cross;
+        self.covariance = blocks::propagate(&self.covariance, &step_t, &m, &jr, h, var_a, var_g);
+        if let Some(walk) = self.bias_walk.as_mut() {
+            let g_b = Input {
+                tg: -jr * h,
+                vg: Matrix3::zeros(),
+                va: -r * h,
+                half_h: 0.5 * h,
+            };
+            walk.step(&mut self.covariance, &step_t, &m, &g_b, &self.noise);
+        }
+
+        // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
+        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac;
+        let ra_drot = mul(&r_a_cross, &jtg);
+        self.jac = [
+            [mul(&step_t, &jtg) - jr * h, Matrix3::zeros()],
+            [jvg - ra_drot * h, jva - r * h],
+            [jpg + jvg * h - ra_drot * half_h2, jpa + jva * h - r * half_h2],
+        ];
+
+        // Deltas.
+        let ra = r * a;
+        self.delta_position += self.delta_velocity * h + ra * half_h2;
+        self.delta_velocity += ra * h;
+        self.delta_rotation = mul(&r, step.matrix());
+        self.delta_t += h;
+    }
+
+    /// `A`, `B`, `C` of the next euler interval (module docs) as dense matrices: the reference the
+    /// block-structured update is tested against.
+    pub fn step_matrices(&self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) -> StepMatrices {
+        let a = accel - self.bias_accel;
+        let w = gyro - self.bias_gyro;
+        let r = self.delta_rotation;
+        let r_a_cross = r * so3::hat(&a);
+        let mut a_m = Covariance9::identity();
+        a_m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&so3::exp(&(w * h)).matrix().transpose());
+        a_m.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-r_a_cross * h));
+        a_m.fixed_view_mut::<3, 3>(6, 0)
+            .copy_from(&(-r_a_cross * (0.5 * h * h)));
+        a_m.fixed_view_mut::<3, 3>(6, 3).copy_from(&(Matrix3::identity() * h));
+        let mut b_m = SMatrix::<f64, 9, 3>::zeros();
+        b_m.fixed_view_mut::<3, 3>(3, 0).copy_from(&(r * h));
+        b_m.fixed_view_mut::<3, 3>(6, 0).copy_from(&(r * (0.5 * h * h)));
+        let mut c_m = SMatrix::<f64, 9, 3>::zeros();
+        c_m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(so3::right_jacobian(&(w * h)) * h));
+        StepMatrices { a: a_m, b: b_m, c: c_m }
+    }
+
+    /// Covariance of `[δθ, δv, δp, δb_g, δb_a]` (15×15) including the bias random walk between i
+    /// and j; `None` unless built [`Preintegrator::with_bias_walk`].
+    pub fn covariance_combined(&self) -> Option<Covariance15> {
+        let walk = self.bias_walk.as_ref()?;
+        let mut out = Covariance15::zeros();
+        out.fixed_view_mut::<9, 9>(0, 0).copy_from(&self.covariance());
+        let cross = blocks::cross_matrix(&walk.cross);
+        out.fixed_view_mut::<9, 6>(0, 9).copy_from(&cross);
+        out.fixed_view_mut::<6, 9>(9, 0).copy_from(&cross.transpose());
+        out.fixed_view_mut::<3, 3>(9, 9)
+            .copy_from(&(Matrix3::identity() * walk.var_gyro));
+        out.fixed_view_mut::<3, 3>(12, 12)
+            .copy_from(&(Matrix3::identity() * walk.var_accel));
+        Some(out)
+    }
+
+    /// Covariance of `[δθ, δv, δp]` (9×9).
+    pub fn covariance(&self) -> Covariance9 {
+        blocks::assemble(&self.covariance)
+    }
+
+    /// The bias Jacobian `∂(θ, v, p)/∂(b_g, b_a)`.
+    pub fn bias_jacobian(&self) -> BiasJacobian {
+        blocks::cross_matrix(&self.jac)
+    }
+
+    /// First-order bias update: the deltas for biases `b̄ + (δb_g, δb_a)` without
+    /// re-integration, `ΔR Exp(∂ΔR/∂b_g δb_g)` (right-applied), `Δv + ∂Δv/∂b δb`, `Δp + ∂Δp/∂b δb`.
+    pub fn corrected(
+        &self,
+        bias_gyro: &Vector3<f64>,
+        bias_accel: &Vector3<f64>,
+    ) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+        let dbg = bias_gyro - self.bias_gyro;
+        let dba = bias_accel - self.bias_accel;
+        let [[jtg, _], [jvg, jva], [jpg, jpa]] = &self.jac;
+        (
+            self.delta_rotation * so3::exp(&(jtg * dbg)).matrix(),
+            self.delta_velocity + jvg * dbg + jva * dba,
+            self.delta_position + jpg * dbg + jpa * dba,
+        )
+    }
+}

@@ -1,0 +1,233 @@
+//! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
+//! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
+
+use imukit::preint::{self, Scheme};
+use nalgebra::Vector3;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::{bias, noise_of, raise, to_py, SampleCopies};
+
+/// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
+#[pyclass(name = "Preintegrator", module = "imukit._core")]
+pub(crate) struct PyPreintegrator {
+    inner: preint::Preintegrator,
+}
+
+fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
+    match name {
+        "euler" => Ok(Scheme::Euler),
+        "midpoint" => Ok(Scheme::Midpoint),
+        other => Err(raise(
+            py,
+            "ParameterError",
+            "scheme",
+            format!("expected one of 'euler', 'midpoint', got {other:?}"),
+        )),
+    }
+}
+
+fn template(
+    py: Python<'_>,
+    bias_values: [f64; 6],
+    noise: [f64; 4],
+    combined: bool,
+    scheme: &str,
+) -> PyResult<preint::Preintegrator> {
+    let b = bias(bias_values);
+    let inner = preint::Preintegrator::new(b.gyro, b.accel, noise_of(noise)).with_scheme(scheme_of(py, scheme)?);
+    Ok(if combined { inner.with_bias_walk() } else { inner })
+}
+
+fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(Vector3::from(v))
+    } else {
+        Err(raise(
+            py,
+            "NonFiniteError",
+            name,
+            format!("expected finite values, got {v:?}"),
+        ))
+    }
+}
+
+/// Column-major nalgebra storage as a row-major `(r, c)` array.
+fn rows<'py>(py: Python<'py>, m: &[f64], r: usize, c: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let data: Vec<f64> = (0..r * c).map(|i| m[(i % c) * r + i / c]).collect();
+    PyArray1::from_vec(py, data).reshape([r, c])
+}
+
+#[pymethods]
+impl PyPreintegrator {
+    #[new]
+    fn new(py: Python<'_>, bias_values: [f64; 6], noise: [f64; 4], combined: bool, scheme: &str) -> PyResult<Self> {
+        Ok(Self {
+            inner: template(py, bias_values, noise, combined, scheme)?,
+        })
+    }
+
+    /// This preintegration followed by `next`, as one.
+    fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
+        match self.inner.merge(&next.inner) {
+            Ok(inner) => Ok(PyPreintegrator { inner }),
+            Err(imukit::Error::Parameter { expected, got, .. }) => Err(raise(
+                py,
+                "ParameterError",
+                "other",
+                format!("expected {expected}, got {got}"),
+            )),
+            Err(e) => Err(to_py(py, "other", e)),
+        }
+    }
+
+    /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
+    fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let Some(c) = self.inner.covariance_combined() else {
+            return Ok(None);
+        };
+        // Symmetric: column-major storage reads the same as row-major.
+        Ok(Some(PyArray1::from_slice(py, c.as_slice()).reshape([15, 15])?))
+    }
+
+    /// One interval of `dt` seconds: euler, `accel`, `gyro` held over it; midpoint, sampled at its
+    /// end (the window's first sample comes with `dt = 0`).
+    fn integrate_measurement(&mut self, py: Python<'_>, accel: [f64; 3], gyro: [f64; 3], dt: f64) -> PyResult<()> {
+        let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
+        let starts = self.inner.scheme == Scheme::Midpoint && self.inner.last_sample().is_none();
+        if starts && dt != 0.0 {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "dt",
+                format!("the first sample of a midpoint window has no interval before it: expected 0, got {dt}"),
+            ));
+        }
+        let positive = dt > 0.0 && dt.is_finite();
+        if !starts && !positive {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "dt",
+                format!("expected a positive, finite step, got {dt}"),
+            ));
+        }
+        self.inner.integrate_measurement(&a, &w, dt);
+        Ok(())
+    }
+
+    /// The N − 1 intervals of the samples (euler: sample k held over `[t_k, t_k+1)`; midpoint:
+    /// between samples k and k+1, continuing from the last sample, which must be sample 0).
+    fn integrate(
+        &mut self,
+        py: Python<'_>,
+        t: PyReadonlyArray1<'_, f64>,
+        gyro: PyReadonlyArray2<'_, f64>,
+        accel: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+        let samples = copies.samples(py)?;
+        samples.check_shapes().map_err(|e| to_py(py, "integrate", e))?;
+        // Validate everything first, so a bad sample leaves the preintegration untouched.
+        let bad = !samples.first_ok() || (0..samples.t.len() - 1).any(|k| !samples.step_ok(k));
+        if bad {
+            return Err(to_py(py, "integrate", samples.value_error()));
+        }
+        let first = (samples.accel_at(0), samples.gyro_at(0));
+        if let Some(last) = self.inner.last_sample().filter(|last| *last != first) {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "imu",
+                format!(
+                    "a midpoint preintegration continues from its last sample (accel {:?}, gyro {:?}): \
+                     expected the batch to start with it, got accel {:?}, gyro {:?}",
+                    last.0.as_slice(),
+                    last.1.as_slice(),
+                    first.0.as_slice(),
+                    first.1.as_slice()
+                ),
+            ));
+        }
+        let inner = &mut self.inner;
+        py.detach(|| {
+            let n = samples.t.len();
+            if inner.scheme == Scheme::Euler {
+                for k in 0..n - 1 {
+                    let h = samples.t[k + 1] - samples.t[k];
+                    inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+                }
+                return;
+            }
+            if inner.last_sample().is_none() {
+                inner.integrate_measurement(&first.0, &first.1, 0.0);
+            }
+            for k in 1..n {
+                let h = samples.t[k] - samples.t[k - 1];
+                inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+            }
+        });
+        Ok(())
+    }
+
+    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
+    #[allow(clippy::type_complexity)] // a plain tuple is the simplest thing to unpack in Python
+    fn state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        f64,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+    )> {
+        let p = &self.inner;
+        Ok((
+            rows(py, p.delta_rotation.as_slice(), 3, 3)?,
+            PyArray1::from_slice(py, p.delta_velocity.as_slice()),
+            PyArray1::from_slice(py, p.delta_position.as_slice()),
+            p.delta_t,
+            rows(py, p.covariance().as_slice(), 9, 9)?,
+            rows(py, p.bias_jacobian().as_slice(), 9, 6)?,
+        ))
+    }
+}
+
+/// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, in parallel on `threads`
+/// threads (0: all cores), GIL released.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.preintegrate_windows
+pub(crate) fn preint_windows(
+    py: Python<'_>,
+    t: PyReadonlyArray1<'_, f64>,
+    gyro: PyReadonlyArray2<'_, f64>,
+    accel: PyReadonlyArray2<'_, f64>,
+    boundaries: PyReadonlyArray1<'_, f64>,
+    bias_values: [f64; 6],
+    noise: [f64; 4],
+    combined: bool,
+    scheme: &str,
+    threads: usize,
+) -> PyResult<Vec<PyPreintegrator>> {
+    let template = template(py, bias_values, noise, combined, scheme)?;
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
+    let boundaries = crate::private_copy(py, &boundaries)?.readonly();
+    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
+    let run = || preint::preintegrate_windows(&samples, boundaries, &template);
+    let windows = py.detach(|| {
+        if threads == 0 {
+            return Ok(run());
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map(|pool| pool.install(run))
+    });
+    let windows = windows
+        .map_err(|e| raise(py, "ParameterError", "threads", e))?
+        .map_err(|e| to_py(py, "preintegrate_windows", e))?;
+    Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
+}
