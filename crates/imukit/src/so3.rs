@@ -157,8 +157,22 @@ pub fn exp_double_integral(phi: &Vector3<f64>) -> Matrix3<f64> {
 /// `J_l(φ)`; `J_r` is this at `−φ`.
 fn jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     let theta = phi.norm();
-    let k = hat(phi);
-    Matrix3::identity() + k * one_minus_cos_over_sq(theta) + k * k * theta_minus_sin_over_cube(theta)
+    let (b, c) = (one_minus_cos_over_sq(theta), theta_minus_sin_over_cube(theta));
+    // I + b K + c K², with K² = φ φᵀ − θ² I written out.
+    let (x, y, z) = (phi.x, phi.y, phi.z);
+    let (cxy, cxz, cyz) = (c * x * y, c * x * z, c * y * z);
+    let (bx, by, bz) = (b * x, b * y, b * z);
+    Matrix3::new(
+        1.0 - c * (y * y + z * z),
+        cxy - bz,
+        cxz + by,
+        cxy + bz,
+        1.0 - c * (x * x + z * z),
+        cyz - bx,
+        cxz - by,
+        cyz + bx,
+        1.0 - c * (x * x + y * y),
+    )
 }
 
 /// `J_l⁻¹(φ)`; `J_r⁻¹` is this at `−φ`.

@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
-use crate::mat3::{mul, mul_t};
+use crate::mat3::{mul, mul_t, mul_t_symmetric};
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
@@ -47,7 +47,7 @@ pub(super) fn propagate(
     let a_pp = m_tp * half_h2 + vp * h + pp;
     // (A Σ) Aᵀ, upper blocks.
     let phi_tt_mt = mul_t(&phi_tt, m);
-    let new_tt = mul_t(&phi_tt, phi) + mul_t(jr, jr) * (var_g * h * h);
+    let new_tt = mul_t_symmetric(&phi_tt, phi) + mul_t_symmetric(jr, jr) * (var_g * h * h);
     let phi_tv = mul(phi, &tv);
     let new_tv = phi_tt_mt * h + phi_tv;
     let new_tp = phi_tt_mt * half_h2 + phi_tv * h + mul(phi, &tp);
@@ -55,14 +55,7 @@ pub(super) fn propagate(
     let new_vv = a_vt_mt * h + a_vv + Matrix3::identity() * (var_a * h * h);
     let new_vp = a_vt_mt * half_h2 + a_vv * h + a_vp + Matrix3::identity() * (var_a * h * half_h2);
     let new_pp = mul_t(&a_pt, m) * half_h2 + a_pv * h + a_pp + Matrix3::identity() * (var_a * half_h2 * half_h2);
-    [
-        symmetric(new_tt),
-        new_tv,
-        new_tp,
-        symmetric(new_vv),
-        new_vp,
-        symmetric(new_pp),
-    ]
+    [new_tt, new_tv, new_tp, symmetric(new_vv), new_vp, symmetric(new_pp)]
 }
 
 /// `(b + bᵀ)/2`: keeps the diagonal blocks exactly symmetric against rounding.
