@@ -4,7 +4,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use imukit::preint::{preintegrate_windows, Preintegrator, Scheme};
-use imukit::propagate::Noise;
 use imukit::strapdown::Samples;
 use imukit_testing::preint::{samples, H, NOISE};
 use nalgebra::Vector3;
