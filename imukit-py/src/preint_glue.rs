@@ -127,47 +127,20 @@ impl PyPreintegrator {
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
-        samples.check_shapes().map_err(|e| to_py(py, "integrate", e))?;
-        // Validate everything first, so a bad sample leaves the preintegration untouched.
-        let bad = !samples.first_ok() || (0..samples.t.len() - 1).any(|k| !samples.step_ok(k));
-        if bad {
-            return Err(to_py(py, "integrate", samples.value_error()));
-        }
-        let first = (samples.accel_at(0), samples.gyro_at(0));
-        if let Some(last) = self.inner.last_sample().filter(|last| *last != first) {
-            return Err(raise(
+        let inner = &mut self.inner;
+        match py.detach(|| inner.integrate_samples(&samples)) {
+            Err(imukit::Error::Parameter {
+                name: "samples",
+                expected,
+                got,
+            }) => Err(raise(
                 py,
                 "ParameterError",
                 "imu",
-                format!(
-                    "a midpoint preintegration continues from its last sample (accel {:?}, gyro {:?}): \
-                     expected the batch to start with it, got accel {:?}, gyro {:?}",
-                    last.0.as_slice(),
-                    last.1.as_slice(),
-                    first.0.as_slice(),
-                    first.1.as_slice()
-                ),
-            ));
+                format!("expected {expected}, got {got}"),
+            )),
+            other => other.map_err(|e| to_py(py, "integrate", e)),
         }
-        let inner = &mut self.inner;
-        py.detach(|| {
-            let n = samples.t.len();
-            if inner.scheme == Scheme::Euler {
-                for k in 0..n - 1 {
-                    let h = samples.t[k + 1] - samples.t[k];
-                    inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
-                }
-                return;
-            }
-            if inner.last_sample().is_none() {
-                inner.integrate_measurement(&first.0, &first.1, 0.0);
-            }
-            for k in 1..n {
-                let h = samples.t[k] - samples.t[k - 1];
-                inner.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
-            }
-        });
-        Ok(())
     }
 
     /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.

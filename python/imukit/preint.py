@@ -128,7 +128,9 @@ class PreintegratedImu:
     def integrate(self, imu: ImuData) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
-        share their boundary sample)."""
+        share their boundary sample). Long euler batches (over 65,536 intervals, without
+        ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
+        rounding (1e-12 relative) and independent of the core count."""
         if not isinstance(imu, ImuData):
             raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
         self._core.integrate(imu.seconds, imu.gyro, imu.accel)

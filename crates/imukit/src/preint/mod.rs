@@ -31,6 +31,7 @@
 //! The midpoint step, its linearisation and its noise model: `preint/midpoint.rs`; merging two
 //! windows: `preint/merge.rs`.
 
+mod batch;
 mod blocks;
 mod merge;
 mod midpoint;
@@ -41,6 +42,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use crate::mat3::mul;
 use crate::propagate::Noise;
 use crate::so3;
+pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use midpoint::MidpointStepMatrices;
 pub use windows::preintegrate_windows;

@@ -1,0 +1,79 @@
+//! Batch preintegration of sampled data: N samples, N − 1 intervals.
+//!
+//! Long euler batches run in parallel: preintegration is associative ([`Preintegrator::merge`]
+//! is exact composition, covariance and bias Jacobians included), so fixed chunks of
+//! [`CHUNK`] intervals are preintegrated on separate cores and merged in order. The chunking
+//! depends on N only, never on the thread count, so results are reproducible; they differ from
+//! sample-by-sample streaming by rounding only (1e-12 relative, tested). The midpoint scheme
+//! (whose samples' noise correlates across a chunk boundary) and the bias random walk (not merged)
+//! run sequentially.
+
+use rayon::prelude::*;
+
+use super::{Preintegrator, Scheme};
+use crate::error::{Error, Result};
+use crate::strapdown::Samples;
+
+/// Intervals per parallel chunk: long enough that a merge (a few dense 9×9 products) is noise.
+pub const CHUNK: usize = 1 << 15;
+
+impl Preintegrator {
+    /// Adds the N − 1 intervals of `samples` (euler: sample k held over `[t_k, t_k+1)`; midpoint:
+    /// between samples k and k+1, continuing from the last sample, which must then be sample 0).
+    /// Everything is validated first: on an error nothing has been added.
+    pub fn integrate_samples(&mut self, samples: &Samples<'_>) -> Result<()> {
+        samples.check_shapes()?;
+        let n = samples.t.len();
+        if !samples.first_ok() || (0..n - 1).any(|k| !samples.step_ok(k)) {
+            return Err(samples.value_error());
+        }
+        let first = (samples.accel_at(0), samples.gyro_at(0));
+        if let Some(last) = self.last_sample().filter(|last| *last != first) {
+            return Err(Error::Parameter {
+                name: "samples",
+                expected: "a midpoint batch starting with the preintegration's last sample",
+                got: format!(
+                    "accel {:?}, gyro {:?} after {:?}, {:?}",
+                    first.0, first.1, last.0, last.1
+                ),
+            });
+        }
+        match self.scheme {
+            Scheme::Euler if self.bias_walk.is_none() && n > 2 * CHUNK => {
+                let template = Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise);
+                let chunks: Vec<Preintegrator> = (0..n - 1)
+                    .step_by(CHUNK)
+                    .collect::<Vec<_>>()
+                    .into_par_iter()
+                    .map(|start| {
+                        let mut p = template.clone();
+                        p.run_euler(samples, start, (start + CHUNK).min(n - 1));
+                        p
+                    })
+                    .collect();
+                for chunk in &chunks {
+                    *self = self.merge(chunk)?;
+                }
+            }
+            Scheme::Euler => self.run_euler(samples, 0, n - 1),
+            Scheme::Midpoint => {
+                if self.last_sample().is_none() {
+                    self.integrate_measurement(&first.0, &first.1, 0.0);
+                }
+                for k in 1..n {
+                    let h = samples.t[k] - samples.t[k - 1];
+                    self.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Euler intervals `start..end` (interval k from sample k to k+1).
+    fn run_euler(&mut self, samples: &Samples<'_>, start: usize, end: usize) {
+        for k in start..end {
+            let h = samples.t[k + 1] - samples.t[k];
+            self.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! Batch preintegration: long euler batches run as parallel chunks merged in order; they equal
+//! sample-by-sample streaming to rounding and do not depend on the thread count. Midpoint batches
+//! continue from the last sample or are refused.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use imukit::preint::{Preintegrator, Scheme, CHUNK};
+use imukit::strapdown::Samples;
+use imukit_testing::preint::NOISE;
+use nalgebra::Vector3;
+
+struct Stream {
+    t: Vec<f64>,
+    gyro: Vec<f64>,
+    accel: Vec<f64>,
+}
+
+/// `n` samples of a slowly turning, accelerating body at 200 Hz with jittered stamps.
+fn stream(n: usize) -> Stream {
+    let t: Vec<f64> = (0..n)
+        .map(|k| k as f64 * 0.005 + 1e-4 * (k as f64 * 0.37).sin())
+        .collect();
+    let gyro = t
+        .iter()
+        .flat_map(|s| [0.3 * (1.1 * s).sin(), 0.2 * (0.7 * s).cos(), 0.5 * (1.3 * s).sin()])
+        .collect();
+    let accel = t
+        .iter()
+        .flat_map(|s| [0.5 * (0.9 * s).sin(), 0.4 * (0.3 * s).cos(), 9.81])
+        .collect();
+    Stream { t, gyro, accel }
+}
+
+impl Stream {
+    fn samples(&self) -> Samples<'_> {
+        Samples {
+            t: &self.t,
+            gyro: &self.gyro,
+            accel: &self.accel,
+        }
+    }
+}
+
+fn fresh(scheme: Scheme) -> Preintegrator {
+    Preintegrator::new(Vector3::new(0.01, -0.02, 0.0), Vector3::new(0.1, 0.0, -0.1), NOISE).with_scheme(scheme)
+}
+
+#[test]
+fn parallel_chunks_equal_streaming_and_ignore_the_thread_count() {
+    let data = stream(2 * CHUNK + 1235);
+    let s = data.samples();
+    let mut streamed = fresh(Scheme::Euler);
+    for k in 0..data.t.len() - 1 {
+        streamed.integrate_measurement(&s.accel_at(k), &s.gyro_at(k), data.t[k + 1] - data.t[k]);
+    }
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let mut p = fresh(Scheme::Euler);
+        pool.install(|| p.integrate_samples(&s)).unwrap();
+        p
+    };
+    let batch = on(2);
+    assert_eq!(batch, on(1));
+    let rel = |a: f64, b: f64| a / b;
+    let dp = (batch.delta_position - streamed.delta_position).amax();
+    assert!(rel(dp, streamed.delta_position.amax()) < 1e-12, "Δp off by {dp:e}");
+    assert!((batch.delta_rotation - streamed.delta_rotation).amax() < 1e-12);
+    let dc = (batch.covariance() - streamed.covariance()).amax();
+    assert!(
+        rel(dc, streamed.covariance().amax()) < 1e-12,
+        "covariance off by {dc:e}"
+    );
+    let dj = (batch.bias_jacobian() - streamed.bias_jacobian()).amax();
+    assert!(
+        rel(dj, streamed.bias_jacobian().amax()) < 1e-12,
+        "bias Jacobian off by {dj:e}"
+    );
+    assert!((batch.delta_t - streamed.delta_t).abs() < 1e-9);
+    // it was merged: not bit for bit the streamed result
+    assert_ne!(batch.delta_position, streamed.delta_position);
+}
+
+#[test]
+fn short_and_combined_batches_stream_bit_for_bit() {
+    let data = stream(500);
+    let s = data.samples();
+    for combined in [false, true] {
+        let make = || {
+            let p = fresh(Scheme::Euler);
+            if combined {
+                p.with_bias_walk()
+            } else {
+                p
+            }
+        };
+        let mut streamed = make();
+        for k in 0..data.t.len() - 1 {
+            streamed.integrate_measurement(&s.accel_at(k), &s.gyro_at(k), data.t[k + 1] - data.t[k]);
+        }
+        let mut batch = make();
+        batch.integrate_samples(&s).unwrap();
+        assert_eq!(batch, streamed);
+    }
+}
+
+#[test]
+fn midpoint_batches_continue_from_the_last_sample() {
+    let data = stream(300);
+    let s = data.samples();
+    let mut whole = fresh(Scheme::Midpoint);
+    whole.integrate_samples(&s).unwrap();
+    let part = |lo: usize, hi: usize| Samples {
+        t: &data.t[lo..hi],
+        gyro: &data.gyro[3 * lo..3 * hi],
+        accel: &data.accel[3 * lo..3 * hi],
+    };
+    let mut two = fresh(Scheme::Midpoint);
+    two.integrate_samples(&part(0, 101)).unwrap();
+    two.integrate_samples(&part(100, 300)).unwrap();
+    assert_eq!(two, whole);
+    let e = two.integrate_samples(&part(150, 300)).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("samples must be a midpoint batch starting with"),
+        "{e}"
+    );
+    assert_eq!(two, whole); // nothing was added
+    let mut bad = stream(300);
+    bad.accel[3 * 200 + 1] = f64::INFINITY;
+    let mut p = fresh(Scheme::Midpoint);
+    assert!(p.integrate_samples(&bad.samples()).is_err());
+    assert_eq!(p, fresh(Scheme::Midpoint));
+}
