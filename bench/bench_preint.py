@@ -1,5 +1,7 @@
 """Preintegration from Python, 10^6 samples at 200 Hz, euler scheme, 9×9 covariance and bias
-Jacobians: ``imukit.preintegrate`` (one call, GIL released) against the streaming
+Jacobians: ``imukit.preintegrate`` (one call, GIL released; on one core as a single window with
+``threads=1``, and on all cores as parallel chunks), the 15×15 and midpoint variants,
+``preintegrate_windows`` over 10^4 windows on 1 and 2 threads, against the streaming
 ``PreintegratedImu.integrate_measurement`` loop over a subset, and against GTSAM's
 ``integrateMeasurement`` called per sample from Python (``PreintegratedImuMeasurementsManifold``, the
 same Forster scheme, and the default ``PreintegratedImuMeasurements``, which in the PyPI wheels is the
@@ -9,7 +11,7 @@ GTSAM has no batch fast path from Python: the C++ ``integrateMeasurements(accs, 
 loop over matrix columns) is not wrapped in gtsam 4.3.0, so per-sample calls are the only way in.
 
 Usage: ``python bench/bench_preint.py [--n 1000000] [--loop-n 20000] [--gtsam-n 100000]
-[--repeats 7]``; medians per sample. Compare with ``cargo bench -p imukit --bench preint`` for the
+[--repeats 7] [--windows 10000]``; medians per sample. Compare with ``cargo bench -p imukit --bench preint`` for the
 Rust figure.
 """
 
@@ -34,6 +36,7 @@ def main() -> None:
     parser.add_argument("--loop-n", type=int, default=20_000)
     parser.add_argument("--gtsam-n", type=int, default=100_000)
     parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--windows", type=int, default=10_000)
     args = parser.parse_args()
 
     t, gyro, accel = synthetic_imu(args.n)
@@ -48,17 +51,34 @@ def main() -> None:
 
     m = args.loop_n
     gap = np.abs(stream(m).delta_position - ik.preintegrate(imu[:m], noise=noise, scheme="euler").delta_position).max()
+    whole = [imu.t[0], imu.t[-1]]  # one window: the sequential batch on one core
     rows = [
         (
-            "preintegrate (batch)",
+            "preintegrate, 1 core",
+            median_s(lambda: ik.preintegrate_windows(imu, whole, noise=noise, scheme="euler", threads=1), args.repeats)
+            / args.n,
+        ),
+        (
+            "preintegrate (all cores)",
             median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler"), args.repeats) / args.n,
         ),
         (
             "preintegrate combined=True",
             median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler", combined=True), 3) / args.n,
         ),
+        (
+            "preintegrate midpoint",
+            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="midpoint"), 3) / args.n,
+        ),
         ("integrate_measurement loop", median_s(lambda: stream(m), 1) / m),
     ]
+    bounds = imu.t[:: max(1, args.n // args.windows)]
+    for threads in (1, 2):
+        seconds = median_s(
+            lambda: ik.preintegrate_windows(imu, bounds, noise=noise, scheme="euler", threads=threads),  # noqa: B023
+            args.repeats,
+        )
+        rows.append((f"{len(bounds) - 1:,} windows, {threads} thread(s)", seconds / args.n))
     print(f"n = {args.n:,}; batch vs streaming over {m:,} samples: max |Δp| gap = {gap:.1e} m")
     if gtsam is not None:
         g = min(args.gtsam_n, args.n)
@@ -89,12 +109,14 @@ def main() -> None:
     else:
         print("gtsam not installed (pip install -r requirements/dev.txt): GTSAM rows skipped")
     base = rows[0][1]
-    print(f"{'case':30s} {'ns/sample':>10s} {'÷ batch':>9s}")
+    print(f"{'case':30s} {'ns/sample':>10s} {'÷ 1 core':>9s}")
     for name, seconds in rows:
         print(f"{name:30s} {seconds * 1e9:10.1f} {seconds / base:8.1f}x")
     if gtsam is not None:
-        ratio = rows[0][1] / rows[3][1]
-        print(f"imukit batch / GTSAM manifold loop = {ratio:.3f} (time per sample; imukit {1 / ratio:.1f}x faster)")
+        manifold_loop = dict(rows)["GTSAM manifold loop (Python)"]
+        for name in ("preintegrate, 1 core", "preintegrate (all cores)"):
+            ratio = dict(rows)[name] / manifold_loop
+            print(f"imukit {name} / GTSAM manifold loop = {ratio:.3f} (imukit {1 / ratio:.1f}x faster)")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,9 @@ use crate::mat3::{mul, mul_t, mul_t_symmetric};
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
 
-/// A 9×6 matrix as 3×3 blocks: rows `[θ, v, p]`, columns `[gyro, accel]`.
+/// A 9×6 matrix as 3×3 blocks: rows `[θ, v, p]`, columns `[gyro, accel]`. Its θ-row accelerometer
+/// block is always zero (no accelerometer input reaches δθ, and `A` keeps it so): the products
+/// below skip it.
 pub(super) type Cross = [[Matrix3<f64>; 2]; 3];
 
 pub(super) const ZERO_CROSS: Cross = [[Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0); 2]; 3];
@@ -64,14 +66,15 @@ pub(super) fn symmetric(b: Matrix3<f64>) -> Matrix3<f64> {
 }
 
 /// `A X` for a 9×6 cross covariance `X`.
+#[inline]
 pub(super) fn transition(x: &Cross, phi: &Matrix3<f64>, m: &Matrix3<f64>, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
-    let [[xtg, xta], [xvg, xva], [xpg, xpa]] = *x;
-    let (m_tg, m_ta) = (mul(m, &xtg), mul(m, &xta));
+    let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
+    let m_tg = mul(m, &xtg);
     [
-        [mul(phi, &xtg), mul(phi, &xta)],
-        [m_tg * h + xvg, m_ta * h + xva],
-        [m_tg * half_h2 + xvg * h + xpg, m_ta * half_h2 + xva * h + xpa],
+        [mul(phi, &xtg), Matrix3::zeros()],
+        [m_tg * h + xvg, xva],
+        [m_tg * half_h2 + xvg * h + xpg, xva * h + xpa],
     ]
 }
 
@@ -86,6 +89,7 @@ pub(super) struct Input {
 
 impl Input {
     /// `G diag(s_g I, s_a I)` as a cross covariance.
+    #[inline]
     pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
         let (vg, va) = (self.vg * s_g, self.va * s_a);
         [
@@ -95,12 +99,13 @@ impl Input {
         ]
     }
 
-    /// `cov += G diag(s_g I, s_a I) Gᵀ`.
+    /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
+    #[inline]
     pub fn add_quadratic(&self, cov: &mut CovarianceBlocks, s_g: f64, s_a: f64) {
         let tv = mul_t(&self.tg, &self.vg) * s_g;
-        let vv = mul_t(&self.vg, &self.vg) * s_g + mul_t(&self.va, &self.va) * s_a;
+        let vv = mul_t_symmetric(&self.vg, &self.vg) * s_g + mul_t_symmetric(&self.va, &self.va) * s_a;
         let c = self.half_h;
-        cov[0] += mul_t(&self.tg, &self.tg) * s_g;
+        cov[0] += mul_t_symmetric(&self.tg, &self.tg) * s_g;
         cov[1] += tv;
         cov[2] += tv * c;
         cov[3] += vv;
@@ -109,10 +114,15 @@ impl Input {
     }
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
+    #[inline]
     pub fn add_cross(&self, cov: &mut CovarianceBlocks, y: &Cross) {
         let c = self.half_h;
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
-        let u = y.map(|[yg, ya]| mul_t(&yg, &self.vg) + mul_t(&ya, &self.va));
+        let u = [
+            mul_t(&y[0][0], &self.vg), // y's θ-row accelerometer block is zero
+            mul_t(&y[1][0], &self.vg) + mul_t(&y[1][1], &self.va),
+            mul_t(&y[2][0], &self.vg) + mul_t(&y[2][1], &self.va),
+        ];
         let y0t = mul_t(&y[0][0], &self.tg);
         cov[0] += y0t + y0t.transpose();
         cov[1] += u[0] + mul_t(&self.tg, &y[1][0]);
@@ -124,6 +134,7 @@ impl Input {
 }
 
 /// Block-wise `a + b` for cross covariances.
+#[inline]
 pub(super) fn add(a: &Cross, b: &Cross) -> Cross {
     std::array::from_fn(|i| [a[i][0] + b[i][0], a[i][1] + b[i][1]])
 }

@@ -90,6 +90,7 @@ struct Step {
 }
 
 impl Preintegrator {
+    #[inline(always)]
     fn midpoint_step(&self, prev: &Sample, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) -> Step {
         let a0 = prev.accel - self.bias_accel;
         let a1 = accel - self.bias_accel;
@@ -147,8 +148,13 @@ impl Preintegrator {
         // Covariance, with the shared sample's correlation (module docs).
         let y_end = blocks::transition(&self.ends.end_cross, &s.phi, &s.m, h);
         let mut cov = blocks::propagate(&self.covariance, &s.phi, &s.m, &s.jr, h, 0.0, 0.0);
-        b0.add_quadratic(&mut cov, q0[0], q0[1]);
-        b1.add_quadratic(&mut cov, q1[0], q1[1]);
+        // B_0 q_0 B_0ᵀ + B_1 q_1 B_1ᵀ in one: the gyro columns are equal, and each accelerometer
+        // block (−½h R_s) has the Gram matrix ¼h² I, as −½h I does.
+        let pair = Input {
+            va: Matrix3::identity() * half_h,
+            ..b0
+        };
+        pair.add_quadratic(&mut cov, q0[0] + q1[0], q0[1] + q1[1]);
         b0.add_cross(&mut cov, &y_end);
         for d in [0, 3, 5] {
             cov[d] = blocks::symmetric(cov[d]);
