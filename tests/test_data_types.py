@@ -423,3 +423,20 @@ def test_trajectory_nanoseconds() -> None:
         ik.Trajectory(None, pos, None, rot)
     with pytest.raises(ik.DTypeError, match=r"^t_ns: expected integer nanoseconds"):
         ik.Trajectory(None, pos, None, rot, t_ns=t_ns * 1.0)
+
+
+def test_trajectory_carries_optional_bias_histories() -> None:
+    t = np.array([0.0, 0.1, 0.2])
+    rot = Rotation.identity(3)
+    plain = ik.Trajectory(t, np.zeros((3, 3)), None, rot)
+    assert plain.gyro_bias is None and plain.accel_bias is None
+    bg, ba = np.full((3, 3), 1e-3), np.full((3, 3), 0.05)
+    traj = ik.Trajectory(t, np.zeros((3, 3)), None, rot, gyro_bias=bg, accel_bias=ba)
+    assert traj.gyro_bias is not None and traj.accel_bias is not None
+    assert np.array_equal(traj.gyro_bias, bg) and np.array_equal(traj.accel_bias, ba)
+    assert not traj.gyro_bias.flags.writeable
+    assert "gyro_bias" in repr(traj)
+    with pytest.raises(ik.ParameterError, match="gyro_bias: give gyro_bias and accel_bias together"):
+        ik.Trajectory(t, np.zeros((3, 3)), None, rot, gyro_bias=bg)
+    with pytest.raises(ik.ShapeError, match=r"accel_bias: expected shape \(N, 3\) with N = len\(t\) = 3"):
+        ik.Trajectory(t, np.zeros((3, 3)), None, rot, gyro_bias=bg, accel_bias=np.zeros((2, 3)))

@@ -85,9 +85,22 @@ class Trajectory:
     covariance
         ``(M, 15, 15)`` error-state covariances (order stated by the producer), with
         ``covariance_t`` ``(M,)`` their float times [s], strictly increasing. Give both or neither.
+    gyro_bias, accel_bias
+        ``(N, 3)`` true or estimated sensor biases at each ``t[k]`` [rad/s], [m/s²] (a simulation's
+        truth, EuRoC's ground truth), or None when unknown. Give both or neither.
     """
 
-    __slots__ = ("covariance", "covariance_t", "position", "rotation", "t", "t_ns", "velocity")
+    __slots__ = (
+        "accel_bias",
+        "covariance",
+        "covariance_t",
+        "gyro_bias",
+        "position",
+        "rotation",
+        "t",
+        "t_ns",
+        "velocity",
+    )
 
     t: FloatArray
     t_ns: NDArray[np.int64] | None
@@ -96,6 +109,8 @@ class Trajectory:
     rotation: Rotation
     covariance: FloatArray | None
     covariance_t: FloatArray | None
+    gyro_bias: FloatArray | None
+    accel_bias: FloatArray | None
 
     def __init__(
         self,
@@ -107,6 +122,8 @@ class Trajectory:
         t_ns: ArrayLike | None = None,
         covariance: ArrayLike | None = None,
         covariance_t: ArrayLike | None = None,
+        gyro_bias: ArrayLike | None = None,
+        accel_bias: ArrayLike | None = None,
     ) -> None:
         stamps_ns = None if t_ns is None else _nanoseconds(t_ns)
         if t is None:
@@ -155,6 +172,10 @@ class Trajectory:
             cov = readonly_array(covariance, "covariance", (m, 15, 15), f"(M, 15, 15) with M = len(covariance_t) = {m}")
             set_(self, "covariance", cov)
             set_(self, "covariance_t", readonly_copy(cov_t))
+        if (gyro_bias is None) != (accel_bias is None):
+            raise ParameterError("gyro_bias: give gyro_bias and accel_bias together, or neither")
+        for name, bias in (("gyro_bias", gyro_bias), ("accel_bias", accel_bias)):
+            set_(self, name, None if bias is None else readonly_array(bias, name, (n, 3), rows))
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"Trajectory is immutable: cannot set {name!r}")
@@ -186,6 +207,8 @@ class Trajectory:
             ("rotation", rotation),
             ("covariance", covariance),
             ("covariance_t", covariance_t),
+            ("gyro_bias", None),
+            ("accel_bias", None),
         ):
             set_(traj, name, value)
         return traj
@@ -209,7 +232,7 @@ class Trajectory:
         write_tum(self, path)
 
     def __repr__(self) -> str:
-        extras = [name for name in ("t_ns", "velocity", "covariance") if getattr(self, name) is not None]
+        extras = [name for name in ("t_ns", "velocity", "covariance", "gyro_bias") if getattr(self, name) is not None]
         with_ = f" with {', '.join(extras)}" if extras else ""
         return f"Trajectory({len(self)} samples, {float(self.t[0])!r} … {float(self.t[-1])!r} s{with_})"
 
