@@ -47,6 +47,8 @@ bench: build
 	$(VPY) bench/bench_attitude.py
 	$(VPY) bench/bench_strapdown.py
 	$(VPY) bench/bench_preint.py
+	$(VPY) bench/bench_allan.py
+	$(VPY) bench/bench_sim.py
 	cargo bench --locked -p imukit
 
 # Re-pin the Python closure after editing requirements/dev.in.

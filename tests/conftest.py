@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
+
+import imukit as ik
 
 N_RANDOM = 10_000
 
@@ -38,3 +44,12 @@ def rotation_angle_between(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """Angle (rad) of aᵀ b for (..., 3, 3) rotation matrices."""
     rel = np.swapaxes(np.asarray(a), -1, -2) @ np.asarray(b)
     return Rotation.from_matrix(rel.reshape(-1, 3, 3)).magnitude().reshape(rel.shape[:-2])
+
+
+def assert_file_error(path: Path, text: str, read: Callable[[Path], object], message: str) -> None:
+    """Write ``text`` to ``path``: ``read(path)`` must raise a FileFormatError (a ValueError) whose
+    message is ``path: <path>`` followed by the regex ``message``."""
+    path.write_text(text)
+    with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(path))}{message}") as info:
+        read(path)
+    assert isinstance(info.value, ValueError) and isinstance(info.value, ik.ImukitError)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +9,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+
+from conftest import assert_file_error
 
 
 def two_samples(**kwargs: object) -> ik.Trajectory:
@@ -108,11 +109,7 @@ def test_reads_comments_blank_lines_and_short_quaternions(tmp_path: Path) -> Non
     ],
 )
 def test_malformed_files_name_file_and_line(tmp_path: Path, text: str, message: str) -> None:
-    path = tmp_path / "bad.txt"
-    path.write_text(text)
-    with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(path))}(, )?{message}") as info:
-        ik.io.read_tum(path)
-    assert isinstance(info.value, ValueError) and isinstance(info.value, ik.ImukitError)
+    assert_file_error(tmp_path / "bad.txt", text, ik.io.read_tum, f"(, )?{message}")
 
 
 def test_write_refuses_other_objects(tmp_path: Path) -> None:

@@ -7,7 +7,9 @@ use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{propagate, strapdown};
 
+mod allan_glue;
 mod preint_glue;
+mod sim_glue;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
     PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
@@ -482,6 +484,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(strapdown_propagate, m)?)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
+    m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

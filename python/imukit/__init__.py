@@ -10,7 +10,7 @@ right perturbations, intrinsic ZYX Euler angles, SI units) are tabulated with wo
 array([0., 1., 0.])
 """
 
-from imukit import euler, io, quat, so3
+from imukit import euler, io, noise, quat, sim, so3
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
@@ -19,6 +19,7 @@ from imukit._errors import (
     ImukitError,
     InvalidQuaternionError,
     InvalidRotationError,
+    MissingDependencyError,
     NonFiniteError,
     ParameterError,
     ShapeError,
@@ -40,6 +41,7 @@ __all__ = [
     "ImukitError",
     "InvalidQuaternionError",
     "InvalidRotationError",
+    "MissingDependencyError",
     "NavState",
     "NonFiniteError",
     "ParameterError",
@@ -53,9 +55,11 @@ __all__ = [
     "integrate",
     "integrate_attitude",
     "io",
+    "noise",
     "preintegrate",
     "preintegrate_windows",
     "propagate",
     "quat",
+    "sim",
     "so3",
 ]

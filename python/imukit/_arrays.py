@@ -136,13 +136,17 @@ def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
 
 
 def seconds_from_ns(t_ns: NDArray[np.int64]) -> FloatArray:
-    """Float seconds of int64 nanosecond stamps, within one rounding of the exact value.
+    """Float seconds of int64 nanosecond stamps.
 
-    Whole seconds and the nanosecond remainder are converted separately, so a 1.4e18 ns epoch
-    gives the float nearest ``t_ns / 1e9`` (bar a tie), not the 256 ns-coarse ``float(t_ns)`` scaled.
+    Below 2⁵³ ns (104 days; every relative time) the stamp is exact in float64 and one correctly
+    rounded division gives the float nearest ``t_ns / 1e9``. Larger stamps (epochs, 1.4e18 ns) are
+    split into whole seconds and the nanosecond remainder, converted separately: within one unit in
+    the last place of the exact value, not the 256 ns-coarse ``float(t_ns)`` scaled.
     """
+    exact = np.abs(t_ns) < 2**53
     whole, frac = np.divmod(t_ns, np.int64(1_000_000_000))
-    return np.ascontiguousarray(whole.astype(np.float64) + frac.astype(np.float64) / 1e9)
+    split = whole.astype(np.float64) + frac.astype(np.float64) / 1e9
+    return np.ascontiguousarray(np.where(exact, t_ns.astype(np.float64) / 1e9, split))
 
 
 def readonly_copy(arr: NDArray[_T]) -> NDArray[_T]:

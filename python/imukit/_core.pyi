@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 __all__ = [
     "Preintegrator",
     "__version__",
+    "allan_variance",
     "attitude_integrate",
     "euler_from_matrix",
     "euler_rate_matrix",
@@ -24,6 +25,8 @@ __all__ = [
     "quat_omega_matrix",
     "quat_product_matrix",
     "quat_rotate",
+    "sim_measure",
+    "sim_motion",
     "so3_exp",
     "so3_hat",
     "so3_jacobian",
@@ -53,6 +56,9 @@ def euler_to_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: .
 def euler_from_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def euler_rate_matrix(x: NDArray[np.float64], name: str, tolerance: float) -> NDArray[np.float64]: ...
 def euler_rate_matrix_inv(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
+def allan_variance(
+    y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...  # (M, C) variances, (M,) term counts
 def attitude_integrate(
     t: NDArray[np.float64],
     gyro: NDArray[np.float64],
@@ -108,3 +114,9 @@ def preint_windows(
     scheme: str,
     threads: int,
 ) -> list[Preintegrator]: ...
+def sim_motion(
+    kind: str, params: list[float], t: NDArray[np.float64], gravity: list[float]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+def sim_measure(
+    t: NDArray[np.float64], ideal: NDArray[np.float64], model: list[float], seed: int, triad: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...

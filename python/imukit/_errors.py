@@ -14,6 +14,7 @@ __all__ = [
     "ImukitError",
     "InvalidQuaternionError",
     "InvalidRotationError",
+    "MissingDependencyError",
     "NonFiniteError",
     "ParameterError",
     "ShapeError",
@@ -58,7 +59,11 @@ class TimestampError(ImukitError, ValueError):
 
 
 class FileFormatError(ImukitError, ValueError):
-    """A file line that cannot be read (the message names the file and the line number)."""
+    """A file that cannot be read (the message names the file, and the line number or the key)."""
+
+
+class MissingDependencyError(ImukitError, ImportError):
+    """An optional package that a function needs (matplotlib for plots) is not installed."""
 
 
 # Tracebacks and reprs name the public path (imukit.GimbalLockError), not this private module.
@@ -73,5 +78,6 @@ for _cls in (
     ParameterError,
     TimestampError,
     FileFormatError,
+    MissingDependencyError,
 ):
     _cls.__module__ = "imukit"

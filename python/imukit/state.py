@@ -185,32 +185,33 @@ class Trajectory:
         cls,
         imu_t: FloatArray,
         imu_t_ns: NDArray[np.int64] | None,
-        states: FloatArray,
+        arrays: dict[str, FloatArray],
         rotation: Rotation,
         covariance: FloatArray | None = None,
         covariance_t: FloatArray | None = None,
     ) -> Trajectory:
         """A trajectory over arrays the compiled core has just produced, without re-validating or
         copying them (they are fresh, finite and correctly shaped by construction; copying 10⁶ states
-        cost more than integrating them). ``states`` is the core's ``(N, 6)`` ``[p, v]`` array, made
-        read-only here; the timestamps are an ImuData's, read-only already. As everywhere in numpy, the
-        read-only flag is a guard, not a lock: the owner of a buffer can set it writeable again.
+        cost more than integrating them). ``arrays`` maps ``position``, ``velocity`` and optionally
+        ``gyro_bias`` / ``accel_bias`` to ``(N, 3)`` views, made read-only here; the timestamps are an
+        ImuData's, read-only already. As everywhere in numpy, the read-only flag is a guard, not a
+        lock: the owner of a buffer can set it writeable again.
         """
-        states.setflags(write=False)
         traj = object.__new__(cls)
         set_ = object.__setattr__
-        for name, value in (
+        for name in ("position", "velocity", "gyro_bias", "accel_bias"):
+            value = arrays.get(name)
+            if value is not None:
+                value.setflags(write=False)
+            set_(traj, name, value)
+        for name, item in (
             ("t", imu_t),
             ("t_ns", imu_t_ns),
-            ("position", states[:, 0:3]),
-            ("velocity", states[:, 3:6]),
             ("rotation", rotation),
             ("covariance", covariance),
             ("covariance_t", covariance_t),
-            ("gyro_bias", None),
-            ("accel_bias", None),
         ):
-            set_(traj, name, value)
+            set_(traj, name, item)
         return traj
 
     def __len__(self) -> int:

@@ -52,7 +52,8 @@ def _trajectory(
 ) -> Trajectory:
     # Fresh arrays from the core: the quaternions become the Rotation's own buffer.
     rotation = rotation_from_unit_quat(quaternions)
-    return Trajectory._from_core(imu.t, imu.t_ns, position_velocity, rotation, covariance, covariance_t)
+    arrays = {"position": position_velocity[:, 0:3], "velocity": position_velocity[:, 3:6]}
+    return Trajectory._from_core(imu.t, imu.t_ns, arrays, rotation, covariance, covariance_t)
 
 
 def integrate(

@@ -20,20 +20,64 @@ pub const GIMBAL_TOLERANCE: f64 = 1e-6;
 
 /// `R = Rz(ψ) Ry(θ) Rx(φ)` for `χ = [ψ, θ, φ]`.
 pub fn to_rotation(chi: &Vector3<f64>) -> Rotation3<f64> {
-    let (sy, cy) = chi.x.sin_cos();
-    let (sp, cp) = chi.y.sin_cos();
-    let (sr, cr) = chi.z.sin_cos();
-    Rotation3::from_matrix_unchecked(Matrix3::new(
-        cy * cp,
-        cy * sp * sr - sy * cr,
-        cy * sp * cr + sy * sr,
-        sy * cp,
-        sy * sp * sr + cy * cr,
-        sy * sp * cr - cy * sr,
-        -sp,
-        cp * sr,
-        cp * cr,
-    ))
+    EulerSines::of(chi).rotation()
+}
+
+/// `(R(χ), E⁻¹(χ) χ̇)`: the attitude and the body rate of Euler angles moving at `χ̇`, from one
+/// evaluation of the sines (a simulator evaluates both at every sample).
+pub fn to_rotation_with_body_rate(chi: &Vector3<f64>, chi_dot: &Vector3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
+    let s = EulerSines::of(chi);
+    (s.rotation(), s.body_rate(chi_dot))
+}
+
+/// Sines and cosines `(sin, cos)` of yaw ψ, pitch θ and roll φ: callers that know them without the
+/// angles (a heading from a velocity direction) skip the trigonometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EulerSines {
+    /// `(sin ψ, cos ψ)`.
+    pub yaw: (f64, f64),
+    /// `(sin θ, cos θ)`.
+    pub pitch: (f64, f64),
+    /// `(sin φ, cos φ)`.
+    pub roll: (f64, f64),
+}
+
+impl EulerSines {
+    /// The sines of `χ = [ψ, θ, φ]`.
+    pub fn of(chi: &Vector3<f64>) -> Self {
+        Self {
+            yaw: chi.x.sin_cos(),
+            pitch: chi.y.sin_cos(),
+            roll: chi.z.sin_cos(),
+        }
+    }
+
+    /// `R = Rz(ψ) Ry(θ) Rx(φ)`.
+    pub fn rotation(&self) -> Rotation3<f64> {
+        let ((sy, cy), (sp, cp), (sr, cr)) = (self.yaw, self.pitch, self.roll);
+        Rotation3::from_matrix_unchecked(Matrix3::new(
+            cy * cp,
+            cy * sp * sr - sy * cr,
+            cy * sp * cr + sy * sr,
+            sy * cp,
+            sy * sp * sr + cy * cr,
+            sy * sp * cr - cy * sr,
+            -sp,
+            cp * sr,
+            cp * cr,
+        ))
+    }
+
+    /// `ω_b = E⁻¹(χ) χ̇ = [φ̇ − ψ̇ sθ, θ̇ cφ + ψ̇ cθ sφ, ψ̇ cθ cφ − θ̇ sφ]`.
+    pub fn body_rate(&self, chi_dot: &Vector3<f64>) -> Vector3<f64> {
+        let ((sp, cp), (sr, cr)) = (self.pitch, self.roll);
+        let (yaw_dot, pitch_dot, roll_dot) = (chi_dot.x, chi_dot.y, chi_dot.z);
+        Vector3::new(
+            roll_dot - yaw_dot * sp,
+            pitch_dot * cr + yaw_dot * cp * sr,
+            yaw_dot * cp * cr - pitch_dot * sr,
+        )
+    }
 }
 
 /// `χ = [ψ, θ, φ]` of R; `to_rotation(χ)` reproduces R to rounding, except within

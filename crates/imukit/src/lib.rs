@@ -22,6 +22,7 @@
 //! assert!((quat::exp(&phi) * Vector3::x() - Vector3::y()).norm() < 1e-15);
 //! ```
 
+pub mod allan;
 pub mod attitude;
 pub mod batch;
 mod error;
@@ -31,6 +32,7 @@ mod mat3;
 pub mod preint;
 pub mod propagate;
 pub mod quat;
+pub mod sim;
 pub mod so3;
 pub mod strapdown;
 pub mod time;

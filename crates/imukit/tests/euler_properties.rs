@@ -47,6 +47,18 @@ fn to_rotation_is_rz_ry_rx() {
 }
 
 #[test]
+fn rotation_with_body_rate_equals_its_two_parts() {
+    let rates = (angles(PI), angles(PI)).prop_map(|(chi, d)| (chi, d));
+    check("R and E⁻¹ χ̇", CASES, rates, |(chi, chi_dot)| {
+        let (r, w) = euler::to_rotation_with_body_rate(&chi, &chi_dot);
+        prop_assert!(r == euler::to_rotation(&chi));
+        let err = (w - euler::rate_matrix_inv(&chi) * chi_dot).amax();
+        prop_assert!(err <= 1e-14, "{err:e}");
+        Ok(())
+    });
+}
+
+#[test]
 fn from_rotation_inverts_to_rotation() {
     // Away from gimbal lock the angles are unique in the stated ranges; their error grows like
     // ε / cos θ (≈ 2e-14 at 0.01 rad from the pole).

@@ -1,0 +1,72 @@
+//! IMU simulation: trajectories in closed form ([`Motion`]), their exact ideal measurements
+//! ([`evaluate`]: body rate and specific force `Rᵀ(a − g)`), and a seeded sensor error model
+//! ([`measure`], [`SensorModel`]: white noise, bias random walk, Gauss–Markov, constant and
+//! turn-on bias, scale factor and misalignment, saturation, quantisation).
+
+mod motion;
+mod sensor;
+
+pub use motion::{Kinematics, Motion};
+pub use sensor::{measure, SensorModel, CHUNK};
+
+use nalgebra::{UnitQuaternion, Vector3};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+
+/// Output buffers of [`evaluate`], flat row-major: `position`, `velocity`, `gyro` (body rate) and
+/// `accel` (specific force) `3N`, `rotation` `4N` as `[x, y, z, w]` quaternions of `R_wb`.
+pub struct Truth<'a> {
+    /// Positions [m].
+    pub position: &'a mut [f64],
+    /// Velocities [m/s].
+    pub velocity: &'a mut [f64],
+    /// `R_wb` quaternions `[x, y, z, w]`.
+    pub rotation: &'a mut [f64],
+    /// Ideal gyro readings [rad/s].
+    pub gyro: &'a mut [f64],
+    /// Ideal accelerometer readings [m/s²].
+    pub accel: &'a mut [f64],
+}
+
+/// Evaluates `motion` at the times `t` (finite) into `out`, in parallel.
+pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'_>) -> Result<()> {
+    let n = t.len();
+    for (name, len, width) in [
+        ("position", out.position.len(), 3),
+        ("velocity", out.velocity.len(), 3),
+        ("rotation", out.rotation.len(), 4),
+        ("gyro", out.gyro.len(), 3),
+        ("accel", out.accel.len(), 3),
+    ] {
+        if len != width * n {
+            return Err(Error::RowCount {
+                input: n,
+                output: len / width,
+            }
+            .in_argument(name));
+        }
+    }
+    if let Some(k) = t.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite { index: k }.in_argument("t"));
+    }
+    const ROWS: usize = 4096;
+    t.par_chunks(ROWS)
+        .zip(out.position.par_chunks_mut(3 * ROWS))
+        .zip(out.velocity.par_chunks_mut(3 * ROWS))
+        .zip(out.rotation.par_chunks_mut(4 * ROWS))
+        .zip(out.gyro.par_chunks_mut(3 * ROWS))
+        .zip(out.accel.par_chunks_mut(3 * ROWS))
+        .for_each(|(((((ts, p), v), q), w), a)| {
+            for (i, &tk) in ts.iter().enumerate() {
+                let x = motion.at(tk);
+                p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
+                v[3 * i..3 * i + 3].copy_from_slice(x.velocity.as_slice());
+                let quat = UnitQuaternion::from_rotation_matrix(&x.rotation);
+                q[4 * i..4 * i + 4].copy_from_slice(quat.coords.as_slice());
+                w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
+                a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
+            }
+        });
+    Ok(())
+}

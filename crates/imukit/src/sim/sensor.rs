@@ -1,0 +1,275 @@
+//! The sensor error model of the simulator, one triad (gyro or accelerometer) at a time:
+//!
+//! ```text
+//! m_k = Q( S( T u_k + b_k + n_k ) )
+//! b_k = b_const + b_on + w_k + g_k
+//! ```
+//!
+//! | term | model | per step of Δt_k = t_{k+1} − t_k |
+//! |---|---|---|
+//! | `u_k` | the ideal reading (body rate or specific force) | |
+//! | `T` | scale factor and misalignment, 3×3 (`I` = none) | |
+//! | `b_const` | constant bias | |
+//! | `b_on` | turn-on bias, drawn once per run: `N(0, σ_on² I)` | |
+//! | `n_k` | white noise of density σ (units/√Hz) | `N(0, σ²/Δt_k I)` |
+//! | `w_k` | bias random walk of density σ_w, `w_0 = 0` | `w_{k+1} = w_k + σ_w √Δt_k ε` |
+//! | `g_k` | first-order Gauss–Markov bias, std σ_gm, correlation time τ, stationary from k = 0 | `g_{k+1} = e^{−Δt/τ} g_k + σ_gm √(1 − e^{−2Δt/τ}) ε` |
+//! | `S` | saturation: clamp each axis to `±range` (∞ = none) | |
+//! | `Q` | quantisation: round to a multiple of `resolution` (0 = none) | |
+//!
+//! The last sample's Δt is the one before it. The reported true bias is `b_k`.
+//!
+//! Random numbers: ChaCha8 (portable, seekable) seeded with the run's seed, one independent stream
+//! per (triad, process, chunk of [`CHUNK`] samples); normals by the ziggurat of `rand_distr`. The
+//! chunks are fixed by N, so the output does not depend on the thread count, and the same seed
+//! gives the same output across runs; the walk and Gauss–Markov recursions are joined across chunks
+//! by a prefix pass.
+
+use nalgebra::{Matrix3, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+
+/// Samples per random stream and per parallel task.
+pub const CHUNK: usize = 1 << 16;
+
+/// Error model of one sensor triad (module docs). `Default` is a perfect sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorModel {
+    /// `T`: scale factor and misalignment.
+    pub matrix: Matrix3<f64>,
+    /// `b_const`.
+    pub bias: Vector3<f64>,
+    /// σ_on of the turn-on bias.
+    pub turn_on_sigma: f64,
+    /// σ: white-noise density.
+    pub density: f64,
+    /// σ_w: bias random-walk density.
+    pub random_walk: f64,
+    /// σ_gm: stationary std of the Gauss–Markov bias.
+    pub gauss_markov_sigma: f64,
+    /// τ [s]: its correlation time (∞ or 0 with σ_gm = 0: none).
+    pub gauss_markov_tau: f64,
+    /// Saturation range (∞: none).
+    pub range: f64,
+    /// Quantisation step (0: none).
+    pub resolution: f64,
+}
+
+impl Default for SensorModel {
+    fn default() -> Self {
+        Self {
+            matrix: Matrix3::identity(),
+            bias: Vector3::zeros(),
+            turn_on_sigma: 0.0,
+            density: 0.0,
+            random_walk: 0.0,
+            gauss_markov_sigma: 0.0,
+            gauss_markov_tau: f64::INFINITY,
+            range: f64::INFINITY,
+            resolution: 0.0,
+        }
+    }
+}
+
+impl SensorModel {
+    fn check(&self) -> Result<()> {
+        let bad = |name: &'static str, expected: &'static str, got: f64| {
+            Err(Error::Parameter {
+                name,
+                expected,
+                got: format!("{got}"),
+            })
+        };
+        if !self.matrix.iter().chain(self.bias.iter()).all(|v| v.is_finite()) {
+            return bad("matrix", "finite scale/misalignment and bias values", f64::NAN);
+        }
+        for (name, v) in [
+            ("turn_on_sigma", self.turn_on_sigma),
+            ("density", self.density),
+            ("random_walk", self.random_walk),
+            ("gauss_markov_sigma", self.gauss_markov_sigma),
+            ("resolution", self.resolution),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, "finite and ≥ 0", v);
+            }
+        }
+        if self.gauss_markov_tau.is_nan() || self.gauss_markov_tau <= 0.0 {
+            return bad("gauss_markov_tau", "> 0 (∞ for none)", self.gauss_markov_tau);
+        }
+        if self.range.is_nan() || self.range <= 0.0 {
+            return bad("range", "> 0 (∞ for none)", self.range);
+        }
+        Ok(())
+    }
+}
+
+/// Which random process a stream feeds.
+#[derive(Clone, Copy)]
+enum Process {
+    White = 0,
+    Walk = 1,
+    GaussMarkov = 2,
+    TurnOn = 3,
+}
+
+/// The stream of (triad, process, chunk): disjoint for every combination.
+fn stream(seed: u64, triad: u64, process: Process, chunk: usize) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream((triad << 34) | ((process as u64) << 32) | chunk as u64);
+    rng
+}
+
+fn normal3(rng: &mut ChaCha8Rng) -> Vector3<f64> {
+    Vector3::from_fn(|_, _| StandardNormal.sample(rng))
+}
+
+/// `Δt_k` with the last sample's taken from the step before it.
+fn step(t: &[f64], k: usize) -> f64 {
+    if k + 1 < t.len() {
+        t[k + 1] - t[k]
+    } else {
+        t[k] - t[k - 1]
+    }
+}
+
+/// One chunk's recursion `x_{k+1} = a_k x_k + e_k` from `x = 0`: the local values, the end state and
+/// the product of the `a_k` (to join chunks: `x_k = local_k + (Π a) x_start`).
+struct Local {
+    end: Vector3<f64>,
+    decay: f64,
+}
+
+/// Measures `ideal` (flat `3N`, rows `u_k`) at times `t` (strictly increasing, N ≥ 2) with
+/// `model`, writing the readings to `out` and the true bias `b_k` to `bias_out` (both flat `3N`).
+/// `triad` (0 gyro, 1 accelerometer) selects independent random streams for the same seed.
+pub fn measure(
+    t: &[f64],
+    ideal: &[f64],
+    model: &SensorModel,
+    seed: u64,
+    triad: u64,
+    out: &mut [f64],
+    bias_out: &mut [f64],
+) -> Result<()> {
+    model.check()?;
+    let n = t.len();
+    if n < 2 {
+        return Err(Error::Parameter {
+            name: "t",
+            expected: "at least two samples",
+            got: format!("{n}"),
+        });
+    }
+    for (name, len) in [("ideal", ideal.len()), ("out", out.len()), ("bias_out", bias_out.len())] {
+        if len != 3 * n {
+            return Err(Error::RowCount {
+                input: n,
+                output: len / 3,
+            }
+            .in_argument(name));
+        }
+    }
+    crate::time::check_increasing(t).map_err(|e| e.in_argument("t"))?;
+    if let Some(i) = ideal.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite { index: i / 3 }.in_argument("ideal"));
+    }
+    let turn_on = normal3(&mut stream(seed, triad, Process::TurnOn, 0)) * model.turn_on_sigma;
+    let fixed = model.bias + turn_on;
+    let walk_on = model.random_walk > 0.0;
+    let gm_on = model.gauss_markov_sigma > 0.0 && model.gauss_markov_tau.is_finite();
+    // The once-per-run draws share the turn-on stream: the turn-on bias, then g_0 (stationary).
+    let gm_start = normal3(&mut stream(seed, triad, Process::TurnOn, 1)) * model.gauss_markov_sigma;
+
+    // Pass 1 (parallel): white noise into `out`, walk and Gauss–Markov from zero into `bias_out`
+    // (walk in place, Gauss–Markov added), with each chunk's end state and decay.
+    let chunks: Vec<(Local, Local)> = bias_out
+        .par_chunks_mut(3 * CHUNK)
+        .zip(out.par_chunks_mut(3 * CHUNK))
+        .enumerate()
+        .map(|(c, (bias, noise))| {
+            let (mut white, mut walk_rng, mut gm_rng) = (
+                stream(seed, triad, Process::White, c),
+                stream(seed, triad, Process::Walk, c),
+                stream(seed, triad, Process::GaussMarkov, c),
+            );
+            let (mut w, mut g, mut decay) = (Vector3::zeros(), Vector3::zeros(), 1.0);
+            for (i, (b, e)) in bias.chunks_exact_mut(3).zip(noise.chunks_exact_mut(3)).enumerate() {
+                let k = c * CHUNK + i;
+                let h = step(t, k);
+                let root_h = h.sqrt();
+                let white_k = normal3(&mut white) * (model.density / root_h);
+                e.copy_from_slice(white_k.as_slice());
+                let value = w + g;
+                b.copy_from_slice(value.as_slice());
+                if walk_on {
+                    w += normal3(&mut walk_rng) * (model.random_walk * root_h);
+                }
+                if gm_on {
+                    let a = (-h / model.gauss_markov_tau).exp();
+                    g = g * a + normal3(&mut gm_rng) * (model.gauss_markov_sigma * (1.0 - a * a).sqrt());
+                    decay *= a;
+                }
+            }
+            (Local { end: w, decay: 1.0 }, Local { end: g, decay })
+        })
+        .collect();
+
+    // Pass 2 (sequential over chunks): the walk and Gauss–Markov states at each chunk's start.
+    let mut starts = Vec::with_capacity(chunks.len());
+    let (mut w0, mut g0) = (Vector3::zeros(), if gm_on { gm_start } else { Vector3::zeros() });
+    for (walk, gm) in &chunks {
+        starts.push((w0, g0));
+        w0 += walk.end;
+        g0 = g0 * gm.decay + gm.end;
+    }
+
+    // Pass 3 (parallel): join the chunks, add the fixed bias, form the readings (skipping the
+    // terms that are off: most simulations have neither scale errors nor limits).
+    let ideal_sensor = model.matrix == Matrix3::identity();
+    let clean = model.range == f64::INFINITY && model.resolution == 0.0;
+    let limit = |v: f64| quantise(v.clamp(-model.range, model.range), model.resolution);
+    let ideal_chunks = ideal.par_chunks(3 * CHUNK);
+    bias_out
+        .par_chunks_mut(3 * CHUNK)
+        .zip(out.par_chunks_mut(3 * CHUNK))
+        .zip(ideal_chunks)
+        .enumerate()
+        .for_each(|(c, ((bias, noise), u))| {
+            let (w_start, g_start) = starts[c];
+            let mut decay = 1.0;
+            for (i, ((b, e), u)) in bias
+                .chunks_exact_mut(3)
+                .zip(noise.chunks_exact_mut(3))
+                .zip(u.chunks_exact(3))
+                .enumerate()
+            {
+                let b_k = Vector3::from_column_slice(b) + w_start + g_start * decay + fixed;
+                b.copy_from_slice(b_k.as_slice());
+                let u = Vector3::from_column_slice(u);
+                let scaled = if ideal_sensor { u } else { model.matrix * u };
+                let reading = scaled + b_k + Vector3::from_column_slice(e);
+                let reading = if clean { reading } else { reading.map(&limit) };
+                e.copy_from_slice(reading.as_slice());
+                if gm_on {
+                    decay *= (-step(t, c * CHUNK + i) / model.gauss_markov_tau).exp();
+                }
+            }
+        });
+    match out.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument("ideal")),
+        None => Ok(()),
+    }
+}
+
+fn quantise(v: f64, resolution: f64) -> f64 {
+    if resolution > 0.0 {
+        (v / resolution).round() * resolution
+    } else {
+        v
+    }
+}

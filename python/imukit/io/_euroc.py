@@ -1,0 +1,320 @@
+"""EuRoC / ASL dataset folders: :func:`write_euroc`, :func:`read_euroc` and its two CSV readers.
+
+Frames (``docs/io.md``): ``R`` is EuRoC's world (the motion-capture reference), ``S`` the IMU
+sensor, which is imukit's body frame ``b``; ``q_RS`` is imukit's ``R_wb`` written scalar first.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray
+from imukit._errors import FileFormatError, ImukitError, ParameterError, TimestampError
+from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
+from imukit.io._kalibr import noise_lines, yaml_float
+from imukit.io._lines import (
+    INT64_MAX,
+    INT64_MIN,
+    check_stamps_increase,
+    data_lines,
+    parse_floats,
+    rotations_from_rows,
+    write_rows,
+)
+from imukit.state import Trajectory
+
+__all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "write_euroc"]
+
+# The header lines of the EuRoC files, character for character.
+IMU_HEADER = (
+    "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+    "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
+)
+GROUNDTRUTH_HEADER = (
+    "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+    "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], "
+    "b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], "
+    "b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]"
+)
+IMU_CSV = Path("imu0", "data.csv")
+GROUNDTRUTH_CSV = Path("state_groundtruth_estimate0", "data.csv")
+SENSOR_YAML = Path("imu0", "sensor.yaml")
+
+_T = TypeVar("_T")
+_STAMP = re.compile(r"[+-]?[0-9]+")
+# EuRoC's imu0/sensor.yaml layout; the IMU is the body frame, so T_BS is the identity.
+_SENSOR_YAML_HEAD = """\
+# EuRoC / ASL imu0 sensor file, written by imukit
+sensor_type: imu
+comment: written by imukit
+
+# Sensor extrinsics wrt. the body-frame.
+T_BS:
+  cols: 4
+  rows: 4
+  data: [1.0, 0.0, 0.0, 0.0,
+         0.0, 1.0, 0.0, 0.0,
+         0.0, 0.0, 1.0, 0.0,
+         0.0, 0.0, 0.0, 1.0]
+"""
+
+
+def write_euroc(
+    folder: str | os.PathLike[str],
+    imu: ImuData,
+    truth: Trajectory | None = None,
+    *,
+    epoch_ns: int | None = None,
+    truth_bias: ImuBias | None = None,
+    noise: ImuNoise | None = None,
+    rate_hz: float | None = None,
+) -> None:
+    """Write ``imu`` (and ``truth``) as an EuRoC / ASL folder: ``imu0/data.csv`` and
+    ``state_groundtruth_estimate0/data.csv``, with EuRoC's header lines (columns in ``docs/io.md``).
+
+    Parameters
+    ----------
+    folder
+        Created if needed (EuRoC's own folders are called ``mav0``); the files are overwritten and
+        other files left alone, so without ``truth`` an older ground-truth file would stay.
+    imu
+        The samples. Stamps are ``imu.t_ns`` when present, else ``t`` converted as below.
+    truth
+        Ground truth at its own stamps (``t_ns``, else ``t`` converted as below). It needs a
+        velocity, and bias histories (``gyro_bias``, ``accel_bias``) unless ``truth_bias`` is given.
+        Quaternions are written scalar first, as stored by the ``Rotation`` (not canonicalised).
+    epoch_ns
+        Integer nanoseconds added to float-second stamps: ``t_ns = epoch_ns + round(t · 10⁹)``,
+        rounded to the nearest nanosecond (``t`` split into whole seconds and fraction first, so
+        epoch seconds lose nothing more). Default 0. Stamps that already are ``t_ns`` are written
+        as they are; passing ``epoch_ns`` when there is no float stamp to offset is an error.
+    truth_bias
+        A constant bias written in every ground-truth row, for a ``truth`` without bias histories
+        (``ImuBias()`` writes zeros); an error when ``truth`` has histories.
+    noise, rate_hz
+        Give both to also write ``imu0/sensor.yaml`` in EuRoC's layout (Kalibr's noise keys,
+        ``rate_hz``; read back with :func:`imukit.io.read_kalibr_imu`).
+
+    Floats are printed with ``repr``, so :func:`read_euroc` gives back every value bit for bit.
+
+    Raises
+    ------
+    ParameterError, TimestampError
+        Before anything is written: a missing velocity or bias, ``noise`` without ``rate_hz``,
+        ``epoch_ns`` not an integer or unused, stamps outside int64 nanoseconds, or two float stamps
+        on the same nanosecond.
+    TypeError
+        ``imu``, ``truth``, ``truth_bias`` or ``noise`` of the wrong type.
+    """
+    if not isinstance(imu, ImuData):
+        raise TypeError(f"imu: expected an imukit ImuData, got {type(imu).__name__}")
+    if truth is not None and not isinstance(truth, Trajectory):
+        raise TypeError(f"truth: expected an imukit Trajectory or None, got {type(truth).__name__}")
+    if (noise is None) != (rate_hz is None):
+        raise ParameterError("noise: give noise and rate_hz together (for imu0/sensor.yaml), or neither")
+    rate = None if rate_hz is None else _rate(rate_hz)
+    if noise is not None and not isinstance(noise, ImuNoise):
+        raise TypeError(f"noise: expected an imukit ImuNoise, got {type(noise).__name__}")
+    if epoch_ns is not None and imu.t_ns is not None and (truth is None or truth.t_ns is not None):
+        raise ParameterError("epoch_ns: offsets float-second stamps, but every stream given has t_ns already")
+    epoch = _epoch(epoch_ns)
+    imu_ns = _stamps_ns(imu.t_ns, imu.t, epoch, "imu")
+    gt_rows = None if truth is None else _groundtruth_rows(truth, truth_bias, epoch)
+    if truth is None and truth_bias is not None:
+        raise ParameterError("truth_bias: given without truth")
+
+    root = Path(folder)
+    (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
+    write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
+    if gt_rows is not None:
+        (root / GROUNDTRUTH_CSV).parent.mkdir(parents=True, exist_ok=True)
+        write_rows(root / GROUNDTRUTH_CSV, GROUNDTRUTH_HEADER, map(str, gt_rows[0].tolist()), gt_rows[1], ",")
+    if noise is not None and rate is not None:
+        _write_sensor_yaml(root / SENSOR_YAML, noise, rate)
+
+
+def _write_sensor_yaml(path: Path, noise: ImuNoise, rate: float) -> None:
+    """EuRoC's ``imu0/sensor.yaml``: its layout and key order, imukit's exact floats."""
+    rate_text = str(int(rate)) if rate.is_integer() else yaml_float(rate)  # EuRoC writes "rate_hz: 200"
+    keys = ["gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density"]
+    body = [f"rate_hz: {rate_text}", "", "# inertial sensor noise model parameters (static)"]
+    body += noise_lines(noise, [*keys, "accelerometer_random_walk"])
+    with open(path, "w", encoding="ascii", newline="\n") as f:
+        f.write(_SENSOR_YAML_HEAD + "\n".join(body) + "\n")
+
+
+def _groundtruth_rows(
+    truth: Trajectory, truth_bias: ImuBias | None, epoch: int
+) -> tuple[NDArray[np.int64], FloatArray]:
+    if truth.velocity is None:
+        raise ParameterError("truth: has no velocity, but EuRoC's ground truth has v_RS_R columns")
+    if truth.gyro_bias is None or truth.accel_bias is None:
+        if truth_bias is None:
+            raise ParameterError(
+                "truth: has no gyro_bias / accel_bias histories for EuRoC's b_w_RS_S / b_a_RS_S columns; "
+                "pass truth_bias=ImuBias(...) to write a constant bias (ImuBias() for zeros)"
+            )
+        if not isinstance(truth_bias, ImuBias):
+            raise TypeError(f"truth_bias: expected an imukit ImuBias, got {type(truth_bias).__name__}")
+        n = len(truth)
+        biases = [np.broadcast_to(truth_bias.gyro, (n, 3)), np.broadcast_to(truth_bias.accel, (n, 3))]
+    elif truth_bias is not None:
+        raise ParameterError("truth_bias: truth has bias histories already; pass one or the other")
+    else:
+        biases = [truth.gyro_bias, truth.accel_bias]
+    quat_wxyz = truth.rotation.as_quat()[:, [3, 0, 1, 2]]
+    values = np.hstack([truth.position, quat_wxyz, truth.velocity, *biases])
+    return _stamps_ns(truth.t_ns, truth.t, epoch, "truth"), values
+
+
+def _epoch(epoch_ns: int | None) -> int:
+    if epoch_ns is None:
+        return 0
+    if not isinstance(epoch_ns, (int, np.integer)) or isinstance(epoch_ns, bool):
+        raise ParameterError(f"epoch_ns: expected an integer number of nanoseconds, got {epoch_ns!r}")
+    if not INT64_MIN <= int(epoch_ns) <= INT64_MAX:
+        raise ParameterError(f"epoch_ns: {epoch_ns} is outside the int64 range")
+    return int(epoch_ns)
+
+
+def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: str) -> NDArray[np.int64]:
+    """``t_ns``, else float seconds ``t`` as ``epoch + nearest ns`` (exact whole seconds, rounded fraction)."""
+    if t_ns is not None:
+        return t_ns
+    whole = np.floor(t)
+    frac_ns = np.rint((t - whole) * 1e9)  # in [0, 1e9]; t - floor(t) is exact for t ≥ 0
+    epoch_s, epoch_rest = divmod(epoch, 10**9)
+    first = (int(whole[0]) + epoch_s) * 10**9 + int(frac_ns[0]) + epoch_rest
+    last = (int(whole[-1]) + epoch_s) * 10**9 + int(frac_ns[-1]) + epoch_rest
+    if first < INT64_MIN or last > INT64_MAX:
+        raise ParameterError(
+            f"{name}: float stamps {float(t[0])!r} … {float(t[-1])!r} s with epoch_ns = {epoch} "
+            "do not fit int64 nanoseconds"
+        )
+    ns = (whole.astype(np.int64) + epoch_s) * 10**9 + (frac_ns.astype(np.int64) + epoch_rest)
+    same = np.flatnonzero(np.diff(ns) <= 0)
+    if same.size:
+        k = int(same[0])
+        raise TimestampError(
+            f"{name}: samples {k} and {k + 1} ({float(t[k])!r} and {float(t[k + 1])!r} s) "
+            f"fall on the same nanosecond {int(ns[k])}"
+        )
+    return ns
+
+
+def read_euroc(folder: str | os.PathLike[str]) -> tuple[ImuData, Trajectory | None]:
+    """Read the IMU and ground truth of an EuRoC / ASL folder (as :func:`write_euroc` writes it).
+
+    ``folder`` holds ``imu0/data.csv`` and, optionally, ``state_groundtruth_estimate0/data.csv``;
+    a folder whose ``mav0/`` holds them (a downloaded sequence) works too. The ground truth keeps
+    its own stamps (it is not interpolated to the IMU's); it is None when its file is absent. The
+    noise of ``imu0/sensor.yaml`` is read by :func:`imukit.io.read_kalibr_imu`.
+
+    Raises
+    ------
+    FileNotFoundError
+        No ``imu0/data.csv``.
+    FileFormatError
+        As :func:`read_euroc_imu` and :func:`read_euroc_groundtruth`.
+    """
+    root = Path(folder)
+    if not (root / IMU_CSV).is_file() and (root / "mav0" / IMU_CSV).is_file():
+        root = root / "mav0"
+    if not (root / IMU_CSV).is_file():
+        raise FileNotFoundError(f"folder: no {IMU_CSV.as_posix()} in {os.fspath(folder)} (nor in its mav0/)")
+    truth = root / GROUNDTRUTH_CSV
+    return read_euroc_imu(root / IMU_CSV), read_euroc_groundtruth(truth) if truth.is_file() else None
+
+
+def read_euroc_imu(path: str | os.PathLike[str]) -> ImuData:
+    """Read an EuRoC ``imu0/data.csv``: ``timestamp [ns], ω_x,y,z [rad/s], a_x,y,z [m/s²]`` rows.
+
+    Returns an :class:`imukit.ImuData` with exact int64 ``t_ns`` (parsed as integers: float64
+    would round 19-digit stamps to 256 ns). ``#`` lines (the header) and blank lines are skipped.
+
+    Raises
+    ------
+    FileFormatError
+        (a ``ValueError``) naming the file and line: not 7 fields, a stamp that is not an integer,
+        a value that is not a finite number, time not strictly increasing, or no data.
+    """
+    t_ns, values, _ = _read_csv(path, IMU_HEADER, IMU_CSV)
+    return _build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+
+
+def read_euroc_groundtruth(path: str | os.PathLike[str]) -> Trajectory:
+    """Read an EuRoC ``state_groundtruth_estimate0/data.csv`` into a :class:`imukit.Trajectory`.
+
+    Columns: ``timestamp [ns]``, ``p_RS_R`` [m], ``q_RS`` (w, x, y, z), ``v_RS_R`` [m/s],
+    ``b_w_RS_S`` [rad/s], ``b_a_RS_S`` [m/s²]; they become ``t_ns`` (exact), ``position``,
+    ``rotation`` (``R_wb``), ``velocity``, ``gyro_bias`` and ``accel_bias``. Quaternions unit to
+    1e-15 are kept bit for bit, others normalised (EuRoC prints 6 decimals: norms off by up to
+    1.5e-4).
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`read_euroc_imu` (17 fields), and for a zero quaternion.
+    """
+    where = os.fspath(path)
+    t_ns, values, lines = _read_csv(path, GROUNDTRUTH_HEADER, GROUNDTRUTH_CSV)
+    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, where)
+    return _build(
+        path,
+        lambda: Trajectory(
+            None,
+            values[:, 0:3],
+            values[:, 7:10],
+            rotation,
+            t_ns=t_ns,
+            gyro_bias=values[:, 10:13],
+            accel_bias=values[:, 13:16],
+        ),
+    )
+
+
+def _read_csv(path: str | os.PathLike[str], header: str, kind: Path) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
+    """Integer stamps, ``(N, columns - 1)`` floats and line numbers of a EuRoC CSV file."""
+    where = os.fspath(path)
+    width = header.count(",") + 1
+    lines: list[int] = []
+    stamps: list[str] = []
+    stamps_ns: list[int] = []
+    rows: list[list[float]] = []
+    for number, text in data_lines(path):
+        fields = text.split(",")
+        if len(fields) != width:
+            raise FileFormatError(
+                f"path: {where}, line {number}: expected {width} comma-separated fields "
+                f"(EuRoC {kind.as_posix()}), got {len(fields)}"
+            )
+        stamp = fields[0].strip()
+        ns = int(stamp) if _STAMP.fullmatch(stamp) else None
+        if ns is None or not INT64_MIN <= ns <= INT64_MAX:
+            raise FileFormatError(
+                f"path: {where}, line {number}: timestamp {stamp!r} is not an integer number of nanoseconds (int64)"
+            )
+        rows.append(parse_floats(fields[1:], where, number, text))
+        lines.append(number)
+        stamps.append(stamp)
+        stamps_ns.append(ns)
+    if not rows:
+        raise FileFormatError(f"path: {where}: no data lines")
+    t_ns = np.array(stamps_ns, dtype=np.int64)
+    check_stamps_increase(t_ns, stamps, lines, where)
+    return t_ns, np.array(rows, dtype=np.float64), lines
+
+
+def _build(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
+    """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
+    try:
+        return make()
+    except ImukitError as exc:
+        raise FileFormatError(f"path: {os.fspath(path)}: {exc}") from exc

@@ -1,0 +1,187 @@
+"""Kalibr ``imu.yaml`` noise files: :func:`read_kalibr_imu`, :func:`write_kalibr_imu` (``docs/io.md``).
+
+Kalibr's IMU noise model (github.com/ethz-asl/kalibr/wiki/IMU-Noise-Model) is imukit's: continuous-time
+densities, the same numbers as :class:`imukit.ImuNoise` without any conversion. The file is also
+how EuRoC's ``imu0/sensor.yaml`` states its noise (with ``rate_hz`` in place of ``update_rate``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Mapping
+from typing import Any, NamedTuple
+
+import yaml
+
+from imukit._errors import FileFormatError, ParameterError
+from imukit.imu import ImuNoise, _rate
+
+__all__ = ["KalibrImu", "read_kalibr_imu", "write_kalibr_imu"]
+
+# Kalibr key -> (ImuNoise field, unit, what), in Kalibr's order.
+_NOISE_KEYS = {
+    "accelerometer_noise_density": ("accel_density", "m/s^2/sqrt(Hz)", "white noise"),
+    "accelerometer_random_walk": ("accel_random_walk", "m/s^3/sqrt(Hz)", "bias random walk"),
+    "gyroscope_noise_density": ("gyro_density", "rad/s/sqrt(Hz)", "white noise"),
+    "gyroscope_random_walk": ("gyro_random_walk", "rad/s^2/sqrt(Hz)", "bias random walk"),
+}
+# Kalibr names the rate update_rate, EuRoC's sensor.yaml rate_hz.
+_RATE_KEYS = ("update_rate", "rate_hz")
+# OpenCV's FileStorage writes this first line (EuRoC-derived files carry it); PyYAML refuses it.
+_OPENCV_DIRECTIVE = re.compile(r"\A%YAML:1\.[0-9]+[^\n]*")
+
+
+class KalibrImu(NamedTuple):
+    """What a Kalibr ``imu.yaml`` holds: the noise densities, the rate, and every other key."""
+
+    noise: ImuNoise
+    """The four densities (Kalibr units, which are imukit's)."""
+    rate_hz: float
+    """``update_rate`` (or EuRoC's ``rate_hz``) [Hz]: the rate Kalibr discretises the densities with."""
+    extra: dict[str, Any]
+    """The other keys as PyYAML parsed them (``rostopic``, ``T_BS``, ``time_offset``, …)."""
+
+
+def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None) -> KalibrImu:
+    """Read the IMU noise model of a Kalibr ``imu.yaml`` (or an EuRoC ``imu0/sensor.yaml``).
+
+    Parameters
+    ----------
+    path
+        The YAML file. Keys: ``accelerometer_noise_density`` [m/s²/√Hz],
+        ``accelerometer_random_walk`` [m/s³/√Hz], ``gyroscope_noise_density`` [rad/s/√Hz],
+        ``gyroscope_random_walk`` [rad/s²/√Hz], and the rate ``update_rate`` [Hz] (Kalibr) or
+        ``rate_hz`` (EuRoC; if both are present they must agree). A leading OpenCV ``%YAML:1.0``
+        line is accepted. Numbers may be written the way YAML 1.1 reads as text (``1e-3``).
+    section
+        Read the mapping under this top-level key instead, e.g. ``"imu0"`` for the files that
+        ``kalibr_calibrate_imu_camera`` writes.
+
+    Returns
+    -------
+    KalibrImu
+        ``(noise, rate_hz, extra)``; ``extra`` holds every other key of the mapping read.
+
+    Raises
+    ------
+    FileFormatError
+        (a ``ValueError``) naming the file and the key: invalid YAML, missing keys, or a value that
+        is not a finite number ≥ 0 (a rate must be > 0).
+    """
+    where = os.fspath(path)
+    with open(path, encoding="utf-8") as f:
+        text = _OPENCV_DIRECTIVE.sub("", f.read(), count=1)  # keeps the newline: line numbers hold
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise FileFormatError(f"path: {where}{_yaml_problem(exc)}") from None
+    if section is not None:
+        if not isinstance(doc, dict) or section not in doc:
+            raise FileFormatError(f"path: {where}: no section {section!r} at the top level")
+        doc = doc[section]
+    within = "" if section is None else f" in section {section!r}"
+    if not isinstance(doc, dict):
+        raise FileFormatError(f"path: {where}: expected a mapping of Kalibr keys{within}, got {type(doc).__name__}")
+    missing = [key for key in _NOISE_KEYS if key not in doc]
+    rates = [key for key in _RATE_KEYS if key in doc]
+    if not rates:
+        missing.append("update_rate")
+    if missing:
+        raise FileFormatError(f"path: {where}: missing key {', '.join(missing)}{within}{_section_hint(doc, section)}")
+    densities = {field: _number(doc, key, where, positive=False) for key, (field, _, _) in _NOISE_KEYS.items()}
+    rate, *others = (_number(doc, key, where, positive=True) for key in rates)
+    if others and others[0] != rate:
+        raise FileFormatError(f"path: {where}, key 'rate_hz': {others[0]!r} disagrees with update_rate {rate!r}")
+    extra = {key: value for key, value in doc.items() if key not in _NOISE_KEYS and key not in _RATE_KEYS}
+    return KalibrImu(ImuNoise(**densities), rate, extra)
+
+
+def write_kalibr_imu(
+    path: str | os.PathLike[str],
+    noise: ImuNoise,
+    *,
+    rate_hz: float,
+    rostopic: str | None = None,
+    extra: Mapping[str, Any] | None = None,
+) -> None:
+    """Write ``noise`` as a Kalibr ``imu.yaml``, each value with its unit in a comment.
+
+    Floats are written with ``repr`` (``1.0e-05`` rather than ``1e-05``, which YAML 1.1 would read
+    as text), so :func:`read_kalibr_imu` gives back the same floats bit for bit. ``rate_hz`` is the
+    ``update_rate`` [Hz] > 0; ``rostopic`` (e.g. ``"/imu0"``) and the keys of ``extra`` (plain
+    Python values, written by ``yaml.safe_dump``; e.g. ``KalibrImu.extra`` of a file read) follow
+    when given. Nothing is written when an argument is refused (``ParameterError``, ``TypeError``).
+    """
+    if not isinstance(noise, ImuNoise):
+        raise TypeError(f"noise: expected an imukit ImuNoise, got {type(noise).__name__}")
+    rate = _rate(rate_hz)
+    more = dict(extra or {})
+    taken = sorted(set(more) & {*_NOISE_KEYS, *_RATE_KEYS, *([] if rostopic is None else ["rostopic"])})
+    if taken:
+        raise ParameterError(f"extra: keys {taken} are written from noise, rate_hz and rostopic")
+    if rostopic is not None:
+        if not isinstance(rostopic, str):
+            raise ParameterError(f"rostopic: expected a string such as '/imu0', got {rostopic!r}")
+        more = {"rostopic": rostopic, **more}
+    try:
+        more_text = [yaml.safe_dump(more, sort_keys=False, allow_unicode=True).rstrip("\n")] if more else []
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"extra: cannot be written as YAML (plain Python values only): {exc}") from None
+    lines = [
+        "# Kalibr IMU noise model (continuous-time densities), written by imukit",
+        *noise_lines(noise, list(_NOISE_KEYS)),
+        *more_text,
+        f"update_rate: {yaml_float(rate)}  # [Hz]",
+    ]
+    with open(path, "w", encoding="utf-8", newline="\n") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def noise_lines(noise: ImuNoise, keys: list[str]) -> list[str]:
+    """``key: value  # [unit] what`` lines for the Kalibr ``keys`` of ``noise``, in that order."""
+    lines = []
+    for key in keys:
+        field, unit, what = _NOISE_KEYS[key]
+        lines.append(f"{key}: {yaml_float(getattr(noise, field))}  # [{unit}] {what}")
+    return lines
+
+
+def yaml_float(x: float) -> str:
+    """``repr(x)`` with a ``.0`` in the mantissa where it has none, so YAML 1.1 reads a float."""
+    mantissa, e, exponent = repr(float(x)).partition("e")
+    if "." not in mantissa:
+        mantissa += ".0"
+    return mantissa + e + exponent
+
+
+def _number(doc: dict[Any, Any], key: str, where: str, *, positive: bool) -> float:
+    value = doc[key]
+    x = math.nan
+    if isinstance(value, (int, float, str)) and not isinstance(value, bool):
+        try:
+            x = float(value)
+        except (ValueError, OverflowError):
+            pass
+    if not (math.isfinite(x) and (x > 0 if positive else x >= 0)):
+        what = "a positive, finite number" if positive else "a finite number ≥ 0"
+        raise FileFormatError(f"path: {where}, key {key!r}: expected {what}, got {value!r}")
+    return x
+
+
+def _section_hint(doc: dict[Any, Any], section: str | None) -> str:
+    if section is not None:
+        return ""
+    nested = [key for key, value in doc.items() if isinstance(value, dict) and "gyroscope_noise_density" in value]
+    return f" (found under {nested[0]!r}: pass section={nested[0]!r})" if nested else ""
+
+
+def _yaml_problem(exc: yaml.YAMLError) -> str:
+    """``, line N: not valid YAML: problem (context at line M)`` in one line, without PyYAML's excerpt."""
+    if not isinstance(exc, yaml.MarkedYAMLError) or exc.problem_mark is None:
+        return f": not valid YAML: {exc}"
+    context = ""
+    if exc.context is not None and exc.context_mark is not None:
+        context = f" ({exc.context} at line {exc.context_mark.line + 1})"
+    return f", line {exc.problem_mark.line + 1}: not valid YAML: {exc.problem}{context}"

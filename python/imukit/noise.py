@@ -1,0 +1,580 @@
+"""Allan-variance identification of IMU noise: :func:`allan_deviation`, :func:`fit_allan`, :func:`plot_allan`.
+
+=====================  ===========================================================================
+input                  a rate signal sampled at a constant ``rate`` [Hz]: a gyro at rest [rad/s] or an
+                       accelerometer at rest [m/s²], ``(N,)`` or ``(N, C)`` (one column per axis)
+estimator              overlapping Allan variance (IEEE Std 952; Riley, NIST SP 1065, eq. 11), or the
+                       non-overlapping one; ``docs/noise.md`` § Allan variance
+model                  ``σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3``: white noise density N [unit/√Hz],
+                       bias instability B [unit], rate random walk K [unit/s/√Hz]
+units                  N and K are the continuous densities of :class:`imukit.ImuNoise`
+                       (``docs/conventions.md``, row 11): :func:`to_imu_noise` builds one
+=====================  ===========================================================================
+
+>>> import numpy as np, imukit as ik
+>>> rng = np.random.default_rng(0)
+>>> gyro = 1e-3 * np.sqrt(200.0) * rng.standard_normal(200_000)   # N = 1e-3 rad/s/√Hz at 200 Hz
+>>> allan = ik.noise.allan_deviation(gyro, 200.0)
+>>> round(float(allan.deviation[0] * np.sqrt(allan.taus[0])), 4)  # σ(τ) √τ = N for white noise
+0.001
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import linalg, optimize, signal, stats
+
+from imukit import _core
+from imukit._arrays import FloatArray, as_float_array
+from imukit._errors import MissingDependencyError, ParameterError, ShapeError
+from imukit.imu import ImuNoise, _number
+
+__all__ = ["AllanDeviation", "AllanFit", "allan_deviation", "fit_allan", "plot_allan", "to_imu_noise"]
+
+# σ² of flicker (1/f) rate noise of coefficient B: (2 ln 2 / π) B² (IEEE Std 952, Annex C).
+FLICKER_FACTOR = 2.0 * math.log(2.0) / math.pi
+_SENSORS = ("gyro", "accel")
+# Units of (σ and B, N, K) for each sensor; None: the input's unit, written "u".
+_UNITS = {
+    "gyro": ("rad/s", "rad/s/√Hz", "rad/s²/√Hz"),
+    "accel": ("m/s²", "m/s²/√Hz", "m/s³/√Hz"),
+    None: ("u", "u/√Hz", "u/s/√Hz"),
+}
+
+
+class AllanDeviation(NamedTuple):
+    """Allan deviation of a rate signal, as returned by :func:`allan_deviation`."""
+
+    taus: FloatArray
+    """``(M,)`` averaging times ``τ = m / rate`` [s]."""
+    deviation: FloatArray
+    """``(M,)`` for ``(N,)`` input, ``(M, C)`` for ``(N, C)`` input: σ(τ) [unit of the input]."""
+    clusters: NDArray[np.int64]
+    """``(M,)`` number of squared differences averaged at each τ (allantools' ``ns``):
+    ``N − 2m + 1`` overlapping, ``⌊N/m⌋ − 1`` non-overlapping."""
+    rate: float
+    """Sample rate [Hz]."""
+    samples: int
+    """Record length N."""
+    overlapping: bool
+    """Which estimator produced :attr:`deviation`."""
+
+    @property
+    def variance(self) -> FloatArray:
+        """σ²(τ), same shape as :attr:`deviation`."""
+        return self.deviation**2
+
+    @property
+    def cluster_sizes(self) -> NDArray[np.int64]:
+        """``(M,)`` cluster sizes ``m = τ · rate``."""
+        return np.rint(self.taus * self.rate).astype(np.int64)
+
+
+def _rate(rate: object) -> float:
+    return _number(rate, "rate", positive=True, what="a positive, finite sample rate in Hz")
+
+
+def _cluster_sizes(taus: ArrayLike | None, rate: float, n: int) -> list[int]:
+    if taus is None:
+        if n < 4:
+            raise ShapeError(f"x: the default τ grid (m = 1, 2, 4, … ≤ N/4) needs N ≥ 4 samples, got {n}")
+        return [1 << j for j in range((n // 4).bit_length())]
+    t = as_float_array(taus, "taus")
+    if t.ndim != 1 or t.size == 0:
+        raise ShapeError(f"taus: expected a non-empty (M,) array of seconds, got shape {t.shape}")
+    bad = np.flatnonzero(~(np.isfinite(t) & (t > 0.0)))
+    if bad.size:
+        k = int(bad[0])
+        raise ParameterError(f"taus: expected positive, finite seconds, got taus[{k}] = {float(t[k])!r}")
+    m = t * rate
+    whole = np.rint(m)
+    off = np.flatnonzero(np.abs(m - whole) > 1e-9 * np.maximum(whole, 1.0))
+    if off.size:
+        k = int(off[0])
+        raise ParameterError(
+            f"taus: every τ must be a whole multiple of 1/rate = {1.0 / rate!r} s; "
+            f"taus[{k}] = {float(t[k])!r} s is {float(m[k])!r} samples"
+        )
+    big = np.flatnonzero(2.0 * whole > n)
+    if big.size:
+        k = int(big[0])
+        raise ParameterError(
+            f"taus: taus[{k}] = {float(t[k])!r} s is m = {int(whole[k])} samples; two clusters need 2m ≤ N = {n}"
+        )
+    return [int(v) for v in whole]
+
+
+def allan_deviation(
+    x: ArrayLike, rate: float, *, taus: ArrayLike | None = None, overlapping: bool = True
+) -> AllanDeviation:
+    """Allan deviation σ(τ) of a rate signal ``x`` sampled at ``rate`` Hz.
+
+    Parameters
+    ----------
+    x
+        ``(N,)`` or ``(N, C)`` samples (one column per axis), e.g. a gyro at rest [rad/s]. Finite.
+    rate
+        Sample rate [Hz], positive; ``τ0 = 1 / rate``.
+    taus
+        Averaging times [s], each a whole multiple ``m τ0`` with ``2m ≤ N``, in any order. Default:
+        octaves ``m = 1, 2, 4, …`` up to ``N/4`` (at least four clusters; Riley, NIST SP 1065).
+    overlapping
+        The overlapping estimator (default: every start index, the better-determined estimate) or
+        the non-overlapping one (disjoint adjacent clusters).
+
+    Returns
+    -------
+    AllanDeviation
+        ``taus`` [s], ``deviation`` (``(M,)`` or ``(M, C)``), ``clusters`` (terms per τ), and the
+        ``rate``, ``samples`` and ``overlapping`` that :func:`fit_allan` needs.
+
+    Raises
+    ------
+    ShapeError, DTypeError, NonFiniteError, ParameterError
+        Messages start with the argument name (``x``, ``rate``, ``taus``).
+
+    Notes
+    -----
+    ``AVAR(mτ0) = Σ_k (x_{k+2m} − 2x_{k+m} + x_k)² / (2 m² τ0² n)`` with the phase
+    ``x_j = τ0 Σ_{i<j} y_i`` and ``n`` the number of terms; computed in the Rust core without
+    forming the phase, to within a few ulps (``docs/noise.md``). Agrees with
+    ``allantools.oadev(x, rate, data_type="freq", taus=taus)`` (and ``adev``) to 1e-10 relative.
+    """
+    arr = as_float_array(x, "x")
+    if arr.ndim not in (1, 2):
+        raise ShapeError(f"x: expected shape (N,) or (N, C), got {arr.shape}")
+    data = np.ascontiguousarray(arr if arr.ndim == 2 else arr[:, None])
+    if data.shape[1] == 0:
+        raise ShapeError(f"x: expected shape (N, C) with C ≥ 1, got {arr.shape}")
+    n = data.shape[0]
+    if n < 2:
+        raise ShapeError(f"x: expected at least 2 samples, got {n}")
+    f = _rate(rate)
+    m = _cluster_sizes(taus, f, n)
+    variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping))
+    deviation = np.sqrt(variance)
+    return AllanDeviation(
+        taus=np.asarray(m, dtype=np.float64) / f,
+        deviation=deviation if arr.ndim == 2 else deviation[:, 0],
+        clusters=terms,
+        rate=f,
+        samples=n,
+        overlapping=bool(overlapping),
+    )
+
+
+def _edf(allan: AllanDeviation, fractions: FloatArray) -> FloatArray:
+    """Equivalent degrees of freedom of each AVAR estimate for a mix of the three noises.
+
+    ``fractions`` is ``(M, 3)``: the share of white, flicker and random-walk noise in σ²(τ).
+    Overlapping: the simple formulas of Howe, Allan & Barnes (1981), tabulated in Riley, NIST
+    SP 1065 (2008), Table 5, for white, flicker and random-walk FM (N + 1 phase points).
+    Non-overlapping: the differences of adjacent cluster means are correlated at lag 1 only
+    (exactly so for white and random-walk noise), with ρ fixed by how σ² scales from m to 2m
+    (ρ = (4r − 6)/8 for σ²(2m) = r σ²(m): −1/2 white, −1/4 flicker, +1/4 random walk), and
+    ``edf = 2 (Σ E d²)² / Var Σ d² = n² / (n + 2 (n − 1) ρ²)``. A mix combines as
+    ``1/edf = Σ_c f_c / edf_c``: by Cauchy–Schwarz this bounds the cross terms from above, so it
+    errs towards fewer degrees of freedom (tested against the exact Gaussian values).
+    """
+    m = allan.cluster_sizes.astype(np.float64)
+    if allan.overlapping:
+        p = float(allan.samples + 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            white = (3.0 * (p - 1.0) / (2.0 * m) - 2.0 * (p - 2.0) / p) * 4.0 * m**2 / (4.0 * m**2 + 5.0)
+            flicker = np.where(m == 1.0, 2.0 * (p - 2.0) ** 2 / (2.3 * p - 4.9), 5.0 * p**2 / (4.0 * m * (p + 3.0 * m)))
+            walk = (p - 2.0) / (m * (p - 3.0) ** 2) * ((p - 1.0) ** 2 - 3.0 * m * (p - 1.0) + 4.0 * m**2)
+        edf = np.stack([white, flicker, walk], axis=-1)
+    else:
+        n = allan.clusters.astype(np.float64)[:, None]
+        rho = np.array([-0.5, -0.25, 0.25])
+        edf = n**2 / (n + 2.0 * (n - 1.0) * rho**2)
+    # The formulas are fits; at the edges (a handful of samples) keep them at least 1.
+    edf = np.where(np.isfinite(edf), np.maximum(edf, 1.0), 1.0)
+    return np.asarray(1.0 / np.sum(fractions / edf, axis=-1), dtype=np.float64)
+
+
+def _design(taus: FloatArray) -> FloatArray:
+    """Columns of σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3, linear in (N², B², K²)."""
+    return np.stack([1.0 / taus, np.full_like(taus, FLICKER_FACTOR), taus / 3.0], axis=-1)
+
+
+def _nnls(a: FloatArray, b: FloatArray) -> FloatArray:
+    """min |a θ − b| with θ ≥ 0, columns scaled to unit norm first (they span ~10 decades)."""
+    norms = np.linalg.norm(a, axis=0)
+    norms[norms == 0.0] = 1.0
+    theta, _ = optimize.nnls(a / norms, b)
+    return np.asarray(theta / norms, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class AllanFit:
+    """White noise N, bias instability B and random walk K fitted to an Allan variance.
+
+    ====================  ======  ==============================  ===================================
+    field                 symbol  unit (gyro / accel)             σ²(τ) term
+    ====================  ======  ==============================  ===================================
+    ``noise_density``     N       rad/s/√Hz  /  m/s²/√Hz          N²/τ (slope −½ in σ)
+    ``bias_instability``  B       rad/s  /  m/s²                  (2 ln 2/π) B² (flat, σ = 0.664 B)
+    ``random_walk``       K       rad/s²/√Hz  /  m/s³/√Hz         K² τ/3 (slope +½ in σ)
+    ====================  ======  ==============================  ===================================
+
+    Each ``*_interval`` is a two-sided interval at level :attr:`confidence`. N and K are the
+    continuous densities of :class:`imukit.ImuNoise` (``gyro_density`` / ``gyro_random_walk`` …).
+    """
+
+    noise_density: float
+    bias_instability: float
+    random_walk: float
+    noise_density_interval: tuple[float, float]
+    bias_instability_interval: tuple[float, float]
+    random_walk_interval: tuple[float, float]
+    confidence: float
+    sensor: str | None
+    """``"gyro"``, ``"accel"`` or None (units unknown), as passed to :func:`fit_allan`."""
+    covariance: FloatArray
+    """``(3, 3)`` covariance of (N², B², K²), scaled by max(1, χ²/dof)."""
+    chi2: float
+    """Weighted residual sum of squares at the solution."""
+    dof: int
+    """Points used minus 3."""
+    taus: FloatArray
+    """``(M,)`` the τ values the fit used [s]."""
+
+    def variance(self, taus: ArrayLike) -> FloatArray:
+        """Model σ²(τ) at ``taus`` [s]."""
+        return np.asarray(self.components(taus) ** 2 @ np.ones(3), dtype=np.float64)
+
+    def deviation(self, taus: ArrayLike) -> FloatArray:
+        """Model σ(τ) at ``taus`` [s]."""
+        return np.sqrt(self.variance(taus))
+
+    def components(self, taus: ArrayLike) -> FloatArray:
+        """``(M, 3)`` deviations of the white, flicker and random-walk terms alone at ``taus`` [s]."""
+        t = as_float_array(taus, "taus").reshape(-1)
+        theta = np.array([self.noise_density, self.bias_instability, self.random_walk]) ** 2
+        return np.asarray(np.sqrt(_design(t) * theta), dtype=np.float64)
+
+    def __str__(self) -> str:
+        unit, density, walk = _UNITS[self.sensor]
+        rows = (
+            ("N", self.noise_density, self.noise_density_interval, density),
+            ("B", self.bias_instability, self.bias_instability_interval, unit),
+            ("K", self.random_walk, self.random_walk_interval, walk),
+        )
+        level = f"{100 * self.confidence:g}%"
+        return "\n".join(f"{s} = {v:.4g} {u}  ({level}: [{lo:.4g}, {hi:.4g}])" for s, v, (lo, hi), u in rows)
+
+
+def fit_allan(
+    allan: AllanDeviation,
+    *,
+    sensor: str | None = None,
+    axis: int | None = None,
+    confidence: float = 0.95,
+    tau_min: float | None = None,
+    tau_max: float | None = None,
+) -> AllanFit:
+    """Fit N, B and K jointly to an Allan variance by weighted non-negative least squares.
+
+    Parameters
+    ----------
+    allan
+        The result of :func:`allan_deviation`.
+    sensor
+        ``"gyro"`` or ``"accel"``: what the signal is, for units and :func:`to_imu_noise`; None
+        leaves the units unnamed.
+    axis
+        For ``(M, C)`` deviations: the column to fit. None fits one (N, B, K) to all columns
+        together (independent axes of one sensor type, as :class:`imukit.ImuNoise` assumes).
+    confidence
+        Level of the intervals, in (0, 1).
+    tau_min, tau_max
+        Fit only τ in ``[tau_min, tau_max]`` [s] (e.g. to leave out quantisation noise at short τ).
+
+    Returns
+    -------
+    AllanFit
+
+    Raises
+    ------
+    ParameterError
+        An option out of its domain, fewer than 4 τ values to fit, or an ``allan`` that is not an
+        :class:`AllanDeviation`.
+
+    Notes
+    -----
+    σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3 is linear in θ = (N², B², K²), so all three are fitted
+    at once, by least squares on the variances with θ ≥ 0 (scipy's NNLS), rather than by reading
+    straight lines of slope −½, 0, +½ off the log-log plot, which attributes to one term what
+    the others add. Each point is weighted by the inverse variance of its estimate,
+    ``Var σ̂² = 2 σ⁴ / edf``, with σ² from the current model and the equivalent degrees of freedom
+    of the estimator for the current mix of noises (:func:`_edf`); the fit is iterated until θ
+    settles. Octave-spaced τ values are close to uncorrelated (Schlossberger & Howe, "Analysis
+    of powers-of-two calculations of the Allan variance", 2019), so the points are treated as
+    independent. Intervals: the WLS covariance ``(AᵀWA)⁻¹`` of θ, scaled by max(1, χ²/dof)
+    (Birge ratio) to absorb a misfit, gives the interval ``θ ± q σ_θ`` (q the normal quantile, or
+    Student's with dof when scaled) clipped at 0; its end points, square-rooted, bound N, B and
+    K (square root is monotone, so coverage carries over, and a term at 0 gets ``[0, …]``).
+    """
+    if not isinstance(allan, AllanDeviation):
+        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+    if sensor is not None and sensor not in _SENSORS:
+        raise ParameterError(f"sensor: expected one of {_SENSORS} or None, got {sensor!r}")
+    if not (isinstance(confidence, (float, int)) and 0.0 < confidence < 1.0):
+        raise ParameterError(f"confidence: expected a number in (0, 1), got {confidence!r}")
+    dev = np.asarray(allan.deviation, dtype=np.float64)
+    columns = dev.reshape(len(allan.taus), -1)
+    if axis is not None:
+        if not isinstance(axis, (int, np.integer)) or not -columns.shape[1] <= axis < columns.shape[1]:
+            raise ParameterError(f"axis: expected None or a column index below {columns.shape[1]}, got {axis!r}")
+        columns = columns[:, [int(axis)]]
+    lo = 0.0 if tau_min is None else _bound(tau_min, "tau_min")
+    hi = math.inf if tau_max is None else _bound(tau_max, "tau_max")
+    keep = (allan.taus >= lo) & (allan.taus <= hi)
+    if np.count_nonzero(keep) < 4:
+        raise ParameterError(
+            f"allan: fitting 3 parameters needs at least 4 τ values, got {np.count_nonzero(keep)} "
+            f"in [tau_min, tau_max] = [{lo}, {hi}] s"
+        )
+    sub = allan._replace(taus=allan.taus[keep], deviation=columns[keep], clusters=np.asarray(allan.clusters)[keep])
+    taus = sub.taus
+    a_one = _design(taus)
+    k = columns.shape[1]
+    if not np.any(sub.deviation > 0.0):
+        raise ParameterError("allan: the Allan variance is 0 at every τ (a constant signal): nothing to fit")
+    ys = (sub.deviation**2).T  # (k, M): one row per fitted column
+    theta = _gls_step(sub, a_one, ys, None)
+    for _ in range(50):
+        new = _gls_step(sub, a_one, ys, theta)
+        settled = np.allclose(new, theta, rtol=1e-9, atol=1e-12 * float(np.max(new)))
+        theta = new
+        if settled:
+            break
+    chol = np.linalg.cholesky(_estimate_covariance(sub, a_one, theta, ys))
+    aw = linalg.solve_triangular(chol, a_one, lower=True)
+    resid = linalg.solve_triangular(chol, ys.T - (a_one @ theta)[:, None], lower=True)
+    chi2 = float(np.sum(resid**2))
+    dof = resid.size - 3
+    norms = np.linalg.norm(aw, axis=0)
+    norms[norms == 0.0] = 1.0
+    cov = np.linalg.pinv(k * (aw / norms).T @ (aw / norms)) / np.outer(norms, norms)
+    birge = chi2 / dof if dof > 0 else 1.0
+    if birge > 1.0:
+        cov = cov * birge
+        q = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
+    else:
+        q = float(stats.norm.ppf(0.5 + confidence / 2.0))
+    half = q * np.sqrt(np.maximum(np.diag(cov), 0.0))
+    ends = [(math.sqrt(max(t - h, 0.0)), math.sqrt(t + h)) for t, h in zip(theta, half)]
+    n_, b_, k_ = (math.sqrt(t) for t in theta)
+    return AllanFit(
+        noise_density=n_,
+        bias_instability=b_,
+        random_walk=k_,
+        noise_density_interval=ends[0],
+        bias_instability_interval=ends[1],
+        random_walk_interval=ends[2],
+        confidence=float(confidence),
+        sensor=sensor,
+        covariance=cov,
+        chi2=chi2,
+        dof=dof,
+        taus=taus.copy(),
+    )
+
+
+def _bound(value: object, name: str) -> float:
+    return _number(value, name, positive=False, what="a non-negative number of seconds or None")
+
+
+def _gls_step(allan: AllanDeviation, a_one: FloatArray, ys: FloatArray, theta: FloatArray | None) -> FloatArray:
+    """θ ≥ 0 minimising the generalised squared residual of every column, with the covariance of
+    the estimates taken at ``theta`` (None: from the data, as white noise)."""
+    chol = np.linalg.cholesky(_estimate_covariance(allan, a_one, theta, ys))
+    aw = linalg.solve_triangular(chol, a_one, lower=True)
+    yw = linalg.solve_triangular(chol, ys.T, lower=True)
+    return _nnls(np.tile(aw, (ys.shape[0], 1)), yw.T.reshape(-1))
+
+
+def _estimate_covariance(
+    allan: AllanDeviation, a_one: FloatArray, theta: FloatArray | None, ys: FloatArray
+) -> FloatArray:
+    """``(M, M)`` covariance of the σ̂² estimates of one column under the model θ (None: the data).
+
+    Diagonal: ``2 σ⁴ / edf`` with σ² from the model and the edf of its mix of noises (:func:`_edf`).
+    Off the diagonal: estimates at different τ from one record are strongly correlated (0.53
+    between adjacent octaves for white noise, 0.89 for random walk, overlapping estimator), so
+    treating them as independent makes the intervals far too narrow. The correlation of each
+    pure noise comes from :func:`_kernel_correlations`; a mix takes
+    ``ρ_ij = Σ_c √(f_c(τ_i) f_c(τ_j)) ρ_c(τ_i, τ_j)`` (noises are independent; a cross term between
+    two noises is dropped), then the matrix is projected onto the positive-definite cone.
+    """
+    parts = a_one * theta if theta is not None else None
+    if parts is None or not np.any(parts.sum(axis=1) > 0.0):
+        level = np.maximum(ys.mean(axis=0), 1e-12 * float(np.max(ys)))
+        fractions = np.tile([1.0, 0.0, 0.0], (len(level), 1))
+    else:
+        level = parts.sum(axis=1)
+        fractions = parts / np.where(level > 0.0, level, 1.0)[:, None]
+        fractions[level <= 0.0] = [1.0, 0.0, 0.0]
+        level = np.maximum(level, 1e-12 * float(np.max(level)))
+    sd = level * np.sqrt(2.0 / _edf(allan, fractions))
+    rho = _kernel_correlations(
+        tuple(int(v) for v in allan.cluster_sizes), tuple(int(v) for v in allan.clusters), allan.overlapping
+    )
+    root = np.sqrt(fractions).T  # (3, M)
+    mix = np.einsum("ci,cij,cj->ij", root, rho, root)
+    values, vectors = np.linalg.eigh(mix)
+    mix = (vectors * np.maximum(values, 1e-9 * values[-1])) @ vectors.T
+    return np.asarray(mix * np.outer(sd, sd), dtype=np.float64)
+
+
+# Correlations between cluster sizes above this are taken at the same ratio, scaled down
+# (they depend on the ratio alone once m is past ~8).
+_MAX_KERNEL = 2048
+
+
+def _kernel(m: int, kind: int) -> FloatArray:
+    """Weights of the samples (white noise) or of the steps (random walk) in one difference d_k."""
+    if kind == 0:
+        return np.concatenate([-np.ones(m), np.ones(m)])
+    j = np.arange(2 * m + 1, dtype=np.float64)
+    return np.minimum(j, 2.0 * m - j)
+
+
+@functools.lru_cache(maxsize=4096)
+def _lag_power(a: int, b: int, kind: int, step: int) -> float:
+    """``Σ_{h ∈ step ℤ} X(h)²``, X the cross-correlation of the kernels of cluster sizes a and b."""
+    kb = _kernel(b, kind)
+    x = signal.fftconvolve(_kernel(a, kind), kb[::-1])
+    lags = np.arange(len(x)) - (len(kb) - 1)
+    return float(np.sum(x[lags % step == 0] ** 2))
+
+
+@functools.lru_cache(maxsize=64)
+def _kernel_correlations(m: tuple[int, ...], n: tuple[int, ...], overlapping: bool) -> FloatArray:
+    """``(3, M, M)`` correlations of σ̂²(m_i) and σ̂²(m_j) for white, flicker, random-walk noise.
+
+    For Gaussian noise ``Cov(Σ d_j², Σ e_k²) = 2 Σ_{j,k} Cov(d_j, e_k)²``, and ``Cov(d_j, e_k)`` is the
+    cross-correlation X of the two difference kernels (white: the samples' weights −1…−1, +1…+1;
+    random walk: the steps' weights, a tent) at the lag between the start indices. With every
+    start (overlapping) the double sum is ``min(n_a, n_b) Σ_h X(h)²``; with starts on ``a ℤ`` and
+    ``b ℤ`` (non-overlapping, a ≤ b) it is ``n_b (g/a) Σ_{h ∈ g ℤ} X(h)²``, g = gcd(a, b); end
+    effects are neglected. Past m = 2048 a pair is evaluated at the same ratio scaled down (the
+    correlation depends on the ratio alone once m exceeds ~8). Flicker noise, which has no finite
+    kernel, takes the mean of the two.
+    """
+    size = len(m)
+    out = np.ones((3, size, size))
+    for kind in (0, 2):
+        for i in range(size):
+            for j in range(i + 1, size):
+                (a, na), (b, nb) = sorted(((m[i], n[i]), (m[j], n[j])))
+                if b > _MAX_KERNEL:
+                    a, b = max(1, round(a * _MAX_KERNEL / b)), _MAX_KERNEL
+                if overlapping:
+                    cross = min(na, nb) * _lag_power(a, b, kind, 1)
+                    own = na * _lag_power(a, a, kind, 1) * nb * _lag_power(b, b, kind, 1)
+                else:
+                    g = math.gcd(a, b)
+                    cross = nb * g / a * _lag_power(a, b, kind, g)
+                    own = na * _lag_power(a, a, kind, a) * nb * _lag_power(b, b, kind, b)
+                out[kind, i, j] = out[kind, j, i] = cross / math.sqrt(own)
+    out[1] = 0.5 * (out[0] + out[2])
+    return out
+
+
+def to_imu_noise(*, gyro: AllanFit, accel: AllanFit) -> ImuNoise:
+    """An :class:`imukit.ImuNoise` from a gyro fit and an accelerometer fit (continuous densities).
+
+    ``gyro_density = gyro.noise_density``, ``gyro_random_walk = gyro.random_walk``, and the same
+    for the accelerometer; the bias instabilities have no place in ``ImuNoise`` and are dropped.
+    Each fit must have been made with the matching ``sensor=``, so the two cannot be swapped.
+    """
+    for name, fit in (("gyro", gyro), ("accel", accel)):
+        if not isinstance(fit, AllanFit):
+            raise ParameterError(f"{name}: expected an AllanFit, got {type(fit).__name__}")
+        if fit.sensor != name:
+            raise ParameterError(f"{name}: expected a fit made with sensor={name!r}, got sensor={fit.sensor!r}")
+    return ImuNoise(
+        gyro_density=gyro.noise_density,
+        accel_density=accel.noise_density,
+        gyro_random_walk=gyro.random_walk,
+        accel_random_walk=accel.random_walk,
+    )
+
+
+def plot_allan(
+    allan: AllanDeviation,
+    path: str | os.PathLike[str],
+    *,
+    fit: AllanFit | None = None,
+    title: str | None = None,
+) -> None:
+    """Draw σ(τ) on log-log axes to a PNG at ``path``, with the fit and its three terms if given.
+
+    Needs matplotlib (imported here, not with imukit); without it, :class:`imukit.MissingDependencyError`.
+    Each column is drawn as points; with ``fit``, the points get ``confidence`` error bars from
+    the χ² distribution with the model's degrees of freedom, and the fitted σ(τ) and its white,
+    flicker and random-walk terms are drawn as lines, labelled with N, B, K and their intervals.
+    """
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as e:
+        raise MissingDependencyError(
+            "plot_allan: needs matplotlib, which is not installed (pip install matplotlib)"
+        ) from e
+    if not isinstance(allan, AllanDeviation):
+        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+    if fit is not None and not isinstance(fit, AllanFit):
+        raise ParameterError(f"fit: expected an AllanFit or None, got {type(fit).__name__}")
+    unit, density, walk = _UNITS[fit.sensor if fit is not None else None]
+    fig = Figure(figsize=(7.0, 5.0), dpi=120)
+    FigureCanvasAgg(fig)
+    ax: Any = fig.add_subplot()
+    dev = np.asarray(allan.deviation).reshape(len(allan.taus), -1)
+    bars = None
+    if fit is not None:
+        parts = _design(allan.taus) * np.array([fit.noise_density, fit.bias_instability, fit.random_walk]) ** 2
+        model = parts.sum(axis=1)
+        fractions = parts / np.where(model > 0.0, model, 1.0)[:, None]
+        edf = _edf(allan, np.where(model[:, None] > 0.0, fractions, [1.0, 0.0, 0.0]))
+        tail = (1.0 - fit.confidence) / 2.0
+        bars = np.sqrt(edf / stats.chi2.ppf(1.0 - tail, edf)), np.sqrt(edf / stats.chi2.ppf(tail, edf))
+    for c in range(dev.shape[1]):
+        label = "σ(τ)" if dev.shape[1] == 1 else f"σ(τ), column {c}"
+        if bars is None:
+            ax.loglog(allan.taus, dev[:, c], "o", ms=4, label=label)
+        else:
+            err = [dev[:, c] * (1.0 - bars[0]), dev[:, c] * (bars[1] - 1.0)]
+            ax.errorbar(allan.taus, dev[:, c], yerr=err, fmt="o", ms=4, capsize=2, label=label)
+    if fit is not None:
+        t = np.geomspace(allan.taus.min(), allan.taus.max(), 200)
+        level = f"{100 * fit.confidence:g}%"
+        names = (
+            ("N", fit.noise_density, fit.noise_density_interval, density, "--"),
+            ("B", fit.bias_instability, fit.bias_instability_interval, unit, ":"),
+            ("K", fit.random_walk, fit.random_walk_interval, walk, "-."),
+        )
+        ax.loglog(t, fit.deviation(t), "k-", lw=1.5, label="fit")
+        for (symbol, value, (lo, hi), u, style), part in zip(names, fit.components(t).T):
+            if value > 0.0:
+                ax.loglog(t, part, style, lw=1, label=f"{symbol} = {value:.3g} {u} ({level}: {lo:.3g}…{hi:.3g})")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("τ [s]")
+    ax.set_ylabel(f"Allan deviation σ(τ) [{unit}]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    if title is not None:
+        ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), format="png")

@@ -1,0 +1,335 @@
+"""IMU simulation with an exact truth: ``imukit.sim.simulate(trajectory, *, rate, duration, ...)``.
+
+Trajectories have closed-form position, velocity, acceleration, attitude and body rate, so the ideal
+readings are exact: body rate from the attitude's analytic derivative, specific force
+``R_wbᵀ (a − g)``. Noise-free integration therefore reproduces the truth to the integrator's own
+error (``docs/simulation.md``).
+
+=====================  ======================================================================
+``Static``             at rest at ``position`` with ``rotation``
+``ConstantTwist``      constant body rate and body-frame velocity (a screw): ``R₀ Exp(ωt)``
+``Circle``, ``Helix``  horizontal circle (climbing at ``climb_rate``), facing along the motion
+``FigureEight``        ``(A sin Ωt, B sin 2Ωt, C sin 2Ωt)``, heading along the path, banking and pitching
+``VioEllipse``         the VIO teaching trajectory (ellipse, sinusoidal height and attitude)
+``Waypoints``          C² cubic spline through timed positions, C² rotation spline through attitudes
+=====================  ======================================================================
+
+The sensor model (per triad, ``docs/simulation.md``): ``m = Q(S(T u + b + n))`` with white noise
+``n`` of density σ discretised with the actual step (``σ/√Δt``), bias ``b`` = constant
+(``ImuBias``) + turn-on + random walk (``σ_w √Δt`` per step) + first-order Gauss–Markov, scale
+factor and misalignment ``T``, saturation ``S`` and quantisation ``Q`` (:class:`SensorErrors`).
+Seeded: the same seed gives the same output, whatever the number of cores.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal, Union
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.interpolate import CubicSpline
+from scipy.spatial.transform import Rotation, RotationSpline
+
+from imukit import _core
+from imukit._arrays import FloatArray, as_float_array, rotation_from_unit_quat
+from imukit._errors import ParameterError, ShapeError
+from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.state import Trajectory
+
+__all__ = [
+    "Circle",
+    "ConstantTwist",
+    "FigureEight",
+    "Helix",
+    "Motion",
+    "SensorErrors",
+    "Static",
+    "VioEllipse",
+    "Waypoints",
+    "simulate",
+]
+
+_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _vec3(x: ArrayLike, name: str) -> FloatArray:
+    v = as_float_array(x, name)
+    if v.shape != (3,):
+        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
+    return v
+
+
+def _quat(r: Rotation, name: str) -> list[float]:
+    if not (isinstance(r, Rotation) and r.single):
+        raise ParameterError(f"{name}: expected a single scipy Rotation, got {r!r}")
+    return [float(v) for v in r.as_quat()]
+
+
+class _ClosedForm:
+    """A motion evaluated in the compiled core from its parameters."""
+
+    _kind: str
+
+    def _params(self) -> list[float]:
+        raise NotImplementedError
+
+    def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
+        return _core.sim_motion(self._kind, self._params(), t, [*gravity])
+
+
+@dataclass(frozen=True)
+class Static(_ClosedForm):
+    """At rest at ``position`` [m] with attitude ``rotation`` (``R_wb``)."""
+
+    position: ArrayLike = (0.0, 0.0, 0.0)
+    rotation: Rotation = field(default_factory=Rotation.identity)
+    _kind = "static"
+
+    def _params(self) -> list[float]:
+        return [*_vec3(self.position, "position"), *_quat(self.rotation, "rotation")]
+
+
+@dataclass(frozen=True)
+class ConstantTwist(_ClosedForm):
+    """Constant ``body_rate`` ω [rad/s] and ``body_velocity`` v_b [m/s] (body frame): a screw motion,
+    ``R(t) = R₀ Exp(ωt)``, ``p(t) = p₀ + R₀ J_l(ωt) v_b t``, ``a = R [ω]× v_b``."""
+
+    body_velocity: ArrayLike = (1.0, 0.0, 0.0)
+    body_rate: ArrayLike = (0.0, 0.0, 0.2)
+    position: ArrayLike = (0.0, 0.0, 0.0)
+    rotation: Rotation = field(default_factory=Rotation.identity)
+    _kind = "constant_twist"
+
+    def _params(self) -> list[float]:
+        return [
+            *_vec3(self.position, "position"),
+            *_quat(self.rotation, "rotation"),
+            *_vec3(self.body_velocity, "body_velocity"),
+            *_vec3(self.body_rate, "body_rate"),
+        ]
+
+
+@dataclass(frozen=True)
+class Helix(_ClosedForm):
+    """``center + (r cos Ωt, r sin Ωt, climb_rate·t)``; body x along the horizontal velocity, z up."""
+
+    radius: float = 5.0
+    angular_rate: float = 0.5
+    climb_rate: float = 0.2
+    center: ArrayLike = (0.0, 0.0, 1.0)
+    _kind = "helix"
+
+    def _params(self) -> list[float]:
+        return [*_vec3(self.center, "center"), float(self.radius), float(self.angular_rate), float(self.climb_rate)]
+
+
+@dataclass(frozen=True)
+class Circle(Helix):
+    """A :class:`Helix` that does not climb."""
+
+    climb_rate: float = 0.0
+
+
+@dataclass(frozen=True)
+class FigureEight(_ClosedForm):
+    """``center + (A sin Ωt, B sin 2Ωt, C sin 2Ωt)`` with ``amplitude = (A, B, C)`` [m], one eight every
+    2π/Ω s; yaw along the horizontal velocity, roll ``roll·sin 2Ωt``, pitch ``pitch·sin Ωt`` [rad]."""
+
+    amplitude: ArrayLike = (10.0, 5.0, 1.0)
+    angular_rate: float = 2 * math.pi / 30.0
+    roll: float = 0.3
+    pitch: float = 0.2
+    center: ArrayLike = (0.0, 0.0, 2.0)
+    _kind = "figure_eight"
+
+    def _params(self) -> list[float]:
+        return [
+            *_vec3(self.center, "center"),
+            *_vec3(self.amplitude, "amplitude"),
+            float(self.angular_rate),
+            float(self.roll),
+            float(self.pitch),
+        ]
+
+
+@dataclass(frozen=True)
+class VioEllipse(_ClosedForm):
+    """The VIO teaching trajectory (He Yijia's ``vio_data_simulation``): ``center + (a cos Kt, b sin Kt,
+    c sin K₁Kt)``, yaw ``Kt``, pitch ``pitch·sin t``, roll ``roll·cos t``; its defaults."""
+
+    amplitude: ArrayLike = (15.0, 20.0, 1.0)
+    angular_rate: float = math.pi / 10.0
+    height_frequency: float = 10.0
+    roll: float = 0.1
+    pitch: float = 0.2
+    center: ArrayLike = (5.0, 5.0, 5.0)
+    _kind = "vio_ellipse"
+
+    def _params(self) -> list[float]:
+        return [
+            *_vec3(self.center, "center"),
+            *_vec3(self.amplitude, "amplitude"),
+            float(self.angular_rate),
+            float(self.height_frequency),
+            float(self.roll),
+            float(self.pitch),
+        ]
+
+
+class Waypoints:
+    """A smooth trajectory through timed waypoints: a C² cubic spline in position (scipy
+    ``CubicSpline``, ``bc_type`` as there; default ``"clamped"``: at rest at both ends) and a C² cubic
+    rotation spline in attitude (scipy ``RotationSpline``). Derivatives are the splines' analytic ones:
+    velocity and acceleration, and the body rate ``R_wbᵀ Ṙ_wb``.
+
+    ``times`` (M,) strictly increasing seconds, ``positions`` (M, 3) [m], ``rotations`` a scipy
+    ``Rotation`` of length M (``R_wb``), M ≥ 2; simulate within ``[times[0], times[-1]]``.
+    """
+
+    def __init__(
+        self,
+        times: ArrayLike,
+        positions: ArrayLike,
+        rotations: Rotation,
+        *,
+        bc_type: Literal["not-a-knot", "clamped", "natural", "periodic"] = "clamped",
+    ) -> None:
+        t = as_float_array(times, "times")
+        if t.ndim != 1 or len(t) < 2 or not np.all(np.diff(t) > 0):
+            raise ParameterError(f"times: expected (M,) strictly increasing seconds, M ≥ 2, got {t!r}")
+        p = as_float_array(positions, "positions")
+        if p.shape != (len(t), 3):
+            raise ShapeError(f"positions: expected shape (M, 3) with M = len(times) = {len(t)}, got {p.shape}")
+        if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
+            raise ShapeError(f"rotations: expected a scipy Rotation of length M = len(times) = {len(t)}")
+        self.times = t
+        self._position = CubicSpline(t, p, bc_type=bc_type)
+        self._rotation = RotationSpline(t, rotations)
+
+    def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
+        if t[0] < self.times[0] or t[-1] > self.times[-1]:
+            raise ParameterError(
+                f"duration: the waypoints span [{self.times[0]}, {self.times[-1]}] s, "
+                f"the simulation [{t[0]}, {t[-1]}] s"
+            )
+        rot = self._rotation(t)
+        accel = self._position(t, 2)
+        specific_force = rot.inv().apply(accel - gravity)
+        return (
+            self._position(t),
+            self._position(t, 1),
+            rot.as_quat(),
+            np.ascontiguousarray(self._rotation(t, 1)),  # scipy's rate is body-frame: R(t)ᵀ Ṙ(t)
+            specific_force,
+        )
+
+
+Motion = Union[Static, ConstantTwist, Helix, FigureEight, VioEllipse, Waypoints]
+"""Every trajectory :func:`simulate` accepts."""
+
+
+@dataclass(frozen=True)
+class SensorErrors:
+    """Errors of one triad beyond white noise, random walk and constant bias (``ImuNoise``, ``ImuBias``).
+
+    ``matrix`` 3×3 scale factor and misalignment ``T`` (reading ``T u``; identity: none; see
+    :meth:`from_scale_misalignment`); ``turn_on_sigma`` std of a bias drawn once per run;
+    ``gauss_markov_sigma`` / ``gauss_markov_tau`` [s] stationary std and correlation time of a
+    first-order Gauss–Markov bias; ``range`` saturation (readings clamped to ±range); ``resolution``
+    quantisation step (readings rounded to multiples). Units are the sensor's (rad/s or m/s²).
+    """
+
+    matrix: ArrayLike = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    turn_on_sigma: float = 0.0
+    gauss_markov_sigma: float = 0.0
+    gauss_markov_tau: float = math.inf
+    range: float = math.inf
+    resolution: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("turn_on_sigma", "gauss_markov_sigma", "resolution"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value >= 0):
+                raise ParameterError(f"{name}: expected a finite, non-negative number, got {value!r}")
+        for name in ("gauss_markov_tau", "range"):
+            value = float(getattr(self, name))
+            if not value > 0:
+                raise ParameterError(f"{name}: expected a positive number (inf for none), got {value!r}")
+        matrix = as_float_array(self.matrix, "matrix")
+        if matrix.shape != (3, 3):
+            raise ShapeError(f"matrix: expected shape (3, 3), got {matrix.shape}")
+
+    @classmethod
+    def from_scale_misalignment(cls, scale: ArrayLike, misalignment: ArrayLike, **kwargs: float) -> SensorErrors:
+        """``T = (I + diag(scale)) (I + M)``: ``scale`` (3,) relative scale-factor errors, ``misalignment``
+        (3, 3) small non-orthogonality angles [rad] off the diagonal (the diagonal must be zero)."""
+        s = _vec3(scale, "scale")
+        m = as_float_array(misalignment, "misalignment")
+        if m.shape != (3, 3) or np.any(np.diag(m) != 0.0):
+            raise ShapeError(f"misalignment: expected a (3, 3) matrix with a zero diagonal, got {m!r}")
+        return cls(matrix=(np.eye(3) + np.diag(s)) @ (np.eye(3) + m), **kwargs)
+
+    def _values(self) -> list[float]:
+        return [
+            *as_float_array(self.matrix, "matrix").ravel(),
+            float(self.turn_on_sigma),
+            float(self.gauss_markov_sigma),
+            float(self.gauss_markov_tau),
+            float(self.range),
+            float(self.resolution),
+        ]
+
+
+def _model(bias: FloatArray, density: float, walk: float, errors: SensorErrors) -> list[float]:
+    v = errors._values()
+    # [T (9), bias (3), σ_on, σ, σ_w, σ_gm, τ_gm, range, resolution], as the core reads it.
+    return [*v[0:9], *bias, v[9], density, walk, *v[10:14]]
+
+
+def simulate(
+    trajectory: Motion,
+    *,
+    rate: float,
+    duration: float,
+    noise: ImuNoise | None = None,
+    bias: ImuBias | None = None,
+    gyro_errors: SensorErrors | None = None,
+    accel_errors: SensorErrors | None = None,
+    gravity: ArrayLike = _GRAVITY,
+    seed: int = 0,
+    start: float = 0.0,
+) -> tuple[ImuData, Trajectory]:
+    """Simulate ``trajectory`` at ``rate`` [Hz] for ``duration`` [s] from time ``start``: samples
+    ``t_k = start + k / rate``, ``k = 0 … floor(duration·rate)``. Returns the readings as
+    :class:`imukit.ImuData` (float seconds) and the truth as :class:`imukit.Trajectory` with the
+    true biases (``gyro_bias``, ``accel_bias``) at every sample. Without ``noise``, ``bias`` and
+    errors, the readings are the exact ideal ones.
+    """
+    rate_hz, span = float(rate), float(duration)
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise ParameterError(f"rate: expected a positive, finite rate in Hz, got {rate!r}")
+    if not (math.isfinite(span) and span * rate_hz >= 1):
+        raise ParameterError(f"duration: expected at least one sample interval (1 / rate), got {duration!r}")
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**64:
+        raise ParameterError(f"seed: expected an int in [0, 2**64), got {seed!r}")
+    for name, errors in (("gyro_errors", gyro_errors), ("accel_errors", accel_errors)):
+        if errors is not None and not isinstance(errors, SensorErrors):
+            raise ParameterError(f"{name}: expected an imukit.sim.SensorErrors or None, got {type(errors).__name__}")
+    g = _vec3(gravity, "gravity")
+    t = float(start) + np.arange(math.floor(span * rate_hz + 1e-9) + 1) / rate_hz
+    position, velocity, quat, gyro, accel = trajectory._truth(t, g)
+    n = len(t)
+    bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))
+    perfect = noise is None and bias is None and gyro_errors is None and accel_errors is None
+    if not perfect:
+        noise = noise or ImuNoise(0.0, 0.0, 0.0, 0.0)
+        b = bias or ImuBias()
+        model_g = _model(b.gyro, noise.gyro_density, noise.gyro_random_walk, gyro_errors or SensorErrors())
+        model_a = _model(b.accel, noise.accel_density, noise.accel_random_walk, accel_errors or SensorErrors())
+        gyro, bias_g = _core.sim_measure(t, gyro, model_g, seed, 0)
+        accel, bias_a = _core.sim_measure(t, accel, model_a, seed, 1)
+    imu = ImuData(t, gyro, accel)
+    arrays = {"position": position, "velocity": velocity, "gyro_bias": bias_g, "accel_bias": bias_a}
+    return imu, Trajectory._from_core(imu.t, None, arrays, rotation_from_unit_quat(quat))
