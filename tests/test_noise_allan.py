@@ -12,6 +12,7 @@ import pytest
 
 import imukit as ik
 from imukit import noise
+from imukit.noise import _fit
 
 RATE = 200.0
 
@@ -131,7 +132,7 @@ def test_edf_formulas_match_the_exact_gaussian_values(overlapping: bool) -> None
     for kind, autocov, tolerance in ((0, white_kernel_autocovariance, 0.05), (2, walk_kernel_autocovariance, 0.15)):
         fractions = np.zeros((len(allan.taus), 3))
         fractions[:, kind] = 1.0
-        edf = noise._edf(allan, fractions)
+        edf = _fit._edf(allan, fractions)
         for m, terms, value in zip(allan.cluster_sizes, allan.clusters, edf):
             r = autocov(int(m))
             if not overlapping:  # d at stride m: only lags that are multiples of m remain
@@ -207,8 +208,8 @@ def test_model_curve_and_components(gyro_3h: noise.AllanDeviation) -> None:
     np.testing.assert_allclose(terms[:, 2], fit.random_walk * np.sqrt(taus / 3))
     np.testing.assert_allclose(fit.variance(taus), np.sum(terms**2, axis=1))
     # The fitted curve follows the data: every point within 3 of its own standard errors.
-    parts = noise._design(gyro_3h.taus) * np.array([fit.noise_density, fit.bias_instability, fit.random_walk]) ** 2
-    edf = noise._edf(gyro_3h, parts / parts.sum(axis=1, keepdims=True))
+    parts = _fit._design(gyro_3h.taus) * np.array([fit.noise_density, fit.bias_instability, fit.random_walk]) ** 2
+    edf = _fit._edf(gyro_3h, parts / parts.sum(axis=1, keepdims=True))
     rel = gyro_3h.variance / fit.variance(gyro_3h.taus)[:, None] - 1
     assert np.all(np.abs(rel) < 3 * np.sqrt(2 / edf)[:, None] + 0.01)
 

@@ -1,42 +1,19 @@
-"""Allan-variance identification of IMU noise: :func:`allan_deviation`, :func:`fit_allan`, :func:`plot_allan`.
-
-=====================  ===========================================================================
-input                  a rate signal sampled at a constant ``rate`` [Hz]: a gyro at rest [rad/s] or an
-                       accelerometer at rest [m/s²], ``(N,)`` or ``(N, C)`` (one column per axis)
-estimator              overlapping Allan variance (IEEE Std 952; Riley, NIST SP 1065, eq. 11), or the
-                       non-overlapping one; ``docs/noise.md`` § Allan variance
-model                  ``σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3``: white noise density N [unit/√Hz],
-                       bias instability B [unit], rate random walk K [unit/s/√Hz]
-units                  N and K are the continuous densities of :class:`imukit.ImuNoise`
-                       (``docs/conventions.md``, row 11): :func:`to_imu_noise` builds one
-=====================  ===========================================================================
-
->>> import numpy as np, imukit as ik
->>> rng = np.random.default_rng(0)
->>> gyro = 1e-3 * np.sqrt(200.0) * rng.standard_normal(200_000)   # N = 1e-3 rad/s/√Hz at 200 Hz
->>> allan = ik.noise.allan_deviation(gyro, 200.0)
->>> round(float(allan.deviation[0] * np.sqrt(allan.taus[0])), 4)  # σ(τ) √τ = N for white noise
-0.001
-"""
+"""The joint weighted least-squares fit of N, B and K to an Allan variance, and its intervals."""
 
 from __future__ import annotations
 
 import functools
 import math
-import os
 from dataclasses import dataclass
-from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy import linalg, optimize, signal, stats
 
-from imukit import _core
 from imukit._arrays import FloatArray, as_float_array
-from imukit._errors import MissingDependencyError, ParameterError, ShapeError
+from imukit._errors import ParameterError
 from imukit.imu import ImuNoise, _number
-
-__all__ = ["AllanDeviation", "AllanFit", "allan_deviation", "fit_allan", "plot_allan", "to_imu_noise"]
+from imukit.noise._allan import AllanDeviation
 
 # σ² of flicker (1/f) rate noise of coefficient B: (2 ln 2 / π) B² (IEEE Std 952, Annex C).
 FLICKER_FACTOR = 2.0 * math.log(2.0) / math.pi
@@ -47,127 +24,6 @@ _UNITS = {
     "accel": ("m/s²", "m/s²/√Hz", "m/s³/√Hz"),
     None: ("u", "u/√Hz", "u/s/√Hz"),
 }
-
-
-class AllanDeviation(NamedTuple):
-    """Allan deviation of a rate signal, as returned by :func:`allan_deviation`."""
-
-    taus: FloatArray
-    """``(M,)`` averaging times ``τ = m / rate`` [s]."""
-    deviation: FloatArray
-    """``(M,)`` for ``(N,)`` input, ``(M, C)`` for ``(N, C)`` input: σ(τ) [unit of the input]."""
-    clusters: NDArray[np.int64]
-    """``(M,)`` number of squared differences averaged at each τ (allantools' ``ns``):
-    ``N − 2m + 1`` overlapping, ``⌊N/m⌋ − 1`` non-overlapping."""
-    rate: float
-    """Sample rate [Hz]."""
-    samples: int
-    """Record length N."""
-    overlapping: bool
-    """Which estimator produced :attr:`deviation`."""
-
-    @property
-    def variance(self) -> FloatArray:
-        """σ²(τ), same shape as :attr:`deviation`."""
-        return self.deviation**2
-
-    @property
-    def cluster_sizes(self) -> NDArray[np.int64]:
-        """``(M,)`` cluster sizes ``m = τ · rate``."""
-        return np.rint(self.taus * self.rate).astype(np.int64)
-
-
-def _rate(rate: object) -> float:
-    return _number(rate, "rate", positive=True, what="a positive, finite sample rate in Hz")
-
-
-def _cluster_sizes(taus: ArrayLike | None, rate: float, n: int) -> list[int]:
-    if taus is None:
-        if n < 4:
-            raise ShapeError(f"x: the default τ grid (m = 1, 2, 4, … ≤ N/4) needs N ≥ 4 samples, got {n}")
-        return [1 << j for j in range((n // 4).bit_length())]
-    t = as_float_array(taus, "taus")
-    if t.ndim != 1 or t.size == 0:
-        raise ShapeError(f"taus: expected a non-empty (M,) array of seconds, got shape {t.shape}")
-    bad = np.flatnonzero(~(np.isfinite(t) & (t > 0.0)))
-    if bad.size:
-        k = int(bad[0])
-        raise ParameterError(f"taus: expected positive, finite seconds, got taus[{k}] = {float(t[k])!r}")
-    m = t * rate
-    whole = np.rint(m)
-    off = np.flatnonzero(np.abs(m - whole) > 1e-9 * np.maximum(whole, 1.0))
-    if off.size:
-        k = int(off[0])
-        raise ParameterError(
-            f"taus: every τ must be a whole multiple of 1/rate = {1.0 / rate!r} s; "
-            f"taus[{k}] = {float(t[k])!r} s is {float(m[k])!r} samples"
-        )
-    big = np.flatnonzero(2.0 * whole > n)
-    if big.size:
-        k = int(big[0])
-        raise ParameterError(
-            f"taus: taus[{k}] = {float(t[k])!r} s is m = {int(whole[k])} samples; two clusters need 2m ≤ N = {n}"
-        )
-    return [int(v) for v in whole]
-
-
-def allan_deviation(
-    x: ArrayLike, rate: float, *, taus: ArrayLike | None = None, overlapping: bool = True
-) -> AllanDeviation:
-    """Allan deviation σ(τ) of a rate signal ``x`` sampled at ``rate`` Hz.
-
-    Parameters
-    ----------
-    x
-        ``(N,)`` or ``(N, C)`` samples (one column per axis), e.g. a gyro at rest [rad/s]. Finite.
-    rate
-        Sample rate [Hz], positive; ``τ0 = 1 / rate``.
-    taus
-        Averaging times [s], each a whole multiple ``m τ0`` with ``2m ≤ N``, in any order. Default:
-        octaves ``m = 1, 2, 4, …`` up to ``N/4`` (at least four clusters; Riley, NIST SP 1065).
-    overlapping
-        The overlapping estimator (default: every start index, the better-determined estimate) or
-        the non-overlapping one (disjoint adjacent clusters).
-
-    Returns
-    -------
-    AllanDeviation
-        ``taus`` [s], ``deviation`` (``(M,)`` or ``(M, C)``), ``clusters`` (terms per τ), and the
-        ``rate``, ``samples`` and ``overlapping`` that :func:`fit_allan` needs.
-
-    Raises
-    ------
-    ShapeError, DTypeError, NonFiniteError, ParameterError
-        Messages start with the argument name (``x``, ``rate``, ``taus``).
-
-    Notes
-    -----
-    ``AVAR(mτ0) = Σ_k (x_{k+2m} − 2x_{k+m} + x_k)² / (2 m² τ0² n)`` with the phase
-    ``x_j = τ0 Σ_{i<j} y_i`` and ``n`` the number of terms; computed in the Rust core without
-    forming the phase, to within a few ulps (``docs/noise.md``). Agrees with
-    ``allantools.oadev(x, rate, data_type="freq", taus=taus)`` (and ``adev``) to 1e-10 relative.
-    """
-    arr = as_float_array(x, "x")
-    if arr.ndim not in (1, 2):
-        raise ShapeError(f"x: expected shape (N,) or (N, C), got {arr.shape}")
-    data = np.ascontiguousarray(arr if arr.ndim == 2 else arr[:, None])
-    if data.shape[1] == 0:
-        raise ShapeError(f"x: expected shape (N, C) with C ≥ 1, got {arr.shape}")
-    n = data.shape[0]
-    if n < 2:
-        raise ShapeError(f"x: expected at least 2 samples, got {n}")
-    f = _rate(rate)
-    m = _cluster_sizes(taus, f, n)
-    variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping))
-    deviation = np.sqrt(variance)
-    return AllanDeviation(
-        taus=np.asarray(m, dtype=np.float64) / f,
-        deviation=deviation if arr.ndim == 2 else deviation[:, 0],
-        clusters=terms,
-        rate=f,
-        samples=n,
-        overlapping=bool(overlapping),
-    )
 
 
 def _edf(allan: AllanDeviation, fractions: FloatArray) -> FloatArray:
@@ -509,72 +365,3 @@ def to_imu_noise(*, gyro: AllanFit, accel: AllanFit) -> ImuNoise:
         gyro_random_walk=gyro.random_walk,
         accel_random_walk=accel.random_walk,
     )
-
-
-def plot_allan(
-    allan: AllanDeviation,
-    path: str | os.PathLike[str],
-    *,
-    fit: AllanFit | None = None,
-    title: str | None = None,
-) -> None:
-    """Draw σ(τ) on log-log axes to a PNG at ``path``, with the fit and its three terms if given.
-
-    Needs matplotlib (imported here, not with imukit); without it, :class:`imukit.MissingDependencyError`.
-    Each column is drawn as points; with ``fit``, the points get ``confidence`` error bars from
-    the χ² distribution with the model's degrees of freedom, and the fitted σ(τ) and its white,
-    flicker and random-walk terms are drawn as lines, labelled with N, B, K and their intervals.
-    """
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError as e:
-        raise MissingDependencyError(
-            "plot_allan: needs matplotlib, which is not installed (pip install matplotlib)"
-        ) from e
-    if not isinstance(allan, AllanDeviation):
-        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
-    if fit is not None and not isinstance(fit, AllanFit):
-        raise ParameterError(f"fit: expected an AllanFit or None, got {type(fit).__name__}")
-    unit, density, walk = _UNITS[fit.sensor if fit is not None else None]
-    fig = Figure(figsize=(7.0, 5.0), dpi=120)
-    FigureCanvasAgg(fig)
-    ax: Any = fig.add_subplot()
-    dev = np.asarray(allan.deviation).reshape(len(allan.taus), -1)
-    bars = None
-    if fit is not None:
-        parts = _design(allan.taus) * np.array([fit.noise_density, fit.bias_instability, fit.random_walk]) ** 2
-        model = parts.sum(axis=1)
-        fractions = parts / np.where(model > 0.0, model, 1.0)[:, None]
-        edf = _edf(allan, np.where(model[:, None] > 0.0, fractions, [1.0, 0.0, 0.0]))
-        tail = (1.0 - fit.confidence) / 2.0
-        bars = np.sqrt(edf / stats.chi2.ppf(1.0 - tail, edf)), np.sqrt(edf / stats.chi2.ppf(tail, edf))
-    for c in range(dev.shape[1]):
-        label = "σ(τ)" if dev.shape[1] == 1 else f"σ(τ), column {c}"
-        if bars is None:
-            ax.loglog(allan.taus, dev[:, c], "o", ms=4, label=label)
-        else:
-            err = [dev[:, c] * (1.0 - bars[0]), dev[:, c] * (bars[1] - 1.0)]
-            ax.errorbar(allan.taus, dev[:, c], yerr=err, fmt="o", ms=4, capsize=2, label=label)
-    if fit is not None:
-        t = np.geomspace(allan.taus.min(), allan.taus.max(), 200)
-        level = f"{100 * fit.confidence:g}%"
-        names = (
-            ("N", fit.noise_density, fit.noise_density_interval, density, "--"),
-            ("B", fit.bias_instability, fit.bias_instability_interval, unit, ":"),
-            ("K", fit.random_walk, fit.random_walk_interval, walk, "-."),
-        )
-        ax.loglog(t, fit.deviation(t), "k-", lw=1.5, label="fit")
-        for (symbol, value, (lo, hi), u, style), part in zip(names, fit.components(t).T):
-            if value > 0.0:
-                ax.loglog(t, part, style, lw=1, label=f"{symbol} = {value:.3g} {u} ({level}: {lo:.3g}…{hi:.3g})")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("τ [s]")
-    ax.set_ylabel(f"Allan deviation σ(τ) [{unit}]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    if title is not None:
-        ax.set_title(title)
-    fig.tight_layout()
-    fig.savefig(os.fspath(path), format="png")
