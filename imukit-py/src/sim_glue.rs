@@ -3,10 +3,10 @@
 
 use imukit::sim::{self, Motion, SensorModel};
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray2};
 use pyo3::prelude::*;
 
-use crate::{contiguous, private_copy, raise, to_py};
+use crate::{contiguous, raise, to_py};
 
 fn v3(p: &[f64]) -> Vector3<f64> {
     Vector3::new(p[0], p[1], p[2])
@@ -87,8 +87,8 @@ pub(crate) fn sim_motion<'py>(
     gravity: [f64; 3],
 ) -> PyResult<Arrays<'py>> {
     let motion = motion(py, kind, &params)?;
-    let t_copy = private_copy(py, &t)?.readonly();
-    let t = contiguous(py, "t", &t_copy)?;
+    // No private copy: imukit.sim passes an array it has just made and shares with no one.
+    let t = contiguous(py, "t", &t)?;
     let n = t.len();
     let make = |w: usize| PyArray2::<f64>::zeros(py, [n, w], false);
     let (p, v, q, w, a) = (make(3), make(3), make(4), make(3), make(3));
@@ -114,19 +114,19 @@ pub(crate) fn sim_motion<'py>(
     Ok((p, v, q, w, a))
 }
 
-type Pair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
-
-/// Readings and true biases of one triad: `model` is `[T (9, row-major), bias (3), σ_on, σ, σ_w,
-/// σ_gm, τ_gm, range, resolution]`.
+/// Measures one triad in place: `ideal` (the caller's fresh `(N, 3)` array) becomes the readings;
+/// returns the true biases. `model` is `[T (9, row-major), bias (3), σ_on, σ, σ_w, σ_gm, τ_gm, range,
+/// resolution]`. Private to `imukit.sim`, which passes arrays it has just made and shares with no one,
+/// so nothing is copied.
 #[pyfunction]
 pub(crate) fn sim_measure<'py>(
     py: Python<'py>,
     t: PyReadonlyArray1<'py, f64>,
-    ideal: PyReadonlyArray2<'py, f64>,
+    mut ideal: PyReadwriteArray2<'py, f64>,
     model: [f64; 19],
     seed: u64,
     triad: u64,
-) -> PyResult<Pair<'py>> {
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let m = &model;
     let model = SensorModel {
         matrix: Matrix3::from_row_slice(&m[0..9]),
@@ -139,18 +139,17 @@ pub(crate) fn sim_measure<'py>(
         range: m[17],
         resolution: m[18],
     };
-    let (t_copy, ideal_copy) = (private_copy(py, &t)?.readonly(), private_copy(py, &ideal)?.readonly());
-    let (t, ideal) = (contiguous(py, "t", &t_copy)?, contiguous(py, "ideal", &ideal_copy)?);
+    let t = contiguous(py, "t", &t)?;
     let n = t.len();
-    let (out, bias) = (
-        PyArray2::<f64>::zeros(py, [n, 3], false),
-        PyArray2::<f64>::zeros(py, [n, 3], false),
-    );
+    let bias = PyArray2::<f64>::zeros(py, [n, 3], false);
     {
-        let (mut og, mut bg) = (out.readwrite(), bias.readwrite());
-        let (o, b) = (og.as_slice_mut()?, bg.as_slice_mut()?);
-        py.detach(|| sim::measure(t, ideal, &model, seed, triad, o, b))
+        let mut bg = bias.readwrite();
+        let b = bg.as_slice_mut()?;
+        let values = ideal
+            .as_slice_mut()
+            .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
+        py.detach(|| sim::measure_in_place(t, values, &model, seed, triad, b))
             .map_err(|e| to_py(py, "simulate", e))?;
     }
-    Ok((out, bias))
+    Ok(bias)
 }

@@ -126,6 +126,19 @@ class ImuData:
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"ImuData is immutable: cannot set {name!r}")
 
+    @classmethod
+    def _from_core(cls, t: FloatArray, gyro: FloatArray, accel: FloatArray) -> ImuData:
+        """Samples the compiled core has just produced, without validating or copying them (fresh,
+        finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
+        simulating them). The arrays are made read-only here and must not be shared elsewhere."""
+        imu = object.__new__(cls)
+        seconds = t - t[0]
+        for name, value in (("t", t), ("t_ns", None), ("gyro", gyro), ("accel", accel), ("_seconds", seconds)):
+            if value is not None:
+                value.setflags(write=False)
+            object.__setattr__(imu, name, value)
+        return imu
+
     @property
     def seconds(self) -> FloatArray:
         """``(N,)`` float64 seconds since the first sample (read-only); exact from ``t_ns`` when present.

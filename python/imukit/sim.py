@@ -328,8 +328,9 @@ def simulate(
         b = bias or ImuBias()
         model_g = _model(b.gyro, noise.gyro_density, noise.gyro_random_walk, gyro_errors or SensorErrors())
         model_a = _model(b.accel, noise.accel_density, noise.accel_random_walk, accel_errors or SensorErrors())
-        gyro, bias_g = _core.sim_measure(t, gyro, model_g, seed, 0)
-        accel, bias_a = _core.sim_measure(t, accel, model_a, seed, 1)
-    imu = ImuData(t, gyro, accel)
+        # In place: gyro and accel are this call's own fresh arrays (and Waypoints' fresh results).
+        bias_g = _core.sim_measure(t, gyro, model_g, seed, 0)
+        bias_a = _core.sim_measure(t, accel, model_a, seed, 1)
+    imu = ImuData._from_core(t, gyro, accel)
     arrays = {"position": position, "velocity": velocity, "gyro_bias": bias_g, "accel_bias": bias_a}
     return imu, Trajectory._from_core(imu.t, None, arrays, rotation_from_unit_quat(quat))

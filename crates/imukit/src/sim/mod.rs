@@ -7,7 +7,7 @@ mod motion;
 mod sensor;
 
 pub use motion::{Kinematics, Motion};
-pub use sensor::{measure, SensorModel, CHUNK};
+pub use sensor::{measure, measure_in_place, SensorModel, CHUNK};
 
 use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;

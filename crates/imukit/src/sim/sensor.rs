@@ -156,6 +156,23 @@ pub fn measure(
     out: &mut [f64],
     bias_out: &mut [f64],
 ) -> Result<()> {
+    if out.len() != ideal.len() {
+        let (input, output) = (ideal.len() / 3, out.len() / 3);
+        return Err(Error::RowCount { input, output }.in_argument("out"));
+    }
+    out.copy_from_slice(ideal);
+    measure_in_place(t, out, model, seed, triad, bias_out)
+}
+
+/// [`measure`] with the ideal readings in `values`, replaced by the measured ones.
+pub fn measure_in_place(
+    t: &[f64],
+    values: &mut [f64],
+    model: &SensorModel,
+    seed: u64,
+    triad: u64,
+    bias_out: &mut [f64],
+) -> Result<()> {
     model.check()?;
     let n = t.len();
     if n < 2 {
@@ -165,7 +182,7 @@ pub fn measure(
             got: format!("{n}"),
         });
     }
-    for (name, len) in [("ideal", ideal.len()), ("out", out.len()), ("bias_out", bias_out.len())] {
+    for (name, len) in [("ideal", values.len()), ("bias_out", bias_out.len())] {
         if len != 3 * n {
             return Err(Error::RowCount {
                 input: n,
@@ -175,7 +192,7 @@ pub fn measure(
         }
     }
     crate::time::check_increasing(t).map_err(|e| e.in_argument("t"))?;
-    if let Some(i) = ideal.iter().position(|v| !v.is_finite()) {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFinite { index: i / 3 }.in_argument("ideal"));
     }
     let turn_on = normal3(&mut stream(seed, triad, Process::TurnOn, 0)) * model.turn_on_sigma;
@@ -185,29 +202,22 @@ pub fn measure(
     // The once-per-run draws share the turn-on stream: the turn-on bias, then g_0 (stationary).
     let gm_start = normal3(&mut stream(seed, triad, Process::TurnOn, 1)) * model.gauss_markov_sigma;
 
-    // Pass 1 (parallel): white noise into `out`, walk and Gauss–Markov from zero into `bias_out`
-    // (walk in place, Gauss–Markov added), with each chunk's end state and decay.
+    // Pass 1 (parallel): the walk and Gauss–Markov recursions of each chunk from zero, into
+    // `bias_out`, with each chunk's end state and decay.
     let chunks: Vec<(Local, Local)> = bias_out
         .par_chunks_mut(3 * CHUNK)
-        .zip(out.par_chunks_mut(3 * CHUNK))
         .enumerate()
-        .map(|(c, (bias, noise))| {
-            let (mut white, mut walk_rng, mut gm_rng) = (
-                stream(seed, triad, Process::White, c),
+        .map(|(c, bias)| {
+            let (mut walk_rng, mut gm_rng) = (
                 stream(seed, triad, Process::Walk, c),
                 stream(seed, triad, Process::GaussMarkov, c),
             );
             let (mut w, mut g, mut decay) = (Vector3::zeros(), Vector3::zeros(), 1.0);
-            for (i, (b, e)) in bias.chunks_exact_mut(3).zip(noise.chunks_exact_mut(3)).enumerate() {
-                let k = c * CHUNK + i;
-                let h = step(t, k);
-                let root_h = h.sqrt();
-                let white_k = normal3(&mut white) * (model.density / root_h);
-                e.copy_from_slice(white_k.as_slice());
-                let value = w + g;
-                b.copy_from_slice(value.as_slice());
+            for (i, b) in bias.chunks_exact_mut(3).enumerate() {
+                b.copy_from_slice((w + g).as_slice());
+                let h = step(t, c * CHUNK + i);
                 if walk_on {
-                    w += normal3(&mut walk_rng) * (model.random_walk * root_h);
+                    w += normal3(&mut walk_rng) * (model.random_walk * h.sqrt());
                 }
                 if gm_on {
                     let a = (-h / model.gauss_markov_tau).exp();
@@ -228,39 +238,34 @@ pub fn measure(
         g0 = g0 * gm.decay + gm.end;
     }
 
-    // Pass 3 (parallel): join the chunks, add the fixed bias, form the readings (skipping the
-    // terms that are off: most simulations have neither scale errors nor limits).
+    // Pass 3 (parallel): join the chunks, add the fixed bias and the white noise, form the readings
+    // (skipping the terms that are off: most simulations have neither scale errors nor limits).
     let ideal_sensor = model.matrix == Matrix3::identity();
     let clean = model.range == f64::INFINITY && model.resolution == 0.0;
     let limit = |v: f64| quantise(v.clamp(-model.range, model.range), model.resolution);
-    let ideal_chunks = ideal.par_chunks(3 * CHUNK);
     bias_out
         .par_chunks_mut(3 * CHUNK)
-        .zip(out.par_chunks_mut(3 * CHUNK))
-        .zip(ideal_chunks)
+        .zip(values.par_chunks_mut(3 * CHUNK))
         .enumerate()
-        .for_each(|(c, ((bias, noise), u))| {
+        .for_each(|(c, (bias, readings))| {
             let (w_start, g_start) = starts[c];
+            let mut white = stream(seed, triad, Process::White, c);
             let mut decay = 1.0;
-            for (i, ((b, e), u)) in bias
-                .chunks_exact_mut(3)
-                .zip(noise.chunks_exact_mut(3))
-                .zip(u.chunks_exact(3))
-                .enumerate()
-            {
+            for (i, (b, u)) in bias.chunks_exact_mut(3).zip(readings.chunks_exact_mut(3)).enumerate() {
+                let h = step(t, c * CHUNK + i);
                 let b_k = Vector3::from_column_slice(b) + w_start + g_start * decay + fixed;
                 b.copy_from_slice(b_k.as_slice());
-                let u = Vector3::from_column_slice(u);
-                let scaled = if ideal_sensor { u } else { model.matrix * u };
-                let reading = scaled + b_k + Vector3::from_column_slice(e);
-                let reading = if clean { reading } else { reading.map(&limit) };
-                e.copy_from_slice(reading.as_slice());
+                let ideal = Vector3::from_column_slice(u);
+                let scaled = if ideal_sensor { ideal } else { model.matrix * ideal };
+                let reading = scaled + b_k + normal3(&mut white) * (model.density / h.sqrt());
+                let reading = if clean { reading } else { reading.map(limit) };
+                u.copy_from_slice(reading.as_slice());
                 if gm_on {
-                    decay *= (-step(t, c * CHUNK + i) / model.gauss_markov_tau).exp();
+                    decay *= (-h / model.gauss_markov_tau).exp();
                 }
             }
         });
-    match out.iter().position(|v| !v.is_finite()) {
+    match values.iter().position(|v| !v.is_finite()) {
         Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument("ideal")),
         None => Ok(()),
     }
