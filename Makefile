@@ -49,6 +49,7 @@ bench: build
 	$(VPY) bench/bench_preint.py
 	$(VPY) bench/bench_allan.py
 	$(VPY) bench/bench_sim.py
+	$(VPY) bench/bench_filters.py
 	cargo bench --locked -p imukit
 
 # Re-pin the Python closure after editing requirements/dev.in.

@@ -8,6 +8,7 @@ use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{propagate, strapdown};
 
 mod allan_glue;
+mod filters_glue;
 mod preint_glue;
 mod sim_glue;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -17,7 +18,7 @@ use numpy::{
 use pyo3::prelude::*;
 
 /// The `imukit._errors` class for an imukit error, so Python sees one hierarchy.
-fn class_name(e: &imukit::Error) -> &'static str {
+pub(crate) fn class_name(e: &imukit::Error) -> &'static str {
     use imukit::Error as E;
     match e.root() {
         E::RowLength { .. } | E::RowCount { .. } => "ShapeError",
@@ -483,6 +484,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(strapdown_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(strapdown_propagate, m)?)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
+    m.add_class::<filters_glue::PyAttitudeFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;

@@ -10,7 +10,8 @@ right perturbations, intrinsic ZYX Euler angles, SI units) are tabulated with wo
 array([0., 1., 0.])
 """
 
-from imukit import euler, io, noise, quat, sim, so3
+from imukit import euler, filters, io, noise, quat, sim, so3
+from imukit import eval as eval  # the module imukit.eval (BROAD-style attitude errors); shadows the builtin here only
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
@@ -52,6 +53,8 @@ __all__ = [
     "Trajectory",
     "__version__",
     "euler",
+    "eval",
+    "filters",
     "integrate",
     "integrate_attitude",
     "io",

@@ -7,6 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "AttitudeFilter",
     "Preintegrator",
     "__version__",
     "allan_variance",
@@ -89,6 +90,39 @@ def strapdown_propagate(
     scheme: str,
     every: int,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+
+@final
+class AttitudeFilter:
+    def __new__(
+        cls,
+        algorithm: str,
+        gains: list[float],
+        world: str,
+        gravity: float,
+        ramp: list[float],
+        accel_rejection: list[float] | None,
+        mag_rejection: list[float] | None,
+        rest: list[float] | None,
+    ) -> AttitudeFilter: ...
+    @staticmethod
+    def initial_state(q: list[float] | None = None) -> NDArray[np.float64]: ...
+    def update(
+        self,
+        state: NDArray[np.float64],
+        gyro: list[float],
+        accel: list[float],
+        dt: float,
+        mag: list[float] | None = None,
+    ) -> NDArray[np.float64]: ...
+    def run(
+        self,
+        t: NDArray[np.float64],
+        gyro: NDArray[np.float64],
+        accel: NDArray[np.float64],
+        mag: NDArray[np.float64] | None,
+        state: NDArray[np.float64],
+        continued: bool,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 
 @final
 class Preintegrator:

@@ -27,6 +27,7 @@ pub mod attitude;
 pub mod batch;
 mod error;
 pub mod euler;
+pub mod filters;
 pub mod interp;
 mod mat3;
 pub mod preint;

@@ -1,0 +1,54 @@
+//! Madgwick's gradient-descent filter (Madgwick, "An efficient orientation filter for inertial
+//! and inertial/magnetic sensor arrays", report, 2010, §3; Madgwick, Harrison & Vaidyanathan,
+//! ICORR 2011): `q̇ = ½ q ⊗ ω − β ∇f/‖∇f‖`, `f = q* ⊗ d ⊗ q − s` stacked over gravity and the
+//! earth field `b = [‖h_horizontal‖ north + h_vertical up]`, `h = q ⊗ m ⊗ q*` (his eq. 45–46).
+//!
+//! For `f = ½‖R̂ᵀ d − s‖²` and a right perturbation `R̂ Exp(δ)`, the gradient is `v̂ × s`
+//! (`v̂ = R̂ᵀ d`), so the descent direction on the tangent space is `s × v̂`, summed over the
+//! measurements and normalised. `β` keeps Madgwick's meaning, the norm of the correction's
+//! quaternion rate, hence a correction rate of `2β` rad/s about `Σ s × v̂ / ‖Σ s × v̂‖`. The radial
+//! part of his 4-vector gradient (which his renormalisation removes) is left out of the norm.
+
+use nalgebra::Vector3;
+
+/// Gain of the Madgwick filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Madgwick {
+    /// `β` [1/s]: norm of the correction's quaternion rate (rotation rate `2β` rad/s).
+    pub beta: f64,
+}
+
+impl Default for Madgwick {
+    /// `β = 0.041` (Madgwick 2010 / 2011: `β = √(3/4) ω̃_β`; 0.033 and 0.041 are the values his
+    /// IMU and MARG experiments found best; see `docs/filters.md`).
+    fn default() -> Self {
+        Self { beta: 0.041 }
+    }
+}
+
+/// Unit descent direction `Σ s × v̂` (body frame), or zero. `north_pred`, `up_pred`: the world
+/// north and up in body axes. The field reference `b = n_w ‖h_horizontal‖ + u_w h_up` seen from
+/// the body is `v̂_m = n_pred ‖h_horizontal‖ + u_pred h_up`, with `h_up = m̂·u_pred`.
+#[inline(always)]
+pub(crate) fn direction(
+    north_pred: &Vector3<f64>,
+    up_pred: &Vector3<f64>,
+    accel_dir: Option<&Vector3<f64>>,
+    mag_dir: Option<&Vector3<f64>>,
+) -> Vector3<f64> {
+    let mut d = Vector3::zeros();
+    if let Some(s) = accel_dir {
+        d += s.cross(up_pred);
+    }
+    if let Some(m) = mag_dir {
+        let vertical = m.dot(up_pred);
+        let horizontal = (1.0 - vertical * vertical).max(0.0).sqrt();
+        d += m.cross(&(north_pred * horizontal + up_pred * vertical));
+    }
+    let n2 = d.norm_squared();
+    if n2 > 1e-24 {
+        d * (1.0 / n2.sqrt())
+    } else {
+        Vector3::zeros()
+    }
+}

@@ -1,0 +1,56 @@
+//! Mahony's explicit complementary filter on SO(3) (Mahony, Hamel & Pflimlin, "Nonlinear
+//! complementary filters on the special orthogonal group", IEEE TAC 53(5), 2008, §V eq. 32):
+//!
+//! `ω_mes = Σ k_i v_i × v̂_i`, `Ṙ̂ = R̂ [ω_y − b̂ + k_P ω_mes]×`, `ḃ̂ = −k_I ω_mes`,
+//!
+//! with `v_i` the measured and `v̂_i = R̂ᵀ v₀ᵢ` the predicted body directions (unit vectors).
+//! imukit uses `k_a = 1` for gravity; the magnetometer (9D) enters only about the vertical: its
+//! world-frame horizontal direction `ĥ` is compared with north, `e = R̂ᵀ (ĥ × n_w)`, so a magnetic
+//! disturbance can never tilt the estimate (the same `v × v̂` form, written in world axes with the
+//! field's vertical part removed).
+
+use nalgebra::Vector3;
+
+/// Gains of the Mahony filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mahony {
+    /// Proportional gain `k_P` [1/s] (rad/s of correction per unit of `v × v̂`).
+    pub kp: f64,
+    /// Integral gain `k_I` [1/s²] of the gyro-bias estimate; 0 disables it.
+    pub ki: f64,
+}
+
+impl Default for Mahony {
+    /// `k_P = 1`, `k_I = 0.1`: a crossover near 1 rad/s, and a bias time constant
+    /// `k_P / k_I = 10` s (see `docs/filters.md` for the sources).
+    fn default() -> Self {
+        Self { kp: 1.0, ki: 0.1 }
+    }
+}
+
+/// `Σ v_i × v̂_i` for the accepted measurements (body frame). `north_pred`, `up_pred` are the
+/// world north and up in body axes (`R̂ᵀ n_w`, `R̂ᵀ u_w`).
+///
+/// Magnetometer: with `h = R̂ m̂`, its east and north parts are `m̂·ê_pred`, `m̂·n_pred`
+/// (`ê = n × u`), and `ĥ_horizontal × n_w = u_w h_e / √(h_e² + h_n²)`; in body axes `u_pred h_e/…`.
+#[inline(always)]
+pub(crate) fn error(
+    north_pred: &Vector3<f64>,
+    up_pred: &Vector3<f64>,
+    accel_dir: Option<&Vector3<f64>>,
+    mag_dir: Option<&Vector3<f64>>,
+) -> Vector3<f64> {
+    let mut e = Vector3::zeros();
+    if let Some(s) = accel_dir {
+        e += s.cross(up_pred);
+    }
+    if let Some(m) = mag_dir {
+        let h_north = m.dot(north_pred);
+        let h_east = m.dot(&north_pred.cross(up_pred));
+        let r2 = h_north * h_north + h_east * h_east;
+        if r2 > 1e-18 {
+            e += up_pred * (h_east / r2.sqrt());
+        }
+    }
+    e
+}

@@ -1,0 +1,256 @@
+//! Mahony and Madgwick: convergence at the 24 axis-aligned attitudes in ENU and NED (6D in
+//! inclination, 9D fully), streaming = batch, save/restore, errors naming the sample, no panics.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use imukit::filters::{Algorithm, Common, Filter, Inputs, Madgwick, Mahony, State, World};
+use imukit::Error;
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+
+const G: f64 = 9.81;
+
+fn filters(world: World) -> Vec<Filter> {
+    let common = Common {
+        world,
+        ..Common::default()
+    };
+    vec![
+        Filter::new(Algorithm::Mahony(Mahony::default()), common).unwrap(),
+        Filter::new(Algorithm::Madgwick(Madgwick::default()), common).unwrap(),
+    ]
+}
+
+/// The 24 signed axis permutations with det +1.
+fn axis_rotations() -> Vec<Matrix3<f64>> {
+    let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+    let mut out = Vec::new();
+    for p in perms {
+        for signs in 0..8 {
+            let mut m = Matrix3::zeros();
+            for (i, &j) in p.iter().enumerate() {
+                m[(i, j)] = if signs >> i & 1 == 1 { -1.0 } else { 1.0 };
+            }
+            if m.determinant() > 0.0 {
+                out.push(m);
+            }
+        }
+    }
+    out
+}
+
+/// Resting readings: specific force points up (ENU `+g z`, NED `−g z`); field 22 µT north, 42 down.
+fn readings(world: World, r_wb: &Matrix3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let (up, field) = match world {
+        World::Enu => (Vector3::new(0.0, 0.0, G), Vector3::new(0.0, 22.0, -42.0)),
+        World::Ned => (Vector3::new(0.0, 0.0, -G), Vector3::new(22.0, 0.0, 42.0)),
+    };
+    (r_wb.transpose() * up, r_wb.transpose() * field)
+}
+
+fn run(f: &Filter, state: &mut State, n: usize, accel: Vector3<f64>, mag: Option<Vector3<f64>>) -> Vec<f64> {
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+    let gyro = vec![0.0; 3 * n];
+    let a: Vec<f64> = (0..n).flat_map(|_| accel.iter().copied().collect::<Vec<_>>()).collect();
+    let m: Option<Vec<f64>> = mag.map(|m| (0..n).flat_map(|_| m.iter().copied().collect::<Vec<_>>()).collect());
+    let inputs = Inputs {
+        t: &t,
+        gyro: &gyro,
+        accel: &a,
+        mag: m.as_deref(),
+    };
+    let (mut q, mut b) = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
+    f.run(state, &inputs, false, &mut q, &mut b).unwrap();
+    q
+}
+
+#[test]
+fn converges_at_24_attitudes_enu_and_ned() {
+    let rots = axis_rotations();
+    assert_eq!(rots.len(), 24);
+    let offset = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -0.25, 0.35));
+    for world in [World::Enu, World::Ned] {
+        let up_w = world.up();
+        for f in filters(world) {
+            for m in &rots {
+                let truth = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m));
+                let (a, mag) = readings(world, m);
+                // 6D from a wrong start: inclination only.
+                let mut s = State::at(offset * truth, Vector3::zeros(), 0.0);
+                let q = run(&f, &mut s, 2000, a, None);
+                let est =
+                    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[7999], q[7996], q[7997], q[7998]));
+                let inclination = (est.inverse() * up_w).angle(&(truth.inverse() * up_w));
+                assert!(
+                    inclination < 1e-3,
+                    "{world:?} {:?} 6D inclination {inclination}",
+                    f.algorithm()
+                );
+                // 9D: fully.
+                let mut s = State::at(offset * truth, Vector3::zeros(), 0.0);
+                let q = run(&f, &mut s, 2000, a, Some(mag));
+                let est =
+                    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[7999], q[7996], q[7997], q[7998]));
+                assert!(
+                    est.angle_to(&truth) < 2e-3,
+                    "{world:?} 9D error {}",
+                    est.angle_to(&truth)
+                );
+                // Initialised from the sensors: exact at the first sample.
+                let mut s = State::default();
+                let q = run(&f, &mut s, 1, a, Some(mag));
+                let est = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
+                assert!(est.angle_to(&truth) < 1e-12);
+            }
+        }
+    }
+}
+
+fn moving(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.005).collect();
+    let mut gyro = Vec::new();
+    let mut accel = Vec::new();
+    let mut mag = Vec::new();
+    for &tk in &t {
+        gyro.extend([0.3 * (1.1 * tk).sin(), 0.2 * (0.7 * tk).cos(), 0.5 * (1.3 * tk).sin()]);
+        accel.extend([
+            0.5 * (0.9 * tk).sin(),
+            0.4 * (0.3 * tk).cos(),
+            9.81 + 0.2 * (1.7 * tk).sin(),
+        ]);
+        mag.extend([20.0 * (0.2 * tk).cos(), 20.0 * (0.2 * tk).sin(), -40.0]);
+    }
+    (t, gyro, accel, mag)
+}
+
+#[test]
+fn streaming_equals_batch_and_restore_resumes_identically() {
+    let n = 3000;
+    let (t, gyro, accel, mag) = moving(n);
+    for f in filters(World::Ned) {
+        for nine in [false, true] {
+            let inputs = Inputs {
+                t: &t,
+                gyro: &gyro,
+                accel: &accel,
+                mag: nine.then_some(&mag[..]),
+            };
+            let (mut q, mut b) = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
+            let mut batch_state = State::default();
+            f.run(&mut batch_state, &inputs, false, &mut q, &mut b).unwrap();
+
+            let v = |x: &[f64], k: usize| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+            let mut s = State::default();
+            let mut saved = None;
+            for k in 0..n {
+                let dt = if k == 0 { 0.0 } else { t[k] - t[k - 1] };
+                let m = nine.then(|| v(&mag, k));
+                f.update(&mut s, &v(&gyro, k), &v(&accel, k), m.as_ref(), dt).unwrap();
+                assert_eq!(s.q.coords.as_slice(), &q[4 * k..4 * k + 4], "sample {k}");
+                if k == 1000 {
+                    saved = Some(s);
+                }
+            }
+            // Restore at 1000 and resume: the same numbers.
+            let mut r = saved.unwrap();
+            for k in 1001..n {
+                let m = nine.then(|| v(&mag, k));
+                f.update(&mut r, &v(&gyro, k), &v(&accel, k), m.as_ref(), t[k] - t[k - 1])
+                    .unwrap();
+            }
+            assert_eq!(r.q, s.q);
+            assert_eq!(r.bias, s.bias);
+            // The flat layout round-trips exactly.
+            assert_eq!(State::from_array(&s.to_array()).unwrap(), s);
+            // Batch split in two, the second part continuing the first: the same numbers.
+            let cut = 1234;
+            let mut st = State::default();
+            let (mut q1, mut b1) = (vec![0.0; 4 * cut], vec![0.0; 3 * cut]);
+            let first = Inputs {
+                t: &t[..cut],
+                gyro: &gyro[..3 * cut],
+                accel: &accel[..3 * cut],
+                mag: nine.then_some(&mag[..3 * cut]),
+            };
+            f.run(&mut st, &first, false, &mut q1, &mut b1).unwrap();
+            let rest = Inputs {
+                t: &t[cut..],
+                gyro: &gyro[3 * cut..],
+                accel: &accel[3 * cut..],
+                mag: nine.then_some(&mag[3 * cut..]),
+            };
+            let (mut q2, mut b2) = (vec![0.0; 4 * (n - cut)], vec![0.0; 3 * (n - cut)]);
+            f.run(&mut st, &rest, true, &mut q2, &mut b2).unwrap();
+            q1.extend(q2);
+            assert_eq!(q1, q);
+        }
+    }
+}
+
+#[test]
+fn errors_name_input_and_sample() {
+    let n = 10;
+    let (t, gyro, mut accel, mut mag) = moving(n);
+    let f = &filters(World::Enu)[0];
+    let mut out = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
+    accel[3 * 6 + 2] = f64::NAN;
+    let inputs = Inputs {
+        t: &t,
+        gyro: &gyro,
+        accel: &accel,
+        mag: None,
+    };
+    let e = f
+        .run(&mut State::default(), &inputs, false, &mut out.0, &mut out.1)
+        .unwrap_err();
+    assert_eq!(e, Error::NonFinite { index: 6 }.in_argument("accel"));
+    let good = moving(n).2;
+    mag[3 * 9] = f64::INFINITY;
+    let inputs = Inputs {
+        t: &t,
+        gyro: &gyro,
+        accel: &good,
+        mag: Some(&mag),
+    };
+    let e = f
+        .run(&mut State::default(), &inputs, false, &mut out.0, &mut out.1)
+        .unwrap_err();
+    assert_eq!(e, Error::NonFinite { index: 9 }.in_argument("mag"));
+    let short = Inputs {
+        gyro: &gyro[..6],
+        ..inputs
+    };
+    let e = f
+        .run(&mut State::default(), &short, false, &mut out.0, &mut out.1)
+        .unwrap_err();
+    assert!(matches!(e, Error::Argument { name: "gyro", .. }));
+    let bad = Common {
+        gravity: -1.0,
+        ..Common::default()
+    };
+    assert!(matches!(
+        Filter::new(Algorithm::Mahony(Mahony::default()), bad),
+        Err(Error::Parameter { name: "gravity", .. })
+    ));
+}
+
+#[test]
+fn extreme_finite_input_does_not_panic() {
+    let f = filters(World::Enu);
+    let values = [0.0, 1e-300, -1e-300, 1e300, -1e300, f64::MAX, f64::MIN_POSITIVE, 3.0];
+    for filter in &f {
+        let mut s = State::default();
+        for (i, &x) in values.iter().enumerate() {
+            for &y in &values {
+                let v = Vector3::new(x, y, values[(i + 3) % values.len()]);
+                for r in [
+                    filter.update(&mut s, &v, &Vector3::new(y, x, 9.81), Some(&v), 0.01),
+                    filter.update(&mut s, &v, &v, None, 1e-3),
+                ] {
+                    if let Err(e) = r {
+                        assert!(matches!(e, Error::Overflow { .. }), "{e}");
+                        s = State::default(); // an overflowed state is reported, then discarded
+                    }
+                }
+            }
+        }
+    }
+}

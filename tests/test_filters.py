@@ -1,0 +1,278 @@
+"""Attitude filters (imukit.filters): frame convergence at the 24 axis-aligned attitudes in ENU
+and NED, gyro-bias estimation, acceleration rejection, streaming = batch, save/restore, errors."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+from imukit.filters import Madgwick, Mahony
+
+G = 9.81
+# Earth field [µT], 22 north and 42 down (a mid-latitude dip of 62°): ENU (0, 22, -42), NED (22, 0, 42).
+FIELD = {"ENU": np.array([0.0, 22.0, -42.0]), "NED": np.array([22.0, 0.0, 42.0])}
+# What a resting accelerometer reads in world axes: specific force, pointing up.
+UP_READING = {"ENU": np.array([0.0, 0.0, G]), "NED": np.array([0.0, 0.0, -G])}
+FILTERS = [Mahony, Madgwick]
+
+
+def axis_rotations() -> list[np.ndarray]:
+    """The 24 proper rotations that permute the axes with signs (det +1)."""
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            m = np.zeros((3, 3))
+            m[range(3), perm] = signs
+            if np.linalg.det(m) > 0:
+                out.append(m)
+    return out
+
+
+def test_24_rotations() -> None:
+    mats = axis_rotations()
+    assert len(mats) == 24
+    assert len({m.tobytes() for m in mats}) == 24
+
+
+def static_imu(r_wb: np.ndarray, world: str, n: int, rate: float = 100.0) -> tuple[ik.ImuData, np.ndarray]:
+    t = np.arange(n) / rate
+    accel = np.tile(r_wb.T @ UP_READING[world], (n, 1))
+    mag = np.tile(r_wb.T @ FIELD[world], (n, 1))
+    return ik.ImuData(t, np.zeros((n, 3)), accel), mag
+
+
+def inclination_deg(a: Rotation, b: Rotation, world: str) -> np.ndarray:
+    """Angle between the body directions of the world vertical: tilt error, heading ignored."""
+    z = np.array([0.0, 0.0, 1.0])
+    ua, ub = a.inv().apply(z), b.inv().apply(z)
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(ua, ub), axis=-1), np.sum(ua * ub, axis=-1)))
+
+
+@pytest.mark.parametrize("world", ["ENU", "NED"])
+@pytest.mark.parametrize("cls", FILTERS)
+def test_frame_convergence(cls: type[Mahony], world: str) -> None:
+    """From a 30° wrong start, 20 s at rest converge: 6D in inclination, 9D fully."""
+    offset = Rotation.from_rotvec(np.radians(30.0) * np.array([0.6, -0.48, 0.64]))
+    worst6 = worst9 = 0.0
+    for m in axis_rotations():
+        imu, mag = static_imu(m, world, 2000)
+        truth = Rotation.from_matrix(m)
+        f = cls(world=world)
+        start = offset * truth
+        # Initialised from the sensors: exact at once.
+        first6 = f.run(imu).rotation[0]
+        assert inclination_deg(first6, truth, world) < 1e-9
+        first9 = f.run(imu, mag=mag).rotation[0]
+        assert (first9 * truth.inv()).magnitude() < 1e-9
+        # From a wrong start.
+        r6 = f.run(imu, initial=start).rotation[-1]
+        r9 = f.run(imu, mag=mag, initial=start).rotation[-1]
+        worst6 = max(worst6, float(inclination_deg(r6, truth, world)))
+        worst9 = max(worst9, float(np.degrees((r9 * truth.inv()).magnitude())))
+    assert worst6 < 0.05, worst6
+    assert worst9 < 0.1, worst9
+
+
+def test_ned_is_enu_relabelled() -> None:
+    """The same physical attitude reported in ENU and NED differs by the fixed frame change."""
+    enu_from_ned = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    r_enu = Rotation.from_rotvec([0.2, -0.4, 1.0]).as_matrix()
+    r_ned = enu_from_ned.T @ r_enu
+    imu_e, mag_e = static_imu(r_enu, "ENU", 5)
+    imu_n, mag_n = static_imu(r_ned, "NED", 5)
+    np.testing.assert_allclose(imu_e.accel, imu_n.accel, atol=1e-12)  # the same readings
+    np.testing.assert_allclose(mag_e, mag_n, atol=1e-12)
+    e = Mahony(world="ENU").run(imu_e, mag=mag_e).rotation[-1].as_matrix()
+    n = Mahony(world="NED").run(imu_n, mag=mag_n).rotation[-1].as_matrix()
+    np.testing.assert_allclose(e, r_enu, atol=1e-9)
+    np.testing.assert_allclose(n, r_ned, atol=1e-9)
+
+
+BIAS = np.array([0.02, -0.03, 0.015])
+
+
+def test_mahony_estimates_gyro_bias() -> None:
+    """A constant gyro bias on a moving trajectory is found by the integral term within 5%.
+
+    The figure eight is scaled to 0.2 m: its 0.02 m/s² of linear acceleration is what the filter
+    cannot tell from tilt (at the default 10 m size, 0.9 m/s², the y estimate is 77% off)."""
+    imu, truth = ik.sim.simulate(
+        ik.sim.FigureEight(amplitude=(0.2, 0.1, 0.02)), rate=200, duration=300, bias=ik.ImuBias(gyro=BIAS)
+    )
+    mag = truth.rotation.inv().apply(FIELD["ENU"])
+    res = Mahony(kp=1.0, ki=0.1).run(imu, mag=mag)
+    est = res.gyro_bias[-1]
+    assert np.all(np.abs(est - BIAS) <= 0.05 * np.abs(BIAS)), est
+    # Without the integral term there is no estimate at all.
+    assert np.all(Mahony(kp=1.0, ki=0.0).run(imu, mag=mag).gyro_bias == 0.0)
+
+
+def test_mahony_bias_6d_constant_twist() -> None:
+    imu, _ = ik.sim.simulate(
+        ik.sim.ConstantTwist(body_rate=[0.1, 0.2, 0.3], body_velocity=[0.0, 0.0, 0.0]),
+        rate=200,
+        duration=300,
+        bias=ik.ImuBias(gyro=BIAS),
+    )
+    est = Mahony().run(imu).gyro_bias[-1]
+    assert np.all(np.abs(est - BIAS) <= 0.05 * np.abs(BIAS)), est
+
+
+def accelerating_imu(rate: float = 100.0) -> tuple[ik.ImuData, np.ndarray]:
+    """Level and still for 10 s, then 5 m/s² along world x for 3 s, then still for 1 s (ENU)."""
+    t = np.arange(int(14 * rate)) / rate
+    a_w = np.zeros((len(t), 3))
+    a_w[(t >= 10.0) & (t < 13.0), 0] = 5.0
+    accel = a_w + UP_READING["ENU"]  # R_wb = I: a_m = a_w − g_w
+    return ik.ImuData(t, np.zeros((len(t), 3)), accel), t
+
+
+@pytest.mark.parametrize("cls", FILTERS)
+def test_acceleration_rejection(cls: type[Mahony]) -> None:
+    imu, t = accelerating_imu()
+    during = t < 13.0
+    tilt_rej = np.degrees(cls().run(imu).rotation.magnitude())[during].max()
+    tilt_raw = np.degrees(cls(acc_rejection=None).run(imu).rotation.magnitude())[during].max()
+    assert tilt_rej < 1.0, tilt_rej
+    assert tilt_raw > 1.0, tilt_raw
+
+
+def test_rejection_recovers_after_timeout() -> None:
+    """A disturbance longer than the recovery time is eventually accepted (ramp restart)."""
+    rate = 100.0
+    t = np.arange(int(40 * rate)) / rate
+    # Tilted by 20° about x from t = 5 s on, with zero gyro: the reading is a genuine new tilt.
+    r = Rotation.from_rotvec([np.radians(20.0), 0.0, 0.0]).as_matrix()
+    accel = np.tile(UP_READING["ENU"], (len(t), 1))
+    accel[t >= 5.0] = r.T @ UP_READING["ENU"]
+    imu = ik.ImuData(t, np.zeros((len(t), 3)), accel)
+    tilt = np.degrees(Mahony().run(imu).rotation.magnitude())
+    assert tilt[(t > 5.5) & (t < 9.9)].max() < 0.5  # rejected (20° > 10°), before the 5 s timeout
+    assert abs(tilt[-1] - 20.0) < 0.1  # recovered
+
+
+def test_mag_rejection() -> None:
+    """A magnetic disturbance (field norm +50%) does not turn the heading."""
+    imu, mag = static_imu(np.eye(3), "ENU", 2000)
+    mag = mag.copy()
+    mag[1000:1500] = Rotation.from_rotvec([0, 0, 0.8]).apply(mag[1000:1500]) * 1.5
+    rej = Mahony().run(imu, mag=mag).rotation.magnitude()
+    raw = Mahony(mag_rejection=None).run(imu, mag=mag).rotation.magnitude()
+    assert np.degrees(rej.max()) < 1e-6
+    assert np.degrees(raw.max()) > 5.0
+
+
+def test_rest_detection_bias() -> None:
+    """Madgwick has no bias estimate of its own; at rest the rest detector finds it."""
+    n = 3000
+    imu_still, _ = static_imu(np.eye(3), "ENU", n)
+    imu = ik.ImuData(imu_still.t, np.tile(BIAS * 0.5, (n, 1)), imu_still.accel)
+    est = Madgwick(rest_detection=ik.filters.RestDetection()).run(imu).gyro_bias[-1]
+    np.testing.assert_allclose(est, BIAS * 0.5, rtol=1e-6)
+    assert np.all(Madgwick().run(imu).gyro_bias[-1] == 0.0)
+
+
+@pytest.fixture(scope="module")
+def moving() -> tuple[ik.ImuData, np.ndarray]:
+    imu, truth = ik.sim.simulate(
+        ik.sim.FigureEight(),
+        rate=200,
+        duration=20,
+        noise=ik.ImuNoise(gyro_density=1e-3, accel_density=1e-2, gyro_random_walk=0, accel_random_walk=0),
+        bias=ik.ImuBias(gyro=BIAS),
+        seed=3,
+    )
+    return imu, truth.rotation.inv().apply(FIELD["ENU"])
+
+
+@pytest.mark.parametrize("nine", [False, True])
+@pytest.mark.parametrize("cls", FILTERS)
+def test_streaming_equals_batch(cls: type[Mahony], nine: bool, moving: tuple[ik.ImuData, np.ndarray]) -> None:
+    imu, mag = moving
+    m = mag if nine else None
+    batch = cls(rest_detection=ik.filters.RestDetection()).run(imu, mag=m)
+    f = cls(rest_detection=ik.filters.RestDetection())
+    dts = np.diff(imu.seconds, prepend=0.0)
+    quats = []
+    for k in range(len(imu.t)):
+        r = f.update(imu.gyro[k], imu.accel[k], dts[k], mag=None if m is None else m[k])
+        quats.append(r.as_quat())
+    assert np.array_equal(np.array(quats), batch.rotation.as_quat())
+    assert np.array_equal(f.get_state().gyro_bias, batch.gyro_bias[-1])
+
+
+@pytest.mark.parametrize("nine", [False, True])
+@pytest.mark.parametrize("cls", FILTERS)
+def test_split_save_restore(cls: type[Mahony], nine: bool, moving: tuple[ik.ImuData, np.ndarray]) -> None:
+    imu, mag = moving
+    whole = cls().run(imu, mag=mag if nine else None)
+    cut = 1234
+    a = ik.ImuData(imu.t[:cut], imu.gyro[:cut], imu.accel[:cut])
+    b = ik.ImuData(imu.t[cut:], imu.gyro[cut:], imu.accel[cut:])
+    first = cls().run(a, mag=mag[:cut] if nine else None)
+    saved = first.state
+    second = cls().run(b, mag=mag[cut:] if nine else None, initial=saved)
+    q = np.concatenate([first.rotation.as_quat(), second.rotation.as_quat()])
+    # Same arithmetic except dt of the first step of b (from absolute stamps): allow rounding.
+    np.testing.assert_allclose(q, whole.rotation.as_quat(), atol=1e-12)
+    # Streaming: save mid-way, run on, restore, run again: identical.
+    f = cls()
+    dts = np.diff(imu.seconds, prepend=0.0)
+    for k in range(cut):
+        f.update(imu.gyro[k], imu.accel[k], dts[k])
+    state = f.get_state()
+    run1 = [f.update(imu.gyro[k], imu.accel[k], dts[k]).as_quat() for k in range(cut, cut + 300)]
+    f.set_state(state)
+    run2 = [f.update(imu.gyro[k], imu.accel[k], dts[k]).as_quat() for k in range(cut, cut + 300)]
+    assert np.array_equal(np.array(run1), np.array(run2))
+    assert state.initialized and state.values.flags.writeable is False
+
+
+def test_bad_input_names_argument() -> None:
+    imu, mag = static_imu(np.eye(3), "ENU", 10)
+    bad = mag.copy()
+    bad[7, 1] = np.nan
+    with pytest.raises(ik.NonFiniteError, match=r"^mag: element 7 "):
+        Mahony().run(imu, mag=bad)
+    with pytest.raises(ik.ShapeError, match=r"^mag: expected shape"):
+        Mahony().run(imu, mag=mag[:5])
+    f = Madgwick()
+    f.update([0, 0, 0], [0, 0, 9.81], 0.01)
+    with pytest.raises(ik.NonFiniteError, match=r"^gyro: "):
+        f.update([0, np.inf, 0], [0, 0, 9.81], 0.01)
+    with pytest.raises(ik.NonFiniteError, match=r"^accel: "):
+        f.update([0, 0, 0], [0, np.nan, 9.81], 0.01)
+    with pytest.raises(ik.ParameterError, match=r"^dt: "):
+        f.update([0, 0, 0], [0, 0, 9.81], 0.0)
+    with pytest.raises(ik.ShapeError, match=r"^gyro: "):
+        f.update([0, 0], [0, 0, 9.81], 0.01)
+    with pytest.raises(ik.ParameterError, match=r"^kp: "):
+        Mahony(kp=-1.0)
+    with pytest.raises(ik.ParameterError, match=r"^beta: "):
+        Madgwick(beta=float("nan"))
+    with pytest.raises(ik.ParameterError, match=r"^world: "):
+        Mahony(world="NWU")
+    with pytest.raises(ik.ParameterError, match=r"^acc_rejection.angle: "):
+        Mahony(acc_rejection=ik.filters.AccelRejection(angle_rad=-1.0))
+    with pytest.raises(ik.ParameterError, match=r"^initial: "):
+        Mahony().run(imu, initial=Rotation.random(2, rng=1))
+    with pytest.raises(ik.ParameterError, match=r"^state: "):
+        f.set_state("nope")  # type: ignore[arg-type]
+    later = Mahony().run(imu).state
+    with pytest.raises(ik.TimestampError, match=r"^t: "):
+        Mahony().run(imu, initial=later)  # continuing into the past
+
+
+def test_zero_and_huge_accel_do_not_break() -> None:
+    """Free fall (zero specific force) and huge finite values give finite output, no panic."""
+    n = 50
+    t = np.arange(n) * 0.01
+    accel = np.zeros((n, 3))
+    accel[25:] = 1e300
+    for cls in FILTERS:
+        r = cls(acc_rejection=None).run(ik.ImuData(t, np.zeros((n, 3)), accel))
+        assert np.all(np.isfinite(r.rotation.as_quat()))
