@@ -1,5 +1,6 @@
 """VQF 6D on a real BROAD trial through imukit.eval.attitude_error: the metric reproduces the published
-accuracy, and a wrong frame convention is caught. Skips when the shared data folder is absent."""
+accuracy, and a wrong frame convention is caught; imukit's filters meet issue 7's accuracy targets on
+the 3 shared trials. Skips when the shared data folder is absent."""
 
 from __future__ import annotations
 
@@ -62,3 +63,32 @@ def test_wrong_conventions_give_large_errors(vqf_run: tuple[np.ndarray, ...]) ->
     # the heading alignment moves heading and total only: the inclination is independent of it
     raw = ik.eval.attitude_error(est, truth, scalar_first=True, mask=movement).rmse(degrees=True)
     assert raw.inclination == pytest.approx(good.inclination, rel=1e-9)  # tilt is heading-independent
+
+
+BROAD = TRIAL.parent
+TRIALS = ("01_undisturbed_slow_rotation_A", "06_undisturbed_fast_rotation_A", "24_disturbed_tapping_A")
+
+
+def test_imukit_filters_meet_the_broad_accuracy_targets() -> None:
+    """Issue 7: with default parameters, on the 3 shared trials, the best imukit filter has a mean
+    6D inclination RMSE ≤ 1.0° and a mean 9D total RMSE ≤ 3.0° (docs/filters_accuracy.md: Mahony
+    6D 0.85°, Madgwick 9D 2.24°; 1.73° and 6.26° with the defaults before tuning)."""
+    scipy_io = pytest.importorskip("scipy.io")
+    inc6: dict[str, list[float]] = {"Mahony": [], "Madgwick": []}
+    tot9: dict[str, list[float]] = {"Mahony": [], "Madgwick": []}
+    for name in TRIALS:
+        d = scipy_io.loadmat(BROAD / f"{name}.mat")
+        gyr, acc, mag = (np.ascontiguousarray(d[k], dtype=float) for k in ("imu_gyr", "imu_acc", "imu_mag"))
+        imu = ik.ImuData(np.arange(len(gyr)) / float(d["sampling_rate"].item()), gyr, acc)
+        truth, movement = np.asarray(d["opt_quat"], dtype=float), d["movement"].ravel().astype(bool)
+        for cls in (ik.filters.Mahony, ik.filters.Madgwick):
+            for nine in (False, True):
+                q = cls().run(imu, mag=mag if nine else None).rotation.as_quat(scalar_first=True)
+                r = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=not nine, mask=movement).rmse(
+                    degrees=True
+                )
+                (tot9 if nine else inc6)[cls.__name__].append(r.total if nine else r.inclination)
+    best6 = min(float(np.mean(v)) for v in inc6.values())
+    best9 = min(float(np.mean(v)) for v in tot9.values())
+    assert best6 <= 1.0, inc6
+    assert best9 <= 3.0, tot9

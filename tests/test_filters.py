@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-from imukit.filters import Madgwick, Mahony
+from imukit.filters import AccelRejection, Madgwick, Mahony
 
 G = 9.81
 # Earth field [µT], 22 north and 42 down (a mid-latitude dip of 62°): ENU (0, 22, -42), NED (22, 0, 42).
@@ -73,7 +73,8 @@ def test_frame_convergence(cls: type[Mahony], world: str) -> None:
         r9 = f.run(imu, mag=mag, initial=start).rotation[-1]
         worst6 = max(worst6, float(inclination_deg(r6, truth, world)))
         worst9 = max(worst9, float(np.degrees((r9 * truth.inv()).magnitude())))
-    assert worst6 < 0.05, worst6
+    # Madgwick's normalised gradient chatters at 2β dt (0.08° at the default β = 0.07, 100 Hz).
+    assert worst6 < 0.1, worst6
     assert worst9 < 0.1, worst9
 
 
@@ -118,7 +119,8 @@ def test_mahony_bias_6d_constant_twist() -> None:
         duration=300,
         bias=ik.ImuBias(gyro=BIAS),
     )
-    est = Mahony().run(imu).gyro_bias[-1]
+    # The default k_I = 0.01 has a 50 s time constant: faster gains to converge within 300 s.
+    est = Mahony(kp=1.0, ki=0.1).run(imu).gyro_bias[-1]
     assert np.all(np.abs(est - BIAS) <= 0.05 * np.abs(BIAS)), est
 
 
@@ -131,11 +133,16 @@ def accelerating_imu(rate: float = 100.0) -> tuple[ik.ImuData, np.ndarray]:
     return ik.ImuData(t, np.zeros((len(t), 3)), accel), t
 
 
+# The defaults (4 m/s², 30°, tuned on BROAD) let 5 m/s² sideways (27°, +1.2 m/s²) through: a strict
+# rejection is what these tests exercise.
+STRICT = AccelRejection(norm=1.0, angle_rad=np.radians(10.0))
+
+
 @pytest.mark.parametrize("cls", FILTERS)
 def test_acceleration_rejection(cls: type[Mahony]) -> None:
     imu, t = accelerating_imu()
     during = t < 13.0
-    tilt_rej = np.degrees(cls().run(imu).rotation.magnitude())[during].max()
+    tilt_rej = np.degrees(cls(acc_rejection=STRICT).run(imu).rotation.magnitude())[during].max()
     tilt_raw = np.degrees(cls(acc_rejection=None).run(imu).rotation.magnitude())[during].max()
     assert tilt_rej < 1.0, tilt_rej
     assert tilt_raw > 1.0, tilt_raw
@@ -150,9 +157,49 @@ def test_rejection_recovers_after_timeout() -> None:
     accel = np.tile(UP_READING["ENU"], (len(t), 1))
     accel[t >= 5.0] = r.T @ UP_READING["ENU"]
     imu = ik.ImuData(t, np.zeros((len(t), 3)), accel)
-    tilt = np.degrees(Mahony().run(imu).rotation.magnitude())
+    tilt = np.degrees(Mahony(acc_rejection=STRICT).run(imu).rotation.magnitude())
     assert tilt[(t > 5.5) & (t < 9.9)].max() < 0.5  # rejected (20° > 10°), before the 5 s timeout
     assert abs(tilt[-1] - 20.0) < 0.1  # recovered
+
+
+def turning_with_rejected_accel() -> tuple[ik.ImuData, np.ndarray, Rotation]:
+    """ENU, 100 Hz: level and still for 10 s, then turning about body x at 0.5 rad/s for 3 s with
+    the accelerometer reading 1.8 g (rejected by its norm) and the field turned 30° about the
+    vertical (a disturbance, used with ``mag_rejection=None``). The gyro is exact."""
+    rate, n, k0 = 100.0, 1300, 1000
+    t = np.arange(n) / rate
+    angle = 0.5 * np.maximum(np.arange(n) - k0, 0) / rate
+    truth = Rotation.from_rotvec(angle[:, None] * [1.0, 0.0, 0.0])
+    gyro = np.zeros((n, 3))
+    gyro[k0 + 1 :, 0] = 0.5  # sample k is the step from k − 1 to k
+    scale = np.where(np.arange(n) > k0, 1.8, 1.0)[:, None]
+    accel = truth.inv().apply(UP_READING["ENU"]) * scale
+    turned = np.where(
+        (np.arange(n) > k0)[:, None], Rotation.from_rotvec([0.0, 0.0, 0.5236]).apply(FIELD["ENU"]), FIELD["ENU"]
+    )
+    mag = truth.inv().apply(turned)
+    return ik.ImuData(t, gyro, accel), mag, truth
+
+
+@pytest.mark.parametrize("cls", FILTERS)
+def test_magnetometer_does_not_tilt_while_accel_rejected(cls: type[Mahony]) -> None:
+    """Regression: with the accelerometer rejected, a heading disturbance must not tilt the estimate.
+    Mahony's integral term used to learn from the magnetometer alone (a heading error integrated
+    into the body-axis bias while the body turns tilts it); Madgwick's field gradient, which is not
+    heading-only, used to act alone at the full 2β rate."""
+    imu, mag, truth = turning_with_rejected_accel()
+    res = cls(mag_rejection=None).run(imu, mag=mag)
+    tilt = inclination_deg(res.rotation, truth, "ENU")
+    assert tilt[:1000].max() < 1e-6  # converged at rest
+    # Mahony: the heading correction about the vertical and the turn share one exponential per
+    # step, which does not commute exactly: 0.06° after 3 s here (0.48° before the fix).
+    limit = 0.1 if cls is Mahony else 1e-6
+    assert tilt[1000:].max() < limit, tilt[1000:].max()
+    # The bias estimate does not move while gravity is not observed.
+    np.testing.assert_array_equal(res.gyro_bias[1000:], np.broadcast_to(res.gyro_bias[1000], (300, 3)))
+    if cls is Mahony:  # its heading-only field correction is still applied
+        heading = np.degrees((res.rotation[-1] * truth[-1].inv()).magnitude())
+        assert heading > 1.0, heading
 
 
 def test_mag_rejection() -> None:

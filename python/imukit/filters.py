@@ -56,10 +56,11 @@ class GainRamp(NamedTuple):
 class AccelRejection(NamedTuple):
     """Skip the accelerometer correction when ``|‖a‖ − g| > norm`` [m/s²] or the angle between
     measured and predicted up exceeds ``angle_rad``; after ``recovery_s`` seconds of
-    uninterrupted rejection, restart the :class:`GainRamp` (recovery)."""
+    uninterrupted rejection, restart the :class:`GainRamp` (recovery). The defaults (4 m/s², 30°)
+    were tuned on BROAD's handheld motion (docs/filters.md); (1.0, 10°) suits slow, smooth motion."""
 
-    norm: float = 1.0
-    angle_rad: float = math.radians(10.0)
+    norm: float = 4.0
+    angle_rad: float = math.radians(30.0)
     recovery_s: float = 5.0
 
 
@@ -262,9 +263,9 @@ class Mahony(_Filter):
     Parameters
     ----------
     kp
-        Proportional gain [1/s] (default 1.0).
+        Proportional gain [1/s] (default 0.5, tuned on BROAD: docs/filters.md).
     ki
-        Integral gain [1/s²] of the gyro-bias estimate (default 0.1; 0 disables it).
+        Integral gain [1/s²] of the gyro-bias estimate (default 0.01; 0 disables it).
     world
         ``"ENU"`` or ``"NED"``.
     gravity
@@ -280,8 +281,8 @@ class Mahony(_Filter):
     def __init__(
         self,
         *,
-        kp: float = 1.0,
-        ki: float = 0.1,
+        kp: float = 0.5,
+        ki: float = 0.01,
         world: str = "ENU",
         gravity: float = 9.81,
         gain_ramp: GainRamp | None = GainRamp(),  # noqa: B008 - immutable NamedTuple
@@ -310,8 +311,8 @@ class Madgwick(_Filter):
     Parameters
     ----------
     beta
-        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.041). The bias
-        estimate changes only through ``rest_detection``.
+        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.07, tuned on BROAD:
+        docs/filters.md). The bias estimate changes only through ``rest_detection``.
     world, gravity, gain_ramp, acc_rejection, mag_rejection, rest_detection
         As for :class:`Mahony`.
     """
@@ -319,7 +320,7 @@ class Madgwick(_Filter):
     def __init__(
         self,
         *,
-        beta: float = 0.041,
+        beta: float = 0.07,
         world: str = "ENU",
         gravity: float = 9.81,
         gain_ramp: GainRamp | None = GainRamp(),  # noqa: B008 - immutable NamedTuple

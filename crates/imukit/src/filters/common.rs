@@ -109,8 +109,8 @@ pub struct AccelRejection {
 impl Default for AccelRejection {
     fn default() -> Self {
         Self {
-            norm: 1.0,
-            angle: 10f64.to_radians(),
+            norm: 4.0,
+            angle: 30f64.to_radians(),
             recovery: 5.0,
         }
     }

@@ -19,10 +19,10 @@ pub struct Madgwick {
 }
 
 impl Default for Madgwick {
-    /// `β = 0.041` (Madgwick 2010 / 2011: `β = √(3/4) ω̃_β`; 0.033 and 0.041 are the values his
-    /// IMU and MARG experiments found best; see `docs/filters.md`).
+    /// `β = 0.07`: tuned on the BROAD trials (`bench/tune_filters.py`, `docs/filters.md`);
+    /// Madgwick's own experiments (2010 / 2011) found 0.033 (IMU) and 0.041 (MARG) best.
     fn default() -> Self {
-        Self { beta: 0.041 }
+        Self { beta: 0.07 }
     }
 }
 

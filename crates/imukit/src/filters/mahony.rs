@@ -21,10 +21,10 @@ pub struct Mahony {
 }
 
 impl Default for Mahony {
-    /// `k_P = 1`, `k_I = 0.1`: a crossover near 1 rad/s, and a bias time constant
-    /// `k_P / k_I = 10` s (see `docs/filters.md` for the sources).
+    /// `k_P = 0.5`, `k_I = 0.01`: tuned on the BROAD trials (`bench/tune_filters.py`): a
+    /// crossover near 0.5 rad/s and a bias time constant `k_P / k_I = 50` s (`docs/filters.md`).
     fn default() -> Self {
-        Self { kp: 1.0, ki: 0.1 }
+        Self { kp: 0.5, ki: 0.01 }
     }
 }
 

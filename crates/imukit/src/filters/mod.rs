@@ -19,10 +19,11 @@
 //!
 //! - Mahony (Mahony, Hamel & Pflimlin, IEEE TAC 2008, eq. 32): `ω_mes = s × v̂_g + v̂_g h_e/√(h_e² + h_n²)`
 //!   (9D; `h_e = m̂·(v̂_n × v̂_g)`, `h_n = m̂·v̂_n`: heading only), `ω_c = k_P ρ ω_mes`,
-//!   `b̂ ← b̂ − k_I ω_mes dt` (frozen during the ramp).
+//!   `b̂ ← b̂ − k_I ω_mes dt` (frozen during the ramp and while the accelerometer is rejected).
 //! - Madgwick (Madgwick 2010 report; ICORR 2011): the tangent-space gradient of
 //!   `½‖R̂ᵀ d − s‖²` is `v̂ × s`, so `g = s × v̂_g + m̂ × (‖h_h‖ v̂_n + h_up v̂_g)` and
-//!   `ω_c = 2β ρ g/‖g‖` (β is Madgwick's quaternion-rate gain).
+//!   `ω_c = 2β ρ g/‖g‖` (β is Madgwick's quaternion-rate gain; the field term only with an accepted
+//!   accelerometer sample, since it is not heading-only).
 //!
 //! ```
 //! use imukit::filters::{Algorithm, Common, Filter, Mahony, State};
@@ -290,11 +291,18 @@ impl Filter {
         // Correction as a rotation over the step, ω_c dt (scalars folded off the critical path).
         let correction_dt = if MAHONY {
             let e = mahony::error(&north_pred, &up_pred, accel_dir.as_ref(), mag_dir.as_ref());
-            if !ramping {
+            // The integral only learns while gravity is observed: the magnetometer alone measures
+            // heading about the estimated vertical, and integrating that (in body axes, while the
+            // body turns) into the bias would tilt the estimate.
+            if !ramping && accel_dir.is_some() {
                 s.bias -= e * (gains[1] * dt);
             }
             e * (gains[0] * gain * dt)
         } else {
+            // The field's gradient is not heading-only (it also turns the estimate's tilt): without
+            // the gravity term it would tilt the estimate at the full 2β rate, so the magnetometer
+            // is used only together with an accepted accelerometer sample.
+            let mag_dir = if accel_dir.is_some() { mag_dir } else { None };
             madgwick::direction(&north_pred, &up_pred, accel_dir.as_ref(), mag_dir.as_ref())
                 * (2.0 * gains[0] * gain * dt)
         };
