@@ -3,7 +3,7 @@ noise, bias random walk and constant bias on both triads, truth included) agains
 only the noise of the same run (``default_rng``: white noise and a cumulative-sum random walk for 6
 channels), in the same run; medians per call.
 
-Usage: ``python bench/bench_sim.py [--n 10000000] [--repeats 3]``.
+Usage: ``python bench/bench_sim.py [--n 10000000] [--repeats 3] [--motion figure_eight|helix|static]``.
 """
 
 from __future__ import annotations
@@ -20,14 +20,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10_000_000)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--motion", choices=("figure_eight", "helix", "static"), default="figure_eight")
     args = parser.parse_args()
     rate = 200.0
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
     bias = ik.ImuBias(gyro=[1e-3, -2e-3, 5e-4], accel=[0.05, -0.02, 0.1])
     duration = (args.n - 1) / rate
 
+    motion = {"figure_eight": ik.sim.FigureEight(), "helix": ik.sim.Helix(), "static": ik.sim.Static()}[args.motion]
+
     def ours() -> object:
-        return ik.sim.simulate(ik.sim.FigureEight(), rate=rate, duration=duration, noise=noise, bias=bias, seed=1)
+        return ik.sim.simulate(motion, rate=rate, duration=duration, noise=noise, bias=bias, seed=1)
 
     def numpy_noise_only() -> object:
         rng = np.random.default_rng(1)
@@ -41,7 +44,7 @@ def main() -> None:
         ("imukit.sim.simulate (truth + readings)", median_s(ours, args.repeats)),
         ("numpy: noise only (white + walk, 6 channels)", median_s(numpy_noise_only, args.repeats)),
     ]
-    print(f"n = {args.n:,} samples")
+    print(f"n = {args.n:,} samples, motion {args.motion}")
     for name, seconds in rows:
         print(f"{name:46s} {seconds:8.3f} s  {seconds / args.n * 1e9:7.1f} ns/sample")
     print(f"imukit / numpy-noise-only = {rows[0][1] / rows[1][1]:.2f}")
