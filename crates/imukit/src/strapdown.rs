@@ -110,6 +110,16 @@ impl Samples<'_> {
         Ok(())
     }
 
+    /// Checks shapes and every value up front (for callers that must refuse bad input before
+    /// changing any state; the integrators check in their loops instead).
+    pub fn validate(&self) -> Result<()> {
+        self.check_shapes()?;
+        if !self.first_ok() || (0..self.t.len() - 1).any(|k| !self.step_ok(k)) {
+            return Err(self.value_error());
+        }
+        Ok(())
+    }
+
     /// The precise error for samples that failed a fast in-loop check: first bad index.
     pub fn value_error(&self) -> Error {
         if let Err(e) = time::check_increasing(self.t) {

@@ -22,11 +22,8 @@ impl Preintegrator {
     /// between samples k and k+1, continuing from the last sample, which must then be sample 0).
     /// Everything is validated first: on an error nothing has been added.
     pub fn integrate_samples(&mut self, samples: &Samples<'_>) -> Result<()> {
-        samples.check_shapes()?;
+        samples.validate()?;
         let n = samples.t.len();
-        if !samples.first_ok() || (0..n - 1).any(|k| !samples.step_ok(k)) {
-            return Err(samples.value_error());
-        }
         let first = (samples.accel_at(0), samples.gyro_at(0));
         if let Some(last) = self.last_sample().filter(|last| *last != first) {
             return Err(Error::Parameter {

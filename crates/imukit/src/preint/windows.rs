@@ -23,11 +23,8 @@ pub fn preintegrate_windows(
     boundaries: &[f64],
     template: &Preintegrator,
 ) -> Result<Vec<Preintegrator>> {
-    samples.check_shapes()?;
+    samples.validate()?;
     let n = samples.t.len();
-    if !samples.first_ok() || (0..n - 1).any(|k| !samples.step_ok(k)) {
-        return Err(samples.value_error());
-    }
     check_boundaries(boundaries, samples.t[0], samples.t[n - 1])?;
     Ok(boundaries
         .par_windows(2)
