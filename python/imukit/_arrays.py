@@ -35,6 +35,14 @@ def as_float_array(x: ArrayLike, name: str) -> FloatArray:
     return arr.astype(np.float64, copy=False)
 
 
+def vector3(x: ArrayLike, name: str) -> FloatArray:
+    """``x`` as one float64 3-vector; :class:`ShapeError` naming ``name`` for any other shape."""
+    v = as_float_array(x, name)
+    if v.shape != (3,):
+        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
+    return v
+
+
 def _shape_text(tail: tuple[int, ...]) -> str:
     return "(..., " + ", ".join(str(d) for d in tail) + ")"
 

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, choice, rotation_from_unit_quat
+from imukit._arrays import FloatArray, as_float_array, choice, rotation_from_unit_quat, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuData
 
@@ -147,10 +147,7 @@ def _positive(x: float, name: str, *, zero: bool = False) -> float:
 
 
 def _vec3(x: ArrayLike, name: str) -> list[float]:
-    v = as_float_array(x, name)
-    if v.shape != (3,):
-        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
-    return [float(e) for e in v]
+    return [float(e) for e in vector3(x, name)]
 
 
 class _Filter:

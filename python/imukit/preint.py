@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core, so3
-from imukit._arrays import FloatArray, as_float_array, choice, seconds_from_ns
+from imukit._arrays import FloatArray, as_float_array, choice, seconds_from_ns, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
@@ -35,13 +35,6 @@ from imukit.state import NavState
 __all__ = ["PreintegratedImu", "ResidualJacobians", "preintegrate", "preintegrate_windows"]
 
 _SCHEMES = ("midpoint", "euler")
-
-
-def _vector(x: ArrayLike, name: str) -> FloatArray:
-    v = as_float_array(x, name)
-    if v.shape != (3,):
-        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
-    return v
 
 
 class ResidualJacobians(NamedTuple):
@@ -86,7 +79,7 @@ class PreintegratedImu:
             raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
         self.bias = bias or ImuBias()
         self.noise = noise
-        self.gravity = _vector(gravity, "gravity")
+        self.gravity = vector3(gravity, "gravity")
         self.scheme = choice(scheme, "scheme", _SCHEMES)
         self.combined = bool(combined)
         self._core = _core.Preintegrator(self._bias_values(), self._noise_values(), self.combined, scheme)
@@ -121,7 +114,7 @@ class PreintegratedImu:
         ``integrateMeasurement``). ``"midpoint"``: the sample was taken ``dt`` seconds after the
         previous one (VINS-Mono's ``push_back``); the window's first sample comes with ``dt=0``.
         """
-        a, w = _vector(accel, "accel"), _vector(gyro, "gyro")
+        a, w = vector3(accel, "accel"), vector3(gyro, "gyro")
         self._core.integrate_measurement([*a], [*w], float(dt))
         self._inputs.append((a, w, float(dt)))
 

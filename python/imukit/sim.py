@@ -33,7 +33,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, rotation_from_unit_quat
+from imukit._arrays import FloatArray, as_float_array, rotation_from_unit_quat, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
@@ -52,13 +52,6 @@ __all__ = [
 ]
 
 _GRAVITY = (0.0, 0.0, -9.81)
-
-
-def _vec3(x: ArrayLike, name: str) -> FloatArray:
-    v = as_float_array(x, name)
-    if v.shape != (3,):
-        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
-    return v
 
 
 def _quat(r: Rotation, name: str) -> list[float]:
@@ -88,7 +81,7 @@ class Static(_ClosedForm):
     _kind = "static"
 
     def _params(self) -> list[float]:
-        return [*_vec3(self.position, "position"), *_quat(self.rotation, "rotation")]
+        return [*vector3(self.position, "position"), *_quat(self.rotation, "rotation")]
 
 
 @dataclass(frozen=True)
@@ -104,10 +97,10 @@ class ConstantTwist(_ClosedForm):
 
     def _params(self) -> list[float]:
         return [
-            *_vec3(self.position, "position"),
+            *vector3(self.position, "position"),
             *_quat(self.rotation, "rotation"),
-            *_vec3(self.body_velocity, "body_velocity"),
-            *_vec3(self.body_rate, "body_rate"),
+            *vector3(self.body_velocity, "body_velocity"),
+            *vector3(self.body_rate, "body_rate"),
         ]
 
 
@@ -122,7 +115,7 @@ class Helix(_ClosedForm):
     _kind = "helix"
 
     def _params(self) -> list[float]:
-        return [*_vec3(self.center, "center"), float(self.radius), float(self.angular_rate), float(self.climb_rate)]
+        return [*vector3(self.center, "center"), float(self.radius), float(self.angular_rate), float(self.climb_rate)]
 
 
 @dataclass(frozen=True)
@@ -146,8 +139,8 @@ class FigureEight(_ClosedForm):
 
     def _params(self) -> list[float]:
         return [
-            *_vec3(self.center, "center"),
-            *_vec3(self.amplitude, "amplitude"),
+            *vector3(self.center, "center"),
+            *vector3(self.amplitude, "amplitude"),
             float(self.angular_rate),
             float(self.roll),
             float(self.pitch),
@@ -169,8 +162,8 @@ class VioEllipse(_ClosedForm):
 
     def _params(self) -> list[float]:
         return [
-            *_vec3(self.center, "center"),
-            *_vec3(self.amplitude, "amplitude"),
+            *vector3(self.center, "center"),
+            *vector3(self.amplitude, "amplitude"),
             float(self.angular_rate),
             float(self.height_frequency),
             float(self.roll),
@@ -265,7 +258,7 @@ class SensorErrors:
     def from_scale_misalignment(cls, scale: ArrayLike, misalignment: ArrayLike, **kwargs: float) -> SensorErrors:
         """``T = (I + diag(scale)) (I + M)``: ``scale`` (3,) relative scale-factor errors, ``misalignment``
         (3, 3) small non-orthogonality angles [rad] off the diagonal (the diagonal must be zero)."""
-        s = _vec3(scale, "scale")
+        s = vector3(scale, "scale")
         m = as_float_array(misalignment, "misalignment")
         if m.shape != (3, 3) or np.any(np.diag(m) != 0.0):
             raise ShapeError(f"misalignment: expected a (3, 3) matrix with a zero diagonal, got {m!r}")
@@ -317,7 +310,7 @@ def simulate(
     for name, errors in (("gyro_errors", gyro_errors), ("accel_errors", accel_errors)):
         if errors is not None and not isinstance(errors, SensorErrors):
             raise ParameterError(f"{name}: expected an imukit.sim.SensorErrors or None, got {type(errors).__name__}")
-    g = _vec3(gravity, "gravity")
+    g = vector3(gravity, "gravity")
     t = float(start) + np.arange(math.floor(span * rate_hz + 1e-9) + 1) / rate_hz
     position, velocity, quat, gyro, accel = trajectory._truth(t, g)
     n = len(t)

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, choice, readonly_copy, rotation_from_unit_quat
+from imukit._arrays import FloatArray, as_float_array, choice, readonly_copy, rotation_from_unit_quat, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
@@ -35,9 +35,7 @@ def _common(
     if bias is not None and not isinstance(bias, ImuBias):
         raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
     choice(scheme, "scheme", SCHEMES)
-    g = as_float_array(gravity, "gravity")
-    if g.shape != (3,):
-        raise ShapeError(f"gravity: expected shape (3,), got {g.shape}")
+    g = vector3(gravity, "gravity")
     b = bias or ImuBias()
     state = [*initial.position, *initial.velocity, *initial.rotation.as_quat()]
     return state, [*b.gyro, *b.accel], [float(v) for v in g]
