@@ -1,0 +1,40 @@
+"""Evaluation against a reference: trajectory errors (ATE / RPE) and attitude errors.
+
+=======================  =========================================================================
+:func:`associate`        estimate stamps paired with the reference interpolated there (position
+                         linear, rotation slerp); samples that cannot be paired are counted
+:func:`align`            the similarity (``"se3"``, ``"sim3"``: Umeyama 1991), translation-only
+                         (``"position"``), heading-only (``"yaw"``) or identity (``"none"``)
+                         transform that best fits the estimate's positions onto the reference's
+:func:`ape`              absolute trajectory error (ATE; evo's APE) after association + alignment
+:func:`rpe`              relative pose error over a travelled distance, a time or a frame count
+:func:`attitude_error`   total / heading / inclination split of orientation errors (BROAD)
+=======================  =========================================================================
+
+Definitions, the choice of alignment and the comparison with ``evo`` are in
+``docs/evaluation.md``.
+"""
+
+from __future__ import annotations
+
+from imukit.eval._align import Alignment, align
+from imukit.eval._ape import AbsoluteError, ape
+from imukit.eval._associate import Association, associate
+from imukit.eval._attitude import AttitudeError, AttitudeRmse, attitude_error
+from imukit.eval._rpe import RelativeError, rpe
+from imukit.eval._stats import ErrorStats
+
+__all__ = [
+    "AbsoluteError",
+    "Alignment",
+    "Association",
+    "AttitudeError",
+    "AttitudeRmse",
+    "ErrorStats",
+    "RelativeError",
+    "align",
+    "ape",
+    "associate",
+    "attitude_error",
+    "rpe",
+]

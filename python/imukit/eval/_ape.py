@@ -1,0 +1,73 @@
+"""Absolute trajectory error (ATE; evo's APE): per-sample pose error after association and alignment."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray
+from imukit.eval._align import Alignment
+from imukit.eval._align import align as fit
+from imukit.eval._associate import associate
+from imukit.eval._stats import ErrorStats, error_stats
+from imukit.state import Trajectory
+
+
+class AbsoluteError(NamedTuple):
+    """Result of :func:`ape`: per-sample errors over the N associated samples and their statistics.
+
+    ``estimate`` is the associated estimate after ``alignment``; ``reference`` the reference at
+    the same stamps. ``mask`` and ``n_dropped`` come from :func:`associate` (over the input estimate).
+    """
+
+    translation: FloatArray  # (N,) ‖p_est − p_ref‖ [m], world frame, after alignment
+    rotation: FloatArray  # (N,) angle of R_ref⁻¹ R_est [rad], in [0, π]
+    translation_stats: ErrorStats  # [m]
+    rotation_stats: ErrorStats  # [rad]
+    alignment: Alignment
+    estimate: Trajectory
+    reference: Trajectory
+    mask: NDArray[np.bool_]
+    n_dropped: int
+
+
+def ape(
+    estimate: Trajectory,
+    reference: Trajectory,
+    *,
+    align: str = "se3",
+    max_dt: float = 0.02,
+    offset: float = 0.0,
+) -> AbsoluteError:
+    """Absolute trajectory error (ATE; evo's APE) of ``estimate`` against ``reference``.
+
+    1. :func:`associate` (``max_dt`` [s], ``offset`` [s]): the reference interpolated at the
+       estimate's stamps; unpaired samples are dropped and counted.
+    2. :func:`align` with ``method=align`` (``"se3"``, ``"sim3"``, ``"yaw"``, ``"position"``,
+       ``"none"``), fitted on all associated positions, applied to the estimate.
+    3. Per sample i: translation error ``‖p'_est,i − p_ref,i‖`` [m] (the aligned estimate ``p'``)
+       and rotation error ``∠(R_ref,i⁻¹ R'_est,i)`` [rad] (the rotation angle, in ``[0, π]``), with
+       their :class:`ErrorStats`.
+
+    With synchronised stamps (no interpolation) these are evo's ``APE`` with
+    ``PoseRelation.translation_part`` and ``rotation_angle_rad`` after ``traj.align(...)``.
+    """
+    pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
+    alignment = fit(pair.estimate, pair.reference, method=align)
+    est = alignment.apply(pair.estimate)
+    ref = pair.reference
+    translation = np.linalg.norm(est.position - ref.position, axis=1)
+    rotation = np.asarray((ref.rotation.inv() * est.rotation).magnitude(), dtype=np.float64)
+    return AbsoluteError(
+        translation=translation,
+        rotation=rotation,
+        translation_stats=error_stats(translation),
+        rotation_stats=error_stats(rotation),
+        alignment=alignment,
+        estimate=est,
+        reference=ref,
+        mask=pair.mask,
+        n_dropped=pair.n_dropped,
+    )

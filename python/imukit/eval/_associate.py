@@ -1,0 +1,151 @@
+"""Time association: each estimate sample paired with the reference interpolated at its stamp."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from imukit._arrays import FloatArray
+from imukit._errors import ParameterError
+from imukit.state import Trajectory
+
+
+class Association(NamedTuple):
+    """Two trajectories at the same instants, from :func:`associate`.
+
+    ``estimate`` holds the kept estimate samples (positions, velocities, rotations, biases as they
+    were) stamped in the reference's clock, i.e. its own stamps plus ``offset``; ``reference`` holds
+    the reference interpolated at exactly those stamps. ``mask`` (len of the input estimate,) marks
+    the kept input samples; ``n_dropped = n_outside_span + n_in_gaps`` counts the others.
+    """
+
+    estimate: Trajectory
+    reference: Trajectory
+    mask: NDArray[np.bool_]
+    n_dropped: int
+    n_outside_span: int  # before the first or after the last reference stamp
+    n_in_gaps: int  # inside the span, between reference samples more than max_dt apart
+
+
+def check_trajectory(x: object, name: str) -> Trajectory:
+    """``x`` if it is a :class:`~imukit.Trajectory`, else :class:`ParameterError` naming ``name``."""
+    if not isinstance(x, Trajectory):
+        raise ParameterError(f"{name}: expected an imukit Trajectory, got {type(x).__name__}")
+    return x
+
+
+def finite_float(x: object, name: str, *, positive: bool = False) -> float:
+    """``x`` as a finite float (> 0 when ``positive``), else :class:`ParameterError` naming ``name``."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name}: expected a number, got {x!r}")
+    value = float(x)
+    if not np.isfinite(value) or (positive and value <= 0.0):
+        raise ParameterError(f"{name}: expected a finite{' positive' if positive else ''} number, got {value!r}")
+    return value
+
+
+def associate(
+    estimate: Trajectory,
+    reference: Trajectory,
+    *,
+    max_dt: float = 0.02,
+    offset: float = 0.0,
+) -> Association:
+    """Pair every estimate sample with the reference interpolated at the same instant.
+
+    Parameters
+    ----------
+    estimate, reference
+        :class:`~imukit.Trajectory` objects; only their stamps, positions, rotations and (when
+        present) velocities and biases are used.
+    max_dt
+        Longest reference interval [s] across which the reference may be interpolated. An estimate
+        stamp ``s`` with ``r_k < s < r_{k+1}`` is kept only when ``r_{k+1} − r_k ≤ max_dt``; a stamp
+        equal to a reference stamp needs no interpolation and is always kept.
+    offset
+        Clock offset [s] **added** to the estimate's stamps before pairing: estimate time ``t``
+        corresponds to reference time ``t + offset``.
+
+    Returns
+    -------
+    Association
+        The kept estimate samples and the reference at their stamps ``s = t + offset``:
+        position ``p_k + f (p_{k+1} − p_k)`` and velocity likewise (when the reference has one),
+        rotation by slerp ``R_k Exp(f Log(R_kᵀ R_{k+1}))``, biases linearly, with
+        ``f = (s − r_k) / (r_{k+1} − r_k)``. Samples before the first or after the last reference
+        stamp and samples inside a reference gap longer than ``max_dt`` are dropped and counted,
+        never extrapolated.
+
+    Stamps are compared as int64 nanoseconds when both trajectories carry ``t_ns`` (exact;
+    ``offset`` is then rounded to the nearest nanosecond), else as float seconds. The returned
+    trajectories carry ``t_ns`` exactly when that comparison was in nanoseconds. Covariances are
+    not carried over.
+
+    Raises
+    ------
+    ParameterError
+        When no estimate sample can be paired; the message gives both spans and the drop counts.
+    """
+    est = check_trajectory(estimate, "estimate")
+    ref = check_trajectory(reference, "reference")
+    max_dt = finite_float(max_dt, "max_dt", positive=True)
+    offset = finite_float(offset, "offset")
+    in_ns = est.t_ns is not None and ref.t_ns is not None
+    stamps: NDArray[np.int64] | FloatArray
+    ref_stamps: NDArray[np.int64] | FloatArray
+    if est.t_ns is not None and ref.t_ns is not None:
+        stamps, ref_stamps, max_gap = est.t_ns + round(offset * 1e9), ref.t_ns, max_dt * 1e9
+    else:
+        stamps, ref_stamps, max_gap = est.t + offset, ref.t, max_dt
+
+    n_ref = len(ref_stamps)
+    lo = np.searchsorted(ref_stamps, stamps, side="right") - 1  # r[lo] ≤ s < r[lo + 1]
+    inside = (lo >= 0) & (stamps <= ref_stamps[-1])
+    lo = np.clip(lo, 0, n_ref - 1)
+    hi = np.minimum(lo + 1, n_ref - 1)
+    exact = inside & (ref_stamps[lo] == stamps)
+    gap = (ref_stamps[hi] - ref_stamps[lo]).astype(np.float64)
+    between = inside & ~exact
+    keep = exact | (between & (gap <= max_gap))
+    n_outside = int((~inside).sum())
+    n_gaps = int((between & ~keep).sum())
+    if not keep.any():
+        a, b = float(est.t[0]) + offset, float(est.t[-1]) + offset
+        raise ParameterError(
+            f"estimate: no sample can be paired with the reference: the estimate spans [{a:.9g}, {b:.9g}] s "
+            f"(offset {offset:g} s applied), the reference [{float(ref.t[0]):.9g}, {float(ref.t[-1]):.9g}] s; "
+            f"{n_outside} samples outside the reference span, {n_gaps} inside reference gaps longer than "
+            f"max_dt = {max_dt:g} s"
+        )
+
+    lo, hi, s = lo[keep], hi[keep], stamps[keep]
+    frac = np.where(exact[keep], 0.0, (s - ref_stamps[lo]).astype(np.float64) / np.where(gap[keep] > 0, gap[keep], 1))
+
+    def lerp(x: FloatArray) -> FloatArray:
+        return np.asarray(x[lo] + frac[:, None] * (x[hi] - x[lo]), dtype=np.float64)
+
+    r_lo = ref.rotation[lo]
+    rotation = r_lo * Rotation.from_rotvec(frac[:, None] * (r_lo.inv() * ref.rotation[hi]).as_rotvec())
+    t_s, t_ns = (None, s) if in_ns else (s, None)
+    reference_out = Trajectory(
+        t_s,
+        lerp(ref.position),
+        None if ref.velocity is None else lerp(ref.velocity),
+        rotation,
+        t_ns=t_ns,
+        gyro_bias=None if ref.gyro_bias is None else lerp(ref.gyro_bias),
+        accel_bias=None if ref.accel_bias is None else lerp(ref.accel_bias),
+    )
+    estimate_out = Trajectory(
+        t_s,
+        est.position[keep],
+        None if est.velocity is None else est.velocity[keep],
+        est.rotation[keep],
+        t_ns=t_ns,
+        gyro_bias=None if est.gyro_bias is None else est.gyro_bias[keep],
+        accel_bias=None if est.accel_bias is None else est.accel_bias[keep],
+    )
+    return Association(estimate_out, reference_out, keep, n_outside + n_gaps, n_outside, n_gaps)

@@ -1,0 +1,146 @@
+"""Relative pose error (RPE): the error of the motion between pairs of samples a fixed distance apart."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray, choice
+from imukit._errors import ParameterError
+from imukit.eval._align import Alignment
+from imukit.eval._align import align as fit
+from imukit.eval._associate import associate, finite_float
+from imukit.eval._stats import ErrorStats, error_stats
+from imukit.state import Trajectory
+
+UNITS = ("m", "s", "frames")
+
+
+class RelativeError(NamedTuple):
+    """Result of :func:`rpe`: one error per pair (i, j) of associated samples, and statistics.
+
+    ``pairs`` (M, 2) indexes ``estimate`` and ``reference`` (the associated, aligned trajectories);
+    ``separation`` (M,) is how far apart each pair is, in ``unit`` (travelled reference distance
+    [m], time [s] or frames), ≥ ``delta``; ``translation / separation`` is the drift per unit.
+    """
+
+    translation: FloatArray  # (M,) ‖translation of E_ij‖ [m]
+    rotation: FloatArray  # (M,) rotation angle of E_ij [rad], in [0, π]
+    translation_stats: ErrorStats  # [m]
+    rotation_stats: ErrorStats  # [rad]
+    pairs: NDArray[np.int64]
+    separation: FloatArray
+    delta: float
+    unit: str
+    alignment: Alignment
+    estimate: Trajectory
+    reference: Trajectory
+    mask: NDArray[np.bool_]
+    n_dropped: int
+
+
+def rpe(
+    estimate: Trajectory,
+    reference: Trajectory,
+    *,
+    delta: float = 1.0,
+    unit: str = "m",
+    align: str = "none",
+    all_pairs: bool = False,
+    max_dt: float = 0.02,
+    offset: float = 0.0,
+) -> RelativeError:
+    """Relative pose error of ``estimate`` against ``reference`` over pairs ``delta`` apart.
+
+    The trajectories are first associated (:func:`associate`, with ``max_dt`` [s] and ``offset``
+    [s]) and the estimate aligned (:func:`align` with ``method=align``). For a pair (i, j) of
+    associated samples, with poses ``T = (R, p)`` in SE(3), the error is
+
+        ``E_ij = (T_ref,i⁻¹ T_ref,j)⁻¹ (T_est,i⁻¹ T_est,j)``,
+
+    reported as the norm of its translation [m] (``‖ΔR_refᵀ (Δp_est − Δp_ref)‖`` with the motions
+    ``Δp = R_iᵀ (p_j − p_i)`` in the body frame at i) and its rotation angle [rad]. A rigid
+    alignment cancels in ``T_i⁻¹ T_j``, so only ``"sim3"``'s scale changes the result.
+
+    Pairs, with the separation ``d(i, j)`` = the reference's travelled distance
+    ``Σ_{i≤k<j} ‖p_ref,k+1 − p_ref,k‖`` (``unit="m"``), its time ``t_j − t_i`` (``"s"``; integer
+    nanoseconds when the associated stamps have them) or ``j − i`` (``"frames"``; ``delta`` then a
+    positive integer): from a start i, j is the first sample with ``d(i, j) ≥ delta``. Without
+    ``all_pairs`` the starts are 0 and each previous pair's end, so the pairs tile the trajectory
+    without overlap; with ``all_pairs`` every sample that has such a j is a start. Starts whose j
+    would lie past the end are not used.
+
+    Raises
+    ------
+    ParameterError
+        A bad option, or no pair ``delta`` apart (the message gives the trajectory's extent).
+    """
+    choice(unit, "unit", UNITS)
+    delta = finite_float(delta, "delta", positive=True)
+    if unit == "frames" and not delta.is_integer():
+        raise ParameterError(f"delta: expected a whole number of frames for unit='frames', got {delta!r}")
+    if not isinstance(all_pairs, (bool, np.bool_)):
+        raise ParameterError(f"all_pairs: expected a bool, got {all_pairs!r}")
+    pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
+    alignment = fit(pair.estimate, pair.reference, method=align)
+    est, ref = alignment.apply(pair.estimate), pair.reference
+
+    axis = _separation_axis(ref, unit)
+    pairs = _pairs(axis, delta if unit != "s" or ref.t_ns is None else round(delta * 1e9), bool(all_pairs))
+    if len(pairs) == 0:
+        extent = float(axis[-1] - axis[0]) * (1e-9 if unit == "s" and ref.t_ns is not None else 1.0)
+        raise ParameterError(
+            f"delta: no pair of associated samples is {delta:g} {unit} apart; they extend over {extent:g} {unit}"
+        )
+    i, j = pairs[:, 0], pairs[:, 1]
+    rel_ref = ref.rotation[i].inv() * ref.rotation[j]
+    rel_est = est.rotation[i].inv() * est.rotation[j]
+    dp_ref = ref.rotation[i].inv().apply(ref.position[j] - ref.position[i])
+    dp_est = est.rotation[i].inv().apply(est.position[j] - est.position[i])
+    translation = np.linalg.norm(dp_est - dp_ref, axis=1)  # ΔR_refᵀ preserves the norm
+    rotation = np.asarray((rel_ref.inv() * rel_est).magnitude(), dtype=np.float64)
+    separation = (axis[j] - axis[i]).astype(np.float64)
+    if unit == "s" and ref.t_ns is not None:
+        separation *= 1e-9
+    return RelativeError(
+        translation=translation,
+        rotation=rotation,
+        translation_stats=error_stats(translation),
+        rotation_stats=error_stats(rotation),
+        pairs=pairs,
+        separation=separation,
+        delta=delta,
+        unit=unit,
+        alignment=alignment,
+        estimate=est,
+        reference=ref,
+        mask=pair.mask,
+        n_dropped=pair.n_dropped,
+    )
+
+
+def _separation_axis(ref: Trajectory, unit: str) -> NDArray[np.float64] | NDArray[np.int64]:
+    """Non-decreasing coordinate along the reference in which separations are differences."""
+    if unit == "frames":
+        return np.arange(len(ref), dtype=np.int64)
+    if unit == "s":
+        return ref.t if ref.t_ns is None else ref.t_ns
+    steps = np.linalg.norm(np.diff(ref.position, axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _pairs(axis: NDArray[np.float64] | NDArray[np.int64], delta: float, all_pairs: bool) -> NDArray[np.int64]:
+    """(M, 2) pairs (i, j): j the first index with ``axis[j] − axis[i] ≥ delta`` (j > i always)."""
+    n = len(axis)
+    # first j with axis[j] ≥ axis[i] + delta; at least i + 1 (a stationary stretch repeats values)
+    first = np.maximum(np.searchsorted(axis, axis + delta, side="left"), np.arange(1, n + 1))
+    if all_pairs:
+        starts = np.flatnonzero(first < n)
+        return np.stack([starts, first[starts]], axis=1).astype(np.int64)
+    chain = [0]
+    while first[chain[-1]] < n:
+        chain.append(int(first[chain[-1]]))
+    ids = np.asarray(chain, dtype=np.int64)
+    return np.stack([ids[:-1], ids[1:]], axis=1)
