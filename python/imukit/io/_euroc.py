@@ -7,7 +7,6 @@ sensor, which is imukit's body frame ``b``; ``q_RS`` is imukit's ``R_wb`` writte
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
@@ -22,12 +21,17 @@ from imukit.io._kalibr import noise_lines, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
-    check_stamps_increase,
+    Problem,
     data_lines,
-    parse_floats,
+    increasing,
+    integer_stamp,
+    parse_rows,
+    require_rows,
     rotations_from_rows,
     write_rows,
+    zero_quaternion,
 )
+from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.state import Trajectory
 
 __all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "write_euroc"]
@@ -48,7 +52,6 @@ GROUNDTRUTH_CSV = Path("state_groundtruth_estimate0", "data.csv")
 SENSOR_YAML = Path("imu0", "sensor.yaml")
 
 _T = TypeVar("_T")
-_STAMP = re.compile(r"[+-]?[0-9]+")
 # EuRoC's imu0/sensor.yaml layout; the IMU is the body frame, so T_BS is the identity.
 _SENSOR_YAML_HEAD = """\
 # EuRoC / ASL imu0 sensor file, written by imukit
@@ -209,13 +212,17 @@ def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: 
     return ns
 
 
-def read_euroc(folder: str | os.PathLike[str]) -> tuple[ImuData, Trajectory | None]:
+def read_euroc(
+    folder: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> tuple[ImuData, Trajectory | None]:
     """Read the IMU and ground truth of an EuRoC / ASL folder (as :func:`write_euroc` writes it).
 
     ``folder`` holds ``imu0/data.csv`` and, optionally, ``state_groundtruth_estimate0/data.csv``;
     a folder whose ``mav0/`` holds them (a downloaded sequence) works too. The ground truth keeps
     its own stamps (it is not interpolated to the IMU's); it is None when its file is absent. The
     noise of ``imu0/sensor.yaml`` is read by :func:`imukit.io.read_kalibr_imu`.
+
+    ``on_bad_line`` and ``report`` as in :func:`read_euroc_imu`, for both files (one warning for both).
 
     Raises
     ------
@@ -224,20 +231,47 @@ def read_euroc(folder: str | os.PathLike[str]) -> tuple[ImuData, Trajectory | No
     FileFormatError
         As :func:`read_euroc_imu` and :func:`read_euroc_groundtruth`.
     """
+    bad = BadLines(on_bad_line, report)
+    return bad.done(euroc_folder(folder, bad))
+
+
+def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_euroc` reporting to ``bad``."""
+    root = mav0_root(folder)
+    truth = root / GROUNDTRUTH_CSV
+    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+
+
+def mav0_root(folder: str | os.PathLike[str]) -> Path:
+    """``folder`` or its ``mav0/``: the one holding ``imu0/data.csv``, else FileNotFoundError."""
     root = Path(folder)
     if not (root / IMU_CSV).is_file() and (root / "mav0" / IMU_CSV).is_file():
         root = root / "mav0"
     if not (root / IMU_CSV).is_file():
         raise FileNotFoundError(f"folder: no {IMU_CSV.as_posix()} in {os.fspath(folder)} (nor in its mav0/)")
-    truth = root / GROUNDTRUTH_CSV
-    return read_euroc_imu(root / IMU_CSV), read_euroc_groundtruth(truth) if truth.is_file() else None
+    return root
 
 
-def read_euroc_imu(path: str | os.PathLike[str]) -> ImuData:
+def read_euroc_imu(
+    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> ImuData:
     """Read an EuRoC ``imu0/data.csv``: ``timestamp [ns], ω_x,y,z [rad/s], a_x,y,z [m/s²]`` rows.
 
     Returns an :class:`imukit.ImuData` with exact int64 ``t_ns`` (parsed as integers: float64
     would round 19-digit stamps to 256 ns). ``#`` lines (the header) and blank lines are skipped.
+
+    Parameters
+    ----------
+    path
+        The CSV file.
+    on_bad_line
+        ``"raise"`` (default): the first bad line is a :class:`FileFormatError`. ``"skip"``: bad
+        lines are left out and reported (``docs/io.md``): not 7 fields, a stamp that is not an
+        integer, a value that is not a finite number, a stamp equal to the last kept one (the first
+        is kept) or smaller (later, larger stamps are kept).
+    report
+        An :class:`imukit.io.ReadReport` that receives the skipped lines; without one, skipping
+        emits one :class:`imukit.io.SkippedLinesWarning`.
 
     Raises
     ------
@@ -245,11 +279,19 @@ def read_euroc_imu(path: str | os.PathLike[str]) -> ImuData:
         (a ``ValueError``) naming the file and line: not 7 fields, a stamp that is not an integer,
         a value that is not a finite number, time not strictly increasing, or no data.
     """
-    t_ns, values, _ = _read_csv(path, IMU_HEADER, IMU_CSV)
-    return _build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+    bad = BadLines(on_bad_line, report)
+    return bad.done(euroc_imu(path, bad))
 
 
-def read_euroc_groundtruth(path: str | os.PathLike[str]) -> Trajectory:
+def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
+    """:func:`read_euroc_imu` reporting to ``bad``."""
+    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, IMU_CSV)
+    return build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+
+
+def read_euroc_groundtruth(
+    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> Trajectory:
     """Read an EuRoC ``state_groundtruth_estimate0/data.csv`` into a :class:`imukit.Trajectory`.
 
     Columns: ``timestamp [ns]``, ``p_RS_R`` [m], ``q_RS`` (w, x, y, z), ``v_RS_R`` [m/s],
@@ -258,15 +300,22 @@ def read_euroc_groundtruth(path: str | os.PathLike[str]) -> Trajectory:
     1e-15 are kept bit for bit, others normalised (EuRoC prints 6 decimals: norms off by up to
     1.5e-4).
 
+    ``on_bad_line`` and ``report`` as in :func:`read_euroc_imu`; a zero quaternion is a bad line too.
+
     Raises
     ------
     FileFormatError
         As :func:`read_euroc_imu` (17 fields), and for a zero quaternion.
     """
-    where = os.fspath(path)
-    t_ns, values, lines = _read_csv(path, GROUNDTRUTH_HEADER, GROUNDTRUTH_CSV)
-    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, where)
-    return _build(
+    bad = BadLines(on_bad_line, report)
+    return bad.done(euroc_groundtruth(path, bad))
+
+
+def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_euroc_groundtruth` reporting to ``bad``."""
+    t_ns, values, lines = read_stamped_csv(path, bad, GROUNDTRUTH_HEADER, GROUNDTRUTH_CSV, quaternion=3)
+    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
+    return build(
         path,
         lambda: Trajectory(
             None,
@@ -280,39 +329,45 @@ def read_euroc_groundtruth(path: str | os.PathLike[str]) -> Trajectory:
     )
 
 
-def _read_csv(path: str | os.PathLike[str], header: str, kind: Path) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
-    """Integer stamps, ``(N, columns - 1)`` floats and line numbers of a EuRoC CSV file."""
-    where = os.fspath(path)
+def read_stamped_csv(
+    path: str | os.PathLike[str], bad: BadLines, header: str, kind: Path, *, quaternion: int | None = None
+) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
+    """Integer stamps, ``(N, columns - 1)`` floats and line numbers of an EuRoC-style CSV file with
+    ``header``'s columns.
+
+    ``quaternion``: the first of four value columns (after the stamp) holding a quaternion, which
+    must not be zero.
+    """
     width = header.count(",") + 1
-    lines: list[int] = []
-    stamps: list[str] = []
-    stamps_ns: list[int] = []
-    rows: list[list[float]] = []
-    for number, text in data_lines(path):
-        fields = text.split(",")
-        if len(fields) != width:
-            raise FileFormatError(
-                f"path: {where}, line {number}: expected {width} comma-separated fields "
-                f"(EuRoC {kind.as_posix()}), got {len(fields)}"
-            )
+
+    def check(fields: list[str], row: list[float]) -> Problem | None:
         stamp = fields[0].strip()
-        ns = int(stamp) if _STAMP.fullmatch(stamp) else None
-        if ns is None or not INT64_MIN <= ns <= INT64_MAX:
-            raise FileFormatError(
-                f"path: {where}, line {number}: timestamp {stamp!r} is not an integer number of nanoseconds (int64)"
-            )
-        rows.append(parse_floats(fields[1:], where, number, text))
-        lines.append(number)
-        stamps.append(stamp)
-        stamps_ns.append(ns)
-    if not rows:
-        raise FileFormatError(f"path: {where}: no data lines")
-    t_ns = np.array(stamps_ns, dtype=np.int64)
-    check_stamps_increase(t_ns, stamps, lines, where)
-    return t_ns, np.array(rows, dtype=np.float64), lines
+        if integer_stamp(stamp) is None:
+            return "malformed", f"timestamp {stamp!r} is not an integer number of nanoseconds (int64)"
+        return None if quaternion is None else zero_quaternion(row[quaternion : quaternion + 4])
+
+    rows = parse_rows(
+        data_lines(path),
+        path,
+        bad,
+        split=_split_comma,
+        width=width,
+        expected=f"comma-separated fields (EuRoC {kind.as_posix()})",
+        columns=range(1, width),
+        check=check,
+    )
+    stamps = [f[0].strip() for f in rows.fields]
+    rows = rows.take(increasing(rows, [int(s) for s in stamps], stamps, path, bad))
+    require_rows(rows, path, bad)
+    t_ns = np.array([int(f[0]) for f in rows.fields], dtype=np.int64)
+    return t_ns, np.array(rows.values, dtype=np.float64), rows.lines
 
 
-def _build(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
+def _split_comma(text: str) -> list[str]:
+    return text.split(",")
+
+
+def build(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
     """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
     try:
         return make()

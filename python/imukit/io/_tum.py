@@ -6,17 +6,19 @@ import os
 import re
 
 import numpy as np
-from numpy.typing import NDArray
 
-from imukit._errors import FileFormatError
 from imukit.io._lines import (
     INT64_MAX,
-    check_stamps_increase,
+    all_exact,
     data_lines,
-    parse_floats,
+    increasing,
+    parse_rows,
+    require_rows,
     rotations_from_rows,
     write_rows,
+    zero_quaternion,
 )
+from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.state import Trajectory
 
 __all__ = ["read_tum", "write_tum"]
@@ -45,7 +47,9 @@ def write_tum(trajectory: Trajectory, path: str | os.PathLike[str]) -> None:
     write_rows(path, None, stamps, np.concatenate([trajectory.position, trajectory.rotation.as_quat()], axis=1), " ")
 
 
-def read_tum(path: str | os.PathLike[str]) -> Trajectory:
+def read_tum(
+    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> Trajectory:
     """Read a TUM file into a :class:`imukit.Trajectory` (``velocity`` None).
 
     If every timestamp has exactly nine decimals (``1403636579.758555392``, as :func:`write_tum`
@@ -53,43 +57,58 @@ def read_tum(path: str | os.PathLike[str]) -> Trajectory:
     None and ``t`` is the parsed float. Quaternions that are unit to rounding are kept bit for bit,
     others (e.g. printed with 6 digits) are normalised.
 
+    Parameters
+    ----------
+    path
+        The text file.
+    on_bad_line
+        ``"raise"`` (default) or ``"skip"``: bad lines (below) are left out and reported
+        (``docs/io.md``); a repeated stamp keeps its first line, a stamp going back is skipped and
+        the later, larger ones kept.
+    report
+        An :class:`imukit.io.ReadReport` that receives the skipped lines; without one, skipping
+        emits one :class:`imukit.io.SkippedLinesWarning`.
+
     Raises
     ------
     FileFormatError
         (a ``ValueError``) naming the file and line: wrong number of fields, text that is not a
         number, non-finite values, a zero quaternion, time not strictly increasing, or no data.
     """
-    where = os.fspath(path)
-    lines: list[int] = []
-    stamps: list[str] = []
-    rows: list[list[float]] = []
-    for number, text in data_lines(path):
-        fields = text.split()
-        if len(fields) != 8:
-            raise FileFormatError(
-                f"path: {where}, line {number}: expected 8 fields 'timestamp tx ty tz qx qy qz qw', got {len(fields)}"
-            )
-        rows.append(parse_floats(fields, where, number, text))
-        lines.append(number)
-        stamps.append(fields[0])
-    if not rows:
-        raise FileFormatError(f"path: {where}: no data lines")
-    data = np.array(rows, dtype=np.float64)
-    t_ns = _exact_ns(stamps)
-    check_stamps_increase(data[:, 0] if t_ns is None else t_ns, stamps, lines, where)
-    rotation = rotations_from_rows(np.ascontiguousarray(data[:, 4:8]), lines, where)
-    t = data[:, 0] if t_ns is None else None  # with t_ns, Trajectory sets t = t_ns / 1e9
-    return Trajectory(t, data[:, 1:4], None, rotation, t_ns=t_ns)
+    bad = BadLines(on_bad_line, report)
+    return bad.done(tum(path, bad))
 
 
-def _exact_ns(stamps: list[str]) -> NDArray[np.int64] | None:
-    ns = []
-    for stamp in stamps:
-        match = _NS_STAMP.fullmatch(stamp)
-        if match is None:
-            return None
-        sign, whole, frac = match.groups()
-        ns.append((-1 if sign else 1) * (int(whole) * 10**9 + int(frac)))
-        if abs(ns[-1]) > INT64_MAX:
-            return None
-    return np.array(ns, dtype=np.int64)
+def tum(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_tum` reporting to ``bad``."""
+    rows = parse_rows(
+        data_lines(path),
+        path,
+        bad,
+        split=str.split,
+        width=8,
+        expected="fields 'timestamp tx ty tz qx qy qz qw'",
+        columns=range(8),
+        check=lambda fields, row: zero_quaternion(row[4:8]),
+    )
+    stamps = [f[0] for f in rows.fields]
+    ns = all_exact(stamps, exact_ns)
+    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, path, bad)
+    rows = rows.take(keep)
+    require_rows(rows, path, bad)
+    data = np.array(rows.values, dtype=np.float64)
+    rotation = rotations_from_rows(np.ascontiguousarray(data[:, 4:8]), rows.lines, os.fspath(path))
+    if ns is None:
+        return Trajectory(data[:, 0], data[:, 1:4], None, rotation)
+    # With t_ns, Trajectory sets t = t_ns / 1e9.
+    return Trajectory(None, data[:, 1:4], None, rotation, t_ns=np.array([ns[k] for k in keep], dtype=np.int64))
+
+
+def exact_ns(stamp: str) -> int | None:
+    """Nanoseconds of a stamp with exactly nine decimals (``1403636579.758555392``), else None."""
+    match = _NS_STAMP.fullmatch(stamp)
+    if match is None:
+        return None
+    sign, whole, frac = match.groups()
+    ns = (-1 if sign else 1) * (int(whole) * 10**9 + int(frac))
+    return ns if abs(ns) <= INT64_MAX else None
