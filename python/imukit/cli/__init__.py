@@ -1,0 +1,71 @@
+"""The ``imukit`` command line (console script ``imukit`` and ``python -m imukit``).
+
+Each command lives in its own module with ``add(subparsers)`` (its parser and help, which sets
+``run(args) -> int`` as the parser's default). Bad input ends the command with one line on stderr,
+``imukit: error: <message>``, and exit code 1 (2 for a command line argparse refuses); ``--debug``
+shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from collections.abc import Sequence
+
+from imukit._errors import ImukitError
+from imukit.cli._allan import add as _allan
+from imukit.cli._demo import add as _demo
+from imukit.cli._evaluate import add as _evaluate
+from imukit.cli._filter import add as _filter
+from imukit.cli._integrate import add as _integrate
+from imukit.cli._preintegrate import add as _preintegrate
+from imukit.cli._simulate import add as _simulate
+
+__all__ = ["build_parser", "main"]
+
+# Each adds its parser, with `run` as the default of `args.run`; in the order `imukit --help` lists them.
+_COMMANDS = (_integrate, _preintegrate, _filter, _simulate, _allan, _evaluate, _demo)
+
+_DESCRIPTION = """\
+IMU kinematics from the command line: integrate a recording into a trajectory, preintegrate it
+into windows, run an attitude filter, simulate a sensor, identify its noise (Allan), score a
+trajectory against ground truth, or run the demo.
+
+Inputs are read by format, detected from the path: an EuRoC / ASL folder (or its mav0/), a TUM-VI
+folder, an EuRoC imu0 CSV, GTSAM/KITTI IMU text, a ROS1/ROS2/MCAP bag, a BROAD .mat trial. Frames
+and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity
+(0, 0, -9.81) m/s^2, rotations R_wb (body to world), quaternions x y z w in files.
+
+Run `imukit COMMAND --help` for what a command reads, writes and prints, with an example."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every command (``imukit --help``)."""
+    parser = argparse.ArgumentParser(
+        prog="imukit", description=_DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--debug", action="store_true", help="on an error, show the Python traceback")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in _COMMANDS:
+        add(commands)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; returns the exit code (0 success, 1 bad input or failure, 2 bad usage)."""
+    args = build_parser().parse_args(argv)
+    try:
+        code: int = args.run(args)
+    except (ImukitError, OSError, ValueError) as exc:
+        if args.debug:
+            traceback.print_exc()
+        message = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in message:
+            message = f"{exc.filename}: {message}"
+        print(f"imukit: error: {message}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("imukit: interrupted", file=sys.stderr)
+        return 130
+    return code

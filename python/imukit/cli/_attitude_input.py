@@ -1,0 +1,72 @@
+"""Input of the attitude commands: IMU samples, optional magnetometer, reference attitudes at the
+IMU's samples. BROAD trials (``.mat``, and the package's ``.npz`` excerpt with the same keys) carry
+a magnetometer; the dataset readers of :mod:`imukit.io` do not (yet)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Slerp
+
+from imukit._arrays import FloatArray
+from imukit.cli._common import CliError, err, read_imu
+from imukit.imu import ImuData
+from imukit.state import Trajectory
+
+BROAD_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
+
+
+class AttitudeInput(NamedTuple):
+    """``imu``; ``mag`` (N, 3) or None; ``truth_xyzw`` (N, 4) reference ``R_wb`` at the IMU samples
+    (NaN rows where there is none) or None; ``mask`` (N,) the samples to score (BROAD's movement)."""
+
+    imu: ImuData
+    mag: FloatArray | None
+    truth_xyzw: FloatArray | None
+    mask: NDArray[np.bool_] | None
+
+
+def read_broad(path: str | Path) -> AttitudeInput:
+    """A BROAD trial (Laidig et al. 2021): ``t = index / sampling_rate`` [s], gyro [rad/s], accel
+    [m/s²], mag [µT], ``opt_quat`` w x y z (ENU, NaN during dropouts), ``movement``."""
+    where = str(path)
+    if Path(path).suffix.lower() == ".mat":
+        from scipy.io import loadmat
+
+        data = loadmat(where)
+    else:
+        with np.load(where) as npz:
+            data = {key: npz[key] for key in npz.files}
+    missing = [key for key in BROAD_KEYS if key not in data]
+    if missing:
+        raise CliError(f"path: {where}: not a BROAD trial, missing {', '.join(missing)}")
+    rate = float(np.asarray(data["sampling_rate"]).item())
+    gyro = np.ascontiguousarray(data["imu_gyr"], dtype=np.float64)
+    imu = ImuData(np.arange(len(gyro)) / rate, gyro, np.ascontiguousarray(data["imu_acc"], dtype=np.float64))
+    truth = np.asarray(data["opt_quat"], dtype=np.float64)[:, [1, 2, 3, 0]]
+    mag = np.ascontiguousarray(data["imu_mag"], dtype=np.float64)
+    return AttitudeInput(imu, mag, np.ascontiguousarray(truth), np.asarray(data["movement"]).ravel().astype(bool))
+
+
+def truth_at(truth: Trajectory, imu: ImuData) -> FloatArray:
+    """Reference quaternions (xyzw) at the IMU's stamps by slerp; NaN outside the truth's span."""
+    q = np.full((len(imu), 4), np.nan)
+    inside = (imu.t >= truth.t[0]) & (imu.t <= truth.t[-1])
+    if len(truth) == 1:
+        inside &= imu.t == truth.t[0]
+        q[inside] = truth.rotation.as_quat()[0]
+    elif inside.any():
+        q[inside] = Slerp(truth.t, truth.rotation)(imu.t[inside]).as_quat()
+    return q
+
+
+def read_attitude_input(path: str) -> AttitudeInput:
+    """BROAD ``.mat`` / ``.npz`` by suffix; anything else through :func:`imukit.io.read_imu`."""
+    if Path(path).suffix.lower() in (".mat", ".npz"):
+        with err.status(f"reading {path}"):
+            return read_broad(path)
+    imu, truth = read_imu(path)
+    return AttitudeInput(imu, None, None if truth is None else truth_at(truth, imu), None)

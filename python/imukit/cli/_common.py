@@ -1,0 +1,104 @@
+"""What every command shares: the consoles, progress bars, one-line errors, input and output files."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+
+from imukit._errors import ImukitError
+from imukit.imu import ImuData
+from imukit.state import Trajectory
+
+# Results go to stdout, progress and notes to stderr, so `imukit ... > file` keeps only results.
+out = Console(highlight=False, soft_wrap=True)
+if not out.is_terminal:
+    out = Console(highlight=False, soft_wrap=True, width=140)  # a pipe or a file: no 80-column wrapping
+err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+class CliError(ImukitError):
+    """Bad use of a command (a missing input, a refused option): printed as one line, exit code 1."""
+
+
+def note(text: str) -> None:
+    """A remark about what the command did (samples skipped, the initial state chosen), on stderr."""
+    err.print(f"imukit: {text}", markup=False)
+
+
+@contextmanager
+def progress(description: str, total: int) -> Iterator[Callable[[int], None]]:
+    """A progress bar on stderr over ``total`` units; yields ``advance(n)``. Shown only on a terminal."""
+    bar = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TaskProgressColumn(),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+        disable=not err.is_terminal,
+    )
+    with bar:
+        task = bar.add_task(description, total=total)
+        yield lambda n: bar.advance(task, n)
+
+
+def chunks(n: int, size: int) -> Iterator[tuple[int, int]]:
+    """``(start, stop)`` index pairs covering ``range(n)`` in pieces of ``size``."""
+    for start in range(0, n, size):
+        yield start, min(start + size, n)
+
+
+def read_imu(path: str) -> tuple[ImuData, Trajectory | None]:
+    """The IMU samples and ground truth at ``path``, whatever its format (:func:`imukit.io.read_imu`)."""
+    from imukit import io
+
+    with err.status(f"reading {path}"):
+        return io.read_imu(path)
+
+
+def read_trajectory(path: str) -> Trajectory:
+    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap): :func:`imukit.io.read_trajectory`."""
+    from imukit import io
+
+    with err.status(f"reading {path}"):
+        return io.read_trajectory(path)
+
+
+def output_path(path: str, suffixes: tuple[str, ...], option: str) -> Path:
+    """``path`` as a file to write: its suffix one of ``suffixes``, its folder existing."""
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise CliError(f"{option}: expected a file name ending in {' or '.join(suffixes)}, got {path!r}")
+    if not p.parent.is_dir():
+        raise CliError(f"{option}: folder {os.fspath(p.parent)!r} does not exist")
+    return p
+
+
+def positive(text: str) -> float:
+    """argparse type: a positive, finite float."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def wrote(what: str, path: str | os.PathLike[str]) -> None:
+    """Report a written file on stdout."""
+    out.print(f"wrote {what}: {os.fspath(path)}", markup=False)
+
+
+def add_plot_option(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument(
+        "--plot", metavar="PNG", help=f"write {what} to this PNG file (needs matplotlib: pip install 'imukit[plot]')"
+    )

@@ -1,0 +1,89 @@
+"""``imukit evaluate``: absolute (and relative) trajectory error of an estimate against ground truth."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from rich.table import Table
+
+from imukit.cli._common import add_plot_option, out, output_path, positive, read_trajectory, wrote
+from imukit.eval import ErrorStats, ape, rpe
+
+ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
+
+DESCRIPTION = """\
+Score the trajectory EST against the ground truth GT: the absolute trajectory error (ATE / evo's
+APE) after an alignment, and with --delta the relative pose error (RPE) over pairs --delta apart.
+Definitions and the comparison with evo: docs/evaluation.md.
+
+Reads: EST and GT as trajectory files, format detected: TUM (`t x y z qx qy qz qw`), an EuRoC
+ground-truth CSV, a TUM-VI mocap CSV. Each EST pose is paired with GT interpolated at its stamp
+(position linear, rotation slerp; not across GT gaps over --max-dt s); unpaired poses are counted.
+Alignment (--align): se3 (rotation + translation, Umeyama; the default), sim3 (+ scale: monocular
+VO), yaw (rotation about z + translation: the 4 unobservable DoF of VIO), position (translation
+only), none.
+Units: translation errors in m, rotation errors in degrees.
+Prints a table of RMSE, mean, median, std, min and max. Writes --plot: a top view of the aligned
+estimate and the ground truth.
+
+Example:
+  imukit evaluate traj.txt MH_01_easy/mav0/state_groundtruth_estimate0/data.csv --align se3 --delta 1"""
+
+
+def add(commands: Any) -> None:
+    p = commands.add_parser(
+        "evaluate",
+        help="absolute / relative trajectory error of an estimate against ground truth",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("estimate", metavar="EST", help="the estimated trajectory (TUM, EuRoC ground-truth CSV, ...)")
+    p.add_argument("groundtruth", metavar="GT", help="the ground truth, same formats")
+    p.add_argument("--align", choices=ALIGNMENTS, default="se3", help="alignment before the ATE (default: %(default)s)")
+    p.add_argument("--delta", type=positive, metavar="D", help="also the RPE over pairs D apart (see --delta-unit)")
+    p.add_argument("--delta-unit", choices=("m", "s", "frames"), default="m", help="unit of --delta (default: m)")
+    p.add_argument(
+        "--max-dt", type=positive, default=0.02, metavar="S", help="largest GT gap to interpolate over [s] (0.02)"
+    )
+    add_plot_option(p, "a top view of the aligned estimate and the ground truth")
+    p.set_defaults(run=run)
+
+
+def _row(table: Table, name: str, stats: ErrorStats, unit: str, scale: float) -> None:
+    values = (stats.rmse, stats.mean, stats.median, stats.std, stats.min, stats.max)
+    table.add_row(name, unit, *(f"{v * scale:.4g}" for v in values), str(stats.n))
+
+
+def run(args: argparse.Namespace) -> int:
+    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
+    estimate = read_trajectory(args.estimate)
+    truth = read_trajectory(args.groundtruth)
+    absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt)
+    table = Table(title=f"{args.estimate} against {args.groundtruth} (alignment: {args.align})")
+    for column in ("error", "unit", "RMSE", "mean", "median", "std", "min", "max", "samples"):
+        table.add_column(column, justify="left" if column in ("error", "unit") else "right")
+    _row(table, "ATE translation", absolute.translation_stats, "m", 1.0)
+    _row(table, "ATE rotation", absolute.rotation_stats, "deg", math.degrees(1.0))
+    if args.delta is not None:
+        relative = rpe(estimate, truth, delta=args.delta, unit=args.delta_unit, max_dt=args.max_dt)
+        span = f"{args.delta:g} {args.delta_unit}"
+        _row(table, f"RPE translation / {span}", relative.translation_stats, "m", 1.0)
+        _row(table, f"RPE rotation / {span}", relative.rotation_stats, "deg", math.degrees(1.0))
+    out.print(table)
+    if absolute.n_dropped:
+        out.print(f"{absolute.n_dropped} estimate poses had no ground truth within --max-dt and were left out")
+    if absolute.alignment.scale != 1.0:
+        out.print(f"sim3 scale: {absolute.alignment.scale:.6g}", markup=False)
+    if png is not None:
+        from imukit.plot import trajectory_top_view
+
+        trajectory_top_view(
+            png,
+            {f"{args.estimate} ({args.align}-aligned)": absolute.estimate},
+            truth=truth,
+            title=f"ATE RMSE {absolute.translation_stats.rmse:.4g} m: {args.estimate}",
+        )
+        wrote("top view", png)
+    return 0

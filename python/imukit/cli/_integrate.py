@@ -1,0 +1,108 @@
+"""``imukit integrate``: dead reckoning of a recording into a trajectory."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from imukit.cli._common import CliError, add_plot_option, note, out, output_path, positive, read_imu, wrote
+from imukit.cli._initial import from_truth, levelled_at_rest, trim_to_truth
+from imukit.imu import ImuBias
+from imukit.strapdown import SCHEMES, integrate
+
+DESCRIPTION = """\
+Integrate the IMU samples of PATH into positions, velocities and attitudes (strapdown dead
+reckoning: no correction, so the error grows with time; see docs/strapdown.md).
+
+Reads: PATH in any format imukit detects (an EuRoC folder, a ROS bag, ...; `imukit --help`).
+Frames and units: body = the IMU frame; world z up, gravity (0, 0, -9.81) m/s^2; positions in m.
+
+The initial state:
+  - with ground truth in PATH: the truth's position, velocity and attitude interpolated at the
+    first IMU sample inside the truth's span (IMU samples before the truth starts are skipped,
+    and the count is printed);
+  - without: at the origin, at rest, roll and pitch levelled from the mean accelerometer over the
+    first --static-seconds (yaw 0), so the recording must start at rest.
+--bias-from-groundtruth subtracts the truth's gyro and accelerometer biases at that first sample
+(EuRoC's ground truth has them) as a constant bias.
+
+Writes: --out, a TUM file (`t x y z qx qy qz qw`, one line per IMU sample); --plot, a top view
+(x-y, metres) of the trajectory and the ground truth.
+Prints: with ground truth, the final position error and the absolute trajectory error (RMSE over
+the samples inside the truth's span, no alignment: the start is the truth's).
+
+Example:
+  imukit integrate MH_01_easy/ --scheme rk4 --bias-from-groundtruth --out traj.txt --plot top.png"""
+
+
+def add(commands: Any) -> None:
+    p = commands.add_parser(
+        "integrate",
+        help="dead-reckon a recording into a trajectory (TUM file, top-view plot)",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, CSV, bag, ...)")
+    p.add_argument("--scheme", choices=SCHEMES, default="midpoint", help="integration scheme (default: %(default)s)")
+    p.add_argument(
+        "--bias-from-groundtruth", action="store_true", help="subtract the ground truth's biases at the start"
+    )
+    p.add_argument(
+        "--static-seconds",
+        type=positive,
+        default=2.0,
+        metavar="S",
+        help="without ground truth: level the start from the first S seconds, at rest (default: %(default)s)",
+    )
+    p.add_argument("--out", metavar="TUM", help="write the trajectory to this TUM file (.txt or .tum)")
+    add_plot_option(p, "a top view of the trajectory and the ground truth")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    tum = None if args.out is None else output_path(args.out, (".txt", ".tum"), "--out")
+    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
+    imu, truth = read_imu(args.path)
+    bias = None
+    if truth is not None:
+        imu = trim_to_truth(imu, truth)
+        initial, truth_bias = from_truth(truth, imu)
+        if args.bias_from_groundtruth:
+            if truth_bias is None:
+                raise CliError("--bias-from-groundtruth: the ground truth in PATH has no biases")
+            bias = truth_bias
+    elif args.bias_from_groundtruth:
+        raise CliError("--bias-from-groundtruth: PATH has no ground truth")
+    else:
+        initial = levelled_at_rest(imu, args.static_seconds)
+        note(f"no ground truth: starting at rest, levelled from the first {args.static_seconds} s")
+    with out.status(f"integrating {len(imu)} samples ({args.scheme})"):
+        trajectory = integrate(imu, initial=initial, scheme=args.scheme, bias=bias or ImuBias())
+    out.print(f"integrated {len(imu)} samples over {imu.duration:.3f} s with {args.scheme}", markup=False)
+    if truth is not None:
+        _report_errors(trajectory, truth)
+    if tum is not None:
+        trajectory.write_tum(tum)
+        wrote("trajectory (TUM)", tum)
+    if png is not None:
+        from imukit.plot import trajectory_top_view
+
+        trajectory_top_view(
+            png, {f"imukit {args.scheme}": trajectory}, truth=truth, title=f"Dead reckoning: {args.path}"
+        )
+        wrote("top view", png)
+    return 0
+
+
+def _report_errors(trajectory: Any, truth: Any) -> None:
+    from imukit.eval import ape
+
+    error = ape(trajectory, truth, align="none")
+    final = float(np.linalg.norm(error.estimate.position[-1] - error.reference.position[-1]))
+    out.print(
+        f"final position error {final:.4g} m; ATE RMSE {error.translation_stats.rmse:.4g} m, max "
+        f"{error.translation_stats.max:.4g} m over {error.translation_stats.n} samples (no alignment)",
+        markup=False,
+    )
