@@ -39,13 +39,13 @@ class Alignment(NamedTuple):
         Stamps and biases (body-frame quantities) are kept; covariances are not carried over.
         """
         traj = check_trajectory(trajectory, "trajectory")
-        rot = self.rotation
-        velocity = None if traj.velocity is None else self.scale * rot.apply(traj.velocity)
+        # row vectors times (s R)ᵀ; Rotation.apply refuses the trajectory's read-only arrays
+        sr_t = self.scale * self.rotation.as_matrix().T
         return Trajectory(
             None if traj.t_ns is not None else traj.t,
-            self.scale * rot.apply(traj.position) + self.translation,
-            velocity,
-            rot * traj.rotation,
+            traj.position @ sr_t + self.translation,
+            None if traj.velocity is None else traj.velocity @ sr_t,
+            self.rotation * traj.rotation,
             t_ns=traj.t_ns,
             gyro_bias=traj.gyro_bias,
             accel_bias=traj.accel_bias,
