@@ -21,15 +21,18 @@ from __future__ import annotations
 from imukit._errors import FileFormatError
 from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, write_euroc
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
+from imukit.io._rosbag import list_rosbag_topics, read_rosbag
 from imukit.io._tum import read_tum, write_tum
 
 __all__ = [
     "FileFormatError",
     "KalibrImu",
+    "list_rosbag_topics",
     "read_euroc",
     "read_euroc_groundtruth",
     "read_euroc_imu",
     "read_kalibr_imu",
+    "read_rosbag",
     "read_tum",
     "write_euroc",
     "write_kalibr_imu",

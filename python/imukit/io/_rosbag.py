@@ -1,0 +1,297 @@
+"""ROS bags through the ``rosbags`` library: :func:`read_rosbag`, :func:`list_rosbag_topics`.
+
+ROS 1 ``.bag`` files, ROS 2 bag folders (``metadata.yaml`` with sqlite3 or mcap storage) and bare
+ROS 2 ``.mcap`` / ``.db3`` files. ``rosbags`` is an optional dependency (``pip install "imukit[ros]"``),
+imported on the first call, not with :mod:`imukit.io`. Fields, frames and stamps: ``docs/io.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Literal, NamedTuple, Union
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray
+from imukit._errors import FileFormatError, MissingDependencyError, ParameterError
+from imukit.imu import ImuData
+from imukit.io._lines import Problem, rotations_from_rows, zero_quaternion
+from imukit.io._report import BadLines, ReadReport
+from imukit.state import Trajectory
+
+__all__ = ["list_rosbag_topics", "read_rosbag"]
+
+IMU_TYPE = "sensor_msgs/msg/Imu"
+POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/TransformStamped", "nav_msgs/msg/Odometry")
+_NS_PER_S = 1_000_000_000
+_INSTALL = 'pip install "imukit[ros]"'
+
+
+class _Sample(NamedTuple):
+    """One message: its stamp [ns], its numbers, and what disqualifies it (None if nothing)."""
+
+    stamp_ns: int
+    values: tuple[float, ...]
+    problem: Problem | None
+
+
+Values = tuple[tuple[float, ...], Union[Problem, None]]
+
+
+def _imu_values(msg: Any) -> Values:
+    w, a = msg.angular_velocity, msg.linear_acceleration
+    # sensor_msgs/Imu: element 0 of a covariance set to -1 means "this field is not provided".
+    if msg.angular_velocity_covariance[0] == -1.0:
+        return (), ("missing field", "no angular velocity (angular_velocity_covariance[0] = -1)")
+    if msg.linear_acceleration_covariance[0] == -1.0:
+        return (), ("missing field", "no linear acceleration (linear_acceleration_covariance[0] = -1)")
+    return (w.x, w.y, w.z, a.x, a.y, a.z), None
+
+
+def _pose_values(position: Any, orientation: Any, linear: Any = None) -> Values:
+    q = (orientation.x, orientation.y, orientation.z, orientation.w)
+    velocity = () if linear is None else (linear.x, linear.y, linear.z)
+    return (position.x, position.y, position.z, *q, *velocity), zero_quaternion(q)
+
+
+# msgtype -> (its numbers and any problem, how they are printed in messages)
+_DECODERS: dict[str, tuple[Callable[[Any], Values], str]] = {
+    IMU_TYPE: (_imu_values, "angular_velocity {0} {1} {2}, linear_acceleration {3} {4} {5}"),
+    "geometry_msgs/msg/PoseStamped": (
+        lambda m: _pose_values(m.pose.position, m.pose.orientation),
+        "position {0} {1} {2}, orientation {3} {4} {5} {6}",
+    ),
+    "geometry_msgs/msg/TransformStamped": (
+        lambda m: _pose_values(m.transform.translation, m.transform.rotation),
+        "translation {0} {1} {2}, rotation {3} {4} {5} {6}",
+    ),
+    "nav_msgs/msg/Odometry": (
+        lambda m: _pose_values(m.pose.pose.position, m.pose.pose.orientation, m.twist.twist.linear),
+        "position {0} {1} {2}, orientation {3} {4} {5} {6}, twist.linear {7} {8} {9}",
+    ),
+}
+
+
+def _stamp_text(ns: int) -> str:
+    sign, ns = ("-", -ns) if ns < 0 else ("", ns)
+    return f"{sign}{ns // _NS_PER_S}.{ns % _NS_PER_S:09d}"
+
+
+@contextmanager
+def _open(path: str | os.PathLike[str]) -> Iterator[Any]:
+    """The bag at ``path`` opened with ``rosbags``' AnyReader; errors become :class:`FileFormatError`."""
+    try:
+        from rosbags.highlevel import AnyReader, AnyReaderError
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError as e:
+        raise MissingDependencyError(
+            f"path: reading ROS bags needs the rosbags package, which is not installed ({_INSTALL})"
+        ) from e
+    bag = Path(path)
+    if not bag.exists():
+        raise FileNotFoundError(f"path: {bag}: no such file or folder")
+    if not (bag.is_dir() or bag.suffix in (".bag", ".mcap", ".db3")):
+        raise FileFormatError(
+            f"path: {bag}: not a ROS bag; expected a ROS 1 .bag file, a ROS 2 bag folder (with metadata.yaml), "
+            "or a ROS 2 .mcap / .db3 file"
+        )
+    # Humble-era ROS 2 bags store no message definitions: fall back on the standard ones.
+    reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
+    try:
+        reader.open()
+    except (AnyReaderError, OSError, KeyError, ValueError) as e:
+        hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if bag.suffix == ".mcap" else ""
+        raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
+    try:
+        yield reader
+    finally:
+        reader.close()
+
+
+def _topics(reader: Any) -> dict[str, str]:
+    return {
+        topic: " | ".join(sorted({c.msgtype for c in info.connections}))
+        for topic, info in sorted(reader.topics.items())
+    }
+
+
+def list_rosbag_topics(path: str | os.PathLike[str]) -> dict[str, str]:
+    """The topics of a ROS bag and their message types, ``{"/imu0": "sensor_msgs/msg/Imu", ...}``.
+
+    Sorted by topic; types are written the ROS 2 way (``pkg/msg/Type``), for ROS 1 bags too. A topic
+    recorded with several types (possible in ROS 1) maps to them joined by ``" | "``. Accepts what
+    :func:`read_rosbag` accepts and raises what it raises when opening the bag.
+    """
+    with _open(path) as reader:
+        return _topics(reader)
+
+
+def _listing(topics: dict[str, str]) -> str:
+    return ", ".join(f"{t} ({m})" for t, m in topics.items()) or "none"
+
+
+def _select(topics: dict[str, str], requested: str | None, name: str, wanted: tuple[str, ...]) -> str | None:
+    """The topic to read for ``name`` (``imu_topic`` / ``groundtruth_topic``), or None when there is none."""
+    if requested is not None:
+        if not isinstance(requested, str):
+            raise ParameterError(f"{name}: expected a topic name or None, got {type(requested).__name__}")
+        if requested not in topics:
+            raise ParameterError(f"{name}: topic {requested!r} is not in the bag; its topics: {_listing(topics)}")
+        if topics[requested] not in wanted:
+            raise ParameterError(
+                f"{name}: topic {requested!r} has type {topics[requested]}, expected {' or '.join(wanted)}"
+            )
+        return requested
+    candidates = {t: m for t, m in topics.items() if m in wanted}
+    if len(candidates) > 1:
+        raise ParameterError(
+            f"{name}: the bag has {len(candidates)} candidate topics, pass one: {_listing(candidates)}"
+        )
+    return next(iter(candidates), None)
+
+
+def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: str) -> _Sample:
+    try:
+        msg = reader.deserialize(raw, msgtype)
+    except Exception as e:  # rosbags raises several types on corrupt data, none of them ours
+        return _Sample(record_ns, (), ("malformed", f"cannot decode the message ({type(e).__name__}: {e})"))
+    values, problem = _DECODERS[msgtype][0](msg)
+    if problem is None and not all(map(math.isfinite, values)):
+        problem = ("non-finite", "non-finite value")
+    if time_source == "record":
+        return _Sample(record_ns, values, problem)
+    sec, nanosec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
+    stamp_ns = sec * _NS_PER_S + nanosec
+    if problem is None and not 0 <= nanosec < _NS_PER_S:
+        problem = ("malformed", f"header.stamp.nanosec = {nanosec} is not below 10^9")
+    if problem is None and stamp_ns == 0:
+        problem = (
+            "zero stamp",
+            "header stamp is zero (unset by the publisher; time_source='record' reads record times)",
+        )
+    return _Sample(stamp_ns, values, problem)
+
+
+def _read_topic(
+    reader: Any, topic: str, msgtype: str, time_source: str, where: str, bad: BadLines
+) -> tuple[NDArray[np.int64], FloatArray]:
+    """Stamps [ns] and value rows of the valid messages of ``topic``, in bag order."""
+    stamps: list[int] = []
+    rows: list[tuple[float, ...]] = []
+    kept_at = 0  # message index of the last kept sample
+    index = 0
+    for index, (connection, record_ns, raw) in enumerate(
+        reader.messages([c for c in reader.connections if c.topic == topic]), start=1
+    ):
+        sample = _sample(reader, connection.msgtype, record_ns, raw, time_source)
+        problem = sample.problem
+        if problem is None and stamps and sample.stamp_ns <= stamps[-1]:
+            kind = "duplicate stamp" if sample.stamp_ns == stamps[-1] else "stamp going back"
+            shown = (_stamp_text(sample.stamp_ns), _stamp_text(stamps[-1]))
+            problem = (kind, "time must increase strictly, but {} follows {} (message {})".format(*shown, kept_at))
+        if problem is None:
+            stamps.append(sample.stamp_ns)
+            rows.append(sample.values)
+            kept_at = index
+            continue
+        text = f"stamp {_stamp_text(sample.stamp_ns)}"
+        if sample.values:
+            text += ", " + _DECODERS[msgtype][1].format(*map(repr, sample.values))
+        detail = f"topic {topic}, message {index}: {problem[1]}"
+        if not bad.skip:
+            raise FileFormatError(f"path: {where}, {detail}: {text}")
+        bad.bad(where, index, problem[0], detail, text)
+    if not stamps:
+        left = f"all {index} messages skipped" if index else "no messages"
+        raise FileFormatError(f"path: {where}, topic {topic}: no valid messages ({left})")
+    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
+
+
+def _trajectory(t_ns: NDArray[np.int64], pose: FloatArray) -> Trajectory:
+    # No line list: zero quaternions were skipped or raised already, message by message.
+    rotation = rotations_from_rows(np.ascontiguousarray(pose[:, 3:7]), [], "")
+    # nav_msgs/Odometry's twist is in child_frame_id (body) coordinates: v_w = R_wb v_b.
+    velocity = rotation.apply(pose[:, 7:10]) if pose.shape[1] == 10 else None
+    return Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns)
+
+
+def read_rosbag(
+    path: str | os.PathLike[str],
+    *,
+    imu_topic: str | None = None,
+    groundtruth_topic: str | None = None,
+    time_source: Literal["header", "record"] = "header",
+    on_bad_line: Literal["raise", "skip"] = "raise",
+    report: ReadReport | None = None,
+) -> tuple[ImuData, Trajectory | None]:
+    """Read IMU samples, and ground truth when the bag has it, from a ROS 1 or ROS 2 bag.
+
+    Parameters
+    ----------
+    path
+        A ROS 1 ``.bag`` file, a ROS 2 bag folder (``metadata.yaml`` and sqlite3 or mcap storage),
+        or a bare ROS 2 ``.mcap`` / ``.db3`` file.
+    imu_topic
+        The ``sensor_msgs/msg/Imu`` topic to read. None: the bag's only Imu topic; none or several
+        is a :class:`ParameterError` listing the topics with their types.
+    groundtruth_topic
+        A ``geometry_msgs/msg/PoseStamped``, ``geometry_msgs/msg/TransformStamped`` or
+        ``nav_msgs/msg/Odometry`` topic. None: the bag's only such topic, or no ground truth when it
+        has none; several is a :class:`ParameterError` listing them.
+    time_source
+        ``"header"``: each message's ``header.stamp``, the acquisition time the driver wrote; a zero
+        stamp is a bad message. ``"record"``: the time the recorder received the message, for bags
+        whose driver leaves ``header.stamp`` unset (transport delay and jitter then enter every dt).
+    on_bad_line
+        ``"raise"``: the first bad message is a :class:`FileFormatError` ``path: <bag>, topic <t>,
+        message <n>: …``, n being the 1-based index of the message on its topic in bag order.
+        ``"skip"``: bad messages are skipped and recorded as :class:`SkippedLine` (``line`` = that
+        index, ``text`` = the stamp and values) in ``report``, or summarised in one
+        :class:`SkippedLinesWarning` without one. Bad: undecodable (``malformed``), a non-finite
+        value, a field flagged absent (covariance element 0 = -1: ``missing field``), a zero
+        quaternion, a zero stamp, ``nanosec`` ≥ 10⁹ (``malformed``), a stamp equal to (duplicate: the
+        first is kept) or before (going back) the last kept one.
+    report
+        A :class:`ReadReport` that receives the skipped messages.
+
+    Returns
+    -------
+    imu
+        :class:`imukit.ImuData` with int64 ``t_ns``: ``angular_velocity`` → ``gyro`` [rad/s],
+        ``linear_acceleration`` → ``accel`` [m/s²], in the message's (body) frame. The message's
+        orientation and covariances are not read (except the -1 flag above).
+    truth
+        :class:`imukit.Trajectory` with ``t_ns``, or None: the pose (``PoseStamped.pose``,
+        ``Odometry.pose.pose``, or the ``TransformStamped`` transform, which maps ``child_frame_id``
+        coordinates to ``header.frame_id``) as ``position`` and ``rotation`` ``R_wb``. A velocity only
+        from Odometry, whose twist is in ``child_frame_id`` (body) coordinates (REP 103,
+        nav_msgs/Odometry): it is rotated to the world, ``v_w = R_wb v_b``.
+
+    Raises
+    ------
+    MissingDependencyError
+        ``rosbags`` is not installed.
+    FileNotFoundError, FileFormatError, ParameterError
+        No such path; not a readable bag, a bad message, a topic without valid messages; a topic
+        that is missing, of the wrong type or ambiguous, or a bad option.
+    """
+    if time_source not in ("header", "record"):
+        raise ParameterError(f"time_source: expected 'header' or 'record', got {time_source!r}")
+    bad = BadLines(on_bad_line, report)
+    where = os.fspath(path)
+    with _open(path) as reader:
+        topics = _topics(reader)
+        imu_name = _select(topics, imu_topic, "imu_topic", (IMU_TYPE,))
+        if imu_name is None:
+            raise ParameterError(f"imu_topic: the bag has no {IMU_TYPE} topic; its topics: {_listing(topics)}")
+        truth_name = _select(topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
+        t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
+        truth = None
+        if truth_name is not None:
+            truth = _trajectory(*_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
+    return bad.done((ImuData(t_ns, rows[:, :3], rows[:, 3:]), truth))
