@@ -1,13 +1,25 @@
-"""Files: trajectories (TUM), EuRoC / ASL dataset folders, Kalibr IMU noise files.
+"""Files: IMU datasets (EuRoC, TUM-VI, GTSAM/KITTI, ROS bags, any CSV), trajectories, Kalibr noise files.
 
 =====================  ===========================================================================
+any IMU source         :func:`read_imu` → ``(ImuData, Trajectory | None)``: finds the format (EuRoC or
+                       TUM-VI folder, EuRoC IMU CSV, GTSAM/KITTI text, ROS bag); :func:`read_trajectory`
+                       → ``Trajectory`` (TUM, EuRoC ground truth, TUM-VI mocap)
 TUM                    :func:`write_tum`, :func:`read_tum`: ``timestamp tx ty tz qx qy qz qw`` lines,
                        quaternion ``q_wb`` scalar-last; ``t_ns`` printed exactly with 9 decimals
 EuRoC / ASL            :func:`write_euroc`, :func:`read_euroc` (a folder), :func:`read_euroc_imu`,
                        :func:`read_euroc_groundtruth` (one CSV each): integer-nanosecond stamps,
                        ``q_RS`` = ``R_wb`` scalar-first, EuRoC's header lines
+TUM-VI                 :func:`read_tumvi`: EuRoC-layout folder with ``mocap0/data.csv`` poses
+GTSAM / KITTI          :func:`read_gtsam_imu`: ``Time dt accelX … omegaZ`` text (dt checked against the
+                       stamps); :func:`read_kitti_poses`: 3×4 pose rows plus a times file
+any CSV                :func:`read_imu_csv`: columns by header name or index; s/ms/us/ns, deg/s, g
+ROS bags               :func:`read_rosbag`, :func:`list_rosbag_topics` (ROS 1, ROS 2, MCAP; needs
+                       ``imukit[ros]``)
 Kalibr ``imu.yaml``    :func:`write_kalibr_imu`, :func:`read_kalibr_imu` → :class:`KalibrImu`:
                        continuous-time noise densities (:class:`imukit.ImuNoise`) and the rate
+bad lines              every reader takes ``on_bad_line="raise" | "skip"`` and ``report=``: skipped
+                       lines go to a :class:`ReadReport` (:class:`SkippedLine` records) or, without
+                       one, into one :class:`SkippedLinesWarning`
 =====================  ===========================================================================
 
 Writers print floats with ``repr``, the shortest text that reads back to the same float, so every
@@ -19,21 +31,36 @@ key. Columns, units and frames: ``docs/io.md``.
 from __future__ import annotations
 
 from imukit._errors import FileFormatError
+from imukit.io._csv import read_imu_csv
+from imukit.io._detect import read_imu, read_trajectory
 from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, write_euroc
+from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
+from imukit.io._kitti import read_kitti_poses
+from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 from imukit.io._rosbag import list_rosbag_topics, read_rosbag
 from imukit.io._tum import read_tum, write_tum
+from imukit.io._tumvi import read_tumvi
 
 __all__ = [
     "FileFormatError",
     "KalibrImu",
+    "ReadReport",
+    "SkippedLine",
+    "SkippedLinesWarning",
     "list_rosbag_topics",
     "read_euroc",
     "read_euroc_groundtruth",
     "read_euroc_imu",
+    "read_gtsam_imu",
+    "read_imu",
+    "read_imu_csv",
     "read_kalibr_imu",
+    "read_kitti_poses",
     "read_rosbag",
+    "read_trajectory",
     "read_tum",
+    "read_tumvi",
     "write_euroc",
     "write_kalibr_imu",
     "write_tum",

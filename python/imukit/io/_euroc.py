@@ -285,7 +285,7 @@ def read_euroc_imu(
 
 def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
     """:func:`read_euroc_imu` reporting to ``bad``."""
-    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, IMU_CSV)
+    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
     return build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
 
 
@@ -313,7 +313,9 @@ def read_euroc_groundtruth(
 
 def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     """:func:`read_euroc_groundtruth` reporting to ``bad``."""
-    t_ns, values, lines = read_stamped_csv(path, bad, GROUNDTRUTH_HEADER, GROUNDTRUTH_CSV, quaternion=3)
+    t_ns, values, lines = read_stamped_csv(
+        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
+    )
     rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
     return build(
         path,
@@ -330,13 +332,13 @@ def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory
 
 
 def read_stamped_csv(
-    path: str | os.PathLike[str], bad: BadLines, header: str, kind: Path, *, quaternion: int | None = None
+    path: str | os.PathLike[str], bad: BadLines, header: str, what: str, *, quaternion: int | None = None
 ) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
     """Integer stamps, ``(N, columns - 1)`` floats and line numbers of an EuRoC-style CSV file with
     ``header``'s columns.
 
-    ``quaternion``: the first of four value columns (after the stamp) holding a quaternion, which
-    must not be zero.
+    ``what`` names the file in messages; ``quaternion``: the first of four value columns (after the
+    stamp) holding a quaternion, which must not be zero.
     """
     width = header.count(",") + 1
 
@@ -352,7 +354,7 @@ def read_stamped_csv(
         bad,
         split=_split_comma,
         width=width,
-        expected=f"comma-separated fields (EuRoC {kind.as_posix()})",
+        expected=f"comma-separated fields ({what})",
         columns=range(1, width),
         check=check,
     )

@@ -30,6 +30,7 @@ KINDS = {
     "stamp going back": "stamps going back",
     "zero quaternion": "zero quaternions",
     "not a rotation": "not rotations",
+    "unpaired": "unpaired",
 }
 
 
@@ -42,7 +43,8 @@ class SkippedLine(NamedTuple):
     """1-based line number in that file (for a ROS bag: the message's 1-based index on its topic)."""
     reason: str
     """``"<kind>: <detail>"``, kind one of ``malformed``, ``wrong column count``, ``non-finite``,
-    ``duplicate stamp``, ``stamp going back``, ``zero quaternion``, ``not a rotation``; the detail
+    ``duplicate stamp``, ``stamp going back``, ``zero quaternion``, ``not a rotation``, ``unpaired``
+    (a line whose partner in another file was skipped); the detail
     is the message "raise" mode would have given (``"duplicate stamp: time must increase strictly,
     but 5 follows 5 (line 3)"``)."""
     text: str

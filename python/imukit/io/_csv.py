@@ -1,0 +1,228 @@
+"""Any delimited IMU text file, given its column mapping and units: :func:`read_imu_csv` (``docs/io.md``)."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Collection, Sequence
+from typing import Literal, Union
+
+import numpy as np
+
+from imukit._errors import FileFormatError, ParameterError
+from imukit.imu import ImuData
+from imukit.io._euroc import build
+from imukit.io._lines import Problem, Split, all_exact, increasing, integer_stamp, parse_rows, require_rows
+from imukit.io._report import BadLines, OnBadLine, ReadReport
+
+__all__ = ["read_imu_csv"]
+
+Column = Union[int, str]
+TimeUnit = Literal["s", "ms", "us", "ns"]
+# Nanoseconds per unit, for integer stamps; float stamps are divided by the unit's count per second.
+_NS_PER = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}
+_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
+_DELIMITERS = {",": ",", ";": ";", "\t": "tab", " ": "white space"}
+
+
+def read_imu_csv(
+    path: str | os.PathLike[str],
+    *,
+    time_column: Column,
+    gyro_columns: Sequence[Column],
+    accel_columns: Sequence[Column],
+    time_unit: TimeUnit = "s",
+    gyro_unit: Literal["rad/s", "deg/s"] = "rad/s",
+    accel_unit: Literal["m/s^2", "g"] = "m/s^2",
+    standard_gravity: float = 9.80665,
+    delimiter: str | None = None,
+    on_bad_line: OnBadLine = "raise",
+    report: ReadReport | None = None,
+) -> ImuData:
+    """Read IMU samples from a delimited text file, naming its columns and their units.
+
+    Parameters
+    ----------
+    path
+        The text file. Its first non-blank line is the header when it is not all numbers (a leading
+        ``#`` is dropped from it, as in EuRoC's ``#timestamp [ns],…``); every data line must have as
+        many fields as the header (without one, as the first data line). Later ``#`` lines and
+        blank lines are skipped.
+    time_column, gyro_columns, accel_columns
+        The time column and the x, y, z columns of the angular rate and the specific force, each a
+        header name (exact, after stripping white space) or a 0-based index. Other columns
+        (magnetometer, temperature, …) are not read.
+    time_unit
+        ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. With ``"ns"`` every stamp must be an integer and
+        becomes exact int64 ``t_ns``; with ``"ms"`` or ``"us"``, integer stamps also become exact
+        ``t_ns`` (× 10⁶ or × 10³) and otherwise, like ``"s"``, float seconds
+        ``t = value / 1000`` (or / 10⁶), one correctly rounded division.
+    gyro_unit
+        ``"rad/s"`` or ``"deg/s"`` (converted as ``value * (π / 180)``).
+    accel_unit
+        ``"m/s^2"`` or ``"g"`` (converted as ``value * standard_gravity``). The reading must be the
+        specific force (+1 g on the up axis at rest), as imukit's accelerometer convention.
+    standard_gravity
+        [m/s²] per g, default the standard 9.80665 (used only with ``accel_unit="g"``).
+    delimiter
+        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs); None (default): ``";"`` if
+        the first non-blank line has one, else ``","`` if it has one, else white space. Decimal
+        commas are not read.
+    on_bad_line, report
+        As in :func:`imukit.io.read_euroc_imu`. Bad lines: a wrong field count, text that is not a
+        number (or, with ``"ns"``, not an integer) in a column read, non-finite values, duplicate
+        stamps (first kept) and stamps going back.
+
+    Returns
+    -------
+    ImuData
+        gyro [rad/s], accel [m/s²] in the sensor's own axes; ``t_ns`` as described above.
+
+    Raises
+    ------
+    ParameterError
+        A unit, delimiter or ``standard_gravity`` outside its domain; a column name not in the header
+        (the message lists the header's names), an index beyond the last column, names without a
+        header line. Messages start with the argument's name.
+    FileFormatError
+        Naming the file and line: bad lines ("raise" mode), no data.
+    """
+    _choice(time_unit, "time_unit", _NS_PER)
+    _choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
+    _choice(accel_unit, "accel_unit", ("m/s^2", "g"))
+    gravity = _gravity(standard_gravity)
+    if delimiter is not None:
+        _choice(delimiter, "delimiter", _DELIMITERS)
+    wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
+    for name, columns in wanted.items():
+        _check_columns(columns, name, 1 if name == "time_column" else 3)
+    bad = BadLines(on_bad_line, report)
+    return bad.done(
+        imu_csv(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
+    )
+
+
+def imu_csv(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    wanted: dict[str, Sequence[Column]],
+    time_unit: str,
+    degrees: bool,
+    gravity: float | None,
+    delimiter: str | None,
+) -> ImuData:
+    """:func:`read_imu_csv` reporting to ``bad``, with checked arguments."""
+    where = os.fspath(path)
+    with open(path, encoding="utf-8") as f:
+        numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
+    split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
+    header: list[str] | None = None
+    header_line = 0
+    if numbered and not _numeric(split(numbered[0][1].lstrip("#"))):
+        header = [name.strip() for name in split(numbered[0][1].lstrip("#"))]
+        header_line = numbered.pop(0)[0]
+    numbered = [(n, text) for n, text in numbered if not text.startswith("#")]
+    if not numbered:
+        raise FileFormatError(f"path: {where}: no data lines")
+    width = len(header) if header is not None else len(split(numbered[0][1]))
+    index = {
+        name: [_index(c, name, header, header_line, width, where) for c in columns] for name, columns in wanted.items()
+    }
+    columns = index["time_column"] + index["gyro_columns"] + index["accel_columns"]
+    time = columns[0]
+
+    def check(fields: list[str], row: list[float]) -> Problem | None:
+        if time_unit == "ns" and integer_stamp(fields[time].strip()) is None:
+            return "malformed", f"time {fields[time].strip()!r} is not an integer number of nanoseconds (int64)"
+        return None
+
+    rows = parse_rows(
+        numbered,
+        path,
+        bad,
+        split=split,
+        width=width,
+        expected=f"fields ({'the header' if header is not None else 'the first data line'} has {width})",
+        columns=columns,
+        check=check,
+    )
+    stamps = [f[time].strip() for f in rows.fields]
+    scale = _NS_PER[time_unit]
+    ns = all_exact(stamps, lambda s: integer_stamp(s, scale)) if time_unit != "s" else None
+    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, path, bad)
+    rows = rows.take(keep)
+    require_rows(rows, path, bad)
+    data = np.array(rows.values, dtype=np.float64)
+    gyro = data[:, 1:4] * (np.pi / 180.0) if degrees else data[:, 1:4]
+    accel = data[:, 4:7] * gravity if gravity is not None else data[:, 4:7]
+    if ns is not None:
+        t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
+        return build(path, lambda: ImuData(t_ns, gyro, accel))
+    t = data[:, 0] / _PER_SECOND[time_unit]
+    return build(path, lambda: ImuData(t, gyro, accel))
+
+
+def _choice(value: object, name: str, allowed: Collection[str]) -> None:
+    if not isinstance(value, str) or value not in allowed:
+        raise ParameterError(f"{name}: expected one of {', '.join(map(repr, allowed))}, got {value!r}")
+
+
+def _gravity(value: object) -> float:
+    try:
+        g = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        g = math.nan
+    if not (math.isfinite(g) and g > 0.0):
+        raise ParameterError(f"standard_gravity: expected a positive, finite number of m/s^2 per g, got {value!r}")
+    return g
+
+
+def _check_columns(columns: object, name: str, count: int) -> None:
+    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
+        what = "a column name or 0-based index" if count == 1 else f"{count} column names or 0-based indices (x, y, z)"
+        got = columns[0] if count == 1 and isinstance(columns, list) else columns
+        raise ParameterError(f"{name}: expected {what}, got {got!r}")
+    for column in columns:
+        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
+            raise ParameterError(f"{name}: expected column names or 0-based indices (int ≥ 0), got {column!r}")
+
+
+def _index(column: Column, name: str, header: list[str] | None, line: int, width: int, where: str) -> int:
+    if isinstance(column, int):
+        if column >= width:
+            raise ParameterError(
+                f"{name}: column {column} is out of range: {where} has {width} columns "
+                f"(0-based indices 0 to {width - 1})"
+            )
+        return column
+    if header is None:
+        raise ParameterError(
+            f"{name}: column {column!r} is a name, but {where} has no header line (its first line is numbers); "
+            "pass 0-based indices"
+        )
+    found = [k for k, h in enumerate(header) if h == column]
+    if len(found) != 1:
+        problem = "no column named" if not found else f"{len(found)} columns named"
+        raise ParameterError(
+            f"{name}: {problem} {column!r} in the header of {where} (line {line}), "
+            f"which has {', '.join(map(repr, header))}"
+        )
+    return found[0]
+
+
+def _detect(first: str) -> str:
+    return ";" if ";" in first else "," if "," in first else " "
+
+
+def _splitter(delimiter: str) -> Split:
+    if delimiter == " ":
+        return str.split
+    return lambda text: text.split(delimiter)
+
+
+def _numeric(fields: list[str]) -> bool:
+    try:
+        [float(x) for x in fields]
+    except ValueError:
+        return False
+    return True

@@ -1,0 +1,171 @@
+"""Readers that find the format themselves: :func:`read_imu`, :func:`read_trajectory` (``docs/io.md``)."""
+
+from __future__ import annotations
+
+import os
+from itertools import islice
+from pathlib import Path
+
+from imukit._errors import FileFormatError
+from imukit.imu import ImuData
+from imukit.io._euroc import GROUNDTRUTH_CSV, IMU_CSV, euroc_folder, euroc_groundtruth, euroc_imu
+from imukit.io._gtsam import GTSAM_COLUMNS, gtsam_imu
+from imukit.io._lines import data_lines, integer_stamp
+from imukit.io._report import BadLines, OnBadLine, ReadReport
+from imukit.io._tum import tum
+from imukit.io._tumvi import MOCAP_CSV, tumvi_folder, tumvi_mocap
+from imukit.state import Trajectory
+
+__all__ = ["read_imu", "read_trajectory"]
+
+IMU_FORMATS = (
+    "EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), "
+    "TUM-VI folder (the same with mocap0/data.csv), "
+    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap), "
+    "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
+    "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
+    "for other layouts use read_imu_csv with a column mapping"
+)
+TRAJECTORY_FORMATS = (
+    "TUM (8 white-space-separated fields), EuRoC ground truth (17 comma-separated fields), "
+    "TUM-VI mocap (8 comma-separated fields), EuRoC or TUM-VI folder with one of those files; "
+    "KITTI poses need their times file: use read_kitti_poses"
+)
+
+
+def read_imu(
+    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> tuple[ImuData, Trajectory | None]:
+    """Read IMU samples (and ground truth where the source has it) from any supported source.
+
+    Detection, in this order:
+
+    1. a folder with ``metadata.yaml``: a ROS 2 bag (:func:`imukit.io.read_rosbag`);
+    2. a folder with ``imu0/data.csv`` (or ``mav0/imu0/data.csv``): TUM-VI
+       (:func:`imukit.io.read_tumvi`) when ``mocap0/data.csv`` is next to ``imu0/``, else EuRoC
+       (:func:`imukit.io.read_euroc`);
+    3. a file named ``*.bag`` or ``*.mcap``: a ROS bag;
+    4. a file whose first non-blank line is ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``:
+       GTSAM / KITTI text (:func:`imukit.io.read_gtsam_imu`);
+    5. a file whose first data line (after ``#`` lines) has 7 comma-separated fields and an integer
+       first field: an EuRoC / TUM-VI ``imu0/data.csv`` (:func:`imukit.io.read_euroc_imu`).
+
+    Anything else is a :class:`FileFormatError` listing the formats tried (other CSV layouts:
+    :func:`imukit.io.read_imu_csv`).
+
+    Parameters
+    ----------
+    path
+        File or folder.
+    on_bad_line, report
+        Passed to the reader chosen (see :func:`imukit.io.read_euroc_imu`).
+
+    Returns
+    -------
+    imu, truth
+        ``truth`` is the ground truth of a folder or bag that has one, else None.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    FileFormatError
+        No format recognised, or as the reader chosen.
+    """
+    source = Path(path)
+    if (source.is_dir() and (source / "metadata.yaml").is_file()) or _is_bag_file(source):
+        from imukit.io._rosbag import read_rosbag  # optional dependency, loaded on first use
+
+        return read_rosbag(path, on_bad_line=on_bad_line, report=report)
+    bad = BadLines(on_bad_line, report)
+    root = _dataset_root(source)
+    if root is not None:
+        read = tumvi_folder if (root / MOCAP_CSV).is_file() else euroc_folder
+        return bad.done(read(root, bad))
+    first = _first_lines(source, IMU_FORMATS)
+    if first and first[0][1].split() == GTSAM_COLUMNS:
+        return bad.done((gtsam_imu(path, bad), None))
+    fields = _first_data_fields(first, ",")
+    if len(fields) == 7 and integer_stamp(fields[0].strip()) is not None:
+        return bad.done((euroc_imu(path, bad), None))
+    raise FileFormatError(f"path: {os.fspath(path)}: not an IMU format imukit knows; tried {IMU_FORMATS}")
+
+
+def read_trajectory(
+    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+) -> Trajectory:
+    """Read a trajectory (ground truth or an estimate) from a TUM, EuRoC or TUM-VI file or folder.
+
+    Detection: a folder with ``imu0/data.csv`` (or under ``mav0/``) gives its
+    ``state_groundtruth_estimate0/data.csv`` (EuRoC) or else its ``mocap0/data.csv`` (TUM-VI). A file
+    is classified by its first data line (after ``#`` and blank lines): 17 comma-separated fields,
+    EuRoC ground truth (:func:`imukit.io.read_euroc_groundtruth`); 8 comma-separated fields, TUM-VI
+    mocap (``timestamp [ns], p x y z, q w x y z``); 8 white-space-separated fields, TUM
+    (:func:`imukit.io.read_tum`). Anything else is a :class:`FileFormatError` listing the formats
+    tried (KITTI poses need their times file: :func:`imukit.io.read_kitti_poses`).
+
+    ``on_bad_line`` and ``report`` are passed to the reader chosen.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    FileFormatError
+        No format recognised, a folder without ground truth, or as the reader chosen.
+    """
+    source = Path(path)
+    bad = BadLines(on_bad_line, report)
+    root = _dataset_root(source)
+    if root is not None:
+        for name, read in ((GROUNDTRUTH_CSV, euroc_groundtruth), (MOCAP_CSV, tumvi_mocap)):
+            if (root / name).is_file():
+                return bad.done(read(root / name, bad))
+        raise FileFormatError(
+            f"path: {os.fspath(path)}: a dataset folder without ground truth "
+            f"(no {GROUNDTRUTH_CSV.as_posix()} nor {MOCAP_CSV.as_posix()} in {root})"
+        )
+    first = _first_lines(source, TRAJECTORY_FORMATS)
+    comma, space = len(_first_data_fields(first, ",")), len(_first_data_fields(first, None))
+    if comma == 17:
+        return bad.done(euroc_groundtruth(path, bad))
+    if comma == 8:
+        return bad.done(tumvi_mocap(path, bad))
+    if comma == 1 and space == 8:
+        return bad.done(tum(path, bad))
+    raise FileFormatError(f"path: {os.fspath(path)}: not a trajectory format imukit knows; tried {TRAJECTORY_FORMATS}")
+
+
+def _is_bag_file(source: Path) -> bool:
+    return source.is_file() and source.suffix.lower() in (".bag", ".mcap")
+
+
+def _dataset_root(source: Path) -> Path | None:
+    """``source`` or its ``mav0/`` when it holds ``imu0/data.csv``, else None."""
+    for root in (source, source / "mav0"):
+        if source.is_dir() and (root / IMU_CSV).is_file():
+            return root
+    return None
+
+
+def _first_lines(source: Path, formats: str) -> list[tuple[int, str]]:
+    """The first two non-blank lines, and the first data line after them if it comes later (a header
+    block of ``#`` lines); FileNotFoundError for a missing path, FileFormatError for a folder or a file
+    that is not UTF-8 text."""
+    if not source.exists():
+        raise FileNotFoundError(f"path: {os.fspath(source)} does not exist")
+    if source.is_dir():
+        raise FileFormatError(f"path: {os.fspath(source)}: a folder of no known layout; tried {formats}")
+    try:
+        with open(source, encoding="utf-8") as f:
+            first = list(islice(((n, line.strip()) for n, line in enumerate(f, 1) if line.strip()), 2))
+        return first + list(islice(data_lines(source), 1))
+    except UnicodeDecodeError:
+        raise FileFormatError(f"path: {os.fspath(source)}: not a text file; tried {formats}") from None
+
+
+def _first_data_fields(first: list[tuple[int, str]], delimiter: str | None) -> list[str]:
+    """The fields of the first line that is not a ``#`` comment, [] if there is none."""
+    for _, text in first:
+        if not text.startswith("#"):
+            return text.split(delimiter)
+    return []
