@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import imukit as ik
-from euroc import IMU_CSV, requires_euroc
+from euroc import GT_CSV, IMU_CSV, requires_euroc
 from imukit.io import list_rosbag_topics, read_rosbag
 from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 
@@ -30,7 +30,7 @@ IMU = "sensor_msgs/msg/Imu"
 POSE = "geometry_msgs/msg/PoseStamped"
 TF = "geometry_msgs/msg/TransformStamped"
 ODOM = "nav_msgs/msg/Odometry"
-KINDS = ["ros1", "sqlite3", "mcap", "mcap-file"]
+KINDS = ["ros1", "ros1-bz2", "sqlite3", "mcap", "mcap-file"]
 EPOCH_S = 1_403_715_523  # EuRoC V1_02's epoch second
 
 
@@ -39,7 +39,7 @@ class Bag:
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
-        self.ros1 = kind == "ros1"
+        self.ros1 = kind.startswith("ros1")
         self.store = get_typestore(Stores.ROS1_NOETIC if self.ros1 else Stores.ROS2_HUMBLE)
 
     def _t(self, name: str) -> Any:
@@ -96,10 +96,12 @@ class Bag:
         return self._t(ODOM)(header=self.header(*stamp), child_frame_id="body", pose=pose, twist=twist_cov)
 
     def write(self, base: Path, topics: dict[str, tuple[str, list[tuple[int, Any]]]]) -> Path:
-        """Write ``{topic: (msgtype, [(record time ns, message), ...])}``; the path to read back."""
+        """Write ``{topic: (msgtype, [(record time ns, message or raw bytes), ...])}``; the path to read back."""
         if self.ros1:
             path = base.with_suffix(".bag")
             writer: Any = Writer1(path)
+            if self.kind == "ros1-bz2":
+                writer.set_compression(Writer1.CompressionFormat.BZ2)
             serialize = self.store.serialize_ros1
         else:
             path = base
@@ -110,7 +112,7 @@ class Bag:
             for topic, (msgtype, messages) in topics.items():
                 connection = writer.add_connection(topic, msgtype, typestore=self.store)
                 for record_ns, msg in messages:
-                    writer.write(connection, record_ns, serialize(msg, msgtype))
+                    writer.write(connection, record_ns, msg if isinstance(msg, bytes) else serialize(msg, msgtype))
         return next(path.glob("*.mcap")) if self.kind == "mcap-file" else path
 
 
@@ -246,19 +248,20 @@ def test_a_field_flagged_absent_is_a_bad_message(tmp_path: Path) -> None:
     path = bag.write(tmp_path / "b", {"/imu": (IMU, imu)})
 
     data, _, report = raise_then_skip(
-        path, r"topic /imu, message 3: no angular velocity \(angular_velocity_covariance\[0\] = -1\): stamp 3\.002"
+        path,
+        r"topic /imu, message 3: no angular velocity \(angular_velocity_covariance\[0\] = -1\): header\.stamp 3\.002",
     )
     assert data.t_ns is not None and data.t_ns.tolist() == [3 * 10**9, 3 * 10**9 + 10**6]  # orientation -1 is fine
     assert [(s.line, s.reason, s.text) for s in report.skipped] == [
         (
             3,
             "missing field: topic /imu, message 3: no angular velocity (angular_velocity_covariance[0] = -1)",
-            "stamp 3.002000000",
+            "header.stamp 3.002000000",
         ),
         (
             4,
             "missing field: topic /imu, message 4: no linear acceleration (linear_acceleration_covariance[0] = -1)",
-            "stamp 3.003000000",
+            "header.stamp 3.003000000",
         ),
     ]
 
@@ -320,7 +323,8 @@ def test_bag_without_imu_topic(tmp_path: Path) -> None:
     path = _topics_bag(tmp_path, {"/gt/pose": POSE, "/chatter": "std_msgs/msg/String"})
     listing = re.escape("/chatter (std_msgs/msg/String), /gt/pose (geometry_msgs/msg/PoseStamped)")
     with pytest.raises(
-        ik.ParameterError, match=f"^imu_topic: the bag has no sensor_msgs/msg/Imu topic; its topics: {listing}$"
+        ik.ParameterError,
+        match=f"^imu_topic: the bag has no sensor_msgs/msg/Imu topic with messages; its topics: {listing}$",
     ):
         read_rosbag(path)
 
@@ -339,7 +343,7 @@ def test_duplicate_and_decreasing_stamps(kind: str, tmp_path: Path) -> None:
     imu, _, report = raise_then_skip(
         path,
         r"topic /imu0, message 3: time must increase strictly, but 5\.001000000 follows 5\.001000000 \(message 2\): "
-        r"stamp 5\.001000000, angular_velocity 3\.0 0\.0 0\.0, linear_acceleration 0\.0 0\.0 9\.81$",
+        r"header\.stamp 5\.001000000, angular_velocity 3\.0 0\.0 0\.0, linear_acceleration 0\.0 0\.0 9\.81$",
     )
     assert imu.t_ns is not None
     assert imu.t_ns.tolist() == [5_000_000_000, 5_001_000_000, 5_002_000_000, 5_003_000_000]
@@ -350,21 +354,21 @@ def test_duplicate_and_decreasing_stamps(kind: str, tmp_path: Path) -> None:
             3,
             "duplicate stamp: topic /imu0, message 3: time must increase strictly, but 5.001000000 follows "
             "5.001000000 (message 2)",
-            "stamp 5.001000000, angular_velocity 3.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
+            "header.stamp 5.001000000, angular_velocity 3.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
         ),
         SkippedLine(
             str(path),
             4,
             "stamp going back: topic /imu0, message 4: time must increase strictly, but 5.000500000 follows "
             "5.001000000 (message 2)",
-            "stamp 5.000500000, angular_velocity 4.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
+            "header.stamp 5.000500000, angular_velocity 4.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
         ),
         SkippedLine(
             str(path),
             6,
             "duplicate stamp: topic /imu0, message 6: time must increase strictly, but 5.002000000 follows "
             "5.002000000 (message 5)",
-            "stamp 5.002000000, angular_velocity 6.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
+            "header.stamp 5.002000000, angular_velocity 6.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
         ),
     ]
 
@@ -408,7 +412,7 @@ def test_non_finite_values_and_zero_quaternions(tmp_path: Path) -> None:
     ]
     path = bag.write(tmp_path / "b", {"/imu": (IMU, imu), "/pose": (POSE, poses)})
     data, truth, report = raise_then_skip(
-        path, r"topic /imu, message 2: non-finite value: stamp 2\.001000000, angular_velocity 0\.1 nan 0\.3"
+        path, r"topic /imu, message 2: non-finite value: header\.stamp 2\.001000000, angular_velocity 0\.1 nan 0\.3"
     )
     assert data.t_ns is not None and data.t_ns.tolist() == [2 * 10**9, 2 * 10**9 + 2 * 10**6]
     assert truth is not None and truth.position[:, 0].tolist() == [0.0, 2.0]
@@ -419,15 +423,35 @@ def test_non_finite_values_and_zero_quaternions(tmp_path: Path) -> None:
         (2, "zero quaternion: topic /pose, message 2: zero quaternion"),
         (4, "non-finite: topic /imu, message 4: non-finite value"),
     ]
-    assert report.skipped[1].text == "stamp 2.001000000, position 1.0 0.0 0.0, orientation 0.0 0.0 0.0 0.0"
+    assert report.skipped[1].text == "header.stamp 2.001000000, position 1.0 0.0 0.0, orientation 0.0 0.0 0.0 0.0"
 
 
 def test_a_topic_without_valid_messages(tmp_path: Path) -> None:
     path, _ = _stamped_imu_bag(tmp_path, "mcap", [(0, 0), (0, 0)])
-    with pytest.raises(
-        ik.io.FileFormatError, match=r"^path: .*, topic /imu0: no valid messages \(all 2 messages skipped\)$"
-    ):
+    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*, topic /imu0: no valid messages \(all 2 skipped\)$"):
         read_rosbag(path, on_bad_line="skip", report=ReadReport())
+
+
+def test_undecodable_and_empty_topics(tmp_path: Path) -> None:
+    bag = Bag("sqlite3")
+    good = bag.imu((6, 0), (1.0, 2.0, 3.0), (4.0, 5.0, 6.0))
+    path = bag.write(
+        tmp_path / "b", {"/imu": (IMU, [(11, good), (22, b"\x00\x01\x00\x00 truncated")]), "/pose": (POSE, [])}
+    )
+    imu, truth, report = raise_then_skip(
+        path, r"topic /imu, message 2: cannot decode it \(.+\): record time 0\.000000022$"
+    )
+    assert truth is None  # the empty /pose topic is no candidate
+    assert imu.gyro.tolist() == [[1.0, 2.0, 3.0]]
+    assert [(s.line, s.kind, s.text) for s in report.skipped] == [(2, "malformed", "record time 0.000000022")]
+    with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(path))}, topic /pose: no messages$"):
+        read_rosbag(path, groundtruth_topic="/pose", on_bad_line="skip", report=report)
+    (tmp_path / "empty").mkdir()
+    path, _ = _stamped_imu_bag(tmp_path / "empty", "ros1", [])
+    with pytest.raises(
+        ik.ParameterError, match=r"^imu_topic: the bag has no sensor_msgs/msg/Imu topic with messages; "
+    ):
+        read_rosbag(path)
 
 
 def test_not_a_bag(tmp_path: Path) -> None:
@@ -437,10 +461,18 @@ def test_not_a_bag(tmp_path: Path) -> None:
         ik.io.FileFormatError, match=f"^path: {re.escape(str(text))}: not a ROS bag; expected a ROS 1 .bag"
     ):
         read_rosbag(text)
-    for name in ("broken.bag", "broken.mcap"):
-        broken = tmp_path / name
-        broken.write_bytes(b"#ROSBAG V2.0\n garbage")
-        with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(broken))}: cannot open as a ROS bag"):
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    for broken, hint in (
+        (tmp_path / "broken.bag", ":"),
+        (tmp_path / "broken.mcap", r" \(rosbags reads MCAP files of the ros2 profile"),
+        (folder, ": Expected metadata file"),
+    ):
+        if broken != folder:
+            broken.write_bytes(b"#ROSBAG V2.0\n garbage")
+        with pytest.raises(
+            ik.io.FileFormatError, match=f"^path: {re.escape(str(broken))}: cannot open as a ROS bag{hint}"
+        ):
             list_rosbag_topics(broken)
     with pytest.raises(FileNotFoundError, match="no such file or folder"):
         read_rosbag(tmp_path / "absent.bag")
@@ -474,17 +506,32 @@ def test_missing_rosbags_names_the_extra(tmp_path: Path, monkeypatch: pytest.Mon
 @requires_euroc
 @pytest.mark.parametrize("kind", ["ros1", "mcap"])
 def test_euroc_excerpt_through_a_bag(kind: str, tmp_path: Path) -> None:
-    """The real 40 s EuRoC excerpt (7 999 samples) written as sensor_msgs/Imu reads back identical."""
+    """The real 40 s EuRoC excerpt (7 999 samples) written as sensor_msgs/Imu reads back identical; its
+    ground truth over the same span, written as nav_msgs/Odometry with the twist in the body frame as
+    ROS publishes it (v_b = R_wbᵀ v_w, by scipy), comes back with EuRoC's world-frame velocity."""
     euroc = ik.io.read_euroc_imu(IMU_CSV)
-    assert euroc.t_ns is not None
+    gt = ik.io.read_euroc_groundtruth(GT_CSV)
+    assert euroc.t_ns is not None and gt.t_ns is not None and gt.velocity is not None
+    span = np.flatnonzero(gt.t_ns <= euroc.t_ns[-1])
     bag = Bag(kind)
-    messages = [
+    imu_msgs = [
         (int(ns), bag.imu(divmod(int(ns), 10**9), g, a)) for ns, g, a in zip(euroc.t_ns, euroc.gyro, euroc.accel)
     ]
-    path = bag.write(tmp_path / "euroc", {"/imu0": (IMU, messages)})
+    q_wb = gt.rotation[span].as_quat()
+    v_body = gt.rotation[span].inv().apply(gt.velocity[span])
+    odom_msgs = [
+        (int(ns), bag.odometry(divmod(int(ns), 10**9), p, q, v))
+        for ns, p, q, v in zip(gt.t_ns[span], gt.position[span], q_wb, v_body)
+    ]
+    path = bag.write(tmp_path / "euroc", {"/imu0": (IMU, imu_msgs), "/vicon/odom": (ODOM, odom_msgs)})
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         imu, truth = read_rosbag(path)
-    assert truth is None
     assert imu.t_ns is not None and np.array_equal(imu.t_ns, euroc.t_ns) and len(imu) == 7999
     assert bits(imu.gyro) == bits(euroc.gyro) and bits(imu.accel) == bits(euroc.accel)
+    assert truth is not None and truth.t_ns is not None and truth.velocity is not None
+    assert np.array_equal(truth.t_ns, gt.t_ns[span]) and len(span) > 7000
+    assert bits(truth.position) == bits(gt.position[span]) and bits(truth.rotation.as_quat()) == bits(q_wb)
+    # R (Rᵀ v) = v up to rounding; without the rotation back to the world the error is ~|v| (up to 1.6 m/s)
+    assert np.abs(gt.velocity[span]).max() > 1.0
+    np.testing.assert_allclose(truth.velocity, gt.velocity[span], rtol=0, atol=1e-14)

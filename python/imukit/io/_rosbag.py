@@ -29,21 +29,22 @@ __all__ = ["list_rosbag_topics", "read_rosbag"]
 IMU_TYPE = "sensor_msgs/msg/Imu"
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/TransformStamped", "nav_msgs/msg/Odometry")
 _NS_PER_S = 1_000_000_000
-_INSTALL = 'pip install "imukit[ros]"'
 
 
 class _Sample(NamedTuple):
     """One message: its stamp [ns], its numbers, and what disqualifies it (None if nothing)."""
 
     stamp_ns: int
+    clock: str
+    """Where ``stamp_ns`` comes from: ``header.stamp`` or ``record time``."""
     values: tuple[float, ...]
     problem: Problem | None
 
 
-Values = tuple[tuple[float, ...], Union[Problem, None]]
+_Values = tuple[tuple[float, ...], Union[Problem, None]]
 
 
-def _imu_values(msg: Any) -> Values:
+def _imu_values(msg: Any) -> _Values:
     w, a = msg.angular_velocity, msg.linear_acceleration
     # sensor_msgs/Imu: element 0 of a covariance set to -1 means "this field is not provided".
     if msg.angular_velocity_covariance[0] == -1.0:
@@ -53,14 +54,14 @@ def _imu_values(msg: Any) -> Values:
     return (w.x, w.y, w.z, a.x, a.y, a.z), None
 
 
-def _pose_values(position: Any, orientation: Any, linear: Any = None) -> Values:
+def _pose_values(position: Any, orientation: Any, linear: Any = None) -> _Values:
     q = (orientation.x, orientation.y, orientation.z, orientation.w)
     velocity = () if linear is None else (linear.x, linear.y, linear.z)
     return (position.x, position.y, position.z, *q, *velocity), zero_quaternion(q)
 
 
 # msgtype -> (its numbers and any problem, how they are printed in messages)
-_DECODERS: dict[str, tuple[Callable[[Any], Values], str]] = {
+_DECODERS: dict[str, tuple[Callable[[Any], _Values], str]] = {
     IMU_TYPE: (_imu_values, "angular_velocity {0} {1} {2}, linear_acceleration {3} {4} {5}"),
     "geometry_msgs/msg/PoseStamped": (
         lambda m: _pose_values(m.pose.position, m.pose.orientation),
@@ -83,14 +84,14 @@ def _stamp_text(ns: int) -> str:
 
 
 @contextmanager
-def _open(path: str | os.PathLike[str]) -> Iterator[Any]:
+def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
     """The bag at ``path`` opened with ``rosbags``' AnyReader; errors become :class:`FileFormatError`."""
     try:
         from rosbags.highlevel import AnyReader, AnyReaderError
         from rosbags.typesys import Stores, get_typestore
     except ImportError as e:
         raise MissingDependencyError(
-            f"path: reading ROS bags needs the rosbags package, which is not installed ({_INSTALL})"
+            f'{caller}: needs the rosbags package, which is not installed (pip install "imukit[ros]")'
         ) from e
     bag = Path(path)
     if not bag.exists():
@@ -101,8 +102,8 @@ def _open(path: str | os.PathLike[str]) -> Iterator[Any]:
             "or a ROS 2 .mcap / .db3 file"
         )
     # Humble-era ROS 2 bags store no message definitions: fall back on the standard ones.
-    reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
     try:
+        reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
     except (AnyReaderError, OSError, KeyError, ValueError) as e:
         hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if bag.suffix == ".mcap" else ""
@@ -127,7 +128,7 @@ def list_rosbag_topics(path: str | os.PathLike[str]) -> dict[str, str]:
     recorded with several types (possible in ROS 1) maps to them joined by ``" | "``. Accepts what
     :func:`read_rosbag` accepts and raises what it raises when opening the bag.
     """
-    with _open(path) as reader:
+    with _open(path, "list_rosbag_topics") as reader:
         return _topics(reader)
 
 
@@ -135,8 +136,13 @@ def _listing(topics: dict[str, str]) -> str:
     return ", ".join(f"{t} ({m})" for t, m in topics.items()) or "none"
 
 
-def _select(topics: dict[str, str], requested: str | None, name: str, wanted: tuple[str, ...]) -> str | None:
-    """The topic to read for ``name`` (``imu_topic`` / ``groundtruth_topic``), or None when there is none."""
+def _select(
+    reader: Any, topics: dict[str, str], requested: str | None, name: str, wanted: tuple[str, ...]
+) -> str | None:
+    """The topic to read for ``name`` (``imu_topic`` / ``groundtruth_topic``), or None when there is none.
+
+    Only topics with messages are candidates: a recording often has an empty topic of a sensor that was off.
+    """
     if requested is not None:
         if not isinstance(requested, str):
             raise ParameterError(f"{name}: expected a topic name or None, got {type(requested).__name__}")
@@ -147,7 +153,8 @@ def _select(topics: dict[str, str], requested: str | None, name: str, wanted: tu
                 f"{name}: topic {requested!r} has type {topics[requested]}, expected {' or '.join(wanted)}"
             )
         return requested
-    candidates = {t: m for t, m in topics.items() if m in wanted}
+    counts = {t: info.msgcount for t, info in reader.topics.items()}
+    candidates = {t: m for t, m in topics.items() if m in wanted and counts[t] > 0}
     if len(candidates) > 1:
         raise ParameterError(
             f"{name}: the bag has {len(candidates)} candidate topics, pass one: {_listing(candidates)}"
@@ -159,12 +166,12 @@ def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: 
     try:
         msg = reader.deserialize(raw, msgtype)
     except Exception as e:  # rosbags raises several types on corrupt data, none of them ours
-        return _Sample(record_ns, (), ("malformed", f"cannot decode the message ({type(e).__name__}: {e})"))
+        return _Sample(record_ns, "record time", (), ("malformed", f"cannot decode it ({type(e).__name__}: {e})"))
     values, problem = _DECODERS[msgtype][0](msg)
     if problem is None and not all(map(math.isfinite, values)):
         problem = ("non-finite", "non-finite value")
     if time_source == "record":
-        return _Sample(record_ns, values, problem)
+        return _Sample(record_ns, "record time", values, problem)
     sec, nanosec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
     stamp_ns = sec * _NS_PER_S + nanosec
     if problem is None and not 0 <= nanosec < _NS_PER_S:
@@ -174,7 +181,7 @@ def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: 
             "zero stamp",
             "header stamp is zero (unset by the publisher; time_source='record' reads record times)",
         )
-    return _Sample(stamp_ns, values, problem)
+    return _Sample(stamp_ns, "header.stamp", values, problem)
 
 
 def _read_topic(
@@ -199,7 +206,7 @@ def _read_topic(
             rows.append(sample.values)
             kept_at = index
             continue
-        text = f"stamp {_stamp_text(sample.stamp_ns)}"
+        text = f"{sample.clock} {_stamp_text(sample.stamp_ns)}"
         if sample.values:
             text += ", " + _DECODERS[msgtype][1].format(*map(repr, sample.values))
         detail = f"topic {topic}, message {index}: {problem[1]}"
@@ -207,8 +214,8 @@ def _read_topic(
             raise FileFormatError(f"path: {where}, {detail}: {text}")
         bad.bad(where, index, problem[0], detail, text)
     if not stamps:
-        left = f"all {index} messages skipped" if index else "no messages"
-        raise FileFormatError(f"path: {where}, topic {topic}: no valid messages ({left})")
+        left = f"no valid messages (all {index} skipped)" if index else "no messages"
+        raise FileFormatError(f"path: {where}, topic {topic}: {left}")
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
 
 
@@ -284,12 +291,14 @@ def read_rosbag(
         raise ParameterError(f"time_source: expected 'header' or 'record', got {time_source!r}")
     bad = BadLines(on_bad_line, report)
     where = os.fspath(path)
-    with _open(path) as reader:
+    with _open(path, "read_rosbag") as reader:
         topics = _topics(reader)
-        imu_name = _select(topics, imu_topic, "imu_topic", (IMU_TYPE,))
+        imu_name = _select(reader, topics, imu_topic, "imu_topic", (IMU_TYPE,))
         if imu_name is None:
-            raise ParameterError(f"imu_topic: the bag has no {IMU_TYPE} topic; its topics: {_listing(topics)}")
-        truth_name = _select(topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
+            raise ParameterError(
+                f"imu_topic: the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}"
+            )
+        truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
         t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
         truth = None
         if truth_name is not None:
