@@ -9,8 +9,7 @@ from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
 from imukit.eval._align import Alignment
-from imukit.eval._align import align as fit
-from imukit.eval._associate import associate
+from imukit.eval._prepare import prepare
 from imukit.eval._stats import ErrorStats, error_stats
 from imukit.state import Trajectory
 
@@ -54,20 +53,8 @@ def ape(
     With synchronised stamps (no interpolation) these are evo's ``APE`` with
     ``PoseRelation.translation_part`` and ``rotation_angle_rad`` after ``traj.align(...)``.
     """
-    pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
-    alignment = fit(pair.estimate, pair.reference, method=align)
-    est = alignment.apply(pair.estimate)
-    ref = pair.reference
+    prepared = prepare(estimate, reference, method=align, max_dt=max_dt, offset=offset)
+    est, ref = prepared.estimate, prepared.reference
     translation = np.linalg.norm(est.position - ref.position, axis=1)
     rotation = np.asarray((ref.rotation.inv() * est.rotation).magnitude(), dtype=np.float64)
-    return AbsoluteError(
-        translation=translation,
-        rotation=rotation,
-        translation_stats=error_stats(translation),
-        rotation_stats=error_stats(rotation),
-        alignment=alignment,
-        estimate=est,
-        reference=ref,
-        mask=pair.mask,
-        n_dropped=pair.n_dropped,
-    )
+    return AbsoluteError(translation, rotation, error_stats(translation), error_stats(rotation), *prepared)

@@ -10,8 +10,8 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray, choice
 from imukit._errors import ParameterError
 from imukit.eval._align import Alignment
-from imukit.eval._align import align as fit
-from imukit.eval._associate import associate, finite_float
+from imukit.eval._associate import finite_float
+from imukit.eval._prepare import prepare
 from imukit.eval._stats import ErrorStats, error_stats
 from imukit.state import Trajectory
 
@@ -72,6 +72,12 @@ def rpe(
     without overlap; with ``all_pairs`` every sample that has such a j is a start. Starts whose j
     would lie past the end are not used.
 
+    This is evo's ``RPE`` with ``pairs_from_reference=True`` (evo chooses pairs on the estimate by
+    default) for consecutive pairs, and for ``all_pairs`` over frames; evo's ``all_pairs`` over
+    metres takes from each i the j whose distance is *closest* to delta (within 10 %) instead.
+    evo sums the distance step by step from each start, imukit differences the cumulative sum:
+    a pair can differ only where ``d(i, j)`` equals ``delta`` to rounding.
+
     Raises
     ------
     ParameterError
@@ -83,14 +89,15 @@ def rpe(
         raise ParameterError(f"delta: expected a whole number of frames for unit='frames', got {delta!r}")
     if not isinstance(all_pairs, (bool, np.bool_)):
         raise ParameterError(f"all_pairs: expected a bool, got {all_pairs!r}")
-    pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
-    alignment = fit(pair.estimate, pair.reference, method=align)
-    est, ref = alignment.apply(pair.estimate), pair.reference
+    prepared = prepare(estimate, reference, method=align, max_dt=max_dt, offset=offset)
+    est, ref = prepared.estimate, prepared.reference
 
     axis = _separation_axis(ref, unit)
-    pairs = _pairs(axis, delta if unit != "s" or ref.t_ns is None else round(delta * 1e9), bool(all_pairs))
+    in_ns = axis.dtype.kind == "i" and unit == "s"
+    to_unit = 1e-9 if in_ns else 1.0  # axis units to `unit`
+    pairs = _pairs(axis, round(delta * 1e9) if in_ns else delta, bool(all_pairs))
     if len(pairs) == 0:
-        extent = float(axis[-1] - axis[0]) * (1e-9 if unit == "s" and ref.t_ns is not None else 1.0)
+        extent = float(axis[-1] - axis[0]) * to_unit
         raise ParameterError(
             f"delta: no pair of associated samples is {delta:g} {unit} apart; they extend over {extent:g} {unit}"
         )
@@ -101,24 +108,9 @@ def rpe(
     dp_est = est.rotation[i].inv().apply(est.position[j] - est.position[i])
     translation = np.linalg.norm(dp_est - dp_ref, axis=1)  # ΔR_refᵀ preserves the norm
     rotation = np.asarray((rel_ref.inv() * rel_est).magnitude(), dtype=np.float64)
-    separation = (axis[j] - axis[i]).astype(np.float64)
-    if unit == "s" and ref.t_ns is not None:
-        separation *= 1e-9
-    return RelativeError(
-        translation=translation,
-        rotation=rotation,
-        translation_stats=error_stats(translation),
-        rotation_stats=error_stats(rotation),
-        pairs=pairs,
-        separation=separation,
-        delta=delta,
-        unit=unit,
-        alignment=alignment,
-        estimate=est,
-        reference=ref,
-        mask=pair.mask,
-        n_dropped=pair.n_dropped,
-    )
+    separation = (axis[j] - axis[i]).astype(np.float64) * to_unit
+    t_stats, r_stats = error_stats(translation), error_stats(rotation)
+    return RelativeError(translation, rotation, t_stats, r_stats, pairs, separation, delta, unit, *prepared)
 
 
 def _separation_axis(ref: Trajectory, unit: str) -> NDArray[np.float64] | NDArray[np.int64]:

@@ -1,0 +1,29 @@
+"""The first two steps of :func:`ape` and :func:`rpe`: associate in time, then align in space."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit.eval._align import Alignment, align
+from imukit.eval._associate import associate
+from imukit.state import Trajectory
+
+
+class Prepared(NamedTuple):
+    """The trailing fields of :class:`AbsoluteError` and :class:`RelativeError`, in their order."""
+
+    alignment: Alignment
+    estimate: Trajectory  # associated, then aligned
+    reference: Trajectory  # interpolated at the estimate's stamps
+    mask: NDArray[np.bool_]  # over the input estimate: samples kept by the association
+    n_dropped: int
+
+
+def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt: float, offset: float) -> Prepared:
+    """:func:`associate` (``max_dt``, ``offset``), fit :func:`align` (``method``) on all pairs, apply it."""
+    pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
+    alignment = align(pair.estimate, pair.reference, method=method)
+    return Prepared(alignment, alignment.apply(pair.estimate), pair.reference, pair.mask, pair.n_dropped)
