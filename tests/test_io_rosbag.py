@@ -17,8 +17,7 @@ import pytest
 
 import imukit as ik
 from euroc import GT_CSV, IMU_CSV, requires_euroc
-from imukit.io import list_rosbag_topics, read_rosbag
-from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
+from imukit.io import ReadReport, SkippedLine, SkippedLinesWarning, list_rosbag_topics, read_rosbag
 
 rosbags = pytest.importorskip("rosbags", reason="rosbags is the optional [ros] extra")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
@@ -30,7 +29,7 @@ IMU = "sensor_msgs/msg/Imu"
 POSE = "geometry_msgs/msg/PoseStamped"
 TF = "geometry_msgs/msg/TransformStamped"
 ODOM = "nav_msgs/msg/Odometry"
-KINDS = ["ros1", "ros1-bz2", "sqlite3", "mcap", "mcap-file"]
+KINDS = ["ros1", "ros1-bz2", "ros1-lz4", "sqlite3", "mcap", "mcap-file"]
 EPOCH_S = 1_403_715_523  # EuRoC V1_02's epoch second
 
 
@@ -100,8 +99,8 @@ class Bag:
         if self.ros1:
             path = base.with_suffix(".bag")
             writer: Any = Writer1(path)
-            if self.kind == "ros1-bz2":
-                writer.set_compression(Writer1.CompressionFormat.BZ2)
+            if self.kind != "ros1":
+                writer.set_compression(Writer1.CompressionFormat[self.kind[5:].upper()])
             serialize = self.store.serialize_ros1
         else:
             path = base
