@@ -318,6 +318,27 @@ def test_topic_choice(tmp_path: Path) -> None:
         read_rosbag(path, imu_topic="/a/imu", groundtruth_topic="/a/imu")
 
 
+def test_a_ros1_topic_with_two_types_is_no_candidate(tmp_path: Path) -> None:
+    bag = Bag("ros1")
+    path = tmp_path / "mixed.bag"
+    with Writer1(path) as writer:
+        for msgtype, msg in (
+            (IMU, bag.imu((1, 0), (0.0, 0.0, 0.0), (0.0, 0.0, 9.81))),
+            (POSE, bag.pose((1, 0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))),
+        ):
+            connection = writer.add_connection("/mixed", msgtype, typestore=bag.store)
+            writer.write(connection, 1, bag.store.serialize_ros1(msg, msgtype))
+    assert list_rosbag_topics(path) == {"/mixed": f"{POSE} | {IMU}"}
+    with pytest.raises(ik.ParameterError, match=r"^imu_topic: the bag has no sensor_msgs/msg/Imu topic with messages"):
+        read_rosbag(path)
+    with pytest.raises(
+        ik.ParameterError, match=f"^imu_topic: topic '/mixed' has type {POSE} [|] {IMU}, expected {IMU}$"
+    ):
+        read_rosbag(path, imu_topic="/mixed")
+    with pytest.raises(ik.ParameterError, match=r"^imu_topic: expected a topic name or None, got int$"):
+        read_rosbag(path, imu_topic=0)  # type: ignore[arg-type]
+
+
 def test_bag_without_imu_topic(tmp_path: Path) -> None:
     path = _topics_bag(tmp_path, {"/gt/pose": POSE, "/chatter": "std_msgs/msg/String"})
     listing = re.escape("/chatter (std_msgs/msg/String), /gt/pose (geometry_msgs/msg/PoseStamped)")
