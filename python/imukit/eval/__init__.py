@@ -13,6 +13,16 @@
 
 Definitions, the choice of alignment and the comparison with ``evo`` are in
 ``docs/evaluation.md``.
+
+>>> import numpy as np, imukit as ik
+>>> from scipy.spatial.transform import Rotation
+>>> t = np.arange(100) * 0.1
+>>> truth = ik.Trajectory(t, np.c_[np.cos(t), np.sin(t), 0.1 * t], None, Rotation.identity(100))
+>>> estimate = ik.Trajectory(t, truth.position + [1.0, 2.0, 0.0], None, Rotation.identity(100))
+>>> round(ik.eval.ape(estimate, truth, align="none").translation_stats.rmse, 6)  # the offset, √5 m
+2.236068
+>>> ik.eval.ape(estimate, truth, align="se3").translation_stats.max < 1e-12  # removed by the alignment
+True
 """
 
 from __future__ import annotations

@@ -120,7 +120,7 @@ def _umeyama(xc: FloatArray, yc: FloatArray, mean_x: FloatArray, mean_y: FloatAr
     if n < 3:
         raise ParameterError(f"estimate: {method} alignment needs at least 3 non-collinear positions, got {n}")
     u, d, vt = np.linalg.svd(yc.T @ xc / n)
-    if not d[0] > 0 or d[1] <= _DEGENERATE * d[0]:
+    if not d[1] > _DEGENERATE * d[0]:
         raise ParameterError(
             f"estimate / reference: {method} alignment needs at least 3 non-collinear positions; the "
             f"cross-covariance has singular values {d.tolist()} (collinear or coincident points leave "
@@ -139,7 +139,7 @@ def _yaw(xc: FloatArray, yc: FloatArray) -> Rotation:
     a = float(np.sum(xc[:, 0] * yc[:, 0] + xc[:, 1] * yc[:, 1]))
     b = float(np.sum(xc[:, 0] * yc[:, 1] - xc[:, 1] * yc[:, 0]))
     spread = float(np.sqrt(np.sum(xc[:, :2] ** 2) * np.sum(yc[:, :2] ** 2)))
-    if not np.hypot(a, b) > _DEGENERATE * spread or spread == 0.0:
+    if not np.hypot(a, b) > _DEGENERATE * spread:  # also when spread = 0
         raise ParameterError(
             "estimate / reference: yaw alignment needs positions with a horizontal spread that "
             "determines the heading (all points on one vertical line, or uncorrelated horizontally)"
