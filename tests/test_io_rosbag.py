@@ -21,7 +21,7 @@ from imukit.io import ReadReport, SkippedLine, SkippedLinesWarning, list_rosbag_
 
 rosbags = pytest.importorskip("rosbags", reason="rosbags is the optional [ros] extra")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
-from rosbags.rosbag2 import StoragePlugin  # noqa: E402
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin  # noqa: E402
 from rosbags.rosbag2 import Writer as Writer2  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 
@@ -29,7 +29,7 @@ IMU = "sensor_msgs/msg/Imu"
 POSE = "geometry_msgs/msg/PoseStamped"
 TF = "geometry_msgs/msg/TransformStamped"
 ODOM = "nav_msgs/msg/Odometry"
-KINDS = ["ros1", "ros1-bz2", "ros1-lz4", "sqlite3", "mcap", "mcap-file"]
+KINDS = ["ros1", "ros1-bz2", "ros1-lz4", "sqlite3", "sqlite3-zstd", "mcap", "mcap-file"]
 EPOCH_S = 1_403_715_523  # EuRoC V1_02's epoch second
 
 
@@ -104,8 +104,10 @@ class Bag:
             serialize = self.store.serialize_ros1
         else:
             path = base
-            plugin = StoragePlugin.SQLITE3 if self.kind == "sqlite3" else StoragePlugin.MCAP
+            plugin = StoragePlugin.SQLITE3 if self.kind.startswith("sqlite3") else StoragePlugin.MCAP
             writer = Writer2(path, version=9, storage_plugin=plugin)
+            if self.kind == "sqlite3-zstd":
+                writer.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
             serialize = self.store.serialize_cdr
         with writer:
             for topic, (msgtype, messages) in topics.items():
