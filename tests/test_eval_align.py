@@ -158,6 +158,9 @@ def test_degenerate_yaw_input_is_refused() -> None:
 def test_bad_arguments(ref: ik.Trajectory) -> None:
     with pytest.raises(ik.ParameterError, match=r"^method: expected one of"):
         ik.eval.align(ref, ref, method="sim2")
+    for metric in (ik.eval.ape, ik.eval.rpe):
+        with pytest.raises(ik.ParameterError, match=r"^align: expected one of"):
+            metric(ref, ref, align="umeyama")
     with pytest.raises(ik.ShapeError, match=r"^estimate / reference: expected equally long"):
         ik.eval.align(poses(ref.position[:10], ref.rotation[:10]), ref)
     with pytest.raises(ik.ParameterError, match=r"^trajectory: expected an imukit Trajectory"):

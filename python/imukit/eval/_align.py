@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, choice
 from imukit._errors import ParameterError, ShapeError
-from imukit.eval._associate import check_trajectory
+from imukit.eval._checks import check_trajectory
 from imukit.state import Trajectory
 
 METHODS = ("se3", "sim3", "position", "yaw", "none")

@@ -10,6 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray
 from imukit._errors import ParameterError
+from imukit.eval._checks import check_trajectory, finite_float
 from imukit.state import Trajectory
 
 
@@ -28,23 +29,6 @@ class Association(NamedTuple):
     n_dropped: int
     n_outside_span: int  # before the first or after the last reference stamp
     n_in_gaps: int  # inside the span, between reference samples more than max_dt apart
-
-
-def check_trajectory(x: object, name: str) -> Trajectory:
-    """``x`` if it is a :class:`~imukit.Trajectory`, else :class:`ParameterError` naming ``name``."""
-    if not isinstance(x, Trajectory):
-        raise ParameterError(f"{name}: expected an imukit Trajectory, got {type(x).__name__}")
-    return x
-
-
-def finite_float(x: object, name: str, *, positive: bool = False) -> float:
-    """``x`` as a finite float (> 0 when ``positive``), else :class:`ParameterError` naming ``name``."""
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
-        raise ParameterError(f"{name}: expected a number, got {x!r}")
-    value = float(x)
-    if not np.isfinite(value) or (positive and value <= 0.0):
-        raise ParameterError(f"{name}: expected a finite{' positive' if positive else ''} number, got {value!r}")
-    return value
 
 
 def associate(

@@ -7,7 +7,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from imukit.eval._align import Alignment, align
+from imukit._arrays import choice
+from imukit.eval._align import METHODS, Alignment, align
 from imukit.eval._associate import associate
 from imukit.state import Trajectory
 
@@ -24,6 +25,7 @@ class Prepared(NamedTuple):
 
 def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt: float, offset: float) -> Prepared:
     """:func:`associate` (``max_dt``, ``offset``), fit :func:`align` (``method``) on all pairs, apply it."""
+    choice(method, "align", METHODS)  # named as ape's and rpe's keyword
     pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
     alignment = align(pair.estimate, pair.reference, method=method)
     return Prepared(alignment, alignment.apply(pair.estimate), pair.reference, pair.mask, pair.n_dropped)

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray, choice
 from imukit._errors import ParameterError
 from imukit.eval._align import Alignment
-from imukit.eval._associate import finite_float
+from imukit.eval._checks import finite_float
 from imukit.eval._prepare import prepare
 from imukit.eval._stats import ErrorStats, error_stats
 from imukit.state import Trajectory
