@@ -42,6 +42,16 @@ def test_constant_offset_ape_is_the_offset_without_alignment_and_zero_with_se3(r
         assert fixed.alignment.rotation.magnitude() < 1e-12
 
 
+def test_rotation_error_is_the_angle_of_the_body_frame_difference(ref: ik.Trajectory) -> None:
+    # R_est = R_ref Rx(0.3): R_ref⁻¹ R_est = Rx(0.3) at every sample, whatever R_ref; positions equal,
+    # so no alignment moves anything (orientations do not enter the fit)
+    est = poses(np.array(ref.position), ref.rotation * Rotation.from_rotvec([0.3, 0.0, 0.0]))
+    for method in ("none", "se3", "yaw"):
+        err = ik.eval.ape(est, ref, align=method)
+        np.testing.assert_allclose(err.rotation, 0.3, atol=1e-14, err_msg=method)
+        assert err.translation_stats.max < 1e-12 and err.alignment.rotation.magnitude() < 1e-14
+
+
 def test_se3_recovers_a_rigid_transform_and_undoes_it(ref: ik.Trajectory) -> None:
     est = moved(ref, TRANSFORM, SHIFT)
     raw = ik.eval.ape(est, ref, align="none")

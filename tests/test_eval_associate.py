@@ -24,6 +24,8 @@ def test_interpolation_at_hand_computed_points() -> None:
         [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 4.0, 0.0]],
         [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 4.0, 0.0]],
         Rotation.concatenate([Rotation.identity(), rz90, rz90 * Rotation.from_rotvec([np.pi / 2, 0.0, 0.0])]),
+        gyro_bias=[[0.0, 0.0, 0.0], [0.04, 0.0, 0.0], [0.04, 0.0, 0.08]],
+        accel_bias=np.zeros((3, 3)),
     )
     est = ik.Trajectory(np.array([0.5, 1.25, 2.0]), np.ones((3, 3)), None, Rotation.identity(3))
     pair = ik.eval.associate(est, ref, max_dt=1.0)
@@ -32,6 +34,8 @@ def test_interpolation_at_hand_computed_points() -> None:
     np.testing.assert_allclose(pair.reference.position, [[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [2.0, 4.0, 0.0]], atol=1e-15)
     assert pair.reference.velocity is not None
     np.testing.assert_allclose(pair.reference.velocity, [[1.0, 0.0, 0.0], [1.5, 1.0, 0.0], [0.0, 4.0, 0.0]], atol=1e-15)
+    assert pair.reference.gyro_bias is not None
+    np.testing.assert_allclose(pair.reference.gyro_bias, [[0.02, 0.0, 0.0], [0.04, 0.0, 0.02], [0.04, 0.0, 0.08]])
     # slerp: halfway from I to Rz(90°) is Rz(45°) = (0, 0, sin 22.5°, cos 22.5°); a quarter of the way
     # from Rz(90°) to Rz(90°) Rx(90°) is Rz(90°) Rx(22.5°) = (cos 45° sin 11.25°)(1, 1, 0) + ...
     c, s = np.cos(np.pi / 4), np.sin(np.pi / 4)
