@@ -178,13 +178,12 @@ def _gravity(value: object) -> float:
 
 
 def _check_columns(columns: object, name: str, count: int) -> None:
+    """``columns`` must be ``count`` names or indices (``time_column`` arrives wrapped in a list)."""
     if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        what = "a column name or 0-based index" if count == 1 else f"{count} column names or 0-based indices (x, y, z)"
-        got = columns[0] if count == 1 and isinstance(columns, list) else columns
-        raise ParameterError(f"{name}: expected {what}, got {got!r}")
+        raise ParameterError(f"{name}: expected {count} column names or 0-based indices (x, y, z), got {columns!r}")
     for column in columns:
         if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"{name}: expected column names or 0-based indices (int ≥ 0), got {column!r}")
+            raise ParameterError(f"{name}: expected a column name or a 0-based index (int ≥ 0), got {column!r}")
 
 
 def _index(column: Column, name: str, header: list[str] | None, line: int, width: int, where: str) -> int:

@@ -1,0 +1,158 @@
+"""read_imu / read_trajectory: each format found from the path alone (real files where present), ROS bags
+handed to imukit.io.read_rosbag, and unknown files refused with the list of formats tried."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+import imukit.io._rosbag
+from euroc import GT_CSV, IMU_CSV, requires_euroc
+from imukit.io import ReadReport
+from test_io_gtsam import KITTI_IMU, requires_kitti
+from test_io_tumvi import MOCAP, dataset
+
+TRIED_IMU = (
+    "tried EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), TUM-VI folder (the same with mocap0/data.csv), "
+    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap), "
+    "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
+    "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
+    "for other layouts use read_imu_csv with a column mapping"
+)
+TRIED_TRAJECTORY = (
+    "tried TUM (8 white-space-separated fields), EuRoC ground truth (17 comma-separated fields), "
+    "TUM-VI mocap (8 comma-separated fields), EuRoC or TUM-VI folder with one of those files; "
+    "KITTI poses need their times file: use read_kitti_poses"
+)
+
+
+def simulated(n: int = 20) -> tuple[ik.ImuData, ik.Trajectory]:
+    t_ns = 1_403_715_523_912_140_000 + 5_000_000 * np.arange(n)
+    rng = np.random.default_rng(3)
+    imu = ik.ImuData(t_ns, rng.normal(size=(n, 3)), rng.normal(size=(n, 3)))
+    truth = ik.Trajectory(
+        None, rng.normal(size=(n, 3)), rng.normal(size=(n, 3)), Rotation.random(n, rng=rng), t_ns=t_ns + 3168,
+        gyro_bias=np.zeros((n, 3)), accel_bias=np.zeros((n, 3)),
+    )  # fmt: skip
+    return imu, truth
+
+
+def test_euroc_folder_mav0_and_csv(tmp_path: Path) -> None:
+    imu, truth = simulated()
+    ik.io.write_euroc(tmp_path / "seq" / "mav0", imu, truth)
+    for path in (tmp_path / "seq", tmp_path / "seq" / "mav0"):
+        back, back_truth = ik.io.read_imu(path)
+        assert back_truth is not None and back_truth.velocity is not None  # EuRoC's, not TUM-VI's
+        np.testing.assert_array_equal(back.gyro, imu.gyro)
+        np.testing.assert_array_equal(back_truth.position, truth.position)
+    back, none = ik.io.read_imu(tmp_path / "seq" / "mav0" / "imu0" / "data.csv")
+    assert none is None and np.array_equal(back.accel, imu.accel)
+    # read_trajectory: the folder gives its ground truth, the CSV itself too.
+    for path in (tmp_path / "seq", tmp_path / "seq" / "mav0" / "state_groundtruth_estimate0" / "data.csv"):
+        traj = ik.io.read_trajectory(path)
+        assert traj.t_ns is not None and np.array_equal(traj.t_ns, truth.t_ns)  # type: ignore[arg-type]
+        np.testing.assert_array_equal(traj.rotation.as_quat(), truth.rotation.as_quat())
+
+
+def test_tumvi_folder_and_mocap_csv(tmp_path: Path) -> None:
+    root = dataset(tmp_path / "room1")
+    imu, truth = ik.io.read_imu(root)
+    assert len(imu) == 2 and truth is not None and truth.velocity is None and len(truth) == 2
+    for path in (root, root / "mav0" / "mocap0" / "data.csv"):
+        traj = ik.io.read_trajectory(path)
+        assert traj.t_ns is not None and traj.t_ns.tolist() == [int(line.split(",")[0]) for line in MOCAP[1:]]
+
+
+def test_tum_file(tmp_path: Path) -> None:
+    _, truth = simulated()
+    truth.write_tum(tmp_path / "traj.txt")
+    traj = ik.io.read_trajectory(tmp_path / "traj.txt")
+    assert traj.velocity is None and np.array_equal(traj.position, truth.position)
+    # A TUM file is not IMU data: 8 white-space fields without GTSAM's header are not guessed at.
+    with pytest.raises(
+        ik.io.FileFormatError, match=rf"^path: .*traj\.txt: not an IMU format imukit knows; {re.escape(TRIED_IMU)}$"
+    ):
+        ik.io.read_imu(tmp_path / "traj.txt")
+
+
+def test_gtsam_text(tmp_path: Path) -> None:
+    path = tmp_path / "imu.txt"
+    path.write_text("Time dt accelX accelY accelZ omegaX omegaY omegaZ\n1.0 1.0 1 2 3 4 5 6\n1.01 0.01 1 2 3 4 5 6\n")
+    imu, truth = ik.io.read_imu(path)
+    assert truth is None and imu.t.tolist() == [1.0, 1.01] and imu.gyro[0].tolist() == [4.0, 5.0, 6.0]
+
+
+@requires_euroc
+def test_real_euroc_files() -> None:
+    imu, truth = ik.io.read_imu(IMU_CSV)
+    assert truth is None and np.array_equal(imu.t_ns, ik.io.read_euroc_imu(IMU_CSV).t_ns)  # type: ignore[arg-type]
+    traj = ik.io.read_trajectory(GT_CSV)
+    assert traj.velocity is not None and len(traj) == 16702
+
+
+@requires_kitti
+def test_real_kitti_imu() -> None:
+    imu, truth = ik.io.read_imu(KITTI_IMU)
+    assert truth is None and len(imu) == 46968
+
+
+def test_bags_go_to_read_rosbag(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    calls: list[tuple[Path, dict[str, object]]] = []
+    imu, _ = simulated()
+
+    def fake(path: Path, **options: object) -> tuple[ik.ImuData, None]:
+        calls.append((path, options))
+        return imu, None
+
+    monkeypatch.setattr(imukit.io._rosbag, "read_rosbag", fake)
+    (tmp_path / "ros2").mkdir()
+    (tmp_path / "ros2" / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    report = ReadReport()
+    paths = [tmp_path / "ros2", tmp_path / "run.bag", tmp_path / "run.MCAP"]
+    for path in paths[1:]:
+        path.write_bytes(b"\x89BAG")
+    for path in paths:
+        assert ik.io.read_imu(path, on_bad_line="skip", report=report) == (imu, None)
+    assert calls == [(path, {"on_bad_line": "skip", "report": report}) for path in paths]
+
+
+def test_unknown_files_list_the_formats_tried(tmp_path: Path) -> None:
+    path = tmp_path / "data.csv"
+    path.write_text("time,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n")
+    message = rf"^path: {re.escape(str(path))}: not an IMU format imukit knows; {re.escape(TRIED_IMU)}$"
+    with pytest.raises(ik.io.FileFormatError, match=message):
+        ik.io.read_imu(path)
+    path.write_bytes(b"\xff\xfe\x00binary")
+    with pytest.raises(ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}: not a text file; tried EuRoC"):
+        ik.io.read_imu(path)
+    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*: a folder of no known layout; tried EuRoC folder"):
+        ik.io.read_imu(tmp_path)
+    with pytest.raises(FileNotFoundError, match=r"^path: .*missing\.csv does not exist"):
+        ik.io.read_imu(tmp_path / "missing.csv")
+    poses = tmp_path / "00.txt"
+    poses.write_text("1 0 0 0 0 1 0 0 0 0 1 0\n")
+    message = rf"^path: {re.escape(str(poses))}: not a trajectory format imukit knows; {re.escape(TRIED_TRAJECTORY)}$"
+    with pytest.raises(ik.io.FileFormatError, match=message):
+        ik.io.read_trajectory(poses)
+
+
+def test_folder_without_ground_truth(tmp_path: Path) -> None:
+    imu, _ = simulated()
+    ik.io.write_euroc(tmp_path, imu)
+    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*: a dataset folder without ground truth \(no state_"):
+        ik.io.read_trajectory(tmp_path)
+
+
+def test_options_reach_the_reader_chosen(tmp_path: Path) -> None:
+    path = tmp_path / "traj.txt"
+    path.write_text("0.0 0 0 0 0 0 0 1\n0.1 1 2 3\n0.2 0 0 0 0 0 0 1\n")
+    report = ReadReport()
+    traj = ik.io.read_trajectory(path, on_bad_line="skip", report=report)
+    assert traj.t.tolist() == [0.0, 0.2] and [(s.line, s.kind) for s in report.skipped] == [(2, "wrong column count")]
+    with pytest.raises(ik.io.FileFormatError, match=r", line 2: expected 8 fields"):
+        ik.io.read_trajectory(path)
