@@ -19,7 +19,7 @@ from test_io_tumvi import MOCAP, dataset
 
 TRIED_IMU = (
     "tried EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), TUM-VI folder (the same with mocap0/data.csv), "
-    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap), "
+    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap, .db3), "
     "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
     "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
     "for other layouts use read_imu_csv with a column mapping"
@@ -113,7 +113,7 @@ def test_bags_go_to_read_rosbag(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
     (tmp_path / "ros2").mkdir()
     (tmp_path / "ros2" / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
     report = ReadReport()
-    paths = [tmp_path / "ros2", tmp_path / "run.bag", tmp_path / "run.MCAP"]
+    paths = [tmp_path / "ros2", tmp_path / "run.bag", tmp_path / "run.MCAP", tmp_path / "run_0.db3"]
     for path in paths[1:]:
         path.write_bytes(b"\x89BAG")
     for path in paths:

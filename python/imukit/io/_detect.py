@@ -21,7 +21,7 @@ __all__ = ["read_imu", "read_trajectory"]
 IMU_FORMATS = (
     "EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), "
     "TUM-VI folder (the same with mocap0/data.csv), "
-    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap), "
+    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap, .db3), "
     "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
     "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
     "for other layouts use read_imu_csv with a column mapping"
@@ -44,7 +44,7 @@ def read_imu(
     2. a folder with ``imu0/data.csv`` (or ``mav0/imu0/data.csv``): TUM-VI
        (:func:`imukit.io.read_tumvi`) when ``mocap0/data.csv`` is next to ``imu0/``, else EuRoC
        (:func:`imukit.io.read_euroc`);
-    3. a file named ``*.bag`` or ``*.mcap``: a ROS bag;
+    3. a file named ``*.bag``, ``*.mcap`` or ``*.db3`` (any case): a ROS bag;
     4. a file whose first non-blank line is ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``:
        GTSAM / KITTI text (:func:`imukit.io.read_gtsam_imu`);
     5. a file whose first data line (after ``#`` lines) has 7 comma-separated fields and an integer
@@ -136,7 +136,7 @@ def read_trajectory(
 
 
 def _is_bag_file(source: Path) -> bool:
-    return source.is_file() and source.suffix.lower() in (".bag", ".mcap")
+    return source.is_file() and source.suffix.lower() in (".bag", ".mcap", ".db3")
 
 
 def _dataset_root(source: Path) -> Path | None:
