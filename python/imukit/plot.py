@@ -1,5 +1,6 @@
 """Plots for reports, written straight to PNG files (matplotlib's Agg canvas; no window, no pyplot).
 
+Each function writes the PNG and returns the matplotlib ``Figure`` (to adjust and save again).
 matplotlib is an optional dependency (``pip install "imukit[plot]"``), imported when a function is
 called; without it they raise :class:`imukit.MissingDependencyError`. The Allan plot is
 :func:`imukit.noise.plot_allan`.
@@ -42,8 +43,9 @@ def _figure(name: str, rows: int = 1, height: float = 5.0) -> tuple[Any, list[An
     return fig, list(axes)
 
 
-def _save(fig: Any, path: str | os.PathLike[str]) -> None:
+def _save(fig: Any, path: str | os.PathLike[str]) -> Any:
     fig.savefig(os.fspath(path), format="png")
+    return fig
 
 
 def _positions(value: Trajectory | ArrayLike, name: str) -> np.ndarray:
@@ -59,7 +61,7 @@ def trajectory_top_view(
     *,
     truth: Trajectory | ArrayLike | None = None,
     title: str,
-) -> None:
+) -> Any:
     """Top view (world x east / y north, metres, equal scales) of each estimate, labelled by its key,
     and the truth as a black line; start marked with a circle. Written as a PNG to ``path``."""
     if not estimates and truth is None:
@@ -79,7 +81,7 @@ def trajectory_top_view(
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    _save(fig, path)
+    return _save(fig, path)
 
 
 def attitude_error_plot(
@@ -88,7 +90,7 @@ def attitude_error_plot(
     errors: Mapping[str, AttitudeError],
     *,
     title: str,
-) -> None:
+) -> Any:
     """Three panels over time ``t`` [s]: heading, inclination and total error [deg] of each
     :class:`imukit.eval.AttitudeError`, labelled by its key (samples without truth left blank)."""
     time = as_float_array(t, "t")
@@ -109,7 +111,7 @@ def attitude_error_plot(
         ax.legend(fontsize=7, loc="upper left")
     axes[-1].set_xlabel("time [s]")
     axes[0].set_title(title)
-    _save(fig, path)
+    return _save(fig, path)
 
 
 def convergence_plot(
@@ -120,7 +122,7 @@ def convergence_plot(
     title: str,
     ylabel: str,
     orders: Sequence[int] = (1, 2, 4),
-) -> None:
+) -> Any:
     """Error against step size ``step_sizes`` [s] on log-log axes, one line per scheme (the keys),
     with dashed guides of slope ``orders`` (error ∝ hᵖ) fanning out from the largest step."""
     h = as_float_array(step_sizes, "step_sizes")
@@ -148,4 +150,4 @@ def convergence_plot(
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    _save(fig, path)
+    return _save(fig, path)

@@ -14,8 +14,8 @@ convergence orders), a simulated static gyro (Allan deviation and fit), and a re
 BROAD trial 06 shipped in the package (Mahony and Madgwick, 6D and 9D, against motion capture;
 CC BY 4.0, Laidig et al. 2021).
 
-Prints one table of errors and timings. Writes into --out (default: a new temporary folder, named
-at the end): trajectory_top_view.png, attitude_error.png, scheme_convergence.png, allan_gyro.png
+Prints: one table of errors and timings.
+Writes: into --out (default: a new temporary folder, named at the end) trajectory_top_view.png, attitude_error.png, scheme_convergence.png, allan_gyro.png
 and results.json (the table's numbers and the parameters). Takes about 15 s.
 
 Example:

@@ -22,10 +22,12 @@ MOTIONS: dict[str, Callable[[], sim.Motion]] = {
 }
 
 DESCRIPTION = f"""\
-Simulate an IMU moving along TRAJECTORY and write the readings and the exact truth as an EuRoC /
-ASL folder: FOLDER/mav0/imu0/data.csv, FOLDER/mav0/state_groundtruth_estimate0/data.csv (with the
-true biases) and FOLDER/mav0/imu0/sensor.yaml (the noise model; zeros without --noise). Read it
-back with any imukit command, or with EuRoC tools.
+Simulate an IMU moving along TRAJECTORY (docs/simulation.md).
+
+Writes: the readings and the exact truth as an EuRoC / ASL folder: FOLDER/mav0/imu0/data.csv,
+FOLDER/mav0/state_groundtruth_estimate0/data.csv (with the true biases) and
+FOLDER/mav0/imu0/sensor.yaml (the noise model; zeros without --noise). Read it back with any
+imukit command, or with EuRoC tools.
 
 TRAJECTORY is a closed-form motion of imukit.sim with its default parameters
 ({", ".join(MOTIONS)}; docs/simulation.md), or a TUM trajectory file (`t x y z qx qy qz qw`):

@@ -1,0 +1,328 @@
+"""The ``imukit`` command line, end to end through subprocess: exit codes, files written, numbers
+checked against the library (or hand-computed truth), one-line errors on bad input."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+from euroc import GT_CSV, IMU_CSV, requires_euroc
+from imukit._demo import broad_excerpt_path
+
+matplotlib_image = pytest.importorskip("matplotlib.image", reason="the --plot checks decode PNGs with matplotlib")
+
+NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+RATE = 200.0  # 1e9 / RATE is a whole number of ns: float and integer stamps agree exactly
+DURATION = 20.0
+SEED = 3
+COMMANDS = ("integrate", "preintegrate", "filter", "simulate", "allan", "evaluate", "demo")
+
+
+def cli(*args: str | os.PathLike[str], code: int = 0) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m imukit ARGS``; assert its exit code."""
+    run = subprocess.run(
+        [sys.executable, "-m", "imukit", *map(str, args)], capture_output=True, text=True, timeout=300, check=False
+    )
+    assert run.returncode == code, f"exit {run.returncode}, stdout:\n{run.stdout}\nstderr:\n{run.stderr}"
+    return run
+
+
+def assert_one_line_error(run: subprocess.CompletedProcess[str], *pieces: str) -> None:
+    """stderr is exactly one line ``imukit: error: ...`` naming ``pieces``, with no traceback."""
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("imukit: error: "), run.stderr
+    assert "Traceback" not in run.stderr
+    for piece in pieces:
+        assert piece in lines[0], (piece, lines[0])
+
+
+def assert_png(path: Path) -> None:
+    """A non-empty PNG that matplotlib decodes into an RGBA image of plausible size."""
+    assert path.stat().st_size > 10_000
+    image = matplotlib_image.imread(path)
+    assert image.ndim == 3 and image.shape[2] == 4 and min(image.shape[:2]) > 300
+    assert image[..., :3].std() > 0.05  # not a blank canvas
+
+
+def number_after(text: str, label: str) -> float:
+    match = re.search(re.escape(label) + r"\s+([-+0-9.eE]+)", text)
+    assert match, f"{label!r} not in:\n{text}"
+    return float(match.group(1))
+
+
+def rmse_in_row(table: str, label: str) -> float:
+    """The RMSE cell of the row starting with ``label`` in ``imukit evaluate``'s table."""
+    for line in table.splitlines():
+        cells = [c.strip() for c in re.split(r"[│|]", line)]
+        if len(cells) > 3 and cells[1] == label:
+            return float(cells[3])
+    raise AssertionError(f"no row {label!r} in:\n{table}")
+
+
+@pytest.fixture(scope="module")
+def noise_yaml(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("noise") / "imu.yaml"
+    ik.io.write_kalibr_imu(path, NOISE, rate_hz=RATE)
+    return path
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory: pytest.TempPathFactory, noise_yaml: Path) -> Path:
+    """``imukit simulate figure-eight`` with noise: the folder holding mav0/."""
+    folder = tmp_path_factory.mktemp("sim") / "fig8"
+    run = cli("simulate", "figure-eight", "--duration", DURATION, "--rate", RATE, "--noise", noise_yaml,
+              "--seed", SEED, "--out", folder)  # fmt: skip
+    assert "4001 samples" in run.stdout
+    return folder
+
+
+def in_memory() -> tuple[ik.ImuData, ik.Trajectory]:
+    return ik.sim.simulate(ik.sim.FigureEight(), rate=RATE, duration=DURATION, noise=NOISE, seed=SEED)
+
+
+def test_help_teaches_every_command() -> None:
+    top = cli("--help").stdout
+    for command in COMMANDS:
+        assert command in top
+        text = cli(command, "--help").stdout
+        assert "Example:" in text and f"imukit {command}" in text, command
+        assert "Writes" in text or "Prints" in text, command
+
+
+def test_simulate_writes_the_simulation_as_euroc(simulated: Path) -> None:
+    imu, truth = in_memory()
+    read_imu, read_truth = ik.io.read_euroc(simulated)
+    assert read_imu.t_ns is not None and read_truth is not None
+    assert np.array_equal(read_imu.t_ns, np.arange(len(imu)) * 5_000_000)
+    assert np.array_equal(read_imu.gyro, imu.gyro) and np.array_equal(read_imu.accel, imu.accel)
+    assert np.array_equal(read_truth.position, truth.position)
+    assert np.array_equal(read_truth.gyro_bias, truth.gyro_bias)
+    assert ik.io.read_kalibr_imu(simulated / "mav0" / "imu0" / "sensor.yaml").noise == NOISE
+
+
+def test_round_trip_library_exact(tmp_path: Path) -> None:
+    """simulate → write_euroc → read_euroc → integrate equals integrating the simulation in memory, bit for bit."""
+    imu, truth = in_memory()
+    ik.io.write_euroc(tmp_path, imu, truth)
+    read_imu, read_truth = ik.io.read_euroc(tmp_path)
+    assert read_truth is not None
+    for scheme in ik.strapdown.SCHEMES:
+        direct = ik.integrate(imu, initial=truth.state(0), scheme=scheme)
+        again = ik.integrate(read_imu, initial=read_truth.state(0), scheme=scheme)
+        assert np.array_equal(again.position, direct.position), scheme
+        assert np.array_equal(again.rotation.as_quat(), direct.rotation.as_quat()), scheme
+
+
+@pytest.mark.parametrize("scheme", ["midpoint", "rk4"])
+def test_round_trip_cli_exact(simulated: Path, tmp_path: Path, scheme: str) -> None:
+    """imukit simulate → imukit integrate (initial state from the written truth) → TUM equals the
+    in-memory integration exactly; the printed final error is the in-memory one."""
+    out = tmp_path / "traj.txt"
+    run = cli("integrate", simulated, "--scheme", scheme, "--out", out)
+    imu, truth = in_memory()
+    direct = ik.integrate(imu, initial=truth.state(0), scheme=scheme)
+    written = ik.io.read_tum(out)
+    assert np.array_equal(written.position, direct.position)
+    assert np.array_equal(written.rotation.as_quat(), direct.rotation.as_quat())
+    assert written.t_ns is not None and np.array_equal(written.t_ns, np.arange(len(imu)) * 5_000_000)
+    final = float(np.linalg.norm(direct.position[-1] - truth.position[-1]))
+    assert number_after(run.stdout, "final position error") == pytest.approx(final, rel=1e-3)
+
+
+def test_integrate_without_truth_starts_levelled(tmp_path: Path) -> None:
+    """No ground truth: the start is levelled from the accelerometer (roll 0.2, pitch −0.1 rad here,
+    yaw set to 0), and a noise-free rest stays at the origin."""
+    tilt = Rotation.from_euler("ZYX", [0.7, -0.1, 0.2])
+    imu, _ = ik.sim.simulate(ik.sim.Static(rotation=tilt), rate=RATE, duration=5.0)
+    ik.io.write_euroc(tmp_path / "mav0", imu)
+    out = tmp_path / "traj.tum"
+    run = cli("integrate", tmp_path, "--static-seconds", "1", "--out", out)
+    assert "no ground truth" in run.stderr
+    traj = ik.io.read_tum(out)
+    yaw, pitch, roll = traj.rotation[0].as_euler("ZYX")
+    assert (yaw, pitch, roll) == pytest.approx((0.0, -0.1, 0.2), abs=1e-12)
+    assert np.abs(traj.position).max() < 1e-9
+
+
+def test_integrate_refuses_bias_without_truth(tmp_path: Path) -> None:
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=RATE, duration=2.0)
+    ik.io.write_euroc(tmp_path, imu)
+    assert_one_line_error(cli("integrate", tmp_path, "--bias-from-groundtruth", code=1), "--bias-from-groundtruth")
+
+
+@requires_euroc
+def test_integrate_real_euroc_with_plot(tmp_path: Path) -> None:
+    """EuRoC V1_02 excerpt: the truth starts at ...524907143168 ns, 3168 ns after IMU sample 199, so
+    200 samples are skipped; with the truth's biases the dead reckoning drifts less than without."""
+    folder = tmp_path / "V1_02" / "mav0"
+    for csv, target in ((IMU_CSV, "imu0"), (GT_CSV, "state_groundtruth_estimate0")):
+        (folder / target).mkdir(parents=True)
+        (folder / target / "data.csv").symlink_to(csv)
+    png = tmp_path / "top.png"
+    with_bias = cli("integrate", folder.parent, "--bias-from-groundtruth", "--plot", png)
+    without = cli("integrate", folder.parent)
+    assert "skipped the first 200 IMU samples" in with_bias.stderr
+    ate_with = number_after(with_bias.stdout, "ATE RMSE")
+    ate_without = number_after(without.stdout, "ATE RMSE")
+    assert ate_with < ate_without
+    assert_png(png)
+
+
+def test_preintegrate_windows_match_the_library(simulated: Path, tmp_path: Path) -> None:
+    csv, npz = tmp_path / "w.csv", tmp_path / "w.npz"
+    run = cli("preintegrate", simulated, "--window", "0.5", "--out", csv)  # noise from mav0/imu0/sensor.yaml
+    cli("preintegrate", simulated, "--window", "0.5", "--out", npz, "--noise", simulated / "mav0/imu0/sensor.yaml")
+    assert run.stdout.startswith(f"{int(DURATION / 0.5)} windows")
+    imu, _ = ik.io.read_euroc(simulated)
+    edges = np.arange(41) * 500_000_000  # integer ns, as the stamps
+    pims = ik.preintegrate_windows(imu, edges, noise=NOISE)
+    rows = np.loadtxt(csv, delimiter=",")
+    assert rows.shape == (40, 22)
+    assert np.array_equal(rows[:, 2], [p.delta_t for p in pims])
+    assert np.array_equal(rows[:, 3:7], [p.delta_rotation.as_quat() for p in pims])
+    assert np.array_equal(rows[:, 10:13], [p.delta_position for p in pims])
+    assert np.array_equal(rows[:, 13:22], [np.diag(p.covariance) for p in pims])
+    with np.load(npz) as data:
+        assert np.array_equal(data["covariance"], [p.covariance for p in pims])
+        assert np.array_equal(data["dv"], [p.delta_velocity for p in pims])
+        assert np.array_equal(data["t_start"], np.arange(40) * 0.5)
+
+
+def test_preintegrate_at_rest_is_gravity(tmp_path: Path, noise_yaml: Path) -> None:
+    """At rest, level: Δv = (0, 0, g·Δt) and Δp = ½ g Δt² (gravity is not in the deltas)."""
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=RATE, duration=2.0)
+    ik.io.write_euroc(tmp_path, imu)
+    out = tmp_path / "w.npz"
+    cli("preintegrate", tmp_path, "--window", "0.25", "--noise", noise_yaml, "--out", out)
+    with np.load(out) as data:
+        assert data["dv"].shape == (8, 3)
+        np.testing.assert_allclose(data["dv"], np.tile([0.0, 0.0, 9.81 * 0.25], (8, 1)), atol=1e-12)
+        np.testing.assert_allclose(data["dp"], np.tile([0.0, 0.0, 0.5 * 9.81 * 0.25**2], (8, 1)), atol=1e-12)
+        np.testing.assert_allclose(data["dR_xyzw"], np.tile([0.0, 0.0, 0.0, 1.0], (8, 1)), atol=1e-15)
+
+
+def test_preintegrate_needs_a_noise_model(tmp_path: Path) -> None:
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=RATE, duration=2.0)
+    ik.io.write_euroc(tmp_path, imu)  # no sensor.yaml
+    assert_one_line_error(cli("preintegrate", tmp_path, "--window", "0.5", code=1), "--noise")
+
+
+def test_filter_broad_excerpt_9d(tmp_path: Path) -> None:
+    """The shipped BROAD excerpt has a magnetometer: the printed errors are the library's."""
+    csv, png = tmp_path / "q.csv", tmp_path / "err.png"
+    path = broad_excerpt_path()
+    run = cli("filter", path, "--method", "madgwick", "--mag", "--out", csv, "--plot", png)
+    with np.load(path) as d:
+        rate = float(d["sampling_rate"])
+        imu = ik.ImuData(np.arange(len(d["imu_gyr"])) / rate, d["imu_gyr"], d["imu_acc"])
+        result = ik.filters.Madgwick().run(imu, mag=d["imu_mag"])
+        truth, movement = d["opt_quat"], d["movement"]
+    rmse = ik.eval.attitude_error(result.rotation, truth, scalar_first=True, mask=movement).rmse(degrees=True)
+    assert number_after(run.stdout, "total") == pytest.approx(rmse.total, abs=1e-3)
+    assert number_after(run.stdout, "inclination") == pytest.approx(rmse.inclination, abs=1e-3)
+    rows = np.loadtxt(csv, delimiter=",")
+    np.testing.assert_allclose(rows[:, 1:5], result.rotation.as_quat(), atol=1e-12)
+    np.testing.assert_array_equal(rows[:, 0], imu.t)
+    assert_png(png)
+
+
+def test_filter_tum_output_has_zero_positions(simulated: Path, tmp_path: Path) -> None:
+    out = tmp_path / "att.txt"
+    run = cli("filter", simulated, "--out", out)
+    assert "constant heading offset removed" in run.stdout  # 6D, scored against the simulated truth
+    imu, _ = ik.io.read_euroc(simulated)
+    written = ik.io.read_tum(out)
+    assert np.array_equal(written.position, np.zeros((len(imu), 3)))
+    np.testing.assert_allclose(written.rotation.as_quat(), ik.filters.Mahony().run(imu).rotation.as_quat(), atol=1e-12)
+
+
+def test_filter_refuses_mag_without_magnetometer(simulated: Path) -> None:
+    assert_one_line_error(cli("filter", simulated, "--mag", code=1), "--mag", "no magnetometer")
+
+
+def test_chunked_filter_equals_one_call() -> None:
+    """The CLI's chunked run (state carried across pieces) gives one call's attitudes to rounding."""
+    from imukit.cli._attitude_input import read_broad
+    from imukit.cli._filter import run_chunked
+
+    data = read_broad(broad_excerpt_path())
+    for cls in (ik.filters.Mahony, ik.filters.Madgwick):
+        whole = cls().run(data.imu, mag=data.mag)
+        pieces = run_chunked(cls(), data, use_mag=True, chunk=997)
+        assert len(pieces.rotation) == len(whole.rotation)
+        assert np.abs(pieces.rotation.as_quat() - whole.rotation.as_quat()).max() < 1e-12
+        assert np.abs(pieces.gyro_bias - whole.gyro_bias).max() < 1e-15
+        assert np.allclose(pieces.state.values, whole.state.values, rtol=0, atol=1e-12)
+
+
+def test_allan_recovers_the_simulated_noise(tmp_path: Path, noise_yaml: Path) -> None:
+    folder = tmp_path / "static"
+    cli(
+        "simulate",
+        "static",
+        "--duration",
+        "600",
+        "--rate",
+        "100",
+        "--noise",
+        noise_yaml,
+        "--seed",
+        "5",
+        "--out",
+        folder,
+    )
+    png = tmp_path / "allan.png"
+    cli("allan", folder, "--out", png)
+    fitted = ik.io.read_kalibr_imu(tmp_path / "allan.yaml")
+    assert fitted.rate_hz == pytest.approx(100.0, rel=1e-12)
+    assert fitted.noise.gyro_density == pytest.approx(NOISE.gyro_density, rel=0.05)
+    assert fitted.noise.accel_density == pytest.approx(NOISE.accel_density, rel=0.05)
+    assert_png(tmp_path / "allan_gyro.png")
+    assert_png(tmp_path / "allan_accel.png")
+
+
+def test_evaluate_known_offset(tmp_path: Path) -> None:
+    """An estimate = truth shifted by (1, 2, 2) m: ATE 3 m without alignment, 0 after se3."""
+    _, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=50.0, duration=20.0)
+    shifted = ik.Trajectory(truth.t, truth.position + np.array([1.0, 2.0, 2.0]), None, truth.rotation)
+    est, gt, png = tmp_path / "est.txt", tmp_path / "gt.txt", tmp_path / "ate.png"
+    shifted.write_tum(est)
+    truth.write_tum(gt)
+    none = cli("evaluate", est, gt, "--align", "none")
+    se3 = cli("evaluate", est, gt, "--align", "se3", "--delta", "1", "--plot", png)
+    assert rmse_in_row(none.stdout, "ATE translation") == pytest.approx(3.0, abs=1e-9)
+    assert rmse_in_row(se3.stdout, "ATE translation") < 1e-6
+    assert "RPE translation / 1 m" in se3.stdout
+    assert_png(png)
+
+
+@pytest.mark.parametrize(
+    ("args", "pieces"),
+    [
+        (["integrate", "/no/such/folder"], ["/no/such/folder"]),
+        (["integrate", "{broad}", "--out", "traj.csv"], ["--out", ".txt"]),
+        (["simulate", "spiral", "--out", "x"], ["TRAJECTORY", "spiral"]),
+        (["filter", "{broad}", "--plot", "/no/such/dir/e.png"], ["--plot", "does not exist"]),
+        (["preintegrate", "{broad}", "--window", "0.5"], []),
+    ],
+)
+def test_bad_input_one_line(args: list[str], pieces: list[str], tmp_path: Path) -> None:
+    broad = str(broad_excerpt_path())
+    run = cli(*(a.format(broad=broad) for a in args), code=1)
+    assert_one_line_error(run, *pieces)
+
+
+def test_bad_usage_exit_2_and_debug_traceback() -> None:
+    assert cli(code=2).returncode == 2
+    assert "--window" in cli("preintegrate", "x", code=2).stderr  # required option missing
+    assert "expected a positive number" in cli("integrate", "x", "--static-seconds", "-1", code=2).stderr
+    debug = cli("--debug", "integrate", "/no/such/folder", code=1)
+    assert "Traceback" in debug.stderr and debug.stderr.strip().splitlines()[-1].startswith("imukit: error: ")
