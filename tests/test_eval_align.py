@@ -159,6 +159,15 @@ def test_degenerate_umeyama_input_is_refused(method: str, points: list[list[floa
         ik.eval.align(traj, traj, method=method)
 
 
+def test_too_few_paired_samples_for_umeyama_name_the_association(ref: ik.Trajectory) -> None:
+    # shifted back by 1.03 s, only the estimate's last 2 samples fall inside the reference
+    late = ik.Trajectory(ref.t[:5] + 1.0, ref.position[:5], None, ref.rotation[:5])
+    message = r"^offset: se3 alignment needs at least 3 paired samples, but only 2 of 5 estimate samples"
+    with pytest.raises(ik.ParameterError, match=message):
+        ik.eval.ape(late, ref, offset=-1.03)
+    assert ik.eval.ape(late, ref, offset=-1.03, align="position").translation.shape == (2,)
+
+
 def test_degenerate_yaw_input_is_refused() -> None:
     vertical = poses(np.outer(np.arange(5.0), [0.0, 0.0, 1.0]), Rotation.identity(5))
     with pytest.raises(ik.ParameterError, match=r"^estimate / reference: yaw alignment needs"):

@@ -116,12 +116,22 @@ def test_single_sample_reference_pairs_only_an_exact_stamp() -> None:
 def test_no_survivor_names_both_spans() -> None:
     est = ik.Trajectory(np.array([10.0, 11.0]), np.zeros((2, 3)), None, Rotation.identity(2))
     ref = ik.Trajectory(np.array([0.0, 1.0]), np.zeros((2, 3)), None, Rotation.identity(2))
-    with pytest.raises(
-        ik.ParameterError, match=r"^estimate: no sample .* \[10, 11\] s .* \[0, 1\] s; 2 samples outside"
-    ):
+    with pytest.raises(ik.ParameterError, match=r"^estimate: no estimate sample .* \[10, 11\] s .* \[0, 1\] s; 2 "):
         ik.eval.associate(est, ref)
-    # a clock offset brings them together
+    # a clock offset brings them together; a wrong one is named first
     assert ik.eval.associate(est, ref, offset=-10.0).n_dropped == 0
+    with pytest.raises(ik.ParameterError, match=r"^offset: no estimate sample .* \[15, 16\] s \(offset 5 s applied\)"):
+        ik.eval.associate(est, ref, offset=5.0)
+    # every sample inside the span but in gaps: max_dt is what refused them
+    inside = ik.Trajectory(np.array([0.25, 0.5]), np.zeros((2, 3)), None, Rotation.identity(2))
+    with pytest.raises(ik.ParameterError, match=r"^max_dt: no estimate sample .* 0 samples outside .* 2 inside"):
+        ik.eval.associate(inside, ref, max_dt=0.5)
+
+
+def test_offset_beyond_the_int64_nanosecond_range_is_refused() -> None:
+    t_ns = np.array([1_403_715_524_907_143_168, 1_403_715_524_912_143_104])
+    with pytest.raises(ik.ParameterError, match=r"^offset: 1e\+10 s moves the estimate's nanosecond stamps out"):
+        ik.eval.associate(still(t_ns), still(t_ns), offset=1e10)
 
 
 @pytest.mark.parametrize(
@@ -135,7 +145,7 @@ def test_no_survivor_names_both_spans() -> None:
     ],
 )
 def test_bad_arguments(kwargs: dict[str, object], message: str) -> None:
-    args: dict[str, object] = {"estimate": still(np.array([0, 1])), "reference": still(np.array([0, 1]))}
+    args: dict[str, object] = {"estimate": still(np.array([0, MS])), "reference": still(np.array([0, MS]))}
     args.update(kwargs)
     with pytest.raises(ik.ParameterError, match=message):
         ik.eval.associate(args.pop("estimate"), args.pop("reference"), **args)  # type: ignore[arg-type]

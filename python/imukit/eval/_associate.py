@@ -13,6 +13,8 @@ from imukit._errors import ParameterError
 from imukit.eval._checks import check_trajectory, finite_float
 from imukit.state import Trajectory
 
+_INT64 = np.iinfo(np.int64)
+
 
 class Association(NamedTuple):
     """Two trajectories at the same instants, from :func:`associate`.
@@ -29,6 +31,15 @@ class Association(NamedTuple):
     n_dropped: int
     n_outside_span: int  # before the first or after the last reference stamp
     n_in_gaps: int  # inside the span, between reference samples more than max_dt apart
+
+
+def culprit(offset: float, n_outside: int, n_in_gaps: int) -> str:
+    """The argument an error about unpaired samples names first: ``max_dt`` when every loss was a
+    reference gap, else ``offset`` when one was given (a wrong clock offset is the usual cause),
+    else ``estimate``."""
+    if n_in_gaps and not n_outside:
+        return "max_dt"
+    return "offset" if offset != 0.0 else "estimate"
 
 
 def associate(
@@ -71,7 +82,9 @@ def associate(
     Raises
     ------
     ParameterError
-        When no estimate sample can be paired; the message gives both spans and the drop counts.
+        When no estimate sample can be paired; the message gives both spans and the drop counts, and
+        starts with ``max_dt`` when every sample fell in a reference gap, else with ``offset`` when
+        one was given, else with ``estimate``.
     """
     est = check_trajectory(estimate, "estimate")
     ref = check_trajectory(reference, "reference")
@@ -81,7 +94,10 @@ def associate(
     stamps: NDArray[np.int64] | FloatArray
     ref_stamps: NDArray[np.int64] | FloatArray
     if est.t_ns is not None and ref.t_ns is not None:
-        stamps, ref_stamps, max_gap = est.t_ns + round(offset * 1e9), ref.t_ns, max_dt * 1e9
+        shift = round(offset * 1e9)
+        if not (_INT64.min <= int(est.t_ns[0]) + shift and int(est.t_ns[-1]) + shift <= _INT64.max):
+            raise ParameterError(f"offset: {offset:g} s moves the estimate's nanosecond stamps out of the int64 range")
+        stamps, ref_stamps, max_gap = est.t_ns + shift, ref.t_ns, max_dt * 1e9
     else:
         stamps, ref_stamps, max_gap = est.t + offset, ref.t, max_dt
 
@@ -99,7 +115,8 @@ def associate(
     if not keep.any():
         a, b = float(est.t[0]) + offset, float(est.t[-1]) + offset
         raise ParameterError(
-            f"estimate: no sample can be paired with the reference: the estimate spans [{a:.9g}, {b:.9g}] s "
+            f"{culprit(offset, n_outside, n_gaps)}: no estimate sample can be paired with the reference: the "
+            f"estimate spans [{a:.9g}, {b:.9g}] s "
             f"(offset {offset:g} s applied), the reference [{float(ref.t[0]):.9g}, {float(ref.t[-1]):.9g}] s; "
             f"{n_outside} samples outside the reference span, {n_gaps} inside reference gaps longer than "
             f"max_dt = {max_dt:g} s"

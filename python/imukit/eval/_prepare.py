@@ -8,8 +8,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import choice
+from imukit._errors import ParameterError
 from imukit.eval._align import METHODS, Alignment, align
-from imukit.eval._associate import associate
+from imukit.eval._associate import associate, culprit
 from imukit.state import Trajectory
 
 
@@ -27,5 +28,12 @@ def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt:
     """:func:`associate` (``max_dt``, ``offset``), fit :func:`align` (``method``) on all pairs, apply it."""
     choice(method, "align", METHODS)  # named as ape's and rpe's keyword
     pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
+    kept = len(pair.estimate)
+    if method in ("se3", "sim3") and kept < 3 and pair.n_dropped:
+        raise ParameterError(
+            f"{culprit(offset, pair.n_outside_span, pair.n_in_gaps)}: {method} alignment needs at least 3 paired "
+            f"samples, but only {kept} of {len(pair.mask)} estimate samples could be paired with the reference "
+            f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than max_dt = {max_dt:g} s)"
+        )
     alignment = align(pair.estimate, pair.reference, method=method)
     return Prepared(alignment, alignment.apply(pair.estimate), pair.reference, pair.mask, pair.n_dropped)
