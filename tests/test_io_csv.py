@@ -195,3 +195,15 @@ def test_delimiters(tmp_path: Path, text: str, delimiter: str | None) -> None:
     assert imu.t.tolist() == [0.5]
     np.testing.assert_array_equal(imu.gyro, [[1.0, 2.0, 3.0]])
     np.testing.assert_array_equal(imu.accel, [[4.0, 5.0, 6.0]])
+
+
+def test_an_acceleration_in_g_that_overflows_is_a_bad_line(tmp_path: Path) -> None:
+    path = tmp_path / "imu.csv"
+    path.write_text("0,1,2,3,0,0,1\n0.01,1,2,3,0,0,1e308\n0.02,1,2,3,0,0,1\n")
+    report = ReadReport()
+    imu = ik.io.read_imu_csv(path, **COLS, accel_unit="g", on_bad_line="skip", report=report)  # type: ignore[arg-type]
+    assert imu.t.tolist() == [0.0, 0.02]
+    reason = "non-finite: acceleration (0.0, 0.0, 1e+308) g overflows float64 in m/s^2"
+    assert report.skipped == [SkippedLine(str(path), 2, reason, "0.01,1,2,3,0,0,1e308")]
+    # In m/s^2 the same number is finite and kept.
+    assert len(ik.io.read_imu_csv(path, **COLS)) == 3  # type: ignore[arg-type]

@@ -117,3 +117,16 @@ def test_malformed_files_name_file_and_line(
     bad = poses if where == "poses" else times
     with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(bad))}{message}"):
         ik.io.read_kitti_poses(poses, times)
+
+
+def test_huge_entries_are_not_a_rotation(tmp_path: Path) -> None:
+    poses, times = tmp_path / "poses.txt", tmp_path / "times.txt"
+    poses.write_text(f"{IDENTITY}\n1e308 0 0 0 0 1e308 0 0 0 0 1e308 0\n")
+    times.write_text("0\n1\n")
+    report = ReadReport()
+    with np.errstate(all="raise"):  # no floating-point warning escapes either
+        traj = ik.io.read_kitti_poses(poses, times, on_bad_line="skip", report=report)
+    assert len(traj) == 1
+    assert [(s.path, s.line, s.kind) for s in report.skipped] == [
+        (str(poses), 2, "not a rotation"), (str(times), 2, "unpaired"),
+    ]  # fmt: skip

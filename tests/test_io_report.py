@@ -221,3 +221,17 @@ def _report(skipped: list[SkippedLine]) -> ReadReport:
     report = ReadReport()
     report.skipped.extend(skipped)
     return report
+
+
+def test_bytes_that_are_not_utf8_and_huge_stamps_are_bad_lines(tmp_path: Path) -> None:
+    # A Latin-1 byte in one line, a 25-digit stamp in another: each is one bad line, not a crash.
+    path = tmp_path / "data.csv"
+    lines = [EUROC_IMU[1].encode(), b"1403715523917140000,0.1,\xb00.2,0.3,9.1,9.2,9.3", b"9" * 25 + b",1,2,3,4,5,6"]
+    lines.append(b"9" * 5000 + b",1,2,3,4,5,6")  # past int()'s 4300-digit limit
+    path.write_bytes(b"\n".join(lines) + b"\n")
+    report = ReadReport()
+    imu = ik.io.read_euroc_imu(path, on_bad_line="skip", report=report)
+    assert len(imu) == 1
+    assert [(s.line, s.kind) for s in report.skipped] == [(2, "malformed"), (3, "malformed"), (4, "malformed")]
+    assert report.skipped[0].reason == "malformed: not a number in '1403715523917140000,0.1,\\udcb00.2,0.3,9.1,9.2,9.3'"
+    assert report.skipped[1].reason.startswith("malformed: timestamp '9999999999999999999999999' is not an integer")

@@ -113,7 +113,7 @@ def imu_csv(
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``, with checked arguments."""
     where = os.fspath(path)
-    with open(path, encoding="utf-8") as f:
+    with open(path, encoding="utf-8", errors="surrogateescape") as f:
         numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
     split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
     header: list[str] | None = None
@@ -134,6 +134,9 @@ def imu_csv(
     def check(fields: list[str], row: list[float]) -> Problem | None:
         if time_unit == "ns" and integer_stamp(fields[time].strip()) is None:
             return "malformed", f"time {fields[time].strip()!r} is not an integer number of nanoseconds (int64)"
+        if gravity is not None and not all(math.isfinite(a * gravity) for a in row[4:7]):
+            accel = ", ".join(map(repr, row[4:7]))
+            return "non-finite", f"acceleration ({accel}) g overflows float64 in m/s^2"
         return None
 
     rows = parse_rows(

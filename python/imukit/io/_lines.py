@@ -29,7 +29,8 @@ INT64_MIN = -(2**63)
 INT64_MAX = 2**63 - 1
 # Quaternions within this of unit norm are kept bit for bit; others are normalised.
 _UNIT_TOLERANCE = 1e-15
-_INTEGER = re.compile(r"[+-]?[0-9]+")
+# 20 digits and a sign cover int64; longer texts are refused before int() (which limits to 4300 digits).
+_INTEGER = re.compile(r"[+-]?[0-9]{1,20}")
 
 Problem = tuple[str, str]  # (kind, detail) of a bad line
 RowCheck = Callable[[list[str], list[float]], Union[Problem, None]]
@@ -60,9 +61,11 @@ class Rows(NamedTuple):
 def data_lines(path: str | os.PathLike[str]) -> Iterator[tuple[int, str]]:
     """``(line number, stripped text)`` of each line that is neither blank nor a ``#`` comment.
 
-    Stripping also removes the ``\\r`` of files written with Windows line ends.
+    Stripping also removes the ``\\r`` of files written with Windows line ends. Bytes that are not
+    UTF-8 come through as lone surrogates (``surrogateescape``), so a damaged line is one bad line
+    (not a number), not a ``UnicodeDecodeError`` for the whole file.
     """
-    with open(path, encoding="utf-8") as f:
+    with open(path, encoding="utf-8", errors="surrogateescape") as f:
         for number, line in enumerate(f, start=1):
             text = line.strip()
             if text and not text.startswith("#"):
