@@ -158,6 +158,8 @@ def test_gaps_are_dropped_where_evo_interpolates_across_them() -> None:
     ours = ik.eval.ape(est, ref, align="none")
     before, after = ref.t[ref.t < 4.0][-1], ref.t[ref.t > 4.5][0]  # 3.995 s, 4.505 s
     assert ours.n_dropped == int(((est.t > before) & (est.t < after)).sum()) == 21
+    assert (ours.n_in_gaps, ours.n_outside_span) == (21, 0)
+    np.testing.assert_array_equal(ours.mask, (est.t < before) | (est.t > after))
     assert ours.translation_stats.max < 1.06e-5
     ref_i, est_i = sync.associate_trajectories(
         to_evo(ref), to_evo(est), max_diff=0.01, sync_method=SyncMethod.interpolation

@@ -31,6 +31,7 @@ def drift_truth(t_i: np.ndarray, span: float) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize(("delta", "unit"), [(1.0, "m"), (1.0, "s"), (8, "frames")])
 def test_drift_matches_the_analytic_error(delta: float, unit: str) -> None:
     err = ik.eval.rpe(along_x(1 + EPS, OMEGA), along_x(1.0), delta=delta, unit=unit, max_dt=0.2)
+    assert (err.n_dropped, err.n_outside_span, err.n_in_gaps) == (0, 0, 0)
     np.testing.assert_array_equal(err.pairs, np.stack([np.arange(0, 80, 8), np.arange(8, 81, 8)], axis=1))
     translation, rotation = drift_truth(T[err.pairs[:, 0]], 1.0)
     np.testing.assert_allclose(err.translation, translation, rtol=1e-10)  # the truth's 1 − cos cancels digits

@@ -18,7 +18,8 @@ class AbsoluteError(NamedTuple):
     """Result of :func:`ape`: per-sample errors over the N associated samples and their statistics.
 
     ``estimate`` is the associated estimate after ``alignment``; ``reference`` the reference at
-    the same stamps. ``mask`` and ``n_dropped`` come from :func:`associate` (over the input estimate).
+    the same stamps. ``mask``, ``n_dropped``, ``n_outside_span`` and ``n_in_gaps`` come from
+    :func:`associate` (over the input estimate).
     """
 
     translation: FloatArray  # (N,) ‖p_est − p_ref‖ [m], world frame, after alignment
@@ -30,6 +31,8 @@ class AbsoluteError(NamedTuple):
     reference: Trajectory
     mask: NDArray[np.bool_]
     n_dropped: int
+    n_outside_span: int
+    n_in_gaps: int
 
 
 def ape(

@@ -21,7 +21,9 @@ class Prepared(NamedTuple):
     estimate: Trajectory  # associated, then aligned
     reference: Trajectory  # interpolated at the estimate's stamps
     mask: NDArray[np.bool_]  # over the input estimate: samples kept by the association
-    n_dropped: int
+    n_dropped: int  # = n_outside_span + n_in_gaps
+    n_outside_span: int
+    n_in_gaps: int
 
 
 def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt: float, offset: float) -> Prepared:
@@ -36,4 +38,5 @@ def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt:
             f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than max_dt = {max_dt:g} s)"
         )
     alignment = align(pair.estimate, pair.reference, method=method)
-    return Prepared(alignment, alignment.apply(pair.estimate), pair.reference, pair.mask, pair.n_dropped)
+    estimate_out = alignment.apply(pair.estimate)
+    return Prepared(alignment, estimate_out, pair.reference, pair.mask, *pair[3:])

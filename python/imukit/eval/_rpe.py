@@ -24,6 +24,7 @@ class RelativeError(NamedTuple):
     ``pairs`` (M, 2) indexes ``estimate`` and ``reference`` (the associated, aligned trajectories);
     ``separation`` (M,) is how far apart each pair is, in ``unit`` (travelled reference distance
     [m], time [s] or frames), ≥ ``delta``; ``translation / separation`` is the drift per unit.
+    ``mask``, ``n_dropped``, ``n_outside_span`` and ``n_in_gaps`` come from :func:`associate`.
     """
 
     translation: FloatArray  # (M,) ‖translation of E_ij‖ [m]
@@ -39,6 +40,8 @@ class RelativeError(NamedTuple):
     reference: Trajectory
     mask: NDArray[np.bool_]
     n_dropped: int
+    n_outside_span: int
+    n_in_gaps: int
 
 
 def rpe(
