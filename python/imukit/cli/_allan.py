@@ -27,7 +27,7 @@ Example:
   imukit allan static_imu/ --out allan.png"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "allan",
         help="Allan deviation of a static recording: plots and a fitted Kalibr imu.yaml",
@@ -38,13 +38,22 @@ def add(commands: Any) -> None:
     p.add_argument("--out", required=True, metavar="PNG", help="NAME.png: writes NAME_gyro.png and NAME_accel.png")
     p.add_argument("--yaml", metavar="YAML", help="where to write the fitted Kalibr imu.yaml (default: NAME.yaml)")
     p.set_defaults(run=run)
+    return p
 
 
-def allan_fits(imu: ImuData) -> dict[str, tuple[AllanDeviation, AllanFit]]:
-    """The Allan deviation of both sensors at the mean sample rate, and their joint 3-axis fits."""
+def mean_rate_hz(imu: ImuData) -> float:
+    """Intervals per second over the recording; from integer nanoseconds when there are some, so
+    that 60000 intervals over 600 s give 100 Hz exactly."""
+    if imu.t_ns is not None:
+        return (len(imu) - 1) * 1e9 / float(imu.t_ns[-1] - imu.t_ns[0])
+    return imu.rate_hz
+
+
+def allan_fits(imu: ImuData, rate_hz: float) -> dict[str, tuple[AllanDeviation, AllanFit]]:
+    """The Allan deviation of both sensors at ``rate_hz``, and their joint 3-axis fits."""
     result = {}
     for sensor, samples in (("gyro", imu.gyro), ("accel", imu.accel)):
-        allan = allan_deviation(samples, imu.rate_hz)
+        allan = allan_deviation(samples, rate_hz)
         result[sensor] = allan, fit_allan(allan, sensor=sensor)
     return result
 
@@ -54,12 +63,13 @@ def run(args: argparse.Namespace) -> int:
     yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml") if args.yaml else png.with_suffix(".yaml")
     imu, _ = read_imu(args.path)
     with out.status(f"Allan deviation of {len(imu)} samples"):
-        fits = allan_fits(imu)
+        rate = mean_rate_hz(imu)
+        fits = allan_fits(imu, rate)
     for sensor, (allan, fit) in fits.items():
         out.print(f"{sensor}: {fit}".replace("\n", "\n  "), markup=False)
         path = png.with_name(f"{png.stem}_{sensor}.png")
         plot_allan(allan, path, fit=fit, title=f"Allan deviation, {sensor} (3 axes): {Path(args.path).name}")
         wrote(f"{sensor} Allan plot", path)
-    write_kalibr_imu(yaml_path, to_imu_noise(gyro=fits["gyro"][1], accel=fits["accel"][1]), rate_hz=imu.rate_hz)
+    write_kalibr_imu(yaml_path, to_imu_noise(gyro=fits["gyro"][1], accel=fits["accel"][1]), rate_hz=rate)
     wrote("Kalibr imu.yaml", yaml_path)
     return 0

@@ -15,14 +15,15 @@ BROAD trial 06 shipped in the package (Mahony and Madgwick, 6D and 9D, against m
 CC BY 4.0, Laidig et al. 2021).
 
 Prints: one table of errors and timings.
-Writes: into --out (default: a new temporary folder, named at the end) trajectory_top_view.png, attitude_error.png, scheme_convergence.png, allan_gyro.png
-and results.json (the table's numbers and the parameters). Takes about 15 s.
+Writes: into --out (default: a new temporary folder, named at the end) trajectory_top_view.png,
+attitude_error.png, scheme_convergence.png, allan_gyro.png and results.json (the table's numbers
+and the parameters). Takes about 5 s.
 
 Example:
   imukit demo --out demo_results/"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "demo",
         help="run everything on embedded data: one table, four plots",
@@ -33,6 +34,7 @@ def add(commands: Any) -> None:
         "--out", metavar="FOLDER", help="where to write the plots and results.json (default: a new temp folder)"
     )
     p.set_defaults(run=run)
+    return p
 
 
 def run(args: argparse.Namespace) -> int:

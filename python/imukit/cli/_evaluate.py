@@ -32,7 +32,7 @@ Example:
   imukit evaluate traj.txt MH_01_easy/mav0/state_groundtruth_estimate0/data.csv --align se3 --delta 1"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "evaluate",
         help="absolute / relative trajectory error of an estimate against ground truth",
@@ -49,6 +49,7 @@ def add(commands: Any) -> None:
     )
     add_plot_option(p, "a top view of the aligned estimate and the ground truth")
     p.set_defaults(run=run)
+    return p
 
 
 def _row(table: Table, name: str, stats: ErrorStats, unit: str, scale: float) -> None:

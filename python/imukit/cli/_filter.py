@@ -39,7 +39,7 @@ Example:
   imukit filter 06_undisturbed_fast_rotation_A.mat --method madgwick --mag --plot error.png"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "filter",
         help="run the Mahony or Madgwick attitude filter (errors, quaternion file, error plot)",
@@ -53,6 +53,7 @@ def add(commands: Any) -> None:
     p.add_argument("--out", metavar="FILE", help="write the attitudes: TUM (.txt, .tum) or quaternion CSV (.csv)")
     add_plot_option(p, "the attitude error over time")
     p.set_defaults(run=run)
+    return p
 
 
 def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, chunk: int = CHUNK) -> FilterResult:

@@ -37,7 +37,7 @@ Example:
   imukit integrate MH_01_easy/ --scheme rk4 --bias-from-groundtruth --out traj.txt --plot top.png"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "integrate",
         help="dead-reckon a recording into a trajectory (TUM file, top-view plot)",
@@ -59,6 +59,7 @@ def add(commands: Any) -> None:
     p.add_argument("--out", metavar="TUM", help="write the trajectory to this TUM file (.txt or .tum)")
     add_plot_option(p, "a top view of the trajectory and the ground truth")
     p.set_defaults(run=run)
+    return p
 
 
 def run(args: argparse.Namespace) -> int:

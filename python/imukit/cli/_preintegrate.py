@@ -56,7 +56,7 @@ Example:
   imukit preintegrate MH_01_easy/ --window 0.5 --noise imu.yaml --out windows.csv"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "preintegrate",
         help="preintegrate into fixed windows (deltas, covariance) to CSV or NPZ",
@@ -69,6 +69,7 @@ def add(commands: Any) -> None:
     p.add_argument("--noise", metavar="YAML", help="Kalibr imu.yaml with the noise densities")
     p.add_argument("--out", metavar="FILE", help="write the windows to this .csv or .npz file")
     p.set_defaults(run=run)
+    return p
 
 
 def noise_for(path: str, noise_yaml: str | None) -> ImuNoise:

@@ -42,7 +42,7 @@ Example:
   imukit simulate figure-eight --duration 60 --rate 200 --noise imu.yaml --seed 1 --out sim_fig8/"""
 
 
-def add(commands: Any) -> None:
+def add(commands: Any) -> argparse.ArgumentParser:
     p = commands.add_parser(
         "simulate",
         help="simulate an IMU on a motion or a TUM trajectory, written as an EuRoC folder",
@@ -58,6 +58,7 @@ def add(commands: Any) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the noise (default: %(default)s)")
     p.add_argument("--out", required=True, metavar="FOLDER", help="the EuRoC folder to write (created)")
     p.set_defaults(run=run)
+    return p
 
 
 def motion(name: str) -> tuple[sim.Motion, float, float | None]:
