@@ -28,7 +28,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "allan",
         help="Allan deviation of a static recording: plots and a fitted Kalibr imu.yaml",
         description=DESCRIPTION,

@@ -24,7 +24,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "demo",
         help="run everything on embedded data: one table, four plots",
         description=DESCRIPTION,

@@ -33,7 +33,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "evaluate",
         help="absolute / relative trajectory error of an estimate against ground truth",
         description=DESCRIPTION,

@@ -40,7 +40,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "filter",
         help="run the Mahony or Madgwick attitude filter (errors, quaternion file, error plot)",
         description=DESCRIPTION,

@@ -38,7 +38,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "integrate",
         help="dead-reckon a recording into a trajectory (TUM file, top-view plot)",
         description=DESCRIPTION,

@@ -57,7 +57,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "preintegrate",
         help="preintegrate into fixed windows (deltas, covariance) to CSV or NPZ",
         description=DESCRIPTION,

@@ -43,7 +43,7 @@ Example:
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
-    p = commands.add_parser(
+    p: argparse.ArgumentParser = commands.add_parser(
         "simulate",
         help="simulate an IMU on a motion or a TUM trajectory, written as an EuRoC folder",
         description=DESCRIPTION,
