@@ -115,3 +115,16 @@ def test_malformed_files_name_file_and_line(tmp_path: Path, text: str, message: 
 def test_write_refuses_other_objects(tmp_path: Path) -> None:
     with pytest.raises(TypeError, match=r"^trajectory: expected an imukit Trajectory"):
         ik.io.write_tum(np.zeros((2, 8)), tmp_path / "x.txt")  # type: ignore[arg-type]
+
+
+def test_quaternions_of_extreme_magnitude_are_normalised(tmp_path: Path) -> None:
+    # Squaring 1e308 overflows and 1e-160 or 5e-324 underflow: these rows are rescaled before the norm.
+    path = tmp_path / "traj.txt"
+    path.write_text(
+        "0.0 0 0 0 1e308 1e308 0 0\n0.1 0 0 0 1e-160 -1e-160 0 0\n0.2 0 0 0 0 0 5e-324 0\n0.3 0 0 0 0 0 0 -3\n"
+    )
+    with np.errstate(all="raise"):
+        quat = ik.io.read_tum(path).rotation.as_quat(canonical=False)
+    half = np.sqrt(0.5)
+    np.testing.assert_allclose(quat[:2], [[half, half, 0, 0], [half, -half, 0, 0]], rtol=0, atol=1.2e-16)
+    np.testing.assert_array_equal(quat[2:], [[0, 0, 1, 0], [0, 0, 0, -1]])

@@ -29,6 +29,8 @@ INT64_MIN = -(2**63)
 INT64_MAX = 2**63 - 1
 # Quaternions within this of unit norm are kept bit for bit; others are normalised.
 _UNIT_TOLERANCE = 1e-15
+# Norms between these come from squares that neither overflow nor lose digits to underflow.
+_SAFE_NORM = (1e-150, 1e150)
 # 20 digits and a sign cover int64; longer texts are refused before int() (which limits to 4300 digits).
 _INTEGER = re.compile(r"[+-]?[0-9]{1,20}")
 
@@ -164,15 +166,22 @@ def rotations_from_rows(quat: FloatArray, lines: Sequence[int], where: str) -> R
     """A ``Rotation`` from ``(N, 4)`` xyzw rows read from a file (modified in place).
 
     Rows that are unit to 1e-15 are kept bit for bit (so written rotations come back exactly);
-    others, e.g. printed with 6 decimals, are normalised. A zero row is an error naming its line
-    (``lines[k]`` is row k's line; the line readers have left such rows out already).
+    others, e.g. printed with 6 decimals, are divided by their norm. Rows so large or small that
+    their squares overflow or underflow (1e308, 5e-324) are first divided by their largest component.
+    A zero row is an error naming its line (``lines[k]`` is row k's line; the line readers have left
+    such rows out already).
     """
-    norm = np.linalg.norm(quat, axis=1)
-    zero = np.flatnonzero(norm == 0.0)
-    if zero.size:
-        raise FileFormatError(f"path: {where}, line {lines[int(zero[0])]}: zero quaternion")
-    off = np.abs(norm - 1.0) > _UNIT_TOLERANCE
-    quat[off] /= norm[off, None]
+    with np.errstate(over="ignore", under="ignore"):  # such rows are rescaled below
+        norm = np.linalg.norm(quat, axis=1)
+    off = ~(np.abs(norm - 1.0) <= _UNIT_TOLERANCE)
+    plain = off & (norm > _SAFE_NORM[0]) & (norm < _SAFE_NORM[1])
+    quat[plain] /= norm[plain, None]
+    extreme = np.flatnonzero(off & ~plain)
+    largest = np.abs(quat[extreme]).max(axis=1, initial=0.0)
+    if np.any(largest == 0.0):
+        raise FileFormatError(f"path: {where}, line {lines[int(extreme[largest == 0.0][0])]}: zero quaternion")
+    scaled = quat[extreme] / largest[:, None]
+    quat[extreme] = scaled / np.linalg.norm(scaled, axis=1)[:, None]
     return rotation_from_unit_quat(quat)
 
 
