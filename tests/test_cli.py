@@ -326,3 +326,22 @@ def test_bad_usage_exit_2_and_debug_traceback() -> None:
     assert "expected a positive number" in cli("integrate", "x", "--static-seconds", "-1", code=2).stderr
     debug = cli("--debug", "integrate", "/no/such/folder", code=1)
     assert "Traceback" in debug.stderr and debug.stderr.strip().splitlines()[-1].startswith("imukit: error: ")
+
+
+def test_bad_lines_end_the_command_or_are_skipped_and_listed(tmp_path: Path) -> None:
+    """A malformed line and a repeated stamp: without --skip-bad-lines the first ends the command
+    naming file and line; with it (before or after the command) both are listed and the 99 good
+    samples integrated."""
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=RATE, duration=0.495)  # 100 samples
+    ik.io.write_euroc(tmp_path, imu)
+    csv = tmp_path / "imu0" / "data.csv"
+    lines = csv.read_text().splitlines()
+    lines[11] = lines[11].replace(",", ";", 1)  # line 12 of the file: malformed
+    lines.insert(31, lines[30])  # line 32 repeats the stamp of line 31
+    csv.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "t.txt"
+    assert_one_line_error(cli("integrate", tmp_path, code=1), str(csv), "line 12")
+    for args in (["--skip-bad-lines", "integrate", tmp_path], ["integrate", tmp_path, "--skip-bad-lines"]):
+        run = cli(*args, "--out", out)
+        assert "2 lines skipped" in run.stderr and "line 12" in run.stderr and "line 32" in run.stderr
+        assert len(ik.io.read_tum(out)) == 99

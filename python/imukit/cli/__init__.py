@@ -46,10 +46,18 @@ def build_parser() -> argparse.ArgumentParser:
         prog="imukit", description=_DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--debug", action="store_true", help="on an error, show the Python traceback")
+    parser.add_argument(
+        "--skip-bad-lines",
+        action="store_true",
+        help="skip malformed lines, duplicate or backward stamps in input files, listing them on stderr "
+        "(default: the first one ends the command with its file and line)",
+    )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in _COMMANDS:
-        # --debug after the command too; SUPPRESS keeps a --debug given before it
-        add(commands).add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+        # The global options after the command too; SUPPRESS keeps one given before it.
+        command = add(commands)
+        for option in ("--debug", "--skip-bad-lines"):
+            command.add_argument(option, action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     return parser
 
 

@@ -63,10 +63,10 @@ def truth_at(truth: Trajectory, imu: ImuData) -> FloatArray:
     return q
 
 
-def read_attitude_input(path: str) -> AttitudeInput:
+def read_attitude_input(path: str, *, skip_bad_lines: bool) -> AttitudeInput:
     """BROAD ``.mat`` / ``.npz`` by suffix; anything else through :func:`imukit.io.read_imu`."""
     if Path(path).suffix.lower() in (".mat", ".npz"):
         with err.status(f"reading {path}"):
             return read_broad(path)
-    imu, truth = read_imu(path)
+    imu, truth = read_imu(path, skip_bad_lines=skip_bad_lines)
     return AttitudeInput(imu, None, None if truth is None else truth_at(truth, imu), None)

@@ -13,8 +13,10 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
+from imukit import io
 from imukit._errors import ImukitError
 from imukit.imu import ImuData
+from imukit.io import ReadReport
 from imukit.state import Trajectory
 
 # Results go to stdout, progress and notes to stderr, so `imukit ... > file` keeps only results.
@@ -56,20 +58,29 @@ def chunks(n: int, size: int) -> Iterator[tuple[int, int]]:
         yield start, min(start + size, n)
 
 
-def read_imu(path: str) -> tuple[ImuData, Trajectory | None]:
-    """The IMU samples and ground truth at ``path``, whatever its format (:func:`imukit.io.read_imu`)."""
-    from imukit import io
+def _report_skips(report: ReadReport) -> None:
+    if report:
+        err.print(f"imukit: {report}", markup=False)
 
+
+def read_imu(path: str, *, skip_bad_lines: bool) -> tuple[ImuData, Trajectory | None]:
+    """The IMU samples and ground truth at ``path``, whatever its format (:func:`imukit.io.read_imu`);
+    with ``skip_bad_lines``, bad lines are skipped and listed on stderr instead of ending the command."""
+    report = ReadReport()
     with err.status(f"reading {path}"):
-        return io.read_imu(path)
+        result = io.read_imu(path, on_bad_line="skip" if skip_bad_lines else "raise", report=report)
+    _report_skips(report)
+    return result
 
 
-def read_trajectory(path: str) -> Trajectory:
-    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap): :func:`imukit.io.read_trajectory`."""
-    from imukit import io
-
+def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
+    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap): :func:`imukit.io.read_trajectory`;
+    ``skip_bad_lines`` as for :func:`read_imu`."""
+    report = ReadReport()
     with err.status(f"reading {path}"):
-        return io.read_trajectory(path)
+        result = io.read_trajectory(path, on_bad_line="skip" if skip_bad_lines else "raise", report=report)
+    _report_skips(report)
+    return result
 
 
 def output_path(path: str, suffixes: tuple[str, ...], option: str) -> Path:

@@ -79,7 +79,7 @@ def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".txt", ".tum", ".csv"), "--out")
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
-    data = read_attitude_input(args.path)
+    data = read_attitude_input(args.path, skip_bad_lines=args.skip_bad_lines)
     if args.mag and data.mag is None:
         raise CliError(
             f"--mag: {args.path} has no magnetometer samples (the EuRoC, TUM-VI, KITTI and ROS readers give "

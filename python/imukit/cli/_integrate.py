@@ -65,7 +65,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     tum = None if args.out is None else output_path(args.out, (".txt", ".tum"), "--out")
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
-    imu, truth = read_imu(args.path)
+    imu, truth = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
     bias = None
     if truth is not None:
         imu = trim_to_truth(imu, truth)

@@ -124,7 +124,7 @@ def arrays(imu: ImuData, edges: NDArray[Any], pims: list[PreintegratedImu]) -> d
 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
-    imu, _ = read_imu(args.path)
+    imu, _ = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
     table = arrays(imu, edges, windows(imu, edges, noise, args.scheme))

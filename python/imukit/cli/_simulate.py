@@ -61,13 +61,13 @@ def add(commands: Any) -> argparse.ArgumentParser:
     return p
 
 
-def motion(name: str) -> tuple[sim.Motion, float, float | None]:
+def motion(name: str, *, skip_bad_lines: bool) -> tuple[sim.Motion, float, float | None]:
     """The motion, its start time [s] and its span [s] (None: unbounded)."""
     if name in MOTIONS:
         return MOTIONS[name](), 0.0, None
     if not Path(name).is_file():
         raise CliError(f"TRAJECTORY: {name!r} is neither a motion ({', '.join(MOTIONS)}) nor a file")
-    truth: Trajectory = read_trajectory(name)
+    truth: Trajectory = read_trajectory(name, skip_bad_lines=skip_bad_lines)
     if len(truth) < 2:
         raise CliError(f"TRAJECTORY: {name} has {len(truth)} pose; a spline needs at least 2")
     span = float(truth.t[-1] - truth.t[0])
@@ -76,7 +76,7 @@ def motion(name: str) -> tuple[sim.Motion, float, float | None]:
 
 def simulate(args: argparse.Namespace) -> tuple[ImuData, Trajectory, ImuNoise | None]:
     """What ``imukit simulate`` writes, in memory."""
-    trajectory, start, span = motion(args.trajectory)
+    trajectory, start, span = motion(args.trajectory, skip_bad_lines=args.skip_bad_lines)
     duration = args.duration if args.duration is not None else (span if span is not None else 60.0)
     if span is not None and duration > span:
         raise CliError(f"--duration: {duration} s is longer than the trajectory file's {span:.6g} s")
