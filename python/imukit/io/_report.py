@@ -94,14 +94,15 @@ class ReadReport:
         return f"<ReadReport: {self.summary()}>"
 
 
-def summarise(skipped: list[SkippedLine]) -> str:
+def summarise(skipped: list[SkippedLine], *, files: bool = True) -> str:
+    """``"3 lines skipped in a.csv: 2 duplicate stamps, 1 malformed"`` (without ``in …`` unless ``files``)."""
     if not skipped:
         return "no lines skipped"
-    files = list(dict.fromkeys(s.path for s in skipped))
     counts = Counter(s.kind for s in skipped).most_common()
     kinds = ", ".join(f"{n} {KINDS.get(kind, kind) if n > 1 else kind}" for kind, n in counts)
     noun = "line" if len(skipped) == 1 else "lines"
-    return f"{len(skipped)} {noun} skipped in {', '.join(files)}: {kinds}"
+    where = f" in {', '.join(dict.fromkeys(s.path for s in skipped))}" if files else ""
+    return f"{len(skipped)} {noun} skipped{where}: {kinds}"
 
 
 def check_on_bad_line(on_bad_line: object) -> OnBadLine:
@@ -137,7 +138,7 @@ class BadLines:
         that nothing valid is left."""
         where = os.fspath(path)
         mine = [s for s in self.records if s.path == where]
-        return f" ({summarise(mine).replace(f' in {where}', '')})" if mine else ""
+        return f" ({summarise(mine, files=False)})" if mine else ""
 
     def done(self, value: _T) -> _T:
         """Hand the records over (to the report, else as one warning) and return ``value``.
