@@ -156,3 +156,23 @@ def test_options_reach_the_reader_chosen(tmp_path: Path) -> None:
     assert traj.t.tolist() == [0.0, 0.2] and [(s.line, s.kind) for s in report.skipped] == [(2, "wrong column count")]
     with pytest.raises(ik.io.FileFormatError, match=r", line 2: expected 8 fields"):
         ik.io.read_trajectory(path)
+
+
+def test_skip_warning_points_at_the_caller(tmp_path: Path) -> None:
+    imu, truth = simulated()
+    ik.io.write_euroc(tmp_path, imu)
+    csv = tmp_path / "imu0" / "data.csv"
+    csv.write_text(csv.read_text() + "1,2\n")
+    truth.write_tum(tmp_path / "traj.txt")
+    with open(tmp_path / "traj.txt", "a") as f:
+        f.write("1 2 3\n")
+    calls = [
+        (lambda: ik.io.read_imu(tmp_path, on_bad_line="skip"), csv),
+        (lambda: ik.io.read_imu(csv, on_bad_line="skip"), csv),
+        (lambda: ik.io.read_trajectory(tmp_path / "traj.txt", on_bad_line="skip"), tmp_path / "traj.txt"),
+    ]
+    for call, path in calls:
+        with pytest.warns(ik.io.SkippedLinesWarning) as caught:
+            call()
+        assert [str(w.message) for w in caught] == [f"1 line skipped in {path}: 1 wrong column count"]
+        assert caught[0].filename == __file__
