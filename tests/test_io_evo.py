@@ -1,5 +1,6 @@
 """evo, the reference trajectory tool, reads the files imukit writes: the same stamps, positions and
-quaternions, bit for bit (TUM with float seconds and with nanoseconds; EuRoC ground truth)."""
+quaternions, bit for bit (TUM with float seconds and with nanoseconds; EuRoC ground truth); and imukit
+reads evo's TUM and KITTI files to the same bits."""
 
 from __future__ import annotations
 
@@ -7,10 +8,13 @@ from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
+from evo.core.trajectory import PoseTrajectory3D
 from evo.tools import file_interface
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+
+from conftest import assert_quat_close
 
 EPOCH = 1_403_636_579_758_555_392
 
@@ -64,3 +68,24 @@ def test_evo_reads_euroc_ground_truth(tmp_path: Path, rng: np.random.Generator) 
     assert np.abs(evo.timestamps - truth.t).max() <= 2.6e-7
     assert_same_bits(evo.positions_xyz, truth.position)
     assert_same_bits(evo.orientations_quat_wxyz, truth.rotation.as_quat(scalar_first=True))
+
+
+def test_imukit_reads_evo_written_tum_and_kitti_files(tmp_path: Path, rng: np.random.Generator) -> None:
+    # The other direction: evo writes (numpy's '%.18e', 19 significant digits), imukit reads the same floats.
+    t = 1.4e9 + np.cumsum(rng.uniform(1e-3, 1e-2, 200))
+    traj = random_trajectory(rng, 200, t=t)
+    quat_wxyz = traj.rotation.as_quat(scalar_first=True)
+    evo = PoseTrajectory3D(traj.position, quat_wxyz, t)
+    file_interface.write_tum_trajectory_file(str(tmp_path / "evo.txt"), evo)
+    back = ik.io.read_tum(tmp_path / "evo.txt")
+    assert back.t_ns is None
+    assert_same_bits(back.t, t)
+    assert_same_bits(back.position, traj.position)
+    assert_same_bits(back.rotation.as_quat(scalar_first=True), quat_wxyz)
+    file_interface.write_kitti_poses_file(str(tmp_path / "poses.txt"), evo)
+    (tmp_path / "times.txt").write_text("".join(f"{x!r}\n" for x in t.tolist()))
+    kitti = ik.io.read_kitti_poses(tmp_path / "poses.txt", tmp_path / "times.txt")
+    assert_same_bits(kitti.t, t)
+    assert_same_bits(kitti.position, traj.position)
+    # Through a rotation matrix and back: the same rotation to rounding.
+    assert_quat_close(kitti.rotation.as_quat(), traj.rotation.as_quat(), atol=1e-15)
