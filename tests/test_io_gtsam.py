@@ -67,6 +67,10 @@ def test_dt_that_disagrees_with_the_stamps_is_an_error_in_both_modes(tmp_path: P
     for mode in ("raise", "skip"):
         with pytest.raises(ik.io.FileFormatError, match=message):
             ik.io.read_gtsam_imu(path, on_bad_line=mode, report=ReadReport())  # type: ignore[arg-type]
+    # The way out the message names: read_imu_csv, which reads the stamps and ignores dt.
+    imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[5, 6, 7], accel_columns=[2, 3, 4])
+    np.testing.assert_array_equal(imu.t, [10.0, 10.01, 10.03])
+    np.testing.assert_array_equal(imu.gyro, [[4.0, 5.0, 6.0]] * 3)
     # Off by 1.1 µs fails, by 0.9 µs passes: the tolerance is 1 µs.
     path.write_text(f"10.0 0 1 2 3 4 5 6\n10.5 {0.5 + 1.1e-6!r} 1 2 3 4 5 6\n")
     with pytest.raises(ik.io.FileFormatError, match=r", line 2: dt = 0\.5000011 s"):
