@@ -345,3 +345,21 @@ def test_bad_lines_end_the_command_or_are_skipped_and_listed(tmp_path: Path) -> 
         run = cli(*args, "--out", out)
         assert "2 lines skipped" in run.stderr and "line 12" in run.stderr and "line 32" in run.stderr
         assert len(ik.io.read_tum(out)) == 99
+
+
+def test_simulate_from_a_tum_file_passes_through_its_poses(tmp_path: Path) -> None:
+    """A TUM file becomes a C² spline through its poses: the simulated truth at the file's stamps
+    is the file's poses, and the run spans the file from its first stamp."""
+    _, path = ik.sim.simulate(ik.sim.FigureEight(), rate=2.0, duration=10.0, start=100.0)  # 21 poses
+    tum = tmp_path / "path.tum"
+    ik.Trajectory(path.t, path.position, None, path.rotation).write_tum(tum)
+    run = cli("simulate", tum, "--rate", "100", "--out", tmp_path / "sim")
+    assert "1001 samples at 100 Hz over 10 s" in run.stdout
+    _, truth = ik.io.read_euroc(tmp_path / "sim")
+    assert truth is not None and truth.t_ns is not None
+    assert truth.t_ns[0] == 100_000_000_000 and truth.t_ns[-1] == 110_000_000_000
+    at_poses = truth.position[::50]  # every 0.5 s
+    np.testing.assert_allclose(at_poses, path.position, atol=1e-9)
+    angles = (truth.rotation[::50].inv() * path.rotation).magnitude()
+    assert angles.max() < 1e-9
+    assert np.abs(truth.velocity[[0, -1]]).max() < 1e-12  # clamped: at rest at both ends
