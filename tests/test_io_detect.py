@@ -176,3 +176,20 @@ def test_skip_warning_points_at_the_caller(tmp_path: Path) -> None:
             call()
         assert [str(w.message) for w in caught] == [f"1 line skipped in {path}: 1 wrong column count"]
         assert caught[0].filename == __file__
+
+
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap", "mcap-file"])
+def test_real_bags_end_to_end(kind: str, tmp_path: Path) -> None:
+    pytest.importorskip("rosbags", reason="rosbags (the imukit[ros] extra) is not installed")
+    from test_io_rosbag import Bag
+
+    bag = Bag(kind)
+    stamps = [(1_403_715_523, 912_140_000), (1_403_715_523, 917_140_000)]
+    messages = [(s * 10**9 + ns, bag.imu((s, ns), (0.1 * k, 0.2, 0.3), (9.1, 9.2, 9.3 + k))) for k, (s, ns) in
+                enumerate(stamps)]  # fmt: skip
+    path = bag.write(tmp_path / "run", {"/imu0": ("sensor_msgs/msg/Imu", messages)})
+    imu, truth = ik.io.read_imu(path)
+    assert truth is None and imu.t_ns is not None
+    assert imu.t_ns.tolist() == [1_403_715_523_912_140_000, 1_403_715_523_917_140_000]
+    np.testing.assert_array_equal(imu.gyro, [[0.0, 0.2, 0.3], [0.1, 0.2, 0.3]])
+    np.testing.assert_array_equal(imu.accel, [[9.1, 9.2, 9.3], [9.1, 9.2, 10.3]])
