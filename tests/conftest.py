@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -53,3 +54,10 @@ def assert_file_error(path: Path, text: str, read: Callable[[Path], object], mes
     with pytest.raises(ik.io.FileFormatError, match=f"^path: {re.escape(str(path))}{message}") as info:
         read(path)
     assert isinstance(info.value, ValueError) and isinstance(info.value, ik.ImukitError)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """The malformed-input corpus's case count (tests/test_malformed_corpus.py), when it ran."""
+    corpus = sys.modules.get("malformed_strategies")
+    if corpus is not None and corpus.STATS.cases:
+        terminalreporter.write_line(corpus.STATS.summary())

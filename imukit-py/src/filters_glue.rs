@@ -10,18 +10,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::{class_name, contiguous, private_copy, raise, to_py};
-
-/// Raises an imukit error under the argument it names (or `fallback`).
-fn named(py: Python<'_>, fallback: &str, e: imukit::Error) -> PyErr {
-    match e {
-        imukit::Error::Argument { name, source } => raise(py, class_name(&source), name, source),
-        imukit::Error::Parameter { name, expected, got } => {
-            raise(py, "ParameterError", name, format!("expected {expected}, got {got}"))
-        }
-        other => to_py(py, fallback, other),
-    }
-}
+use crate::{contiguous, private_copy, raise, to_py};
 
 fn state_of(py: Python<'_>, values: [f64; STATE_LEN]) -> PyResult<State> {
     State::from_array(&values).map_err(|e| to_py(py, "state", e))
@@ -94,7 +83,7 @@ impl PyAttitudeFilter {
                 tau,
             }),
         };
-        let inner = Filter::new(algorithm, common).map_err(|e| named(py, "options", e))?;
+        let inner = Filter::new(algorithm, common).map_err(|e| to_py(py, "options", e))?;
         Ok(Self { inner })
     }
 
@@ -128,7 +117,7 @@ impl PyAttitudeFilter {
         let mag = mag.map(Vector3::from);
         self.inner
             .update(&mut s, &Vector3::from(gyro), &Vector3::from(accel), mag.as_ref(), dt)
-            .map_err(|e| named(py, "update", e))?;
+            .map_err(|e| to_py(py, "gyro / accel / dt / state", e))?;
         Ok(PyArray1::from_slice(py, &s.to_array()))
     }
 
@@ -176,7 +165,7 @@ impl PyAttitudeFilter {
             let filter = &self.inner;
             let state = &mut s;
             py.detach(|| filter.run(state, &inputs, continued, sq, sb))
-                .map_err(|e| named(py, "run", e))?;
+                .map_err(|e| to_py(py, "imu / gains", e))?;
         }
         Ok((out_q, out_b, PyArray1::from_slice(py, &s.to_array())))
     }

@@ -45,8 +45,14 @@ pub(crate) fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::
     }
 }
 
-pub(crate) fn to_py(py: Python<'_>, name: &str, e: imukit::Error) -> PyErr {
-    raise(py, class_name(&e), name, e)
+/// Raises `e` under the argument it names (an `Argument` or a `Parameter` error), else under
+/// `fallback`, so that every message starts with the name of the input at fault.
+pub(crate) fn to_py(py: Python<'_>, fallback: &str, e: imukit::Error) -> PyErr {
+    match e {
+        imukit::Error::Argument { name, source } => raise(py, class_name(&source), name, source),
+        imukit::Error::Parameter { name, .. } => raise(py, "ParameterError", name, e),
+        other => raise(py, class_name(&other), fallback, other),
+    }
 }
 
 /// Runs `kernel` over the rows of `x` (shape `(n, width_in)`) into a new `(n, width_out)` array.
@@ -235,7 +241,8 @@ fn attitude_integrate<'py>(
     gimbal_tolerance: f64,
     final_only: bool,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let name = "integrate_attitude";
+    // Errors that name no argument (gimbal lock, overflow) are about the rates.
+    let name = "gyro";
     let scheme = match scheme {
         "euler" => Scheme::Euler,
         "exp" => Scheme::Exp,
@@ -402,7 +409,7 @@ fn strapdown_integrate<'py>(
         };
         let (initial, bias) = (nav_state(initial), bias(bias_values));
         py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out)))
-            .map_err(|e| to_py(py, "integrate", e))?;
+            .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot))
 }
@@ -454,7 +461,7 @@ fn strapdown_propagate<'py>(
         };
         let (initial, bias) = (nav_state(initial), bias(bias_values));
         py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))
-            .map_err(|e| to_py(py, "propagate", e))?;
+            .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot, covariances))
 }

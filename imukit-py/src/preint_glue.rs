@@ -52,6 +52,31 @@ fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
     }
 }
 
+/// Whether every delta, covariance and Jacobian entry is finite: finite samples near f64's limits
+/// (or a subnormal step) can overflow them, and the core does not check.
+fn all_finite(p: &preint::Preintegrator) -> bool {
+    let (covariance, jacobian, combined) = (p.covariance(), p.bias_jacobian(), p.covariance_combined());
+    [
+        p.delta_rotation.as_slice(),
+        p.delta_velocity.as_slice(),
+        p.delta_position.as_slice(),
+        covariance.as_slice(),
+        jacobian.as_slice(),
+        combined.as_ref().map_or(&[][..], |c| c.as_slice()),
+    ]
+    .iter()
+    .all(|part| part.iter().all(|x| x.is_finite()))
+}
+
+fn overflow(py: Python<'_>) -> PyErr {
+    raise(
+        py,
+        "NonFiniteError",
+        "imu / bias",
+        "too large in magnitude to compute with: the preintegrated deltas or covariance overflow",
+    )
+}
+
 /// Column-major nalgebra storage as a row-major `(r, c)` array.
 fn rows<'py>(py: Python<'py>, m: &[f64], r: usize, c: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let data: Vec<f64> = (0..r * c).map(|i| m[(i % c) * r + i / c]).collect();
@@ -112,7 +137,19 @@ impl PyPreintegrator {
                 format!("expected a positive, finite step, got {dt}"),
             ));
         }
-        self.inner.integrate_measurement(&a, &w, dt);
+        // On a copy: a step that overflows (dt or a reading near f64's limits) must leave the
+        // preintegration as it was, not poisoned with NaN.
+        let mut next = self.inner.clone();
+        next.integrate_measurement(&a, &w, dt);
+        if !all_finite(&next) {
+            return Err(raise(
+                py,
+                "NonFiniteError",
+                "accel / gyro / dt",
+                format!("too large (or dt too small) to compute with: the step of {dt} s overflows"),
+            ));
+        }
+        self.inner = next;
         Ok(())
     }
 
@@ -127,8 +164,10 @@ impl PyPreintegrator {
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
-        let inner = &mut self.inner;
-        match py.detach(|| inner.integrate_samples(&samples)) {
+        // On a copy, committed only when finite (see `all_finite`).
+        let mut next = self.inner.clone();
+        let inner = &mut next;
+        let result = match py.detach(|| inner.integrate_samples(&samples)) {
             Err(imukit::Error::Parameter {
                 name: "samples",
                 expected,
@@ -139,8 +178,14 @@ impl PyPreintegrator {
                 "imu",
                 format!("expected {expected}, got {got}"),
             )),
-            other => other.map_err(|e| to_py(py, "integrate", e)),
+            other => other.map_err(|e| to_py(py, "imu", e)),
+        };
+        result?;
+        if !all_finite(&next) {
+            return Err(overflow(py));
         }
+        self.inner = next;
+        Ok(())
     }
 
     /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
@@ -201,6 +246,9 @@ pub(crate) fn preint_windows(
     });
     let windows = windows
         .map_err(|e| raise(py, "ParameterError", "threads", e))?
-        .map_err(|e| to_py(py, "preintegrate_windows", e))?;
+        .map_err(|e| to_py(py, "imu", e))?;
+    if !windows.iter().all(all_finite) {
+        return Err(overflow(py));
+    }
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
 }

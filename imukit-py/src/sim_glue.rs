@@ -148,8 +148,9 @@ pub(crate) fn sim_measure<'py>(
         let values = ideal
             .as_slice_mut()
             .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
+        let errors = if triad == 0 { "gyro_errors" } else { "accel_errors" };
         py.detach(|| sim::measure_in_place(t, values, &model, seed, triad, b))
-            .map_err(|e| to_py(py, "simulate", e))?;
+            .map_err(|e| raise(py, crate::class_name(&e), errors, e.root()))?;
     }
     Ok(bias)
 }

@@ -7,6 +7,7 @@ caller's batch shape. Leading dimensions broadcast like numpy's.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -36,11 +37,30 @@ def as_float_array(x: ArrayLike, name: str) -> FloatArray:
 
 
 def vector3(x: ArrayLike, name: str) -> FloatArray:
-    """``x`` as one float64 3-vector; :class:`ShapeError` naming ``name`` for any other shape."""
+    """``x`` as one finite float64 3-vector; :class:`ShapeError` / :class:`NonFiniteError` naming ``name``."""
     v = as_float_array(x, name)
     if v.shape != (3,):
         raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
+    check_finite_rows(v, name, "element")
     return v
+
+
+def real_scalar(value: object, name: str, *, what: str, accept: Callable[[float], bool]) -> float:
+    """``value`` as a float for which ``accept`` holds, else :class:`ParameterError` naming ``name``.
+
+    Only real numbers qualify: a string that happens to parse as one, None and arrays with more than
+    one element are refused, so that a wrongly typed option fails here and not as a bare
+    ``TypeError`` deep inside.
+    """
+    x = math.nan
+    if not isinstance(value, (str, bytes)):
+        try:
+            x = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            pass
+    if math.isnan(x) or not accept(x):
+        raise ParameterError(f"{name}: expected {what}, got {value!r}")
+    return x
 
 
 def _shape_text(tail: tuple[int, ...]) -> str:
@@ -125,13 +145,14 @@ def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
 
     Integer timestamps are nanoseconds (EuRoC / ROS style); they are converted as offsets from
     the first stamp, so a 1e18 ns epoch loses nothing. Integer steps under 1 µs are refused:
-    they are almost surely seconds or sample indices given as integers.
+    they are almost surely seconds or sample indices given as integers. The stamps must be
+    finite, strictly increasing and at least one (:class:`TimestampError` etc. naming ``name``).
     """
     raw = np.asarray(t)
-    if raw.ndim != 1:
-        raise ShapeError(f"{name}: expected shape (N,), got {raw.shape}")
+    if raw.ndim != 1 or len(raw) == 0:
+        raise ShapeError(f"{name}: expected shape (N,) with N ≥ 1, got {raw.shape}")
     if raw.dtype.kind in "iu":
-        stamps = raw.astype(np.int64)
+        stamps = int64_stamps(raw, name)
         if len(stamps) > 1:
             steps = np.diff(stamps)
             if np.median(steps) < 1000:
@@ -140,7 +161,24 @@ def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
                     f"{np.median(steps)} ns; pass float seconds instead"
                 )
         return seconds_from_ns(stamps - stamps[:1])
-    return np.ascontiguousarray(as_float_array(raw, name))
+    seconds = np.ascontiguousarray(as_float_array(raw, name))
+    check_finite_rows(seconds, name)
+    check_increasing(seconds, name, "s")
+    return seconds
+
+
+def int64_stamps(raw: NDArray[Any], name: str) -> NDArray[np.int64]:
+    """Integer nanosecond stamps as int64: strictly increasing, within int64, and spanning less than
+    2⁶³ ns (292 years), so that every offset from the first stamp is an int64 too."""
+    if raw.dtype.kind == "u" and len(raw) and raw.max() > np.iinfo(np.int64).max:
+        raise ParameterError(f"{name}: integer nanoseconds exceed the int64 range (max {raw.max()})")
+    stamps = raw.astype(np.int64)
+    check_increasing(stamps, name, "ns")
+    if len(stamps) and int(stamps[-1]) - int(stamps[0]) > np.iinfo(np.int64).max:
+        raise TimestampError(
+            f"{name}: the stamps span {int(stamps[-1]) - int(stamps[0])} ns, more than int64 can hold (292 years)"
+        )
+    return stamps
 
 
 def seconds_from_ns(t_ns: NDArray[np.int64]) -> FloatArray:
@@ -173,14 +211,15 @@ def check_finite_rows(arr: FloatArray, name: str, what: str = "sample") -> None:
 
 
 def check_increasing(t: NDArray[np.int64] | FloatArray, name: str, unit: str) -> None:
-    """Raise :class:`TimestampError` naming the first sample whose step from the previous is ≤ 0."""
-    steps = np.diff(t)
-    bad = np.flatnonzero(steps <= 0)
+    """Raise :class:`TimestampError` naming the first sample whose step from the previous is ≤ 0.
+
+    Compares neighbours instead of differencing them: an int64 difference can wrap around.
+    """
+    bad = np.flatnonzero(t[1:] <= t[:-1])
     if bad.size:
         k = int(bad[0])
-        raise TimestampError(
-            f"{name}: time must increase strictly: step into sample {k + 1} has dt = {steps[k]} {unit}"
-        )
+        step = int(t[k + 1]) - int(t[k]) if t.dtype.kind in "iu" else float(t[k + 1]) - float(t[k])
+        raise TimestampError(f"{name}: time must increase strictly: step into sample {k + 1} has dt = {step} {unit}")
 
 
 def readonly_array(

@@ -12,7 +12,14 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import as_float_array, check_tail, choice, rotation_from_unit_quat, timestamps_seconds
+from imukit._arrays import (
+    as_float_array,
+    check_tail,
+    choice,
+    real_scalar,
+    rotation_from_unit_quat,
+    timestamps_seconds,
+)
 from imukit._errors import ParameterError, ShapeError
 
 __all__ = ["REPRESENTATIONS", "SCHEMES", "integrate_attitude"]
@@ -80,7 +87,12 @@ def integrate_attitude(
         start = initial.as_quat()
     else:
         raise ParameterError(f"initial: expected a single scipy Rotation or None, got {initial!r}")
-    tolerance = float(gimbal_tolerance_rad)
+    tolerance = real_scalar(
+        gimbal_tolerance_rad,
+        "gimbal_tolerance_rad",
+        what="an angle in [0, π/2) radians",
+        accept=lambda x: 0.0 <= x < np.pi / 2,
+    )
     out = _core.attitude_integrate(
         seconds, np.ascontiguousarray(rates), start, scheme, representation, tolerance, bool(final_only)
     )

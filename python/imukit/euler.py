@@ -17,8 +17,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, batched
-from imukit._errors import ParameterError
+from imukit._arrays import FloatArray, as_float_array, batched, real_scalar
 
 __all__ = ["from_rotation", "rate_matrix", "rate_matrix_inv", "to_rotation"]
 
@@ -51,9 +50,12 @@ def rate_matrix(angles: ArrayLike, *, degrees: bool = False, tolerance_rad: floa
     :class:`imukit.GimbalLockError` (naming the element) when |pitch| is within ``tolerance_rad``
     radians of 90°. With ``degrees=True`` only the input angles are in degrees; E is unitless.
     """
-    tolerance = float(tolerance_rad)
-    if not (np.isfinite(tolerance) and tolerance >= 0.0):
-        raise ParameterError(f"tolerance_rad: expected a finite, non-negative angle in radians, got {tolerance_rad!r}")
+    tolerance = real_scalar(
+        tolerance_rad,
+        "tolerance_rad",
+        what="a finite, non-negative angle in radians below π/2",
+        accept=lambda x: 0.0 <= x < np.pi / 2,
+    )
     return batched(_core.euler_rate_matrix, [(_radians(angles, degrees), "angles", (3,))], (3, 3), tolerance)
 
 

@@ -26,7 +26,15 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, choice, rotation_from_unit_quat, vector3
+from imukit._arrays import (
+    FloatArray,
+    as_float_array,
+    check_finite_rows,
+    choice,
+    real_scalar,
+    rotation_from_unit_quat,
+    vector3,
+)
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuData
 
@@ -97,9 +105,10 @@ class FilterState:
     values: FloatArray
 
     def __init__(self, values: ArrayLike) -> None:
-        v = np.array(values, dtype=np.float64)
+        v = np.array(as_float_array(values, "state"), dtype=np.float64)
         if v.shape != (16,):
             raise ShapeError(f"state: expected shape (16,), got {v.shape}")
+        check_finite_rows(v, "state", "element")
         v.setflags(write=False)
         object.__setattr__(self, "values", v)
 
@@ -140,10 +149,16 @@ class FilterResult(NamedTuple):
 
 
 def _positive(x: float, name: str, *, zero: bool = False) -> float:
-    v = float(x)
-    if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not zero):
-        raise ParameterError(f"{name}: expected a {'non-negative' if zero else 'positive'} finite number, got {x!r}")
-    return v
+    what = f"a {'non-negative' if zero else 'positive'} finite number"
+    return real_scalar(x, name, what=what, accept=lambda v: math.isfinite(v) and (v >= 0.0 if zero else v > 0.0))
+
+
+def _numbers(option: tuple[float, ...] | None, name: str) -> list[float] | None:
+    """The fields of an options NamedTuple as floats (their ranges are checked in the core)."""
+    if option is None:
+        return None
+    fields = getattr(option, "_fields", [str(k) for k in range(len(option))])
+    return [real_scalar(v, f"{name}.{f}", what="a number", accept=lambda x: True) for f, v in zip(fields, option)]
 
 
 def _vec3(x: ArrayLike, name: str) -> list[float]:
@@ -169,16 +184,16 @@ class _Filter:
         rest_detection: RestDetection | None,
     ) -> None:
         self.world = choice(world, "world", WORLDS)
-        ramp = [0.0, 1.0] if gain_ramp is None else [float(gain_ramp[0]), float(gain_ramp[1])]
+        ramp = _numbers(gain_ramp, "gain_ramp") or [0.0, 1.0]
         self._core_filter = _core.AttitudeFilter(
             algorithm,
             gains,
             self.world,
             float(gravity),
             ramp,
-            None if acc_rejection is None else [float(v) for v in acc_rejection],
-            None if mag_rejection is None else [float(v) for v in mag_rejection],
-            None if rest_detection is None else [float(v) for v in rest_detection],
+            _numbers(acc_rejection, "acc_rejection"),
+            _numbers(mag_rejection, "mag_rejection"),
+            _numbers(rest_detection, "rest_detection"),
         )
         self.reset()
 
@@ -203,7 +218,7 @@ class _Filter:
             self._state.values,
             _vec3(gyro, "gyro"),
             _vec3(accel, "accel"),
-            float(dt),
+            real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
             None if mag is None else _vec3(mag, "mag"),
         )
         self._state = FilterState(values)

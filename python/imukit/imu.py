@@ -25,11 +25,13 @@ from imukit._arrays import (
     FloatArray,
     check_finite_rows,
     check_increasing,
+    int64_stamps,
     readonly_array,
     readonly_copy,
+    real_scalar,
     seconds_from_ns,
 )
-from imukit._errors import DTypeError, ParameterError, ShapeError, TimestampError
+from imukit._errors import DTypeError, NonFiniteError, ParameterError, ShapeError, TimestampError
 
 __all__ = ["DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "ImuNoise"]
 
@@ -84,11 +86,8 @@ class ImuData:
         if raw.ndim != 1 or len(raw) == 0:
             raise ShapeError(f"t: expected shape (N,) with N ≥ 1, got {raw.shape}")
         if raw.dtype.kind in "iu":
-            if raw.dtype.kind == "u" and raw.max() > np.iinfo(np.int64).max:
-                raise ParameterError(f"t: integer nanoseconds exceed the int64 range (max {raw.max()})")
-            t_ns = raw.astype(np.int64)
+            t_ns = int64_stamps(raw, "t")
             steps_ns = np.diff(t_ns)
-            check_increasing(t_ns, "t", "ns")
             if len(steps_ns) and np.median(steps_ns) < _MIN_NS_STEP:
                 raise ParameterError(
                     f"t: integer timestamps are read as nanoseconds, but the median step is "
@@ -246,13 +245,11 @@ class DiscreteSigmas(NamedTuple):
 
 def _number(value: object, name: str, *, positive: bool, what: str) -> float:
     """``value`` as a finite float that is ≥ 0 (or > 0 when ``positive``), else :class:`ParameterError`."""
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        x = math.nan
-    if not (math.isfinite(x) and (x > 0.0 if positive else x >= 0.0)):
-        raise ParameterError(f"{name}: expected {what}, got {value!r}")
-    return x
+
+    def accept(x: float) -> bool:
+        return math.isfinite(x) and (x > 0.0 if positive else x >= 0.0)
+
+    return real_scalar(value, name, what=what, accept=accept)
 
 
 def _density(value: float, name: str) -> float:
@@ -358,9 +355,18 @@ class ImuNoise:
         ``gyro_var`` = 2.8791e-08 / 0.005 = 5.7582e-06 (rad/s)², i.e. σ = 2.3996e-03 rad/s.
         """
         step = _number(dt, "dt", positive=True, what="a positive, finite step in seconds")
+
+        def variance(name: str, white: bool) -> float:
+            sigma = float(getattr(self, name))
+            # Multiplied, not **2: a float power that overflows raises OverflowError.
+            v = sigma * sigma / step if white else sigma * sigma * step
+            if not math.isfinite(v):
+                raise NonFiniteError(f"{name} / dt: {sigma!r} with dt = {step!r} s gives a variance beyond float64")
+            return v
+
         return DiscreteNoise(
-            gyro_var=self.gyro_density**2 / step,
-            accel_var=self.accel_density**2 / step,
-            gyro_bias_var=self.gyro_random_walk**2 * step,
-            accel_bias_var=self.accel_random_walk**2 * step,
+            gyro_var=variance("gyro_density", white=True),
+            accel_var=variance("accel_density", white=True),
+            gyro_bias_var=variance("gyro_random_walk", white=False),
+            accel_bias_var=variance("accel_random_walk", white=False),
         )

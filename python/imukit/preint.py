@@ -27,14 +27,15 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core, so3
-from imukit._arrays import FloatArray, as_float_array, choice, seconds_from_ns, vector3
-from imukit._errors import ParameterError, ShapeError
+from imukit._arrays import FloatArray, as_float_array, choice, real_scalar, seconds_from_ns, vector3
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
 
 __all__ = ["PreintegratedImu", "ResidualJacobians", "preintegrate", "preintegrate_windows"]
 
 _SCHEMES = ("midpoint", "euler")
+_MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 
 
 class ResidualJacobians(NamedTuple):
@@ -115,8 +116,9 @@ class PreintegratedImu:
         previous one (VINS-Mono's ``push_back``); the window's first sample comes with ``dt=0``.
         """
         a, w = vector3(accel, "accel"), vector3(gyro, "gyro")
-        self._core.integrate_measurement([*a], [*w], float(dt))
-        self._inputs.append((a, w, float(dt)))
+        step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
+        self._core.integrate_measurement([*a], [*w], step)
+        self._inputs.append((a, w, step))
 
     def integrate(self, imu: ImuData) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
@@ -210,6 +212,8 @@ class PreintegratedImu:
         ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb`` with ``δb = bias − integration bias``."""
         r, v, p, _, _, jac = self._state()
         d = jac @ self._bias_change(bias)
+        if not (np.isfinite(d).all() and np.isfinite(np.linalg.norm(d))):
+            raise NonFiniteError(f"bias: too far from the integration bias to correct for: J δb = {d.tolist()}")
         return Rotation.from_matrix(r) * Rotation.from_rotvec(d[0:3]), v + d[3:6], p + d[6:9]
 
     def _deltas(self, bias: ImuBias | None) -> tuple[Rotation, FloatArray, FloatArray, float]:
@@ -340,8 +344,10 @@ def preintegrate_windows(
     like = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme, combined=combined)
     if not isinstance(imu, ImuData):
         raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
-    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
-        raise ParameterError(f"threads: expected a positive int or None, got {threads!r}")
+    if threads is not None and (
+        isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= _MAX_THREADS
+    ):
+        raise ParameterError(f"threads: expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}")
     cores = _windows(imu, boundaries, like, threads=threads or 0)
     b = np.asarray(boundaries)
     return [like._like(core, [_Window(imu, b[m], b[m + 1])]) for m, core in enumerate(cores)]

@@ -23,6 +23,7 @@ Seeded: the same seed gives the same output, whatever the number of cores.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Literal, Union
@@ -33,8 +34,8 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, rotation_from_unit_quat, vector3
-from imukit._errors import ParameterError, ShapeError
+from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
 
@@ -52,6 +53,11 @@ __all__ = [
 ]
 
 _GRAVITY = (0.0, 0.0, -9.81)
+_MAX_SAMPLES = 2**31  # 5 arrays of (n, 3) float64 already need 240 GB
+
+
+def _finite(value: object, name: str) -> float:
+    return real_scalar(value, name, what="a finite number", accept=math.isfinite)
 
 
 def _quat(r: Rotation, name: str) -> list[float]:
@@ -115,7 +121,12 @@ class Helix(_ClosedForm):
     _kind = "helix"
 
     def _params(self) -> list[float]:
-        return [*vector3(self.center, "center"), float(self.radius), float(self.angular_rate), float(self.climb_rate)]
+        return [
+            *vector3(self.center, "center"),
+            _finite(self.radius, "radius"),
+            _finite(self.angular_rate, "angular_rate"),
+            _finite(self.climb_rate, "climb_rate"),
+        ]
 
 
 @dataclass(frozen=True)
@@ -141,9 +152,9 @@ class FigureEight(_ClosedForm):
         return [
             *vector3(self.center, "center"),
             *vector3(self.amplitude, "amplitude"),
-            float(self.angular_rate),
-            float(self.roll),
-            float(self.pitch),
+            _finite(self.angular_rate, "angular_rate"),
+            _finite(self.roll, "roll"),
+            _finite(self.pitch, "pitch"),
         ]
 
 
@@ -164,10 +175,10 @@ class VioEllipse(_ClosedForm):
         return [
             *vector3(self.center, "center"),
             *vector3(self.amplitude, "amplitude"),
-            float(self.angular_rate),
-            float(self.height_frequency),
-            float(self.roll),
-            float(self.pitch),
+            _finite(self.angular_rate, "angular_rate"),
+            _finite(self.height_frequency, "height_frequency"),
+            _finite(self.roll, "roll"),
+            _finite(self.pitch, "pitch"),
         ]
 
 
@@ -192,9 +203,11 @@ class Waypoints:
         t = as_float_array(times, "times")
         if t.ndim != 1 or len(t) < 2 or not np.all(np.diff(t) > 0):
             raise ParameterError(f"times: expected (M,) strictly increasing seconds, M ≥ 2, got {t!r}")
+        check_finite_rows(t, "times")
         p = as_float_array(positions, "positions")
         if p.shape != (len(t), 3):
             raise ShapeError(f"positions: expected shape (M, 3) with M = len(times) = {len(t)}, got {p.shape}")
+        check_finite_rows(p, "positions")
         if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
             raise ShapeError(f"rotations: expected a scipy Rotation of length M = len(times) = {len(t)}")
         self.times = t
@@ -207,7 +220,10 @@ class Waypoints:
                 f"duration: the waypoints span [{self.times[0]}, {self.times[-1]}] s, "
                 f"the simulation [{t[0]}, {t[-1]}] s"
             )
-        rot = self._rotation(t)
+        try:
+            rot = self._rotation(t)
+        except ValueError as e:  # scipy: the spline's rotation vectors overflowed
+            raise NonFiniteError(f"times / rotations: the rotation spline cannot be evaluated ({e})") from None
         accel = self._position(t, 2)
         specific_force = rot.inv().apply(accel - gravity)
         return (
@@ -217,6 +233,12 @@ class Waypoints:
             np.ascontiguousarray(self._rotation(t, 1)),  # scipy's rate is body-frame: R(t)ᵀ Ṙ(t)
             specific_force,
         )
+
+
+def _parameter_names(motion: object) -> list[str]:
+    if dataclasses.is_dataclass(motion):
+        return [f.name for f in dataclasses.fields(motion)]
+    return ["times", "positions", "rotations"]
 
 
 Motion = Union[Static, ConstantTwist, Helix, FigureEight, VioEllipse, Waypoints]
@@ -243,16 +265,14 @@ class SensorErrors:
 
     def __post_init__(self) -> None:
         for name in ("turn_on_sigma", "gauss_markov_sigma", "resolution"):
-            value = float(getattr(self, name))
-            if not (math.isfinite(value) and value >= 0):
-                raise ParameterError(f"{name}: expected a finite, non-negative number, got {value!r}")
+            what = "a finite, non-negative number"
+            real_scalar(getattr(self, name), name, what=what, accept=lambda x: math.isfinite(x) and x >= 0)
         for name in ("gauss_markov_tau", "range"):
-            value = float(getattr(self, name))
-            if not value > 0:
-                raise ParameterError(f"{name}: expected a positive number (inf for none), got {value!r}")
+            real_scalar(getattr(self, name), name, what="a positive number (inf for none)", accept=lambda x: x > 0)
         matrix = as_float_array(self.matrix, "matrix")
         if matrix.shape != (3, 3):
             raise ShapeError(f"matrix: expected shape (3, 3), got {matrix.shape}")
+        check_finite_rows(matrix, "matrix", "row")
 
     @classmethod
     def from_scale_misalignment(cls, scale: ArrayLike, misalignment: ArrayLike, **kwargs: float) -> SensorErrors:
@@ -262,6 +282,7 @@ class SensorErrors:
         m = as_float_array(misalignment, "misalignment")
         if m.shape != (3, 3) or np.any(np.diag(m) != 0.0):
             raise ShapeError(f"misalignment: expected a (3, 3) matrix with a zero diagonal, got {m!r}")
+        check_finite_rows(m, "misalignment", "row")
         return cls(matrix=(np.eye(3) + np.diag(s)) @ (np.eye(3) + m), **kwargs)
 
     def _values(self) -> list[float]:
@@ -300,19 +321,31 @@ def simulate(
     true biases (``gyro_bias``, ``accel_bias``) at every sample. Without ``noise``, ``bias`` and
     errors, the readings are the exact ideal ones.
     """
-    rate_hz, span = float(rate), float(duration)
-    if not (math.isfinite(rate_hz) and rate_hz > 0):
-        raise ParameterError(f"rate: expected a positive, finite rate in Hz, got {rate!r}")
-    if not (math.isfinite(span) and span * rate_hz >= 1):
-        raise ParameterError(f"duration: expected at least one sample interval (1 / rate), got {duration!r}")
+    rate_hz = real_scalar(
+        rate, "rate", what="a positive, finite rate in Hz", accept=lambda x: math.isfinite(x) and x > 0
+    )
+    what = "at least one sample interval (1 / rate)"
+    span = real_scalar(
+        duration, "duration", what=what, accept=lambda x: math.isfinite(x * rate_hz) and x * rate_hz >= 1
+    )
+    begin = _finite(start, "start")
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**64:
         raise ParameterError(f"seed: expected an int in [0, 2**64), got {seed!r}")
     for name, errors in (("gyro_errors", gyro_errors), ("accel_errors", accel_errors)):
         if errors is not None and not isinstance(errors, SensorErrors):
             raise ParameterError(f"{name}: expected an imukit.sim.SensorErrors or None, got {type(errors).__name__}")
     g = vector3(gravity, "gravity")
-    t = float(start) + np.arange(math.floor(span * rate_hz + 1e-9) + 1) / rate_hz
-    position, velocity, quat, gyro, accel = trajectory._truth(t, g)
+    n = math.floor(span * rate_hz + 1e-9) + 1
+    if n > _MAX_SAMPLES:
+        raise ParameterError(f"duration: {duration!r} s at {rate_hz!r} Hz is {n} samples, more than {_MAX_SAMPLES}")
+    t = begin + np.arange(n) / rate_hz
+    if not np.all(t[1:] > t[:-1]):
+        raise ParameterError(f"start: {start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show")
+    truth = trajectory._truth(t, g)
+    if not all(np.isfinite(a).all() for a in truth):
+        names = " / ".join(_parameter_names(trajectory))
+        raise NonFiniteError(f"{names}: the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s")
+    position, velocity, quat, gyro, accel = truth
     n = len(t)
     bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))
     perfect = noise is None and bias is None and gyro_errors is None and accel_errors is None

@@ -13,6 +13,7 @@ covariance             optional ``(M, 15, 15)`` at times ``covariance_t`` (M,) [
 
 from __future__ import annotations
 
+import operator
 import os
 
 import numpy as np
@@ -23,6 +24,7 @@ from imukit._arrays import (
     FloatArray,
     check_finite_rows,
     check_increasing,
+    int64_stamps,
     readonly_array,
     readonly_copy,
     rotation_from_unit_quat,
@@ -34,6 +36,8 @@ __all__ = ["NavState", "Trajectory"]
 
 # Largest |t - t_ns/1e9| accepted when both are given: catches relative-vs-epoch mix-ups.
 _T_NS_TOLERANCE_S = 1e-6
+# Integer stamps whose median step is below this many ns are almost surely not nanoseconds (as in ImuData).
+_MIN_NS_STEP = 1000
 
 
 class NavState:
@@ -221,6 +225,12 @@ class Trajectory:
         """The :class:`NavState` at sample ``k`` (negative counts from the end); needs a velocity."""
         if self.velocity is None:
             raise ParameterError("k: this trajectory has no velocity, so it has no NavState")
+        try:
+            k = operator.index(k)
+        except TypeError:
+            raise ParameterError(f"k: expected an integer sample index, got {k!r}") from None
+        if isinstance(k, bool):
+            raise ParameterError(f"k: expected an integer sample index, got {k!r}")
         n = len(self)
         if not -n <= k < n:
             raise IndexError(f"k: sample {k} out of range for a trajectory of {n} samples")
@@ -257,8 +267,10 @@ def _nanoseconds(t_ns: ArrayLike) -> NDArray[np.int64]:
         raise DTypeError(f"t_ns: expected integer nanoseconds, got an array of dtype {raw.dtype}")
     if raw.ndim != 1 or len(raw) == 0:
         raise ShapeError(f"t_ns: expected shape (N,) with N ≥ 1, got {raw.shape}")
-    if raw.dtype.kind == "u" and raw.max() > np.iinfo(np.int64).max:
-        raise ParameterError(f"t_ns: integer nanoseconds exceed the int64 range (max {raw.max()})")
-    stamps = raw.astype(np.int64)
-    check_increasing(stamps, "t_ns", "ns")
+    stamps = int64_stamps(raw, "t_ns")
+    if len(stamps) > 1 and np.median(np.diff(stamps)) < _MIN_NS_STEP:
+        raise ParameterError(
+            f"t_ns: the median step is {np.median(np.diff(stamps))} ns; expected integer nanoseconds "
+            f"(steps of at least {_MIN_NS_STEP} ns), not seconds or sample indices"
+        )
     return stamps

@@ -14,7 +14,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, choice, readonly_copy, rotation_from_unit_quat, vector3
+from imukit._arrays import (
+    FloatArray,
+    as_float_array,
+    check_finite_rows,
+    choice,
+    readonly_copy,
+    rotation_from_unit_quat,
+    vector3,
+)
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
@@ -110,6 +118,7 @@ def propagate(
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
     if p0.shape != (15, 15):
         raise ShapeError(f"covariance: expected shape (15, 15), got {p0.shape}")
+    check_finite_rows(p0, "covariance", "row")
     try:
         every = operator.index(covariance_every)
     except TypeError:

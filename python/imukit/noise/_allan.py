@@ -59,6 +59,12 @@ def _cluster_sizes(taus: ArrayLike | None, rate: float, n: int) -> list[int]:
         raise ParameterError(f"taus: expected positive, finite seconds, got taus[{k}] = {float(t[k])!r}")
     m = t * rate
     whole = np.rint(m)
+    small = np.flatnonzero(whole < 1)
+    if small.size:
+        k = int(small[0])
+        raise ParameterError(
+            f"taus: taus[{k}] = {float(t[k])!r} s is shorter than one sample (1/rate = {1.0 / rate!r} s)"
+        )
     off = np.flatnonzero(np.abs(m - whole) > 1e-9 * np.maximum(whole, 1.0))
     if off.size:
         k = int(off[0])

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike
 from scipy import linalg, optimize, signal, stats
 
 from imukit._arrays import FloatArray, as_float_array
-from imukit._errors import ParameterError
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuNoise, _number
 from imukit.noise._allan import AllanDeviation
 
@@ -114,6 +114,9 @@ class AllanFit:
     def components(self, taus: ArrayLike) -> FloatArray:
         """``(M, 3)`` deviations of the white, flicker and random-walk terms alone at ``taus`` [s]."""
         t = as_float_array(taus, "taus").reshape(-1)
+        bad = np.flatnonzero(~(np.isfinite(t) & (t > 0.0)))
+        if bad.size:
+            raise ParameterError(f"taus: expected positive, finite seconds, got {float(t[bad[0]])!r} at index {bad[0]}")
         theta = np.array([self.noise_density, self.bias_instability, self.random_walk]) ** 2
         return np.asarray(np.sqrt(_design(t) * theta), dtype=np.float64)
 
@@ -179,8 +182,7 @@ def fit_allan(
     Student's with dof when scaled) clipped at 0; its end points, square-rooted, bound N, B and
     K (square root is monotone, so coverage carries over, and a term at 0 gets ``[0, …]``).
     """
-    if not isinstance(allan, AllanDeviation):
-        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+    allan = _checked(allan)
     if sensor is not None and sensor not in _SENSORS:
         raise ParameterError(f"sensor: expected one of {_SENSORS} or None, got {sensor!r}")
     if not (isinstance(confidence, (float, int)) and 0.0 < confidence < 1.0):
@@ -244,6 +246,32 @@ def fit_allan(
         dof=dof,
         taus=taus.copy(),
     )
+
+
+def _checked(allan: object) -> AllanDeviation:
+    """``allan`` with float64 ``taus`` (M,) > 0 and ``deviation`` (M,) or (M, C) ≥ 0 whose squares are
+    finite, and ``clusters`` (M,) ≥ 1: a record built by hand is checked as allan_deviation's input is."""
+    if not isinstance(allan, AllanDeviation):
+        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+    taus = as_float_array(allan.taus, "allan.taus")
+    if taus.ndim != 1 or not (np.isfinite(taus).all() and (taus > 0).all()):
+        raise ParameterError(f"allan.taus: expected (M,) positive, finite seconds, got {allan.taus!r}")
+    rate = _number(allan.rate, "allan.rate", positive=True, what="a positive, finite sample rate in Hz")
+    if not (np.rint(taus * rate) >= 1).all():
+        raise ParameterError(f"allan.taus: expected τ of at least one sample (1/rate), got {allan.taus!r}")
+    dev = as_float_array(allan.deviation, "allan.deviation")
+    if dev.ndim not in (1, 2) or len(dev) != len(taus):
+        raise ShapeError(
+            f"allan.deviation: expected shape (M,) or (M, C) with M = len(taus) = {len(taus)}, got {dev.shape}"
+        )
+    with np.errstate(over="ignore"):
+        squares_finite = np.isfinite(dev * dev).all()
+    if not (squares_finite and (dev >= 0).all()):
+        raise NonFiniteError("allan.deviation: expected non-negative values whose squares are finite")
+    clusters = np.asarray(allan.clusters)
+    if clusters.shape != taus.shape or clusters.dtype.kind not in "iu" or not (clusters >= 1).all():
+        raise ParameterError(f"allan.clusters: expected (M,) integers ≥ 1, got {allan.clusters!r}")
+    return allan._replace(taus=taus, deviation=dev)
 
 
 def _bound(value: object, name: str) -> float:

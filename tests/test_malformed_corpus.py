@@ -1,0 +1,1005 @@
+"""Malformed-input corpus (issue 9): every public entry point that takes arrays, timestamps or
+numeric options, driven with NaN, ±inf, subnormals, 1e300, empty and one-sample input, wrong
+shapes and dtypes, odd memory layouts and broken timestamps (tests/malformed_strategies.py).
+
+Each case must give the clean copy's exact result (valid odd layouts), or raise an
+``imukit.ImukitError`` whose message starts with the argument's name, and never a panic or a NaN
+from finite input. :func:`test_corpus_covers_every_public_entry_point` fails when a public
+function or method has no entry here. The case count is printed in the pytest summary.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import types
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+from imukit import filters, noise, sim
+from malformed_strategies import STATS, Arg, Entry, check_case, check_clean, mutations_of
+
+EXAMPLES = 200  # hypothesis examples per entry point; each runs one or two calls
+
+# ----------------------------------------------------------------------------- drawing valid calls
+
+
+def batch(rng: np.random.Generator, tail: tuple[int, ...]) -> np.ndarray:
+    lead = [(), (int(rng.integers(1, 5)),), (2, int(rng.integers(1, 4)))][int(rng.integers(3))]
+    return rng.standard_normal((*lead, *tail))
+
+
+def rotation_matrices(rng: np.random.Generator) -> np.ndarray:
+    lead = int(rng.integers(1, 5))
+    return Rotation.random(lead, rng=rng).as_matrix()
+
+
+def stamps(rng: np.random.Generator, n: int) -> np.ndarray:
+    return float(rng.uniform(0.0, 100.0)) + np.cumsum(rng.uniform(0.004, 0.006, n))
+
+
+def imu_values(rng: np.random.Generator, n: int | None = None) -> dict[str, Any]:
+    n = n or int(rng.integers(4, 12))
+    return {
+        "t": stamps(rng, n),
+        "gyro": 0.5 * rng.standard_normal((n, 3)),
+        "accel": np.array([0.0, 0.0, 9.81]) + 0.5 * rng.standard_normal((n, 3)),
+    }
+
+
+# A broken t may be reported on the arrays whose length it fixes; an overflow while integrating on
+# the ImuData (the entry points' ``imu`` argument) and the bias together.
+IMU_ARGS = {
+    "t": Arg("times", names=("t", "gyro", "accel")),
+    "gyro": Arg("array", names=("gyro", "imu")),
+    "accel": Arg("array", names=("accel", "imu")),
+}
+
+
+def imu_of(v: dict[str, Any]) -> ik.ImuData:
+    return ik.ImuData(v["t"], v["gyro"], v["accel"])
+
+
+def state_values(rng: np.random.Generator, suffix: str = "") -> dict[str, Any]:
+    return {
+        "position" + suffix: rng.standard_normal(3),
+        "velocity" + suffix: rng.standard_normal(3),
+        "rotation" + suffix: Rotation.random(rng=rng),
+    }
+
+
+def state_args(suffix: str = "") -> dict[str, Arg]:
+    return {
+        "position" + suffix: Arg("array", names=("position",)),
+        "velocity" + suffix: Arg("array", names=("velocity",)),
+        "rotation" + suffix: Arg("rotation", names=("rotation",)),
+    }
+
+
+def state_of(v: dict[str, Any], suffix: str = "") -> ik.NavState:
+    return ik.NavState(v["position" + suffix], v["velocity" + suffix], v["rotation" + suffix])
+
+
+def bias_values(rng: np.random.Generator) -> dict[str, Any]:
+    return {"bias_gyro": 0.01 * rng.standard_normal(3), "bias_accel": 0.1 * rng.standard_normal(3)}
+
+
+BIAS_ARGS = {"bias_gyro": Arg("array", names=("gyro", "bias")), "bias_accel": Arg("array", names=("accel", "bias"))}
+
+
+def bias_of(v: dict[str, Any]) -> ik.ImuBias:
+    return ik.ImuBias(v["bias_gyro"], v["bias_accel"])
+
+
+NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+
+
+# ----------------------------------------------------------------------------- the entries
+
+ENTRIES: list[Entry] = []
+
+
+def entry(name: str, covers: tuple[str, ...], args: dict[str, Arg], **options: Any) -> Callable[..., Any]:
+    """Register ``make`` (decorated) and ``call`` (its return value's "call") as one entry."""
+
+    def register(make: Callable[[np.random.Generator], tuple[dict[str, Any], Callable[[dict[str, Any]], Any]]]) -> Any:
+        def make_values(rng: np.random.Generator) -> dict[str, Any]:
+            return make(rng)[0]
+
+        def call(v: dict[str, Any]) -> Any:
+            return v["__call__"](v)
+
+        def make_with_call(rng: np.random.Generator) -> dict[str, Any]:
+            values, fn = make(rng)
+            return {**values, "__call__": fn}
+
+        ENTRIES.append(Entry(name, covers, make_with_call, call, args, **options))
+        return make_values
+
+    return register
+
+
+def batched_entry(module: types.ModuleType, fn_name: str, arg: str, tail: tuple[int, ...], **kw: Any) -> None:
+    fn = getattr(module, fn_name)
+    qual = f"{module.__name__.removeprefix('imukit.')}.{fn_name}"
+
+    def make(rng: np.random.Generator) -> tuple[dict[str, Any], Callable[[dict[str, Any]], Any]]:
+        value = rotation_matrices(rng) if tail == (3, 3) and fn_name in ("log", "from_rotation") else batch(rng, tail)
+        options = {k: (draw(rng) if callable(draw) else draw) for k, draw in kw.items()}
+        return {arg: value}, lambda v: fn(v[arg], **options)
+
+    entry(qual + (f"[{', '.join(kw)}]" if kw else ""), (qual,), {arg: Arg("batch", tail)})(make)
+
+
+def _flag(rng: np.random.Generator) -> bool:
+    return bool(rng.integers(2))
+
+
+for _name in ("hat", "exp", "right_jacobian", "right_jacobian_inv", "left_jacobian", "left_jacobian_inv"):
+    batched_entry(ik.so3, _name, "phi", (3,))
+batched_entry(ik.so3, "vee", "matrix", (3, 3))
+batched_entry(ik.so3, "log", "rotation", (3, 3))
+for _name in ("conjugate", "inverse", "normalize", "log"):
+    batched_entry(ik.quat, _name, "q", (4,), scalar_first=_flag)
+batched_entry(ik.quat, "exp", "phi", (3,), scalar_first=_flag)
+batched_entry(ik.quat, "left_matrix", "q", (4,), scalar_first=_flag, convention="jpl")
+batched_entry(ik.quat, "right_matrix", "p", (4,), scalar_first=_flag)
+batched_entry(ik.quat, "omega_matrix", "w", (3,), scalar_first=_flag, convention="jpl")
+batched_entry(ik.euler, "to_rotation", "angles", (3,), degrees=_flag)
+batched_entry(ik.euler, "from_rotation", "rotation", (3, 3), degrees=_flag)
+batched_entry(ik.euler, "rate_matrix_inv", "angles", (3,), degrees=_flag)
+
+
+@entry("quat.multiply", ("quat.multiply",), {"q": Arg("batch", (4,)), "p": Arg("batch", (4,))})
+def _multiply(rng: np.random.Generator) -> Any:
+    q = batch(rng, (4,))
+    conv, sf = ("hamilton", "jpl")[int(rng.integers(2))], _flag(rng)
+    return {"q": q, "p": rng.standard_normal(q.shape)}, lambda v: ik.quat.multiply(
+        v["q"], v["p"], convention=conv, scalar_first=sf
+    )
+
+
+@entry("quat.rotate", ("quat.rotate",), {"q": Arg("batch", (4,)), "v": Arg("batch", (3,))})
+def _rotate(rng: np.random.Generator) -> Any:
+    q = batch(rng, (4,))
+    return {"q": q, "v": rng.standard_normal((*q.shape[:-1], 3))}, lambda v: ik.quat.rotate(v["q"], v["v"])
+
+
+@entry("euler.rate_matrix", ("euler.rate_matrix",), {"angles": Arg("batch", (3,)), "tolerance_rad": Arg("scalar")})
+def _rate_matrix(rng: np.random.Generator) -> Any:
+    return {"angles": 0.5 * batch(rng, (3,)), "tolerance_rad": 1e-6}, lambda v: ik.euler.rate_matrix(
+        v["angles"], tolerance_rad=v["tolerance_rad"]
+    )
+
+
+@entry(
+    "integrate_attitude",
+    ("integrate_attitude",),
+    {
+        "t": Arg("times", names=("t", "gyro")),
+        "gyro": Arg("array"),
+        "initial": Arg("rotation", optional=True),
+        "gimbal_tolerance_rad": Arg("scalar"),
+    },
+)
+def _integrate_attitude(rng: np.random.Generator) -> Any:
+    v = imu_values(rng)
+    scheme = ik.attitude.SCHEMES[int(rng.integers(5))]
+    rep = (
+        ("quaternion", "matrix", "euler")[int(rng.integers(3))] if scheme in ("euler", "midpoint", "rk4") else "matrix"
+    )
+    final = _flag(rng)
+    values = {"t": v["t"], "gyro": v["gyro"], "initial": Rotation.random(rng=rng), "gimbal_tolerance_rad": 1e-6}
+    return values, lambda v: ik.integrate_attitude(
+        v["t"],
+        v["gyro"],
+        initial=v["initial"],
+        scheme=scheme,
+        representation=rep,
+        final_only=final,
+        gimbal_tolerance_rad=v["gimbal_tolerance_rad"],
+    )
+
+
+@entry("ImuData", ("ImuData",), {**IMU_ARGS, "max_gap": Arg("scalar", optional=True, names=("max_gap", "t"))})
+def _imu_data(rng: np.random.Generator) -> Any:
+    v = imu_values(rng)
+    return {**v, "max_gap": 1.0}, lambda v: ik.ImuData(v["t"], v["gyro"], v["accel"], max_gap=v["max_gap"])
+
+
+@entry("ImuBias", ("ImuBias",), BIAS_ARGS)
+def _imu_bias(rng: np.random.Generator) -> Any:
+    return bias_values(rng), bias_of
+
+
+_NOISE_KEYS = ("gyro_density", "accel_density", "gyro_random_walk", "accel_random_walk")
+
+
+@entry("ImuNoise", ("ImuNoise", "ImuNoise.from_kalibr"), {k: Arg("scalar") for k in _NOISE_KEYS})
+def _imu_noise(rng: np.random.Generator) -> Any:
+    kalibr = (
+        "gyroscope_noise_density",
+        "accelerometer_noise_density",
+        "gyroscope_random_walk",
+        "accelerometer_random_walk",
+    )
+
+    def call(v: dict[str, Any]) -> Any:
+        return ik.ImuNoise(**{k: v[k] for k in _NOISE_KEYS}), ik.ImuNoise.from_kalibr(
+            **{name: v[k] for name, k in zip(kalibr, _NOISE_KEYS)}
+        )
+
+    return {k: float(rng.uniform(0, 1e-2)) for k in _NOISE_KEYS}, call
+
+
+@entry(
+    "ImuNoise.from_discrete / to_discrete_sigmas / discrete",
+    ("ImuNoise.from_discrete", "ImuNoise.to_discrete_sigmas", "ImuNoise.discrete"),
+    {"gyro_sigma": Arg("scalar", names=("gyro_sigma", "gyro_density")), "rate_hz": Arg("scalar"), "dt": Arg("scalar")},
+)
+def _imu_noise_discrete(rng: np.random.Generator) -> Any:
+    def call(v: dict[str, Any]) -> Any:
+        n = ik.ImuNoise.from_discrete(
+            gyro_sigma=v["gyro_sigma"],
+            accel_sigma=0.03,
+            gyro_walk_sigma=1e-6,
+            accel_walk_sigma=2e-4,
+            rate_hz=v["rate_hz"],
+        )
+        return n, n.to_discrete_sigmas(v["rate_hz"]), n.discrete(v["dt"])
+
+    return {"gyro_sigma": 2.4e-3, "rate_hz": 200.0, "dt": 0.005}, call
+
+
+@entry("NavState", ("NavState",), state_args())
+def _nav_state(rng: np.random.Generator) -> Any:
+    return state_values(rng), state_of
+
+
+@entry(
+    "Trajectory",
+    ("Trajectory", "Trajectory.state"),
+    {
+        "t": Arg("times"),
+        "position": Arg("array"),
+        "velocity": Arg("array", optional=True),
+        "rotation": Arg("rotations"),
+        "covariance": Arg("array", optional=True),
+        "covariance_t": Arg("times", optional=True, names=("covariance_t", "covariance")),
+        "gyro_bias": Arg("array", optional=True),
+        "accel_bias": Arg("array", optional=True),
+        "k": Arg("int", index=True),
+    },
+)
+def _trajectory(rng: np.random.Generator) -> Any:
+    n = int(rng.integers(2, 8))
+    t = stamps(rng, n)
+    a = rng.standard_normal((n, 15, 15))
+    values = {
+        "t": t,
+        "position": rng.standard_normal((n, 3)),
+        "velocity": rng.standard_normal((n, 3)),
+        "rotation": Rotation.random(n, rng=rng),
+        "covariance": a @ np.swapaxes(a, 1, 2),
+        "covariance_t": t.copy(),
+        "gyro_bias": rng.standard_normal((n, 3)),
+        "accel_bias": rng.standard_normal((n, 3)),
+        "k": int(rng.integers(-n, n)),
+    }
+
+    def call(v: dict[str, Any]) -> Any:
+        traj = ik.Trajectory(
+            v["t"],
+            v["position"],
+            v["velocity"],
+            v["rotation"],
+            covariance=v["covariance"],
+            covariance_t=v["covariance_t"],
+            gyro_bias=v["gyro_bias"],
+            accel_bias=v["accel_bias"],
+        )
+        return traj, traj.state(v["k"])
+
+    return values, call
+
+
+@entry(
+    "Trajectory(t=None, t_ns=...)", ("Trajectory",), {"t_ns": Arg("times", names=("t_ns", "t"))}, clean_is_valid=False
+)
+def _trajectory_ns(rng: np.random.Generator) -> Any:
+    n = int(rng.integers(2, 8))
+    position, rotation = rng.standard_normal((n, 3)), Rotation.random(n, rng=rng)
+    # Float stamps are mutated into integer ones (and back): every float here must be refused.
+    return {"t_ns": stamps(rng, n)}, lambda v: ik.Trajectory(None, position, None, rotation, t_ns=v["t_ns"])
+
+
+def _strapdown_values(rng: np.random.Generator) -> dict[str, Any]:
+    return {**imu_values(rng), **state_values(rng), **bias_values(rng), "gravity": np.array([0.0, 0.0, -9.81])}
+
+
+_STRAPDOWN_ARGS = {**IMU_ARGS, **state_args(), **BIAS_ARGS, "gravity": Arg("array")}
+
+
+@entry("integrate", ("integrate",), _STRAPDOWN_ARGS)
+def _integrate(rng: np.random.Generator) -> Any:
+    scheme = ik.strapdown.SCHEMES[int(rng.integers(4))]
+    return _strapdown_values(rng), lambda v: ik.integrate(
+        imu_of(v), initial=state_of(v), gravity=v["gravity"], bias=bias_of(v), scheme=scheme
+    )
+
+
+@entry(
+    "propagate",
+    ("propagate",),
+    {**_STRAPDOWN_ARGS, "covariance": Arg("array"), "covariance_every": Arg("int"), "noise": Arg("object")},
+)
+def _propagate(rng: np.random.Generator) -> Any:
+    scheme = ik.strapdown.SCHEMES[int(rng.integers(4))]
+    values = {**_strapdown_values(rng), "covariance": np.eye(15) * 1e-4, "covariance_every": 2, "noise": NOISE}
+    return values, lambda v: ik.propagate(
+        imu_of(v),
+        initial=state_of(v),
+        covariance=v["covariance"],
+        noise=v["noise"],
+        bias=bias_of(v),
+        gravity=v["gravity"],
+        scheme=scheme,
+        covariance_every=v["covariance_every"],
+    )
+
+
+_PREINT_ARGS = {**IMU_ARGS, **BIAS_ARGS, "gravity": Arg("array"), "noise": Arg("object")}
+
+
+def _preint_values(rng: np.random.Generator) -> dict[str, Any]:
+    return {**imu_values(rng), **bias_values(rng), "gravity": np.array([0.0, 0.0, -9.81]), "noise": NOISE}
+
+
+def _pim(v: dict[str, Any], scheme: str, combined: bool) -> ik.PreintegratedImu:
+    return ik.PreintegratedImu(
+        noise=v["noise"], bias=bias_of(v), gravity=v["gravity"], scheme=scheme, combined=combined
+    )
+
+
+@entry("preintegrate", ("preintegrate", "PreintegratedImu", "PreintegratedImu.integrate"), _PREINT_ARGS)
+def _preintegrate(rng: np.random.Generator) -> Any:
+    scheme, combined = ("midpoint", "euler")[int(rng.integers(2))], _flag(rng)
+    return _preint_values(rng), lambda v: ik.preintegrate(
+        imu_of(v), noise=v["noise"], bias=bias_of(v), gravity=v["gravity"], scheme=scheme, combined=combined
+    )
+
+
+@entry(
+    "preintegrate_windows",
+    ("preintegrate_windows",),
+    {
+        **_PREINT_ARGS,
+        "t": Arg("times", names=("t", "gyro", "accel", "boundaries")),
+        "boundaries": Arg("array", free_length=True),
+        "threads": Arg("int", optional=True),
+    },
+)
+def _preintegrate_windows(rng: np.random.Generator) -> Any:
+    v = _preint_values(rng)
+    t = v["t"]
+    m = int(rng.integers(2, 5))
+    boundaries = np.sort(rng.uniform(t[0], t[-1], m))
+    boundaries[0], boundaries[-1] = t[0], t[-1]
+    scheme = ("midpoint", "euler")[int(rng.integers(2))]
+    return {**v, "boundaries": np.unique(boundaries), "threads": 1}, lambda v: ik.preintegrate_windows(
+        imu_of(v),
+        v["boundaries"],
+        noise=v["noise"],
+        bias=bias_of(v),
+        gravity=v["gravity"],
+        scheme=scheme,
+        threads=v["threads"],
+    )
+
+
+@entry(
+    "PreintegratedImu.integrate_measurement",
+    ("PreintegratedImu.integrate_measurement",),
+    {"m_accel": Arg("array", names=("accel",)), "m_gyro": Arg("array", names=("gyro",)), "dt": Arg("scalar")},
+)
+def _integrate_measurement(rng: np.random.Generator) -> Any:
+    scheme = ("midpoint", "euler")[int(rng.integers(2))]
+
+    def call(v: dict[str, Any]) -> Any:
+        pim = ik.PreintegratedImu(noise=NOISE, scheme=scheme, combined=True)
+        pim.integrate_measurement([0.0, 0.0, 9.81], [0.1, 0.0, 0.0], 0.0 if scheme == "midpoint" else 0.005)
+        pim.integrate_measurement(v["m_accel"], v["m_gyro"], v["dt"])
+        return pim
+
+    return {"m_accel": rng.standard_normal(3), "m_gyro": rng.standard_normal(3), "dt": 0.005}, call
+
+
+def _preint_method_values(rng: np.random.Generator) -> dict[str, Any]:
+    return {**_preint_values(rng), **state_values(rng, "_i"), **state_values(rng, "_j"), **bias_values(rng)}
+
+
+_METHOD_ARGS = {**state_args("_i"), **state_args("_j"), **BIAS_ARGS}
+
+
+@entry(
+    "PreintegratedImu methods",
+    (
+        "PreintegratedImu.reintegrate",
+        "PreintegratedImu.merge",
+        "PreintegratedImu.corrected",
+        "PreintegratedImu.predict",
+        "PreintegratedImu.residual",
+        "PreintegratedImu.residual_jacobians",
+    ),
+    {**_METHOD_ARGS, "other": Arg("object")},
+)
+def _preint_methods(rng: np.random.Generator) -> Any:
+    values = _preint_method_values(rng)
+    imu = imu_of(values)
+    scheme = ("midpoint", "euler")[int(rng.integers(2))]
+    half = len(imu) // 2
+    pim = ik.preintegrate(imu[: half + 1], noise=NOISE, scheme=scheme)
+    second = ik.preintegrate(imu[half:], noise=NOISE, scheme=scheme)  # starts with pim's last sample
+
+    def call(v: dict[str, Any]) -> Any:
+        bias, s_i, s_j = bias_of(v), state_of(v, "_i"), state_of(v, "_j")
+        return (
+            pim.reintegrate(bias),
+            pim.merge(v["other"]),
+            pim.corrected(bias),
+            pim.predict(s_i, bias),
+            pim.residual(s_i, s_j, bias),
+            pim.residual_jacobians(s_i, s_j, bias),
+        )
+
+    return {**values, "other": second}, call
+
+
+# -- simulation
+
+
+def _simulate(motion: Callable[[dict[str, Any]], Any], v: dict[str, Any], **kw: Any) -> Any:
+    return sim.simulate(motion(v), rate=50.0, duration=0.2, **kw)
+
+
+_ROT = Rotation.from_rotvec([0.1, -0.2, 0.3])
+
+
+@entry("sim.Static", ("sim.Static",), {"position": Arg("array"), "rotation": Arg("rotation")})
+def _static(rng: np.random.Generator) -> Any:
+    return {"position": rng.standard_normal(3), "rotation": Rotation.random(rng=rng)}, lambda v: _simulate(
+        lambda v: sim.Static(v["position"], v["rotation"]), v
+    )
+
+
+@entry(
+    "sim.ConstantTwist",
+    ("sim.ConstantTwist",),
+    {"body_velocity": Arg("array"), "body_rate": Arg("array"), "position": Arg("array"), "rotation": Arg("rotation")},
+)
+def _twist(rng: np.random.Generator) -> Any:
+    values = {
+        "body_velocity": rng.standard_normal(3),
+        "body_rate": rng.standard_normal(3),
+        "position": rng.standard_normal(3),
+        "rotation": Rotation.random(rng=rng),
+    }
+    return values, lambda v: _simulate(
+        lambda v: sim.ConstantTwist(v["body_velocity"], v["body_rate"], v["position"], v["rotation"]), v
+    )
+
+
+for _cls in (sim.Helix, sim.Circle):
+
+    @entry(
+        f"sim.{_cls.__name__}",
+        (f"sim.{_cls.__name__}",),
+        {"radius": Arg("scalar"), "angular_rate": Arg("scalar"), "climb_rate": Arg("scalar"), "center": Arg("array")},
+    )
+    def _helix(rng: np.random.Generator, cls: Any = _cls) -> Any:
+        values = {"radius": 5.0, "angular_rate": 0.5, "climb_rate": 0.2, "center": rng.standard_normal(3)}
+        return values, lambda v: _simulate(
+            lambda v: cls(
+                radius=v["radius"], angular_rate=v["angular_rate"], climb_rate=v["climb_rate"], center=v["center"]
+            ),
+            v,
+        )
+
+
+def periodic_motion_entry(cls: type, amplitude: tuple[float, ...], scalars: dict[str, float]) -> None:
+    """FigureEight and VioEllipse: an amplitude and a center vector plus scalar parameters."""
+
+    def make(rng: np.random.Generator) -> Any:
+        values = {"amplitude": np.array(amplitude), "center": rng.standard_normal(3), **scalars}
+        return values, lambda v: _simulate(lambda v: cls(**{k: v[k] for k in ("amplitude", "center", *scalars)}), v)
+
+    args = {"amplitude": Arg("array"), "center": Arg("array"), **{k: Arg("scalar") for k in scalars}}
+    entry(f"sim.{cls.__name__}", (f"sim.{cls.__name__}",), args)(make)
+
+
+periodic_motion_entry(sim.FigureEight, (10.0, 5.0, 1.0), {"angular_rate": 0.2, "roll": 0.3, "pitch": 0.2})
+periodic_motion_entry(
+    sim.VioEllipse, (15.0, 20.0, 1.0), {"angular_rate": 0.3, "height_frequency": 10.0, "roll": 0.1, "pitch": 0.2}
+)
+
+
+@entry(
+    "sim.Waypoints",
+    ("sim.Waypoints",),
+    {"times": Arg("times", names=("times", "duration")), "positions": Arg("array"), "rotations": Arg("rotations")},
+)
+def _waypoints(rng: np.random.Generator) -> Any:
+    m = int(rng.integers(2, 6))
+    times = np.linspace(0.0, 1.0, m) + np.r_[0.0, rng.uniform(-0.02, 0.02, m - 2), 0.0]
+    values = {
+        "times": times,
+        "positions": rng.standard_normal((len(times), 3)),
+        "rotations": Rotation.random(len(times), rng=rng),
+    }
+    return values, lambda v: _simulate(lambda v: sim.Waypoints(v["times"], v["positions"], v["rotations"]), v)
+
+
+_SENSOR = ("turn_on_sigma", "gauss_markov_sigma", "gauss_markov_tau", "range", "resolution")
+
+
+@entry(
+    "sim.simulate with SensorErrors",
+    ("sim.simulate", "sim.SensorErrors", "sim.SensorErrors.from_scale_misalignment"),
+    {
+        "rate": Arg("scalar", names=("rate", "duration")),
+        "duration": Arg("scalar"),
+        "start": Arg("scalar"),
+        "seed": Arg("int"),
+        "gravity": Arg("array"),
+        "matrix": Arg("array"),
+        "scale": Arg("array"),
+        "misalignment": Arg("array"),
+        "noise": Arg("object", optional=True),
+        **BIAS_ARGS,
+        **{k: Arg("scalar", names=(k, "gyro_errors")) for k in _SENSOR},
+    },
+)
+def _simulate_errors(rng: np.random.Generator) -> Any:
+    mis = 1e-3 * rng.standard_normal((3, 3))
+    np.fill_diagonal(mis, 0.0)
+    values = {
+        "rate": 50.0,
+        "duration": 0.2,
+        "start": float(rng.uniform(0, 10)),
+        "seed": int(rng.integers(2**32)),
+        "gravity": np.array([0.0, 0.0, -9.81]),
+        "matrix": np.eye(3) + 1e-3 * rng.standard_normal((3, 3)),
+        "scale": 1e-3 * rng.standard_normal(3),
+        "misalignment": mis,
+        "noise": NOISE,
+        **bias_values(rng),
+        "turn_on_sigma": 1e-3,
+        "gauss_markov_sigma": 1e-3,
+        "gauss_markov_tau": 10.0,
+        "range": 20.0,
+        "resolution": 1e-4,
+    }
+
+    def call(v: dict[str, Any]) -> Any:
+        gyro_errors = sim.SensorErrors(matrix=v["matrix"], **{k: v[k] for k in _SENSOR})
+        accel_errors = sim.SensorErrors.from_scale_misalignment(v["scale"], v["misalignment"])
+        return sim.simulate(
+            sim.Helix(),
+            rate=v["rate"],
+            duration=v["duration"],
+            noise=v["noise"],
+            bias=bias_of(v),
+            gyro_errors=gyro_errors,
+            accel_errors=accel_errors,
+            gravity=v["gravity"],
+            seed=v["seed"],
+            start=v["start"],
+        )
+
+    return values, call
+
+
+# -- noise
+
+
+@entry(
+    "noise.allan_deviation",
+    ("noise.allan_deviation",),
+    {
+        "x": Arg("signal"),
+        "rate": Arg("scalar", names=("rate", "taus")),
+        "taus": Arg("array", optional=True, free_length=True),
+    },
+)
+def _allan(rng: np.random.Generator) -> Any:
+    n = int(rng.integers(8, 40))
+    x = rng.standard_normal((n, int(rng.integers(1, 4)))) if _flag(rng) else rng.standard_normal(n)
+    taus = np.array([1.0, 2.0]) / 10.0
+    overlapping = _flag(rng)
+    return {"x": x, "rate": 10.0, "taus": taus}, lambda v: noise.allan_deviation(
+        v["x"], v["rate"], taus=v["taus"], overlapping=overlapping
+    )
+
+
+def _allan_result(rng: np.random.Generator) -> noise.AllanDeviation:
+    return noise.allan_deviation(rng.standard_normal((400, 2)), 100.0)
+
+
+@entry(
+    "noise.fit_allan",
+    (
+        "noise.fit_allan",
+        "noise.AllanDeviation",
+        "noise.AllanFit.variance",
+        "noise.AllanFit.deviation",
+        "noise.AllanFit.components",
+        "noise.to_imu_noise",
+    ),
+    {
+        "deviation": Arg("array", names=("allan",)),
+        "taus": Arg("array", names=("allan",)),
+        "confidence": Arg("scalar"),
+        "tau_min": Arg("scalar", optional=True, names=("tau_min", "allan")),
+        "tau_max": Arg("scalar", optional=True, names=("tau_max", "allan")),
+        "eval_taus": Arg("array", free_length=True, names=("taus",)),
+        "gyro": Arg("object"),
+    },
+    examples=60,  # each fit iterates a weighted least squares
+)
+def _fit_allan(rng: np.random.Generator) -> Any:
+    allan = _allan_result(rng)
+    gyro_fit = noise.fit_allan(allan, sensor="gyro")
+
+    def call(v: dict[str, Any]) -> Any:
+        a = allan._replace(deviation=v["deviation"], taus=v["taus"])
+        fit = noise.fit_allan(a, sensor="accel", confidence=v["confidence"], tau_min=v["tau_min"], tau_max=v["tau_max"])
+        taus = v["eval_taus"]
+        return (
+            fit,
+            fit.variance(taus),
+            fit.deviation(taus),
+            fit.components(taus),
+            noise.to_imu_noise(gyro=v["gyro"], accel=fit),
+        )
+
+    values = {
+        "deviation": allan.deviation,
+        "taus": allan.taus,
+        "confidence": 0.9,
+        "tau_min": None,
+        "tau_max": None,
+        "eval_taus": np.array([0.01, 0.5, 2.0]),
+        "gyro": gyro_fit,
+    }
+    return values, call
+
+
+@entry(
+    "noise.plot_allan",
+    ("noise.plot_allan",),
+    {"allan": Arg("object"), "fit": Arg("object", optional=True)},
+    examples=6,  # matplotlib draws each in 0.1 s
+)
+def _plot_allan(rng: np.random.Generator) -> Any:
+    allan = _allan_result(rng)
+    path = Path(__import__("tempfile").mkdtemp()) / "allan.png"
+    return {"allan": allan, "fit": noise.fit_allan(allan)}, lambda v: noise.plot_allan(v["allan"], path, fit=v["fit"])
+
+
+# -- filters
+
+
+def _filter(kind: str, v: dict[str, Any]) -> filters.Mahony | filters.Madgwick:
+    options = {
+        "gravity": v["f_gravity"],
+        "gain_ramp": filters.GainRamp(v["ramp_duration_s"], v["ramp_factor"]),
+        "acc_rejection": filters.AccelRejection(v["acc_norm"], v["acc_angle_rad"], v["acc_recovery_s"]),
+        "mag_rejection": filters.MagRejection(v["mag_norm_fraction"], v["mag_dip_rad"], v["mag_recovery_s"]),
+        "rest_detection": filters.RestDetection(v["rest_gyro"], v["rest_accel"], v["rest_duration_s"], v["rest_tau_s"]),
+    }
+    if kind == "mahony":
+        return filters.Mahony(kp=v["gain"], ki=v["ki"], **options)
+    return filters.Madgwick(beta=v["gain"], **options)
+
+
+_FILTER_SCALARS = {
+    "gain": 0.5,
+    "ki": 0.01,
+    "f_gravity": 9.81,
+    "ramp_duration_s": 3.0,
+    "ramp_factor": 10.0,
+    "acc_norm": 4.0,
+    "acc_angle_rad": 0.5,
+    "acc_recovery_s": 5.0,
+    "mag_norm_fraction": 0.1,
+    "mag_dip_rad": 0.17,
+    "mag_recovery_s": 10.0,
+    "rest_gyro": 0.05,
+    "rest_accel": 0.2,
+    "rest_duration_s": 1.0,
+    "rest_tau_s": 1.0,
+}
+_FILTER_NAMES = {
+    "gain": ("kp", "beta", "gains"),
+    "f_gravity": ("gravity",),
+    "ramp_duration_s": ("gain_ramp",),
+    "ramp_factor": ("gain_ramp",),
+    **{k: ("acc_rejection",) for k in ("acc_norm", "acc_angle_rad", "acc_recovery_s")},
+    **{k: ("mag_rejection",) for k in ("mag_norm_fraction", "mag_dip_rad", "mag_recovery_s")},
+    **{k: ("rest_detection",) for k in ("rest_gyro", "rest_accel", "rest_duration_s", "rest_tau_s")},
+}
+_FILTER_ARGS = {k: Arg("scalar", names=_FILTER_NAMES.get(k, (k,))) for k in _FILTER_SCALARS}
+_FILTER_COVERS = ("filters.GainRamp", "filters.AccelRejection", "filters.MagRejection", "filters.RestDetection")
+
+for _kind, _cls_name in (("mahony", "Mahony"), ("madgwick", "Madgwick")):
+
+    @entry(
+        f"filters.{_cls_name}.run",
+        (f"filters.{_cls_name}", f"filters.{_cls_name}.run", *_FILTER_COVERS),
+        {
+            **{k: Arg(a.role, names=(*(a.names or (k,)), "imu")) for k, a in IMU_ARGS.items()},
+            **{k: a for k, a in _FILTER_ARGS.items() if k != "ki" or _kind == "mahony"},
+            "mag": Arg("array", optional=True),
+            "initial": Arg("rotation", optional=True),
+        },
+    )
+    def _run(rng: np.random.Generator, kind: str = _kind) -> Any:
+        v = imu_values(rng)
+        values = {**v, **_FILTER_SCALARS, "mag": rng.standard_normal(v["gyro"].shape), "initial": None}
+        return values, lambda v: _filter(kind, v).run(imu_of(v), mag=v["mag"], initial=v["initial"])
+
+    @entry(
+        f"filters.{_cls_name}.update",
+        (*(f"filters.{_cls_name}.{m}" for m in ("update", "get_state", "set_state", "reset")), "filters.FilterState"),
+        {
+            "u_gyro": Arg("array", names=("gyro",)),
+            "u_accel": Arg("array", names=("accel",)),
+            "dt": Arg("scalar"),
+            "u_mag": Arg("array", optional=True, names=("mag",)),
+            "state_values": Arg("array", names=("state",)),
+            "initial": Arg("rotation", optional=True),
+        },
+    )
+    def _update(rng: np.random.Generator, kind: str = _kind) -> Any:
+        template = _filter(kind, _FILTER_SCALARS)
+        template.update([0.0, 0.0, 0.0], [0.0, 0.0, 9.81], 0.01)
+        values = {
+            "u_gyro": 0.1 * rng.standard_normal(3),
+            "u_accel": np.array([0.0, 0.0, 9.81]) + rng.standard_normal(3),
+            "dt": 0.01,
+            "u_mag": rng.standard_normal(3),
+            "state_values": template.get_state().values.copy(),
+            "initial": Rotation.random(rng=rng),
+        }
+
+        def call(v: dict[str, Any]) -> Any:
+            f = _filter(kind, _FILTER_SCALARS)
+            f.reset(v["initial"])
+            first = f.update(v["u_gyro"], v["u_accel"], v["dt"], v["u_mag"])
+            f.set_state(filters.FilterState(v["state_values"]))
+            second = f.update(v["u_gyro"], v["u_accel"], v["dt"], v["u_mag"])
+            return first, second, f.get_state()
+
+        return values, call
+
+
+# -- evaluation
+
+
+def _traj_values(rng: np.random.Generator, prefix: str, n: int, t0: float) -> dict[str, Any]:
+    return {
+        prefix + "t": t0 + np.arange(n) * 0.1,
+        prefix + "position": np.cumsum(rng.standard_normal((n, 3)), axis=0),
+        prefix + "rotation": Rotation.random(n, rng=rng),
+    }
+
+
+def _traj_args(prefix: str) -> dict[str, Arg]:
+    return {
+        prefix + "t": Arg("times", names=("t", "estimate", "reference", "position", "rotation")),
+        prefix + "position": Arg("array", names=("position", prefix.rstrip("_"))),
+        prefix + "rotation": Arg("rotations", names=("rotation", prefix.rstrip("_"))),
+    }
+
+
+def _traj_of(v: dict[str, Any], prefix: str) -> ik.Trajectory:
+    return ik.Trajectory(v[prefix + "t"], v[prefix + "position"], None, v[prefix + "rotation"])
+
+
+@entry(
+    "eval.attitude_error",
+    ("eval.attitude_error", "eval.AttitudeError.rmse"),
+    {
+        "estimate": Arg("array"),
+        "truth": Arg("array", nan_ok=True),
+        "mask": Arg("mask", optional=True),
+        "rmse_mask": Arg("mask", optional=True, names=("mask",)),
+    },
+)
+def _attitude_error(rng: np.random.Generator) -> Any:
+    n = int(rng.integers(2, 10))
+    align = _flag(rng)
+    values = {
+        "estimate": Rotation.random(n, rng=rng).as_quat(),
+        "truth": Rotation.random(n, rng=rng).as_quat(),
+        "mask": np.ones(n, dtype=bool),
+        "rmse_mask": np.ones(n, dtype=bool),
+    }
+
+    def call(v: dict[str, Any]) -> Any:
+        err = ik.eval.attitude_error(v["estimate"], v["truth"], mask=v["mask"], align_heading=align)
+        return err, err.rmse(v["rmse_mask"])
+
+    return values, call
+
+
+if hasattr(ik.eval, "ape"):  # imukit.eval's trajectory metrics (issue 8)
+
+    @entry(
+        "eval.associate / align / ape / rpe",
+        tuple(f"eval.{n}" for n in ("associate", "align", "ape", "rpe", "Alignment.apply")),
+        {
+            **_traj_args("estimate_"),
+            **_traj_args("reference_"),
+            "max_dt": Arg("scalar", names=("max_dt", "estimate")),
+            "offset": Arg("scalar", names=("offset", "estimate")),
+            "delta": Arg("scalar"),
+        },
+    )
+    def _trajectory_metrics(rng: np.random.Generator) -> Any:
+        n = int(rng.integers(4, 12))
+        values = {
+            **_traj_values(rng, "estimate_", n, 10.0),
+            **_traj_values(rng, "reference_", n + 2, 9.9),
+            "max_dt": 0.2,
+            "offset": 0.0,
+            "delta": 0.2,
+        }
+
+        def call(v: dict[str, Any]) -> Any:
+            est, ref = _traj_of(v, "estimate_"), _traj_of(v, "reference_")
+            assoc = ik.eval.associate(est, ref, max_dt=v["max_dt"], offset=v["offset"])
+            alignment = ik.eval.align(assoc[0], assoc[1], method="se3")
+            return (
+                assoc,
+                alignment,
+                alignment.apply(est),
+                ik.eval.ape(est, ref, max_dt=v["max_dt"], offset=v["offset"]),
+                ik.eval.rpe(est, ref, delta=v["delta"], unit="s", max_dt=v["max_dt"]),
+            )
+
+        return values, call
+
+
+# ----------------------------------------------------------------------------- the tests
+
+# Findings in modules this corpus's author does not own (issue 9 work split), reported to their
+# owners: "<entry>: <argument> <- <mutation>" prefix -> what is wrong.
+KNOWN_ELSEWHERE = {
+    "eval.attitude_error: rmse_mask <- int 0/1": "AttitudeError.rmse takes an int 0/1 mask as booleans, "
+    "where attitude_error(mask=) refuses it with DTypeError",
+    "eval.attitude_error: mask <- int 0/1": "attitude_error(mask=) takes an int 0/1 mask as booleans but "
+    "refuses a float 0/1 one (DTypeError); AttitudeError.rmse(mask) takes both",
+}
+
+
+@pytest.mark.parametrize("corpus_entry", ENTRIES, ids=[e.name for e in ENTRIES])
+def test_malformed_inputs(corpus_entry: Entry) -> None:
+    failures: list[str] = []
+    per_example = corpus_entry.examples or EXAMPLES
+
+    @settings(
+        max_examples=per_example,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+    )
+    @given(seed=st.integers(0, 2**32 - 1), pick=st.integers(0, 2**32 - 1), mutate=st.integers(0, 2**32 - 1))
+    def run(seed: int, pick: int, mutate: int) -> None:
+        rng = np.random.default_rng(seed)
+        values = corpus_entry.make(rng)
+        names = sorted(corpus_entry.args)
+        if pick % 8 == 0 and corpus_entry.clean_is_valid:
+            problem = check_clean(corpus_entry, values)
+        else:
+            arg_name = names[pick % len(names)]
+            options = mutations_of(corpus_entry.args[arg_name], values[arg_name], rng)
+            problem = check_case(corpus_entry, values, arg_name, options[mutate % len(options)])
+        if problem:
+            failures.append(problem)
+
+    run()
+    for problem in list(failures):
+        known = [k for k in KNOWN_ELSEWHERE if problem.startswith(k)]
+        if known:
+            failures.remove(problem)
+            STATS.known.add(known[0])
+    STATS.failures += len(failures)
+    assert not failures, f"{len(failures)} failing cases:\n" + "\n".join(sorted(set(failures))[:40])
+
+
+def _public(module: types.ModuleType, prefix: str) -> Iterator[tuple[str, Any]]:
+    for name in getattr(module, "__all__", ()):
+        obj = getattr(module, name)
+        yield prefix + name, obj
+        if inspect.isclass(obj) and not issubclass(obj, BaseException):
+            for member in dir(obj):
+                if member.startswith("_"):
+                    continue
+                static = inspect.getattr_static(obj, member)
+                if isinstance(static, (types.FunctionType, classmethod, staticmethod)):
+                    yield f"{prefix}{name}.{member}", static
+
+
+# Public names that are not entry points for arrays, timestamps or numeric options, with why.
+NOT_ENTRY_POINTS = {
+    "io": "file readers and writers: malformed files are fuzzed (fuzz/) and tested in tests/test_io_*.py",
+    "Trajectory.write_tum": "writes a validated Trajectory to a path (imukit.io)",
+    "ResidualJacobians": "a plain record returned by PreintegratedImu.residual_jacobians",
+    "filters.FilterResult": "a plain record returned by run",
+    "noise.AllanFit": "the result of fit_allan (its methods are covered)",
+    "sim.Motion": "a typing alias of the motion classes",
+}
+
+
+def _exempt(name: str, obj: Any) -> bool:
+    if name in NOT_ENTRY_POINTS or name.split(".")[0] in NOT_ENTRY_POINTS:
+        return True
+    if isinstance(obj, types.ModuleType) or (inspect.isclass(obj) and issubclass(obj, BaseException)):
+        return True
+    if inspect.isclass(obj) and issubclass(obj, tuple) and name not in {n for e in ENTRIES for n in e.covers}:
+        return True  # result records (NamedTuples); options NamedTuples are covered by their consumers
+    return not callable(obj) and not isinstance(obj, (classmethod, staticmethod))
+
+
+def public_entry_points() -> list[str]:
+    found = []
+    for name in ik.__all__:
+        obj = getattr(ik, name)
+        if isinstance(obj, types.ModuleType):
+            found += [n for n, o in _public(obj, name + ".") if not _exempt(n, o)]
+        else:
+            found += [n for n, o in _public(ik, "") if n.split(".")[0] == name and not _exempt(n, o)]
+    return sorted(set(found))
+
+
+def test_corpus_covers_every_public_entry_point() -> None:
+    covered = {n for e in ENTRIES for n in e.covers}
+    missing = [n for n in public_entry_points() if n not in covered]
+    assert not missing, f"public entry points without malformed-input corpus entries: {missing}"
+    stale = sorted(covered - set(public_entry_points()))
+    assert not stale, f"corpus entries for names that are not public: {stale}"
+
+
+def test_a_panic_or_a_nan_would_be_caught() -> None:
+    """The checker itself: a NaN result from finite input, a wrong exception type and a
+    BaseException (like pyo3's PanicException) are all reported as failures."""
+
+    class FakePanic(BaseException):
+        pass
+
+    def panics(v: dict[str, Any]) -> Any:
+        raise FakePanic("index out of bounds")
+
+    def nan(v: dict[str, Any]) -> Any:
+        return np.array([math.nan])
+
+    def value_error(v: dict[str, Any]) -> Any:
+        raise ValueError("x: bad")
+
+    for fn, text in ((panics, "PANIC FakePanic"), (nan, "NaN in"), (value_error, "raised ValueError")):
+        e = Entry("fake", (), lambda rng: {"x": np.zeros(3)}, fn, {"x": Arg("array")})
+        mutation = mutations_of(e.args["x"], np.zeros(3), np.random.default_rng(0))[0]
+        cases = STATS.cases
+        problem = check_case(e, {"x": np.zeros(3)}, "x", mutation)
+        STATS.cases = cases  # not a corpus case
+        assert problem is not None and text in problem, problem
