@@ -363,3 +363,20 @@ def test_simulate_from_a_tum_file_passes_through_its_poses(tmp_path: Path) -> No
     angles = (truth.rotation[::50].inv() * path.rotation).magnitude()
     assert angles.max() < 1e-9
     assert np.abs(truth.velocity[[0, -1]]).max() < 1e-12  # clamped: at rest at both ends
+
+
+def test_chunked_preintegration_equals_one_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The CLI's windows, computed 7 per call, are bit for bit those of one call."""
+    from imukit.cli import _preintegrate
+
+    imu, _ = in_memory()
+    edges = _preintegrate.boundaries(imu, 0.3)
+    assert len(edges) == 67 and edges[-1] == pytest.approx(19.8)  # the partial last 0.2 s is dropped
+    monkeypatch.setattr(_preintegrate, "WINDOWS_PER_CALL", 7)
+    pieces = _preintegrate.windows(imu, edges, NOISE, "midpoint")
+    whole = ik.preintegrate_windows(imu, edges, noise=NOISE, scheme="midpoint")
+    assert len(pieces) == len(whole) == 66
+    for a, b in zip(pieces, whole):
+        assert np.array_equal(a.delta_rotation.as_quat(), b.delta_rotation.as_quat())
+        assert np.array_equal(a.delta_position, b.delta_position)
+        assert np.array_equal(a.covariance, b.covariance)

@@ -14,18 +14,18 @@ import traceback
 from collections.abc import Sequence
 
 from imukit._errors import ImukitError
-from imukit.cli._allan import add as _allan
-from imukit.cli._demo import add as _demo
-from imukit.cli._evaluate import add as _evaluate
-from imukit.cli._filter import add as _filter
-from imukit.cli._integrate import add as _integrate
-from imukit.cli._preintegrate import add as _preintegrate
-from imukit.cli._simulate import add as _simulate
+from imukit.cli._allan import add as add_allan
+from imukit.cli._demo import add as add_demo
+from imukit.cli._evaluate import add as add_evaluate
+from imukit.cli._filter import add as add_filter
+from imukit.cli._integrate import add as add_integrate
+from imukit.cli._preintegrate import add as add_preintegrate
+from imukit.cli._simulate import add as add_simulate
 
 __all__ = ["build_parser", "main"]
 
 # Each adds its parser, with `run` as the default of `args.run`; in the order `imukit --help` lists them.
-_COMMANDS = (_integrate, _preintegrate, _filter, _simulate, _allan, _evaluate, _demo)
+_COMMANDS = (add_integrate, add_preintegrate, add_filter, add_simulate, add_allan, add_evaluate, add_demo)
 
 _DESCRIPTION = """\
 IMU kinematics from the command line: integrate a recording into a trajectory, preintegrate it

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from imukit.cli._common import out, output_path, read_imu, wrote
+from imukit.cli._common import err, out, output_path, read_imu, wrote
 from imukit.imu import ImuData
 from imukit.io import write_kalibr_imu
 from imukit.noise import AllanDeviation, AllanFit, allan_deviation, fit_allan, plot_allan, to_imu_noise
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     png = output_path(args.out, (".png",), "--out")
     yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml") if args.yaml else png.with_suffix(".yaml")
     imu, _ = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
-    with out.status(f"Allan deviation of {len(imu)} samples"):
+    with err.status(f"Allan deviation of {len(imu)} samples"):
         rate = mean_rate_hz(imu)
         fits = allan_fits(imu, rate)
     for sensor, (allan, fit) in fits.items():
