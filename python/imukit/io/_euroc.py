@@ -359,9 +359,11 @@ def read_stamped_csv(
         check=check,
     )
     stamps = [f[0].strip() for f in rows.fields]
-    rows = rows.take(increasing(rows, [int(s) for s in stamps], stamps, path, bad))
+    ns = [int(s) for s in stamps]  # integers in int64: checked above
+    keep = increasing(rows, ns, stamps, path, bad)
+    rows = rows.take(keep)
     require_rows(rows, path, bad)
-    t_ns = np.array([int(f[0]) for f in rows.fields], dtype=np.int64)
+    t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
     return t_ns, np.array(rows.values, dtype=np.float64), rows.lines
 
 

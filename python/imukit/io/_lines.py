@@ -85,39 +85,42 @@ def parse_rows(
     columns: Sequence[int],
     check: RowCheck | None = None,
 ) -> Rows:
-    """The lines with ``width`` fields whose ``columns`` are finite numbers and that pass ``check``.
+    """The lines with ``width`` fields whose ``columns`` (at least one) are finite numbers and that pass
+    ``check``.
 
     Other lines go to ``bad``: ``expected {width} {expected}, got n`` (wrong column count),
     ``not a number in '…'`` (malformed), ``non-finite value in '…'`` (non-finite), or ``check``'s
     ``(kind, detail)``.
     """
     rows = Rows([], [], [], [])
+    start, stop = columns[0], columns[0] + len(columns)
+    consecutive = list(columns) == list(range(start, stop))  # then a slice, twice as fast as indexing
+    isfinite = math.isfinite
     for number, text in numbered:
+        # One loop, no helper calls: this runs for every line of files with 10⁵-10⁶ lines.
         fields = split(text)
-        problem = _problem(fields, width, expected, columns, text)
+        problem: Problem | None = None
+        row: list[float] = []
+        if len(fields) != width:
+            problem = "wrong column count", f"expected {width} {expected}, got {len(fields)}"
+        else:
+            try:
+                row = list(map(float, fields[start:stop] if consecutive else [fields[c] for c in columns]))
+            except ValueError:
+                problem = "malformed", f"not a number in {text!r}"
+            else:
+                if not all(map(isfinite, row)):
+                    problem = "non-finite", f"non-finite value in {text!r}"
+                elif check is not None:
+                    problem = check(fields, row)
         if problem is None:
-            row = [float(fields[c]) for c in columns]
-            problem = None if check is None else check(fields, row)
-            if problem is None:
-                rows.lines.append(number)
-                rows.texts.append(text)
-                rows.fields.append(fields)
-                rows.values.append(row)
-                continue
-        bad.bad(path, number, *problem, text)
+            rows.lines.append(number)
+            rows.texts.append(text)
+            rows.fields.append(fields)
+            rows.values.append(row)
+        else:
+            bad.bad(path, number, *problem, text)
     return rows
-
-
-def _problem(fields: list[str], width: int, expected: str, columns: Sequence[int], text: str) -> Problem | None:
-    if len(fields) != width:
-        return "wrong column count", f"expected {width} {expected}, got {len(fields)}"
-    try:
-        row = [float(fields[c]) for c in columns]
-    except ValueError:
-        return "malformed", f"not a number in {text!r}"
-    if not all(map(math.isfinite, row)):
-        return "non-finite", f"non-finite value in {text!r}"
-    return None
 
 
 def integer_stamp(text: str, scale: int = 1) -> int | None:
