@@ -109,3 +109,14 @@ def test_broad_rows_are_the_library_calls(demo: tuple[Path, dict, float]) -> Non
             name = f"{cls.__name__} {'9D' if nine else '6D'}"
             assert rows[(name, "inclination RMSE")]["value"] == rmse.inclination
             assert rmse.inclination < 1.5  # BROAD-tuned defaults: docs/filters_accuracy.md
+
+
+def test_the_excerpt_is_small_and_attributed() -> None:
+    """CC BY 4.0 asks for the authors, the source and the changes: ATTRIBUTION.md names them."""
+    assert EXCERPT.stat().st_size < 1_500_000
+    text = (EXCERPT.parent / "ATTRIBUTION.md").read_text(encoding="utf-8")
+    for piece in ("Laidig", "Seel", "Data* 6(7):72", "CC BY 4.0", "06_undisturbed_fast_rotation_A", "7896"):
+        assert piece in text, piece
+    with np.load(EXCERPT) as d:
+        assert int(d["first_sample"]) == 7896 and str(d["trial"]) == "06_undisturbed_fast_rotation_A"
+        assert d["movement"][: 10_753 - 7896].sum() == 0 and d["movement"][10_753 - 7896]  # 10 s rest, then motion
