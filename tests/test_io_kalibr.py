@@ -191,3 +191,12 @@ def test_write_errors_name_the_argument(tmp_path: Path) -> None:
     with pytest.raises(ik.ParameterError, match=r"^extra: cannot be written as YAML"):
         ik.io.write_kalibr_imu(path, EUROC_NOISE, rate_hz=200.0, extra={"T_i_b": np.eye(4)})
     assert not path.exists()
+
+
+def test_bytes_that_are_not_utf8_name_their_line(tmp_path: Path) -> None:
+    path = tmp_path / "imu.yaml"
+    path.write_bytes(b"rostopic: /imu0\nupdate_rate: \xff200.0\n")
+    with pytest.raises(
+        ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}, line 2: not UTF-8 text \(byte 0xff\)$"
+    ):
+        ik.io.read_kalibr_imu(path)

@@ -101,10 +101,12 @@ def _check_dt(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:
     skipped = np.array(sorted(s.line for s in bad.records if s.path == where), dtype=np.int64)
     lines = np.array(rows.lines, dtype=np.int64)
     data = np.array(rows.values, dtype=np.float64)
-    step = np.diff(data[:, 0])
+    with np.errstate(over="ignore"):  # values near ±1e308: an infinite difference, which is a mismatch
+        step = np.diff(data[:, 0])
+        mismatch = np.abs(data[1:, 1] - step) > DT_TOLERANCE_S
     # A kept line right after a skipped one has no known previous stamp.
     follows_kept = np.searchsorted(skipped, lines[1:]) == np.searchsorted(skipped, lines[:-1])
-    off = np.flatnonzero(follows_kept & (np.abs(data[1:, 1] - step) > DT_TOLERANCE_S))
+    off = np.flatnonzero(follows_kept & mismatch)
     if off.size:
         k = int(off[0]) + 1
         raise FileFormatError(

@@ -68,11 +68,16 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
     ------
     FileFormatError
         (a ``ValueError``) naming the file and the key: invalid YAML, missing keys, or a value that
-        is not a finite number ≥ 0 (a rate must be > 0).
+        is not a finite number ≥ 0 (a rate must be > 0); naming the line for bytes that are not UTF-8.
     """
     where = os.fspath(path)
-    with open(path, encoding="utf-8") as f:
-        text = _OPENCV_DIRECTIVE.sub("", f.read(), count=1)  # keeps the newline: line numbers hold
+    with open(path, "rb") as f:
+        raw = f.read()
+    try:
+        text = _OPENCV_DIRECTIVE.sub("", raw.decode("utf-8"), count=1)  # keeps the newline: line numbers hold
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise FileFormatError(f"path: {where}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})") from None
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:
