@@ -380,3 +380,12 @@ def test_chunked_preintegration_equals_one_call(monkeypatch: pytest.MonkeyPatch)
         assert np.array_equal(a.delta_rotation.as_quat(), b.delta_rotation.as_quat())
         assert np.array_equal(a.delta_position, b.delta_position)
         assert np.array_equal(a.covariance, b.covariance)
+
+
+def test_console_script_is_the_same_main() -> None:
+    from importlib.metadata import entry_points
+
+    from imukit.cli import main
+
+    (script,) = [e for e in entry_points(group="console_scripts") if e.name == "imukit"]
+    assert script.value == "imukit.cli:main" and script.load() is main
