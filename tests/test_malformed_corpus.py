@@ -25,7 +25,7 @@ from scipy.spatial.transform import Rotation
 
 import imukit as ik
 from imukit import filters, noise, sim
-from malformed_strategies import STATS, Arg, Entry, check_case, check_clean, mutations_of
+from malformed_strategies import EPOCH_NS, STATS, Arg, Entry, check_case, check_clean, mutations_of
 
 EXAMPLES = 200  # hypothesis examples per entry point; each runs one or two calls
 
@@ -319,6 +319,21 @@ def _trajectory_ns(rng: np.random.Generator) -> Any:
     position, rotation = rng.standard_normal((n, 3)), Rotation.random(n, rng=rng)
     # Float stamps are mutated into integer ones (and back): every float here must be refused.
     return {"t_ns": stamps(rng, n)}, lambda v: ik.Trajectory(None, position, None, rotation, t_ns=v["t_ns"])
+
+
+@entry(
+    "Trajectory(t=..., t_ns=...)",
+    ("Trajectory",),
+    {"t": Arg("times", optional=True, names=("t", "t_ns")), "t_ns": Arg("times", names=("t_ns",))},
+)
+def _trajectory_both_clocks(rng: np.random.Generator) -> Any:
+    """Seconds and nanoseconds of the same instants: a mutated clock (relative seconds against epoch
+    nanoseconds, floats as t_ns, ...) must be refused, never silently paired."""
+    n = int(rng.integers(2, 8))
+    t_ns = EPOCH_NS + np.cumsum(rng.integers(4_000_000, 6_000_000, n))
+    position, rotation = rng.standard_normal((n, 3)), Rotation.random(n, rng=rng)
+    values = {"t": t_ns / 1e9, "t_ns": t_ns}
+    return values, lambda v: ik.Trajectory(v["t"], position, None, rotation, t_ns=v["t_ns"])
 
 
 def _strapdown_values(rng: np.random.Generator) -> dict[str, Any]:
