@@ -209,10 +209,31 @@ def _integrate_attitude(rng: np.random.Generator) -> Any:
     )
 
 
-@entry("ImuData", ("ImuData",), {**IMU_ARGS, "max_gap": Arg("scalar", optional=True, names=("max_gap", "t"))})
+@entry(
+    "ImuData",
+    ("ImuData",),
+    {
+        **IMU_ARGS,
+        "max_gap": Arg("scalar", optional=True, names=("max_gap", "t")),
+        "gyro_range": Arg("scalar", optional=True),
+        "accel_range": Arg("scalar", optional=True),
+    },
+)
 def _imu_data(rng: np.random.Generator) -> Any:
     v = imu_values(rng)
-    return {**v, "max_gap": 1.0}, lambda v: ik.ImuData(v["t"], v["gyro"], v["accel"], max_gap=v["max_gap"])
+
+    def call(v: dict[str, Any]) -> Any:
+        imu = ik.ImuData(
+            v["t"],
+            v["gyro"],
+            v["accel"],
+            max_gap=v["max_gap"],
+            gyro_range=v["gyro_range"],
+            accel_range=v["accel_range"],
+        )
+        return imu, imu.gyro_saturated, imu.accel_saturated
+
+    return {**v, "max_gap": 1.0, "gyro_range": 0.5, "accel_range": 20.0}, call
 
 
 @entry("ImuBias", ("ImuBias",), BIAS_ARGS)

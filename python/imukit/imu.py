@@ -56,6 +56,11 @@ class ImuData:
         If given [s], a step ``t[k] − t[k-1]`` larger than it is an error
         (:class:`imukit.TimestampError` naming sample k): dropped samples are reported, not
         integrated over.
+    gyro_range, accel_range
+        The sensor's full-scale range per axis [rad/s], [m/s²] (the largest magnitude it can
+        report; a datasheet's ±2000 °/s is ``np.deg2rad(2000)``), or None when unknown. Samples
+        with some axis at or beyond it are clipped, not measured: :attr:`gyro_saturated` and
+        :attr:`accel_saturated` flag them.
 
     Attributes
     ----------
@@ -66,6 +71,8 @@ class ImuData:
         ``(N,)`` int64 nanoseconds for integer input, else None.
     gyro, accel
         ``(N, 3)`` float64, C-contiguous, read-only copies of the input.
+    gyro_range, accel_range
+        As given (float or None).
 
     Raises
     ------
@@ -73,15 +80,26 @@ class ImuData:
         Messages start with the argument name and name the first bad sample.
     """
 
-    __slots__ = ("_seconds", "accel", "gyro", "t", "t_ns")
+    __slots__ = ("_seconds", "accel", "accel_range", "gyro", "gyro_range", "t", "t_ns")
 
     t: FloatArray
     t_ns: NDArray[np.int64] | None
     gyro: FloatArray
     accel: FloatArray
+    gyro_range: float | None
+    accel_range: float | None
     _seconds: FloatArray
 
-    def __init__(self, t: ArrayLike, gyro: ArrayLike, accel: ArrayLike, *, max_gap: float | None = None) -> None:
+    def __init__(
+        self,
+        t: ArrayLike,
+        gyro: ArrayLike,
+        accel: ArrayLike,
+        *,
+        max_gap: float | None = None,
+        gyro_range: float | None = None,
+        accel_range: float | None = None,
+    ) -> None:
         raw = np.asarray(t)
         if raw.ndim != 1 or len(raw) == 0:
             raise ShapeError(f"t: expected shape (N,) with N ≥ 1, got {raw.shape}")
@@ -121,12 +139,26 @@ class ImuData:
         set_(self, "gyro", gyro_arr)
         set_(self, "accel", accel_arr)
         set_(self, "_seconds", readonly_copy(seconds))
+        self._set_ranges(gyro_range, accel_range)
+
+    def _set_ranges(self, gyro_range: float | None, accel_range: float | None) -> None:
+        for name, value in (("gyro_range", gyro_range), ("accel_range", accel_range)):
+            what = "a positive, finite full-scale range or None"
+            checked = None if value is None else _number(value, name, positive=True, what=what)
+            object.__setattr__(self, name, checked)
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"ImuData is immutable: cannot set {name!r}")
 
     @classmethod
-    def _from_core(cls, t: FloatArray, gyro: FloatArray, accel: FloatArray) -> ImuData:
+    def _from_core(
+        cls,
+        t: FloatArray,
+        gyro: FloatArray,
+        accel: FloatArray,
+        gyro_range: float | None = None,
+        accel_range: float | None = None,
+    ) -> ImuData:
         """Samples the compiled core has just produced, without validating or copying them (fresh,
         finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
         simulating them). The arrays are made read-only here and must not be shared elsewhere."""
@@ -136,7 +168,20 @@ class ImuData:
             if value is not None:
                 value.setflags(write=False)
             object.__setattr__(imu, name, value)
+        imu._set_ranges(gyro_range, accel_range)
         return imu
+
+    @property
+    def gyro_saturated(self) -> NDArray[np.bool_]:
+        """``(N,)`` True where some gyro axis reads ±:attr:`gyro_range` or beyond (clipped); all
+        False when the range is unknown."""
+        return _at_range(self.gyro, self.gyro_range)
+
+    @property
+    def accel_saturated(self) -> NDArray[np.bool_]:
+        """``(N,)`` True where some accelerometer axis reads ±:attr:`accel_range` or beyond
+        (clipped); all False when the range is unknown."""
+        return _at_range(self.accel, self.accel_range)
 
     @property
     def seconds(self) -> FloatArray:
@@ -175,12 +220,21 @@ class ImuData:
         if step <= 0 or len(range(start, stop, step)) == 0:
             raise ShapeError(f"index: ImuData slices need a positive step and at least 1 sample, got {index}")
         t = self.t if self.t_ns is None else self.t_ns
-        return ImuData(t[index], self.gyro[index], self.accel[index])
+        ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}
+        return ImuData(t[index], self.gyro[index], self.accel[index], **ranges)
 
     def __repr__(self) -> str:
         stamps = "int64 ns" if self.t_ns is not None else "float s"
         rate = f", {self.rate_hz:.6g} Hz" if len(self) > 1 else ""
         return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps})"
+
+
+def _at_range(values: FloatArray, full_scale: float | None) -> NDArray[np.bool_]:
+    flags: NDArray[np.bool_] = np.zeros(len(values), dtype=bool)
+    if full_scale is not None:
+        flags = np.asarray((np.abs(values) >= full_scale).any(axis=1))
+    flags.setflags(write=False)
+    return flags
 
 
 class ImuBias:

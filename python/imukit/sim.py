@@ -285,6 +285,17 @@ class SensorErrors:
         check_finite_rows(m, "misalignment", "row")
         return cls(matrix=(np.eye(3) + np.diag(s)) @ (np.eye(3) + m), **kwargs)
 
+    def _full_scale(self) -> float | None:
+        """The largest magnitude the triad reports: ``range`` quantised as the core quantises
+        readings (to the nearest multiple of ``resolution``, halves away from zero); None without
+        saturation."""
+        limit, step = float(self.range), float(self.resolution)
+        if math.isinf(limit) or step == 0.0:
+            return None if math.isinf(limit) else limit
+        steps = limit / step
+        whole = math.floor(steps)
+        return (whole + (1.0 if steps - whole >= 0.5 else 0.0)) * step
+
     def _values(self) -> list[float]:
         return [
             *as_float_array(self.matrix, "matrix").ravel(),
@@ -319,7 +330,9 @@ def simulate(
     ``t_k = start + k / rate``, ``k = 0 … floor(duration·rate)``. Returns the readings as
     :class:`imukit.ImuData` (float seconds) and the truth as :class:`imukit.Trajectory` with the
     true biases (``gyro_bias``, ``accel_bias``) at every sample. Without ``noise``, ``bias`` and
-    errors, the readings are the exact ideal ones.
+    errors, the readings are the exact ideal ones. A finite ``SensorErrors.range`` becomes the
+    ImuData's ``gyro_range`` / ``accel_range``, so the clipped samples are flagged
+    (``ImuData.gyro_saturated``, ``accel_saturated``).
     """
     rate_hz = real_scalar(
         rate, "rate", what="a positive, finite rate in Hz", accept=lambda x: math.isfinite(x) and x > 0
@@ -357,6 +370,7 @@ def simulate(
         # In place: gyro and accel are this call's own fresh arrays (and Waypoints' fresh results).
         bias_g = _core.sim_measure(t, gyro, model_g, seed, 0)
         bias_a = _core.sim_measure(t, accel, model_a, seed, 1)
-    imu = ImuData._from_core(t, gyro, accel)
+    ranges = [None if e is None else e._full_scale() for e in (gyro_errors, accel_errors)]
+    imu = ImuData._from_core(t, gyro, accel, *ranges)
     arrays = {"position": position, "velocity": velocity, "gyro_bias": bias_g, "accel_bias": bias_a}
     return imu, Trajectory._from_core(imu.t, None, arrays, rotation_from_unit_quat(quat))
