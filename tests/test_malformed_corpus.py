@@ -100,6 +100,12 @@ def bias_of(v: dict[str, Any]) -> ik.ImuBias:
 
 
 NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+_TRAJECTORY_OPTIONS = ("covariance", "covariance_t", "gyro_bias", "accel_bias")
+
+
+def pick(values: dict[str, Any], *names: str) -> dict[str, Any]:
+    """The keyword arguments ``names`` from a case's values."""
+    return {name: values[name] for name in names}
 
 
 # ----------------------------------------------------------------------------- the entries
@@ -223,14 +229,7 @@ def _imu_data(rng: np.random.Generator) -> Any:
     v = imu_values(rng)
 
     def call(v: dict[str, Any]) -> Any:
-        imu = ik.ImuData(
-            v["t"],
-            v["gyro"],
-            v["accel"],
-            max_gap=v["max_gap"],
-            gyro_range=v["gyro_range"],
-            accel_range=v["accel_range"],
-        )
+        imu = ik.ImuData(v["t"], v["gyro"], v["accel"], **pick(v, "max_gap", "gyro_range", "accel_range"))
         return imu, imu.gyro_saturated, imu.accel_saturated
 
     return {**v, "max_gap": 1.0, "gyro_range": 0.5, "accel_range": 20.0}, call
@@ -317,16 +316,7 @@ def _trajectory(rng: np.random.Generator) -> Any:
     }
 
     def call(v: dict[str, Any]) -> Any:
-        traj = ik.Trajectory(
-            v["t"],
-            v["position"],
-            v["velocity"],
-            v["rotation"],
-            covariance=v["covariance"],
-            covariance_t=v["covariance_t"],
-            gyro_bias=v["gyro_bias"],
-            accel_bias=v["accel_bias"],
-        )
+        traj = ik.Trajectory(v["t"], v["position"], v["velocity"], v["rotation"], **pick(v, *_TRAJECTORY_OPTIONS))
         return traj, traj.state(v["k"])
 
     return values, call
