@@ -389,3 +389,19 @@ def test_console_script_is_the_same_main() -> None:
 
     (script,) = [e for e in entry_points(group="console_scripts") if e.name == "imukit"]
     assert script.value == "imukit.cli:main" and script.load() is main
+
+
+def test_plot_without_matplotlib_is_a_one_line_error(tmp_path: Path) -> None:
+    """No matplotlib: --plot ends with one line naming the extra to install (the samples are not lost:
+    --out is written first)."""
+    blocked = (
+        "import sys; sys.modules['matplotlib.figure'] = None; from imukit.cli import main; "
+        "raise SystemExit(main(sys.argv[1:]))"
+    )
+    out, png = tmp_path / "q.csv", tmp_path / "e.png"
+    args = ["filter", str(broad_excerpt_path()), "--out", str(out), "--plot", str(png)]
+    run = subprocess.run([sys.executable, "-c", blocked, *args], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1
+    assert_one_line_error(run, 'pip install "imukit[plot]"')
+    assert not png.exists()
+    assert len(np.loadtxt(out, delimiter=",")) == 11_428

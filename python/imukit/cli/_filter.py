@@ -91,6 +91,9 @@ def run(args: argparse.Namespace) -> int:
     result = run_chunked(filt, data, use_mag=args.mag)
     name = f"{type(filt).__name__} {'9D' if args.mag else '6D'}"
     out.print(f"{name}: {len(data.imu)} samples over {data.imu.duration:.3f} s", markup=False)
+    if target is not None:  # before the plot, which may fail for want of matplotlib
+        _write(target, data, result)
+        wrote("attitudes", target)
     if data.truth_xyzw is not None:
         error = attitude_error(
             result.rotation, data.truth_xyzw, world=args.world, align_heading=not args.mag, mask=data.mask
@@ -107,9 +110,6 @@ def run(args: argparse.Namespace) -> int:
 
             attitude_error_plot(png, data.imu.t - data.imu.t[0], {name: error}, title=f"{name}: {args.path}")
             wrote("attitude error plot", png)
-    if target is not None:
-        _write(target, data, result)
-        wrote("attitudes", target)
     return 0
 
 
