@@ -405,3 +405,10 @@ def test_plot_without_matplotlib_is_a_one_line_error(tmp_path: Path) -> None:
     assert_one_line_error(run, 'pip install "imukit[plot]"')
     assert not png.exists()
     assert len(np.loadtxt(out, delimiter=",")) == 11_428
+
+
+def test_preintegrate_finds_sensor_yaml_beside_a_bare_csv(simulated: Path, tmp_path: Path) -> None:
+    out = tmp_path / "w.npz"
+    cli("preintegrate", simulated / "mav0" / "imu0" / "data.csv", "--window", "1", "--out", out)
+    with np.load(out) as data:
+        assert data["covariance"].shape == (20, 9, 9) and data["covariance"][0, 0, 0] > 0.0  # the noise was found

@@ -9,7 +9,6 @@ import numpy as np
 
 from imukit.cli._common import CliError, add_plot_option, err, note, out, output_path, positive, read_imu, wrote
 from imukit.cli._initial import from_truth, levelled_at_rest, trim_to_truth
-from imukit.imu import ImuBias
 from imukit.strapdown import SCHEMES, integrate
 
 DESCRIPTION = """\
@@ -80,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         initial = levelled_at_rest(imu, args.static_seconds)
         note(f"no ground truth: starting at rest, levelled from the first {args.static_seconds} s")
     with err.status(f"integrating {len(imu)} samples ({args.scheme})"):
-        trajectory = integrate(imu, initial=initial, scheme=args.scheme, bias=bias or ImuBias())
+        trajectory = integrate(imu, initial=initial, scheme=args.scheme, bias=bias)
     out.print(f"integrated {len(imu)} samples over {imu.duration:.3f} s with {args.scheme}", markup=False)
     if truth is not None:
         _report_errors(trajectory, truth)

@@ -77,11 +77,10 @@ def noise_for(path: str, noise_yaml: str | None) -> ImuNoise:
     if noise_yaml is not None:
         return read_kalibr_imu(noise_yaml).noise
     root = Path(path)
-    for candidate in (
-        root / "imu0" / "sensor.yaml",
-        root / "mav0" / "imu0" / "sensor.yaml",
-        root.parent / "sensor.yaml",
-    ):
+    # A folder: its imu0/ (or mav0/imu0/); a bare imu0/data.csv: the file beside it.
+    candidates = [root / "imu0", root / "mav0" / "imu0"] if root.is_dir() else [root.parent]
+    for folder in candidates:
+        candidate = folder / "sensor.yaml"
         if candidate.is_file():
             return read_kalibr_imu(candidate).noise
     raise CliError(f"--noise: {path} has no imu0/sensor.yaml; give the noise model as a Kalibr imu.yaml")
