@@ -1,4 +1,5 @@
-# The one contract: `make demo`, `make test` (what CI runs), `make bench`, `make lint`, `make lock`.
+# The one contract: `make demo`, `make test` (what CI runs), `make bench`, `make lint`, `make lock`;
+# issue 9's long runs: `make stability` (full-length stability tests), `make fuzz` (fuzzers).
 # Everything Python lives in .venv, created here from the pinned requirements/dev.txt.
 
 PYTHON ?= python3
@@ -10,7 +11,17 @@ export PATH := $(VIRTUAL_ENV)/bin:$(PATH)
 # The glue crate's build script (run by clippy too) must see the venv's interpreter.
 export PYO3_PYTHON := $(abspath $(VPY))
 
-.PHONY: demo test build lint rust-test py-test bench lock clean
+.PHONY: demo test build lint rust-test stability-fast py-test bench lock clean stability fuzz
+
+# Attitude steps of the stability tests (crates/imukit/tests/stability*.rs); the rotation-matrix,
+# covariance and memory runs use a tenth. Issue 9's lengths in `make stability`, short ones in
+# `make test`.
+STABILITY_STEPS ?= 1e8
+FAST_STABILITY_STEPS ?= 1e7
+STABILITY_TESTS := -p imukit --test stability --test stability_memory
+# Seconds per fuzz target in `make fuzz`.
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := attitude strapdown preint filters
 
 $(VPY):
 	$(PYTHON) -m venv $(VENV)
@@ -37,10 +48,28 @@ lint: build
 rust-test:
 	cargo test --locked
 
+# Release build: the stability tests are long loops of the optimised kernels.
+stability-fast:
+	IMUKIT_STABILITY_STEPS=$(FAST_STABILITY_STEPS) cargo test --release --locked $(STABILITY_TESTS)
+
+stability:
+	IMUKIT_STABILITY_STEPS=$(STABILITY_STEPS) cargo test --release --locked $(STABILITY_TESTS) -- --nocapture --test-threads=1
+
 py-test: build
 	$(VPY) -m pytest --doctest-modules --doctest-glob=README.md python/imukit README.md tests
 
-test: lint rust-test py-test
+test: lint rust-test stability-fast py-test
+
+# cargo-fuzz needs the nightly toolchain (rustup toolchain install nightly). Each target runs
+# FUZZ_SECONDS; a crash stops `make` with the input under fuzz/artifacts/<target>/.
+fuzz: build
+	command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
+	for target in $(FUZZ_TARGETS); do \
+		cargo +nightly fuzz run $$target -- -max_total_time=$(FUZZ_SECONDS) || exit 1; \
+	done
+	mkdir -p fuzz/corpus/readers fuzz/artifacts/readers
+	$(VPY) fuzz/python/fuzz_readers.py -max_total_time=$(FUZZ_SECONDS) \
+		-artifact_prefix=fuzz/artifacts/readers/ fuzz/corpus/readers
 
 bench: build
 	$(VPY) bench/bench_so3.py

@@ -389,13 +389,20 @@ fn run<S: State>(
 }
 
 /// Finite rates can still overflow (e.g. 1e200 rad/s): refuse a non-finite result, naming the
-/// first non-finite stored attitude when there is a store, else the last sample.
+/// first non-finite stored attitude when there is a store, else the last sample. An ODE step can
+/// also overflow only the norm: `q/|q|` with `|q|² = inf` is the zero quaternion, finite but no
+/// rotation, and the following steps keep it zero; so a result off the unit sphere (every valid
+/// one is unit to ~1e-15) is refused the same way.
 fn check_finite_quaternions(last: &UnitQuaternion<f64>, out: Option<&[f64]>, n: usize) -> Result<()> {
-    if last.coords.iter().all(|v| v.is_finite()) {
+    let valid = |q: &[f64]| {
+        let norm_squared: f64 = q.iter().map(|v| v * v).sum();
+        (norm_squared - 1.0).abs() < 1e-6
+    };
+    if valid(last.coords.as_slice()) {
         return Ok(());
     }
     let index = out
-        .and_then(|o| o.chunks_exact(4).position(|q| q.iter().any(|v| !v.is_finite())))
+        .and_then(|o| o.chunks_exact(4).position(|q| !valid(q)))
         .unwrap_or(n - 1);
     Err(Error::Overflow { index })
 }

@@ -106,7 +106,8 @@ impl Preintegrator {
             bias_gyro: self.bias_gyro,
             bias_accel: self.bias_accel,
             noise: self.noise,
-            delta_rotation: r * next.delta_rotation,
+            // Merged products would accumulate rounding as sample products do (mod.rs).
+            delta_rotation: super::project_rotation(&(r * next.delta_rotation)),
             delta_velocity: self.delta_velocity + r * next.delta_velocity,
             delta_position: self.delta_position + self.delta_velocity * dt_jk + r * next.delta_position,
             delta_t: self.delta_t + dt_jk,
@@ -114,6 +115,7 @@ impl Preintegrator {
             jac: blocks::cross_of(&jac),
             bias_walk: None,
             ends,
+            since_projection: 0,
         })
     }
 }

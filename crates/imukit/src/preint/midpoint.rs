@@ -177,6 +177,7 @@ impl Preintegrator {
         self.delta_velocity += acc * h;
         self.delta_rotation = mul(&s.r0, &s.step);
         self.delta_t += h;
+        self.count_interval();
         if prev.var.is_none() {
             self.ends.first = Some(Sample { var: Some(q0), ..prev });
         }

@@ -129,6 +129,21 @@ pub struct Preintegrator {
     bias_walk: Option<BiasWalk>,
     /// The midpoint scheme's memory of the samples at the window's ends.
     ends: midpoint::Ends,
+    /// Intervals since ΔR was last projected onto SO(3) (see [`PROJECT_EVERY`]).
+    since_projection: u32,
+}
+
+/// ΔR is a product of exact rotations, so it leaves SO(3) by rounding only, about 1e-16 an
+/// interval, but without a projection that adds up (‖ΔRᵀΔR − I‖ reached 1.3e-12 to 4.6e-12 after
+/// 10^7 intervals, `tests/stability.rs`). One Björck–Bowie step every 16 intervals keeps it at
+/// rounding level for a few 3×3 products per 16 samples.
+const PROJECT_EVERY: u32 = 16;
+
+/// One Björck–Bowie step towards the nearest rotation, `R (3I − RᵀR)/2`: from `‖RᵀR − I‖ = ε` it
+/// leaves `O(ε²)`.
+pub(super) fn project_rotation(r: &Matrix3<f64>) -> Matrix3<f64> {
+    let gram = r.transpose() * r;
+    mul(r, &(Matrix3::identity() * 3.0 - gram)) * 0.5
 }
 
 impl Preintegrator {
@@ -147,6 +162,7 @@ impl Preintegrator {
             jac: ZERO_CROSS,
             bias_walk: None,
             ends: midpoint::Ends::default(),
+            since_projection: 0,
         }
     }
 
@@ -218,6 +234,16 @@ impl Preintegrator {
         self.delta_velocity += ra * h;
         self.delta_rotation = mul(&r, step.matrix());
         self.delta_t += h;
+        self.count_interval();
+    }
+
+    /// Counts one interval; every [`PROJECT_EVERY`] intervals, projects ΔR back onto SO(3).
+    pub(super) fn count_interval(&mut self) {
+        self.since_projection += 1;
+        if self.since_projection >= PROJECT_EVERY {
+            self.since_projection = 0;
+            self.delta_rotation = project_rotation(&self.delta_rotation);
+        }
     }
 
     /// `A`, `B`, `C` of the next euler interval (module docs) as dense matrices: the reference the
