@@ -48,7 +48,7 @@ def _state() -> ik.NavState:
     return ik.NavState([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], Rotation.identity())
 
 
-# name -> (make input from a seed and a size, call on that input, size for ~0.1-0.3 s)
+# name -> (make input from a seed and a size, call on that input, a size for a call of 0.1 s or more)
 Batch = tuple[Callable[[int, int], Any], Callable[[Any], Any], int]
 
 BATCH_APIS: dict[str, Batch] = {
@@ -68,13 +68,13 @@ BATCH_APIS: dict[str, Batch] = {
         lambda x: ik.integrate_attitude(x[0], x[1], scheme="rk4"),
         1_000_000,
     ),
-    "integrate": (_imu, lambda imu: ik.integrate(imu, initial=_state(), scheme="rk4"), 400_000),
+    "integrate": (_imu, lambda imu: ik.integrate(imu, initial=_state(), scheme="rk4"), 1_000_000),
     "propagate": (
         _imu,
         lambda imu: ik.propagate(
             imu, initial=_state(), covariance=np.eye(15) * 1e-4, noise=NOISE, covariance_every=1000
         ),
-        60_000,
+        200_000,
     ),
     "preintegrate": (_imu, lambda imu: ik.preintegrate(imu, noise=NOISE, combined=True), 300_000),
     "preintegrate_windows": (
@@ -87,7 +87,7 @@ BATCH_APIS: dict[str, Batch] = {
         lambda x: sim.simulate(sim.FigureEight(), rate=1000.0, duration=x[1], noise=NOISE, seed=x[0]),
         400_000,
     ),
-    "filters.Mahony.run": (_imu, lambda imu: filters.Mahony().run(imu), 400_000),
+    "filters.Mahony.run": (_imu, lambda imu: filters.Mahony().run(imu), 1_200_000),
     "filters.Madgwick.run": (_imu, lambda imu: filters.Madgwick().run(imu), 400_000),
     "noise.allan_deviation": (
         lambda s, n: np.random.default_rng(s).standard_normal((n, 3)),
