@@ -17,6 +17,8 @@ reckoning: no correction, so the error grows with time; see docs/strapdown.md).
 
 Reads: PATH in any format imukit detects (an EuRoC folder, a ROS bag, ...; `imukit --help`).
 Frames and units: body = the IMU frame; world z up, gravity (0, 0, -9.81) m/s^2; positions in m.
+Schemes: euler (order 1), midpoint (order 2, VINS-Mono's), rk4 (order 4), exp (exact while the
+samples are held over a step; order 1 on smooth motion).
 
 The initial state:
   - with ground truth in PATH: the truth's position, velocity and attitude interpolated at the
