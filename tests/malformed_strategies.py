@@ -80,6 +80,8 @@ class Arg:
     free_length: bool = False  # "array": any length N ≥ 1 is valid (taus, boundaries)
     nan_ok: bool = False  # NaN is documented as a valid value (missing truth rows)
     index: bool = False  # an index: out of range raises IndexError (naming it), as in Python
+    # Documented freedoms: mutation label -> the expectation that holds for this argument instead.
+    relabel: tuple[tuple[str, Expect], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -376,6 +378,9 @@ def mutations_of(arg: Arg, value: Any, rng: np.random.Generator) -> list[Mutatio
             continue
         if arg.nan_ok and m.label == "NaN":
             m = Mutation(m.label, m.value, Expect.NAN_OK)
+        for label, expect in arg.relabel:
+            if m.label == label:
+                m = Mutation(m.label, m.value, expect, m.reference)
         out.append(m)
     return out
 

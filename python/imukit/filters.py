@@ -35,7 +35,7 @@ from imukit._arrays import (
     rotation_from_unit_quat,
     vector3,
 )
-from imukit._errors import ParameterError, ShapeError
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuData
 
 __all__ = [
@@ -161,6 +161,18 @@ def _numbers(option: tuple[float, ...] | None, name: str) -> list[float] | None:
     return [real_scalar(v, f"{name}.{f}", what="a number", accept=lambda x: True) for f, v in zip(fields, option)]
 
 
+def _check_mag_norms(mags: FloatArray) -> FloatArray:
+    """``mags`` (N, 3), refusing finite samples whose norm overflows: the filter keeps the first
+    norm as its reference, which must stay finite."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        norms = np.linalg.norm(mags, axis=1)
+    # NaN and inf themselves are the core's to report (naming the sample); here finite overflow.
+    big = np.flatnonzero(np.isinf(norms) & np.isfinite(mags).all(axis=1))
+    if big.size:
+        raise NonFiniteError(f"mag: sample {int(big[0])} is too large: its norm overflows float64")
+    return mags
+
+
 def _vec3(x: ArrayLike, name: str) -> list[float]:
     return [float(e) for e in vector3(x, name)]
 
@@ -219,7 +231,7 @@ class _Filter:
             _vec3(gyro, "gyro"),
             _vec3(accel, "accel"),
             real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
-            None if mag is None else _vec3(mag, "mag"),
+            None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist(),
         )
         self._state = FilterState(values)
         return rotation_from_unit_quat(values[:4].copy())
@@ -249,6 +261,7 @@ class _Filter:
             mags = np.ascontiguousarray(as_float_array(mag, "mag"))
             if mags.shape != (n, 3):
                 raise ShapeError(f"mag: expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}")
+            _check_mag_norms(mags)
         continued = isinstance(initial, FilterState)
         if isinstance(initial, FilterState):
             start = initial.values.copy()

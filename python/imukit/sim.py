@@ -269,6 +269,11 @@ class SensorErrors:
             real_scalar(getattr(self, name), name, what=what, accept=lambda x: math.isfinite(x) and x >= 0)
         for name in ("gauss_markov_tau", "range"):
             real_scalar(getattr(self, name), name, what="a positive number (inf for none)", accept=lambda x: x > 0)
+        if self._full_scale() == 0.0:
+            raise ParameterError(
+                f"resolution / range: a step of {self.resolution!r} rounds the range {self.range!r} "
+                "(and so every reading) to 0"
+            )
         matrix = as_float_array(self.matrix, "matrix")
         if matrix.shape != (3, 3):
             raise ShapeError(f"matrix: expected shape (3, 3), got {matrix.shape}")
@@ -293,6 +298,8 @@ class SensorErrors:
         if math.isinf(limit) or step == 0.0:
             return None if math.isinf(limit) else limit
         steps = limit / step
+        if math.isinf(steps):  # a step too fine to count: the core reports the overflow it causes
+            return limit
         whole = math.floor(steps)
         return (whole + (1.0 if steps - whole >= 0.5 else 0.0)) * step
 
@@ -344,9 +351,14 @@ def simulate(
     begin = _finite(start, "start")
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**64:
         raise ParameterError(f"seed: expected an int in [0, 2**64), got {seed!r}")
-    for name, errors in (("gyro_errors", gyro_errors), ("accel_errors", accel_errors)):
-        if errors is not None and not isinstance(errors, SensorErrors):
-            raise ParameterError(f"{name}: expected an imukit.sim.SensorErrors or None, got {type(errors).__name__}")
+    for name, value, kind, shown in (
+        ("gyro_errors", gyro_errors, SensorErrors, "imukit.sim.SensorErrors"),
+        ("accel_errors", accel_errors, SensorErrors, "imukit.sim.SensorErrors"),
+        ("noise", noise, ImuNoise, "imukit.ImuNoise"),
+        ("bias", bias, ImuBias, "imukit.ImuBias"),
+    ):
+        if value is not None and not isinstance(value, kind):
+            raise ParameterError(f"{name}: expected an {shown} or None, got {type(value).__name__}")
     g = vector3(gravity, "gravity")
     n = math.floor(span * rate_hz + 1e-9) + 1
     if n > _MAX_SAMPLES:

@@ -118,7 +118,9 @@ class AllanFit:
         if bad.size:
             raise ParameterError(f"taus: expected positive, finite seconds, got {float(t[bad[0]])!r} at index {bad[0]}")
         theta = np.array([self.noise_density, self.bias_instability, self.random_walk]) ** 2
-        return np.asarray(np.sqrt(_design(t) * theta), dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):  # 1/τ of a subnormal τ: inf, or 0 where θ is
+            terms = np.where(theta > 0.0, np.sqrt(_design(t) * theta), 0.0)
+        return np.asarray(terms, dtype=np.float64)
 
     def __str__(self) -> str:
         unit, density, walk = _UNITS[self.sensor]
@@ -207,6 +209,10 @@ def fit_allan(
     k = columns.shape[1]
     if not np.any(sub.deviation > 0.0):
         raise ParameterError("allan: the Allan variance is 0 at every τ (a constant signal): nothing to fit")
+    # Fitted in units of the largest deviation, so that the weights (which go as σ⁻⁴) neither
+    # overflow nor underflow: θ = (N², B², K²) scales back by scale², its covariance by scale⁴.
+    scale = float(np.max(sub.deviation))
+    sub = sub._replace(deviation=sub.deviation / scale)
     ys = (sub.deviation**2).T  # (k, M): one row per fitted column
     theta = _gls_step(sub, a_one, ys, None)
     for _ in range(50):
@@ -230,8 +236,14 @@ def fit_allan(
     else:
         q = float(stats.norm.ppf(0.5 + confidence / 2.0))
     half = q * np.sqrt(np.maximum(np.diag(cov), 0.0))
-    ends = [(math.sqrt(max(t - h, 0.0)), math.sqrt(t + h)) for t, h in zip(theta, half)]
-    n_, b_, k_ = (math.sqrt(t) for t in theta)
+    ends = [(scale * math.sqrt(max(t - h, 0.0)), scale * math.sqrt(t + h)) for t, h in zip(theta, half)]
+    n_, b_, k_ = (scale * math.sqrt(t) for t in theta)
+    with np.errstate(over="ignore"):
+        cov = cov * scale**2 * scale**2
+    if not np.isfinite(cov).all():
+        raise NonFiniteError(
+            f"allan.deviation: values up to {scale!r} make the covariance of (N², B², K²) overflow float64"
+        )
     return AllanFit(
         noise_density=n_,
         bias_instability=b_,
@@ -257,8 +269,14 @@ def _checked(allan: object) -> AllanDeviation:
     if taus.ndim != 1 or not (np.isfinite(taus).all() and (taus > 0).all()):
         raise ParameterError(f"allan.taus: expected (M,) positive, finite seconds, got {allan.taus!r}")
     rate = _number(allan.rate, "allan.rate", positive=True, what="a positive, finite sample rate in Hz")
-    if not (np.rint(taus * rate) >= 1).all():
-        raise ParameterError(f"allan.taus: expected τ of at least one sample (1/rate), got {allan.taus!r}")
+    samples = allan.samples
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
+        raise ParameterError(f"allan.samples: expected an integer N ≥ 2, got {samples!r}")
+    m = np.rint(taus * rate)
+    if not ((m >= 1) & (2 * m <= samples)).all():
+        raise ParameterError(
+            f"allan.taus: expected τ = m / rate with 1 ≤ m ≤ N/2 = {samples // 2} samples, got {allan.taus!r}"
+        )
     dev = as_float_array(allan.deviation, "allan.deviation")
     if dev.ndim not in (1, 2) or len(dev) != len(taus):
         raise ShapeError(
