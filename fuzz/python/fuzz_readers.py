@@ -32,7 +32,7 @@ import traceback
 import types
 import warnings
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import Callable, Literal, NamedTuple, TypedDict
 
 import numpy as np
 
@@ -58,7 +58,12 @@ def _file(case: Case, name: str, content: bytes) -> Path:
     return path
 
 
-def _kwargs(case: Case) -> dict[str, object]:
+class _ReadOptions(TypedDict):
+    on_bad_line: Literal["raise", "skip"]
+    report: io.ReadReport
+
+
+def _kwargs(case: Case) -> _ReadOptions:
     return {"on_bad_line": "skip" if case.skip else "raise", "report": io.ReadReport()}
 
 
@@ -102,7 +107,7 @@ def _kitti(case: Case) -> Result:
     return io.read_kitti_poses(poses, times, **_kwargs(case))
 
 
-_TIME_UNITS = ("s", "ms", "us", "ns")
+_TIME_UNITS: tuple[Literal["s", "ms", "us", "ns"], ...] = ("s", "ms", "us", "ns")
 _DELIMITERS = (None, ",", ";", "\t", " ", None, None, None)
 
 
@@ -116,11 +121,11 @@ def _imu_csv(case: Case) -> Result:
         time_column=time_column,
         gyro_columns=gyro_columns,
         accel_columns=accel_columns,
-        time_unit=_TIME_UNITS[(bits >> 1) & 3],  # type: ignore[arg-type]
+        time_unit=_TIME_UNITS[(bits >> 1) & 3],
         gyro_unit="deg/s" if bits & 8 else "rad/s",
         accel_unit="g" if bits & 16 else "m/s^2",
         delimiter=_DELIMITERS[(bits >> 5) & 7] if bits & 64 else None,
-        **_kwargs(case),  # type: ignore[arg-type]
+        **_kwargs(case),
     )
 
 
@@ -147,30 +152,30 @@ READERS: tuple[tuple[str, Callable[[Case], Result]], ...] = (
 )
 
 
-class Finding(AssertionError):
+class ContractError(AssertionError):
     """A reader broke the contract: a valid-looking result that is not valid."""
 
 
 def _increasing(t: np.ndarray, what: str) -> None:
     if t.size > 1 and not np.all(np.diff(t) > 0):
-        raise Finding(f"{what}: stamps not strictly increasing")
+        raise ContractError(f"{what}: stamps not strictly increasing")
 
 
 def _check_imu(imu: ImuData) -> None:
     if len(imu) < 1:
-        raise Finding("ImuData without samples")
+        raise ContractError("ImuData without samples")
     for name in ("t", "gyro", "accel"):
         if not np.all(np.isfinite(getattr(imu, name))):
-            raise Finding(f"ImuData.{name} holds a non-finite value")
+            raise ContractError(f"ImuData.{name} holds a non-finite value")
     _increasing(imu.t if imu.t_ns is None else imu.t_ns, "ImuData")
 
 
 def _check_trajectory(trajectory: Trajectory) -> None:
     if not np.all(np.isfinite(trajectory.position)):
-        raise Finding("Trajectory.position holds a non-finite value")
+        raise ContractError("Trajectory.position holds a non-finite value")
     quat = trajectory.rotation.as_quat()
     if not np.all(np.isfinite(quat)):
-        raise Finding("Trajectory.rotation holds a non-finite value")
+        raise ContractError("Trajectory.rotation holds a non-finite value")
     _increasing(trajectory.t if trajectory.t_ns is None else trajectory.t_ns, "Trajectory")
 
 
@@ -314,7 +319,8 @@ def _instrument_imukit(atheris: types.ModuleType) -> None:
 
 def main(argv: list[str]) -> None:
     """Fuzz with libFuzzer flags and corpus folders as in ``argv``."""
-    import atheris  # noqa: PLC0415  (only the fuzzer needs it; the regression tests do not)
+    # Imported here: only the fuzzer needs it, not the regression tests.
+    import atheris  # type: ignore[import-untyped]
 
     corpora = [Path(a) for a in argv[1:] if not a.startswith("-")]
     if corpora and not any(corpora[0].glob("*")):

@@ -47,3 +47,59 @@ fn rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     let last = attitude::integrate(&t, &gyro, &UnitQuaternion::identity(), &options, None);
     assert!(matches!(last, Err(Error::Overflow { index: 2 })), "{last:?}");
 }
+
+/// fuzz/artifacts/preint/crash-8c76f01f…: finite samples with a finite but enormous noise density
+/// (its square overflows) left an infinite covariance behind an `Ok`. Now an overflow at the last
+/// sample, with nothing added; the windows report the sample ending the first bad window.
+#[test]
+fn preintegration_overflow_is_an_error_and_adds_nothing() {
+    use imukit::preint::{preintegrate_windows, Preintegrator, Scheme};
+    use imukit::propagate::Noise;
+    use imukit::strapdown::Samples;
+    use nalgebra::Vector3;
+
+    let t = [0.0, 0.01, 0.02];
+    let gyro = [0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3];
+    let accel = [0.0, 0.0, 9.81, 0.0, 0.0, 9.81, 0.0, 0.0, 9.81];
+    let samples = Samples {
+        t: &t,
+        gyro: &gyro,
+        accel: &accel,
+    };
+    let huge = 1.6e212;
+    for (noise, walk) in [
+        (
+            Noise {
+                accel_random_walk: huge,
+                ..Noise::default()
+            },
+            true,
+        ),
+        (
+            Noise {
+                accel_density: huge,
+                ..Noise::default()
+            },
+            false,
+        ),
+    ] {
+        for scheme in [Scheme::Euler, Scheme::Midpoint] {
+            let mut p = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), noise).with_scheme(scheme);
+            if walk {
+                p = p.with_bias_walk();
+            }
+            let before = p.clone();
+            let result = p.integrate_samples(&samples);
+            assert!(
+                matches!(result, Err(Error::Overflow { index: 2 })),
+                "{scheme:?}: {result:?}"
+            );
+            assert_eq!(p, before, "{scheme:?}: the failed call changed the preintegration");
+            let windows = preintegrate_windows(&samples, &[0.0, 0.005, 0.02], &before);
+            assert!(
+                matches!(windows, Err(Error::Overflow { index: 1 })),
+                "{scheme:?}: {windows:?}"
+            );
+        }
+    }
+}

@@ -20,7 +20,9 @@ pub const CHUNK: usize = 1 << 15;
 impl Preintegrator {
     /// Adds the N − 1 intervals of `samples` (euler: sample k held over `[t_k, t_k+1)`; midpoint:
     /// between samples k and k+1, continuing from the last sample, which must then be sample 0).
-    /// Everything is validated first: on an error nothing has been added.
+    /// Everything is validated first: on an error nothing has been added. Finite samples whose
+    /// deltas or covariance overflow (e.g. a noise density of 1e200, squared) are an
+    /// [`Error::Overflow`] at the last sample, again with nothing added.
     pub fn integrate_samples(&mut self, samples: &Samples<'_>) -> Result<()> {
         samples.validate()?;
         let n = samples.t.len();
@@ -35,6 +37,19 @@ impl Preintegrator {
                 ),
             });
         }
+        let mut next = self.clone();
+        next.add_validated(samples)?;
+        if !next.is_finite() {
+            return Err(Error::Overflow { index: n - 1 });
+        }
+        *self = next;
+        Ok(())
+    }
+
+    /// The intervals of validated `samples`, continuing this preintegration.
+    fn add_validated(&mut self, samples: &Samples<'_>) -> Result<()> {
+        let n = samples.t.len();
+        let first = (samples.accel_at(0), samples.gyro_at(0));
         match self.scheme {
             Scheme::Euler if self.bias_walk.is_none() && n > 2 * CHUNK => {
                 let template = Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise);

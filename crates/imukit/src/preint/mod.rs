@@ -237,6 +237,29 @@ impl Preintegrator {
         self.count_interval();
     }
 
+    /// Whether every delta, covariance, cross covariance and Jacobian is finite: finite input can
+    /// still overflow them (a noise density of 1e200 squares to inf).
+    pub(super) fn is_finite(&self) -> bool {
+        let finite = |m: &Matrix3<f64>| m.iter().all(|v| v.is_finite());
+        let cross_finite = |c: &Cross| c.iter().flatten().all(finite);
+        let walk_finite = self
+            .bias_walk
+            .as_ref()
+            .is_none_or(|w| cross_finite(&w.cross) && w.var_gyro.is_finite() && w.var_accel.is_finite());
+        finite(&self.delta_rotation)
+            && self
+                .delta_velocity
+                .iter()
+                .chain(self.delta_position.iter())
+                .all(|v| v.is_finite())
+            && self.delta_t.is_finite()
+            && self.covariance.iter().all(finite)
+            && cross_finite(&self.jac)
+            && cross_finite(&self.ends.start_cross)
+            && cross_finite(&self.ends.end_cross)
+            && walk_finite
+    }
+
     /// Counts one interval; every [`PROJECT_EVERY`] intervals, projects ΔR back onto SO(3).
     pub(super) fn count_interval(&mut self) {
         self.since_projection += 1;

@@ -26,10 +26,17 @@ pub fn preintegrate_windows(
     samples.validate()?;
     let n = samples.t.len();
     check_boundaries(boundaries, samples.t[0], samples.t[n - 1])?;
-    Ok(boundaries
+    let windows: Vec<Preintegrator> = boundaries
         .par_windows(2)
         .map(|w| window(samples, w[0], w[1], template))
-        .collect())
+        .collect();
+    // Finite samples can still overflow a window (a noise density of 1e200, squared): name the
+    // sample that ends the first such window.
+    if let Some(m) = windows.iter().position(|w| !w.is_finite()) {
+        let end = samples.t.partition_point(|&x| x < boundaries[m + 1]);
+        return Err(Error::Overflow { index: end.min(n - 1) });
+    }
+    Ok(windows)
 }
 
 fn check_boundaries(b: &[f64], first: f64, last: f64) -> Result<()> {
