@@ -44,14 +44,14 @@ class Expect(enum.Enum):
 @dataclass
 class Stats:
     cases: int = 0
-    entries: set[str] = field(default_factory=set)
+    entries: set[str] = field(default_factory=set)  # the public names the cases went through
     failures: int = 0
     known: set[str] = field(default_factory=set)  # findings in code owned elsewhere, reported
 
     def summary(self) -> str:
         known = f"; {len(self.known)} known finding(s) outside the corpus owner's files" if self.known else ""
         return (
-            f"malformed-input corpus: {self.cases:,} cases through {len(self.entries)} entry points, "
+            f"malformed-input corpus: {self.cases:,} cases through {len(self.entries)} public entry points, "
             f"{self.failures} failures{known}"
         )
 
@@ -471,7 +471,7 @@ def run_call(entry: Entry, values: dict[str, Any]) -> tuple[str, Any]:
 def check_case(entry: Entry, values: dict[str, Any], arg_name: str, mutation: Mutation) -> str | None:
     """Run one case; None when the outcome meets the expectation, else a description."""
     STATS.cases += 1
-    STATS.entries.add(entry.name)
+    STATS.entries.update(entry.covers)
     mutated = {**values, arg_name: mutation.value}
     kind, out = run_call(entry, mutated)
     where = f"{entry.name}: {arg_name} <- {mutation.label} (expected {mutation.expect.value})"
@@ -512,7 +512,7 @@ def check_case(entry: Entry, values: dict[str, Any], arg_name: str, mutation: Mu
 def check_clean(entry: Entry, values: dict[str, Any]) -> str | None:
     """The unmutated valid call must succeed with a NaN-free result."""
     STATS.cases += 1
-    STATS.entries.add(entry.name)
+    STATS.entries.update(entry.covers)
     kind, out = run_call(entry, values)
     if kind != "ok":
         return f"{entry.name}: the valid call gave {kind} {type(out).__name__}: {out}"
