@@ -103,3 +103,74 @@ fn preintegration_overflow_is_an_error_and_adds_nothing() {
         }
     }
 }
+
+/// fuzz/artifacts/strapdown/crash-61955b01…: an RK4 strapdown step with a finite but enormous
+/// bias-corrected rate (1.3e66 rad/s over 2 s) overflowed |q|² inside `new_normalize`, which
+/// returned the zero quaternion; `integrate` and `propagate` returned it as `Ok`.
+#[test]
+fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
+    use imukit::propagate::{self, Covariance, Noise, Outputs};
+    use imukit::strapdown::{self, Bias, NavState, Samples, StatesOut};
+    use nalgebra::Vector3;
+
+    let t = [0.0, 1.9789];
+    let gyro = [0.0; 6];
+    let accel = [0.0, 0.0, 9.81, 0.0, 0.0, 9.81];
+    let samples = Samples {
+        t: &t,
+        gyro: &gyro,
+        accel: &accel,
+    };
+    let initial = NavState {
+        position: Vector3::zeros(),
+        velocity: Vector3::zeros(),
+        rotation: UnitQuaternion::identity(),
+    };
+    let bias = Bias {
+        gyro: Vector3::new(0.0, 0.0, 1.3e66),
+        accel: Vector3::zeros(),
+    };
+    let options = strapdown::Options {
+        scheme: strapdown::Scheme::Rk4,
+        ..strapdown::Options::default()
+    };
+    let last = strapdown::integrate(&samples, &initial, &bias, &options, None);
+    assert!(matches!(last, Err(Error::Overflow { index: 1 })), "{last:?}");
+    let (mut pv, mut rot) = ([0.0; 12], [0.0; 8]);
+    let states = StatesOut {
+        position_velocity: &mut pv,
+        rotation: &mut rot,
+    };
+    let stored = strapdown::integrate(&samples, &initial, &bias, &options, Some(states));
+    assert!(matches!(stored, Err(Error::Overflow { index: 1 })), "{stored:?}");
+    let mut covariances = [0.0; 225 * 2];
+    let outputs = Outputs {
+        states: None,
+        covariances: &mut covariances,
+        every: 1,
+    };
+    let noise = Noise::default();
+    let propagated = propagate::propagate(
+        &samples,
+        &initial,
+        &Covariance::zeros(),
+        &bias,
+        &noise,
+        &options,
+        outputs,
+    );
+    assert!(
+        matches!(propagated, Err(Error::Overflow { index: 1 })),
+        "{propagated:?}"
+    );
+    // Every other scheme composes exact rotations: still unit, still Ok.
+    for scheme in [
+        strapdown::Scheme::Euler,
+        strapdown::Scheme::Midpoint,
+        strapdown::Scheme::Exp,
+    ] {
+        let options = strapdown::Options { scheme, ..options };
+        let x = strapdown::integrate(&samples, &initial, &bias, &options, None).unwrap();
+        assert!((x.rotation.norm() - 1.0).abs() < 1e-12, "{scheme:?}");
+    }
+}
