@@ -174,3 +174,41 @@ fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
         assert!((x.rotation.norm() - 1.0).abs() < 1e-12, "{scheme:?}");
     }
 }
+
+/// fuzz/artifacts/preint/crash-e55713a2…: two finite preintegrations with an enormous accelerometer
+/// bias (2.3e197 m/s²) merged into an infinite covariance and Jacobian behind an `Ok`.
+#[test]
+fn preintegration_merge_overflow_is_an_error() {
+    use imukit::preint::Preintegrator;
+    use imukit::propagate::Noise;
+    use imukit::strapdown::Samples;
+    use nalgebra::Vector3;
+
+    let t = [0.0, 0.5];
+    let gyro = [0.1, -0.2, 0.3, 0.1, -0.2, 0.3];
+    let accel = [0.0; 6];
+    let samples = Samples {
+        t: &t,
+        gyro: &gyro,
+        accel: &accel,
+    };
+    let noise = Noise {
+        gyro_density: 1e-3,
+        accel_density: 1e-2,
+        ..Noise::default()
+    };
+    let mut p = Preintegrator::new(Vector3::zeros(), Vector3::new(-2.3e197, 0.0, 0.0), noise);
+    p.integrate_samples(&samples).unwrap();
+    let result = p.merge(&p);
+    match result {
+        Err(Error::Argument { name, source }) => {
+            assert_eq!(name, "next");
+            assert!(matches!(*source, Error::Overflow { .. }), "{source:?}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // A modest bias merges.
+    let mut q = Preintegrator::new(Vector3::zeros(), Vector3::new(0.1, 0.0, 0.0), noise);
+    q.integrate_samples(&samples).unwrap();
+    assert!((q.merge(&q).unwrap().delta_t - 1.0).abs() < 1e-15);
+}

@@ -64,7 +64,7 @@ impl Preintegrator {
                     })
                     .collect();
                 for chunk in &chunks {
-                    *self = self.merge(chunk)?;
+                    *self = self.merge_unchecked(chunk)?;
                 }
             }
             Scheme::Euler => self.run_euler(samples, 0, n - 1),

@@ -27,8 +27,18 @@ impl Preintegrator {
     /// The preintegration over i → k of this one (i → j) followed by `next` (j → k), covariance
     /// and bias Jacobians included (module docs of `merge.rs`). Both must share the scheme, bias
     /// and noise, and in the midpoint scheme `next` must start with this one's last sample. The bias
-    /// random walk is not merged (`covariance_combined` of the result is `None`).
+    /// random walk is not merged (`covariance_combined` of the result is `None`). Finite
+    /// preintegrations whose composition overflows are an [`Error::Overflow`] in `next`.
     pub fn merge(&self, next: &Preintegrator) -> Result<Preintegrator> {
+        let merged = self.merge_unchecked(next)?;
+        if !merged.is_finite() {
+            return Err(Error::Overflow { index: 0 }.in_argument("next"));
+        }
+        Ok(merged)
+    }
+
+    /// [`Preintegrator::merge`] without the overflow check (the batch path checks once, at its end).
+    pub(super) fn merge_unchecked(&self, next: &Preintegrator) -> Result<Preintegrator> {
         if self.scheme != next.scheme {
             let got = format!("{:?} after {:?}", next.scheme, self.scheme);
             return Err(mismatch("a preintegration with the same scheme", got));
