@@ -52,8 +52,9 @@ fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
     }
 }
 
-/// Whether every delta, covariance and Jacobian entry is finite: finite samples near f64's limits
-/// (or a subnormal step) can overflow them, and the core does not check.
+/// Whether every delta, covariance and Jacobian entry is finite: one streaming step with finite
+/// readings near f64's limits (or a subnormal step) can overflow them, and the core's streaming
+/// step leaves that check to its caller (its batch paths make it themselves).
 fn all_finite(p: &preint::Preintegrator) -> bool {
     let (covariance, jacobian, combined) = (p.covariance(), p.bias_jacobian(), p.covariance_combined());
     [
@@ -66,15 +67,6 @@ fn all_finite(p: &preint::Preintegrator) -> bool {
     ]
     .iter()
     .all(|part| part.iter().all(|x| x.is_finite()))
-}
-
-fn overflow(py: Python<'_>) -> PyErr {
-    raise(
-        py,
-        "NonFiniteError",
-        "imu / bias",
-        "too large in magnitude to compute with: the preintegrated deltas or covariance overflow",
-    )
 }
 
 /// Column-major nalgebra storage as a row-major `(r, c)` array.
@@ -164,10 +156,8 @@ impl PyPreintegrator {
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
-        // On a copy, committed only when finite (see `all_finite`).
-        let mut next = self.inner.clone();
-        let inner = &mut next;
-        let result = match py.detach(|| inner.integrate_samples(&samples)) {
+        let inner = &mut self.inner;
+        match py.detach(|| inner.integrate_samples(&samples)) {
             Err(imukit::Error::Parameter {
                 name: "samples",
                 expected,
@@ -178,14 +168,9 @@ impl PyPreintegrator {
                 "imu",
                 format!("expected {expected}, got {got}"),
             )),
-            other => other.map_err(|e| to_py(py, "imu", e)),
-        };
-        result?;
-        if !all_finite(&next) {
-            return Err(overflow(py));
+            // The core refuses (adding nothing) finite samples that overflow the deltas or covariance.
+            other => other.map_err(|e| to_py(py, "imu / bias", e)),
         }
-        self.inner = next;
-        Ok(())
     }
 
     /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
@@ -246,9 +231,6 @@ pub(crate) fn preint_windows(
     });
     let windows = windows
         .map_err(|e| raise(py, "ParameterError", "threads", e))?
-        .map_err(|e| to_py(py, "imu", e))?;
-    if !windows.iter().all(all_finite) {
-        return Err(overflow(py));
-    }
+        .map_err(|e| to_py(py, "imu / bias", e))?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
 }
