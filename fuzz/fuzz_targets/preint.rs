@@ -5,8 +5,7 @@
 
 use arbitrary::Arbitrary;
 use imukit::preint::{preintegrate_windows, Preintegrator, Scheme};
-use imukit::propagate::Noise;
-use imukit_fuzz::{assert_finite, finite, vector, Series};
+use imukit_fuzz::{assert_finite, finite, noise, vector, Series};
 use libfuzzer_sys::fuzz_target;
 
 #[derive(Arbitrary, Debug)]
@@ -39,13 +38,7 @@ fn check(what: &str, p: &Preintegrator) {
 }
 
 fuzz_target!(|input: Input| {
-    let [g, a, gw, aw] = input.noise;
-    let noise = Noise {
-        gyro_density: g,
-        accel_density: a,
-        gyro_random_walk: gw,
-        accel_random_walk: aw,
-    };
+    let noise = noise(input.noise);
     let mut template =
         Preintegrator::new(vector(input.bias_gyro), vector(input.bias_accel), noise).with_scheme(if input.midpoint {
             Scheme::Midpoint

@@ -3,9 +3,9 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use imukit::propagate::{covariance_count, propagate, Covariance, Noise, Outputs};
+use imukit::propagate::{covariance_count, propagate, Covariance, Outputs};
 use imukit::strapdown::{integrate, Bias, NavState, Options, Scheme, StatesOut};
-use imukit_fuzz::{assert_finite, assert_unit, finite, unit, vector, Series};
+use imukit_fuzz::{assert_finite, assert_unit, finite, noise, unit, vector, Series};
 use libfuzzer_sys::fuzz_target;
 
 #[derive(Arbitrary, Debug)]
@@ -48,13 +48,7 @@ fuzz_target!(|input: Input| {
         scheme: SCHEMES[usize::from(input.scheme) % SCHEMES.len()],
         gravity: vector(input.gravity),
     };
-    let [g, acc, gw, aw] = input.noise;
-    let noise = Noise {
-        gyro_density: g,
-        accel_density: acc,
-        gyro_random_walk: gw,
-        accel_random_walk: aw,
-    };
+    let noise = noise(input.noise);
     let mut p = Covariance::from_diagonal(&nalgebra::SVector::<f64, 15>::from(input.variances));
     let (i, j, v) = input.off_diagonal;
     let (i, j) = (usize::from(i) % 15, usize::from(j) % 15);

@@ -75,11 +75,16 @@ def _euroc_groundtruth(case: Case) -> Result:
     return io.read_euroc_groundtruth(_file(case, "data.csv", case.first), **_kwargs(case))
 
 
-def _euroc_folder(case: Case) -> Result:
+def _folder(case: Case, truth: str) -> Path:
+    # A downloaded-sequence layout: mav0/imu0/data.csv and, when given, the ground-truth CSV.
     _file(case, "mav0/imu0/data.csv", case.first)
     if case.second:
-        _file(case, "mav0/state_groundtruth_estimate0/data.csv", case.second)
-    return io.read_euroc(case.folder, **_kwargs(case))
+        _file(case, f"mav0/{truth}/data.csv", case.second)
+    return case.folder
+
+
+def _euroc_folder(case: Case) -> Result:
+    return io.read_euroc(_folder(case, "state_groundtruth_estimate0"), **_kwargs(case))
 
 
 def _tum(case: Case) -> Result:
@@ -95,10 +100,7 @@ def _gtsam(case: Case) -> Result:
 
 
 def _tumvi(case: Case) -> Result:
-    _file(case, "mav0/imu0/data.csv", case.first)
-    if case.second:
-        _file(case, "mav0/mocap0/data.csv", case.second)
-    return io.read_tumvi(case.folder, **_kwargs(case))
+    return io.read_tumvi(_folder(case, "mocap0"), **_kwargs(case))
 
 
 def _kitti(case: Case) -> Result:

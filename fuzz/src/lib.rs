@@ -113,6 +113,17 @@ pub fn assert_unit(what: &str, q: &[f64]) {
     assert!((norm - 1.0).abs() < 1e-9, "{what}: Ok attitude with |q| = {norm}");
 }
 
+/// Noise densities from `[gyro, accel, gyro walk, accel walk]`.
+pub fn noise(d: [f64; 4]) -> imukit::propagate::Noise {
+    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = d;
+    imukit::propagate::Noise {
+        gyro_density,
+        accel_density,
+        gyro_random_walk,
+        accel_random_walk,
+    }
+}
+
 /// A 3-vector from an array.
 pub fn vector(v: [f64; 3]) -> nalgebra::Vector3<f64> {
     nalgebra::Vector3::from(v)

@@ -68,34 +68,23 @@ fn attitude_norm_drift(scheme: Scheme) -> f64 {
     worst
 }
 
-#[test]
-fn attitude_euler_stays_unit() {
-    let e = attitude_norm_drift(Scheme::Euler);
-    assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
+/// One test per scheme, so that each is timed and reported on its own.
+macro_rules! attitude_test {
+    ($($name:ident: $scheme:expr,)*) => {$(
+        #[test]
+        fn $name() {
+            let e = attitude_norm_drift($scheme);
+            assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
+        }
+    )*};
 }
 
-#[test]
-fn attitude_exp_stays_unit() {
-    let e = attitude_norm_drift(Scheme::Exp);
-    assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
-}
-
-#[test]
-fn attitude_midpoint_stays_unit() {
-    let e = attitude_norm_drift(Scheme::Midpoint);
-    assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
-}
-
-#[test]
-fn attitude_rk4_stays_unit() {
-    let e = attitude_norm_drift(Scheme::Rk4);
-    assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
-}
-
-#[test]
-fn attitude_magnus_stays_unit() {
-    let e = attitude_norm_drift(Scheme::Magnus);
-    assert!(e < UNIT_TOLERANCE, "|‖q‖ − 1| reached {e:e}");
+attitude_test! {
+    attitude_euler_stays_unit: Scheme::Euler,
+    attitude_exp_stays_unit: Scheme::Exp,
+    attitude_midpoint_stays_unit: Scheme::Midpoint,
+    attitude_rk4_stays_unit: Scheme::Rk4,
+    attitude_magnus_stays_unit: Scheme::Magnus,
 }
 
 #[test]
@@ -202,24 +191,20 @@ fn strapdown_run(scheme: strapdown::Scheme) {
     assert!(p[(0, 0)] > 1e3, "position variance {:e}", p[(0, 0)]);
 }
 
-#[test]
-fn strapdown_euler_covariance_stays_psd() {
-    strapdown_run(strapdown::Scheme::Euler);
+macro_rules! strapdown_test {
+    ($($name:ident: $scheme:expr,)*) => {$(
+        #[test]
+        fn $name() {
+            strapdown_run($scheme);
+        }
+    )*};
 }
 
-#[test]
-fn strapdown_midpoint_covariance_stays_psd() {
-    strapdown_run(strapdown::Scheme::Midpoint);
-}
-
-#[test]
-fn strapdown_rk4_covariance_stays_psd() {
-    strapdown_run(strapdown::Scheme::Rk4);
-}
-
-#[test]
-fn strapdown_exp_covariance_stays_psd() {
-    strapdown_run(strapdown::Scheme::Exp);
+strapdown_test! {
+    strapdown_euler_covariance_stays_psd: strapdown::Scheme::Euler,
+    strapdown_midpoint_covariance_stays_psd: strapdown::Scheme::Midpoint,
+    strapdown_rk4_covariance_stays_psd: strapdown::Scheme::Rk4,
+    strapdown_exp_covariance_stays_psd: strapdown::Scheme::Exp,
 }
 
 /// Runs a filter over `long_steps()` samples in batches continuing one another; returns the
