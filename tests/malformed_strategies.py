@@ -12,9 +12,10 @@ argument by a :class:`Mutation` of it and checks the outcome against the mutatio
 - ``RAISE``: invalid input (NaN, ±inf, wrong shape, dtype or timestamps). The call must raise an
   :class:`imukit.ImukitError` whose message starts with the argument's name.
 - ``EITHER``: finite but extreme input (subnormals, 1e300, empty, one sample, gaps, stamps near
-  2⁶³). The call must return a NaN-free result or raise an ``ImukitError`` naming the argument.
+  2⁶³). The call must return a finite result (no NaN, no ±inf) or raise an ``ImukitError`` naming
+  the argument.
 
-Anything else (another exception, a ``PanicException``, a NaN from finite input) is a failure.
+Anything else (another exception, a ``PanicException``, NaN or inf from finite input) is a failure.
 :data:`STATS` counts the cases for the pytest summary (tests/conftest.py).
 """
 
@@ -37,7 +38,7 @@ import imukit as ik
 class Expect(enum.Enum):
     SAME = "same result as the clean float64 copy"
     RAISE = "an ImukitError naming the argument"
-    EITHER = "a NaN-free result or an ImukitError naming the argument"
+    EITHER = "a finite result or an ImukitError naming the argument"
     NAN_OK = "a result (NaN documented as missing) or an ImukitError naming the argument"
 
 
@@ -420,12 +421,13 @@ def leaves(x: Any, path: str = "") -> Iterator[tuple[str, Any]]:
         raise AssertionError(f"{path}: no rule to compare a {type(x).__name__}")
 
 
-def nan_paths(result: Any) -> list[str]:
+def nonfinite_paths(result: Any) -> list[str]:
+    """Where a result holds NaN or ±inf (docs/guarantees.md: neither comes from finite input)."""
     bad = []
     for path, leaf in leaves(result):
-        if isinstance(leaf, np.ndarray) and leaf.dtype.kind in "fc" and np.isnan(leaf).any():
+        if isinstance(leaf, np.ndarray) and leaf.dtype.kind in "fc" and not np.isfinite(leaf).all():
             bad.append(path)
-        elif isinstance(leaf, np.floating) and np.isnan(leaf):
+        elif isinstance(leaf, np.floating) and not np.isfinite(leaf):
             bad.append(path)
     return bad
 
@@ -496,9 +498,9 @@ def check_case(entry: Entry, values: dict[str, Any], arg_name: str, mutation: Mu
         return f"{where}: returned instead of raising"
     if mutation.expect is Expect.NAN_OK:
         return None
-    bad = nan_paths(out)
+    bad = nonfinite_paths(out)
     if bad:
-        return f"{where}: NaN in {bad} from finite input"
+        return f"{where}: NaN or inf in {bad} from finite input"
     if mutation.expect is Expect.SAME:
         ref_kind, ref = run_call(entry, {**values, arg_name: mutation.reference})
         if ref_kind != "ok":
@@ -510,11 +512,11 @@ def check_case(entry: Entry, values: dict[str, Any], arg_name: str, mutation: Mu
 
 
 def check_clean(entry: Entry, values: dict[str, Any]) -> str | None:
-    """The unmutated valid call must succeed with a NaN-free result."""
+    """The unmutated valid call must succeed with a finite result."""
     STATS.cases += 1
     STATS.entries.update(entry.covers)
     kind, out = run_call(entry, values)
     if kind != "ok":
         return f"{entry.name}: the valid call gave {kind} {type(out).__name__}: {out}"
-    bad = nan_paths(out)
-    return f"{entry.name}: NaN in {bad} from a valid call" if bad else None
+    bad = nonfinite_paths(out)
+    return f"{entry.name}: NaN or inf in {bad} from a valid call" if bad else None

@@ -1043,7 +1043,7 @@ def test_a_panic_or_a_nan_would_be_caught() -> None:
     def value_error(v: dict[str, Any]) -> Any:
         raise ValueError("x: bad")
 
-    for fn, text in ((panics, "PANIC FakePanic"), (nan, "NaN in"), (value_error, "raised ValueError")):
+    for fn, text in ((panics, "PANIC FakePanic"), (nan, "NaN or inf in"), (value_error, "raised ValueError")):
         e = Entry("fake", (), lambda rng: {"x": np.zeros(3)}, fn, {"x": Arg("array")})
         mutation = mutations_of(e.args["x"], np.zeros(3), np.random.default_rng(0))[0]
         cases = STATS.cases

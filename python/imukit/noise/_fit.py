@@ -118,8 +118,12 @@ class AllanFit:
         if bad.size:
             raise ParameterError(f"taus: expected positive, finite seconds, got {float(t[bad[0]])!r} at index {bad[0]}")
         theta = np.array([self.noise_density, self.bias_instability, self.random_walk]) ** 2
-        with np.errstate(over="ignore", invalid="ignore"):  # 1/τ of a subnormal τ: inf, or 0 where θ is
+        with np.errstate(over="ignore", invalid="ignore"):  # 1/τ of a subnormal τ; a term whose θ is 0 is 0
             terms = np.where(theta > 0.0, np.sqrt(_design(t) * theta), 0.0)
+        bad = np.flatnonzero(~np.isfinite(terms).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            raise NonFiniteError(f"taus: the model overflows float64 at τ = {float(t[k])!r} s (index {k})")
         return np.asarray(terms, dtype=np.float64)
 
     def __str__(self) -> str:
