@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import tempfile
 import types
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -721,6 +722,9 @@ def _fit_allan(rng: np.random.Generator) -> Any:
     return values, call
 
 
+_PLOTS = tempfile.TemporaryDirectory(prefix="imukit-corpus-")  # removed when the module is collected
+
+
 @entry(
     "noise.plot_allan",
     ("noise.plot_allan",),
@@ -729,7 +733,7 @@ def _fit_allan(rng: np.random.Generator) -> Any:
 )
 def _plot_allan(rng: np.random.Generator) -> Any:
     allan = _allan_result(rng)
-    path = Path(__import__("tempfile").mkdtemp()) / "allan.png"
+    path = Path(_PLOTS.name) / "allan.png"
     return {"allan": allan, "fit": noise.fit_allan(allan)}, lambda v: noise.plot_allan(v["allan"], path, fit=v["fit"])
 
 
