@@ -11,6 +11,12 @@ mag                    any unit; ``R_wbᵀ m_w``; north is +y (ENU) / +x (NED)
 first sample           initialises: tilt from the accelerometer, heading from the magnetometer (9D),
                        else ZYX yaw 0; output as is
 gyro_bias              the bias estimate after each sample [rad/s]
+saturation             a clipped accelerometer sample (an axis at ±range, ``ImuData.accel_saturated``)
+                       has ‖a‖ ≥ range, so the norm test of :class:`AccelRejection` skips it whenever
+                       range > g + ``norm`` (±2 g sensors and up with the defaults), except during
+                       the :class:`GainRamp`, when rejection is off; a clipped gyro sample is
+                       integrated as read, its error then corrected like any other (heading only
+                       in 9D)
 =====================  ===========================================================================
 
 Equations, rejection rules, the gain ramp and measured test numbers: ``docs/filters.md``.

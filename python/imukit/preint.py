@@ -12,6 +12,9 @@ prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``, ``p_j
 residual               ``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``
 residual Jacobians     rows ``[θ, v, p]``; state columns ``[δp, δv, δθ]`` (imukit's NavState
                        perturbation: ``p + δp``, ``v + δv``, ``R Exp(δθ)``); bias columns ``[b_g, b_a]``
+saturation             clipped samples (``ImuData.gyro_saturated`` / ``accel_saturated``) are
+                       integrated as read, with the configured noise: the covariance does not grow
+                       for them, so check the flags of a window before trusting its factor
 =====================  ===========================================================================
 
 Gravity is added as everywhere in imukit (default ``(0, 0, −9.81)``, z up). Formulas and the noise
