@@ -412,3 +412,40 @@ def test_preintegrate_finds_sensor_yaml_beside_a_bare_csv(simulated: Path, tmp_p
     cli("preintegrate", simulated / "mav0" / "imu0" / "data.csv", "--window", "1", "--out", out)
     with np.load(out) as data:
         assert data["covariance"].shape == (20, 9, 9) and data["covariance"][0, 0, 0] > 0.0  # the noise was found
+
+
+def test_evaluate_counts_poses_outside_the_span_apart_from_those_in_gaps(tmp_path: Path) -> None:
+    """GT at 10 Hz over [0, 10] s without its stamps 5.0 … 6.0 (a 1.2 s gap from 4.9 to 6.1); EST at
+    20 Hz from −0.475 to 10.475 s (220 poses, none on a GT stamp). By hand: 10 before 0 and 10 after
+    10 s are outside the span; 4.925 … 6.075 s, 24 poses, fall in the gap (longer than --max-dt 0.2)."""
+    gt_t = np.arange(101) / 10
+    gt_t = gt_t[(gt_t < 4.95) | (gt_t > 6.05)]
+    est_t = -0.475 + np.arange(220) / 20
+    for t, path in ((gt_t, tmp_path / "gt.txt"), (est_t, tmp_path / "est.txt")):
+        ik.Trajectory(t, np.column_stack([t, 0 * t, 0 * t]), None, Rotation.identity(len(t))).write_tum(path)
+    run = cli("evaluate", tmp_path / "est.txt", tmp_path / "gt.txt", "--align", "none", "--max-dt", "0.2")
+    assert (
+        "44 estimate poses had no ground truth and were left out: 20 outside its span (before its first or after "
+        "its last stamp), 24 in its gaps longer than --max-dt = 0.2 s" in run.stdout
+    )
+    assert rmse_in_row(run.stdout, "ATE translation") < 1e-12  # x = t on both: the kept 176 poses agree
+    (row,) = [line for line in run.stdout.splitlines() if "ATE translation" in line]
+    assert row.rstrip(" │|").split()[-1] == "176"  # the samples column: 220 − 44
+
+
+def test_integrate_counts_samples_after_the_truth_apart_from_those_in_gaps(tmp_path: Path) -> None:
+    """IMU at 200 Hz over [0, 5] s; the ground truth stops at 3 s and lacks its 19 stamps strictly
+    between 1.0 and 1.1 s. By hand: 400 samples (3.005 … 5 s) are after its span, 19 in the gap
+    (longer than 0.02 s), and the ATE is over 1001 − 419 = 582 samples."""
+    imu, truth = ik.sim.simulate(ik.sim.Circle(), rate=RATE, duration=5.0)
+    keep = np.flatnonzero(
+        (np.arange(len(truth)) <= 600) & ~((np.arange(len(truth)) > 200) & (np.arange(len(truth)) < 220))
+    )
+    cut = ik.Trajectory(truth.t[keep], truth.position[keep], truth.velocity[keep], truth.rotation[keep])
+    ik.io.write_euroc(tmp_path, imu, cut, truth_bias=ik.ImuBias())
+    run = cli("integrate", tmp_path)
+    assert (
+        "419 samples had no ground truth and were left out: 400 outside its span (before its first or after its "
+        "last stamp), 19 in its gaps longer than 0.02 s" in run.stdout
+    )
+    assert "over 582 samples (no alignment)" in run.stdout

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from imukit.cli._common import err, out, output_path, read_imu, wrote
+from imukit.cli._common import add_bag_options, err, out, output_path, read_imu, wrote
 from imukit.imu import ImuData
 from imukit.io import write_kalibr_imu
 from imukit.noise import AllanDeviation, AllanFit, allan_deviation, fit_allan, plot_allan, to_imu_noise
@@ -37,6 +37,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("path", metavar="PATH", help="a static recording (EuRoC folder, CSV, bag, ...)")
     p.add_argument("--out", required=True, metavar="PNG", help="NAME.png: writes NAME_gyro.png and NAME_accel.png")
     p.add_argument("--yaml", metavar="YAML", help="where to write the fitted Kalibr imu.yaml (default: NAME.yaml)")
+    add_bag_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -61,7 +62,7 @@ def allan_fits(imu: ImuData, rate_hz: float) -> dict[str, tuple[AllanDeviation, 
 def run(args: argparse.Namespace) -> int:
     png = output_path(args.out, (".png",), "--out")
     yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml") if args.yaml else png.with_suffix(".yaml")
-    imu, _ = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
+    imu, _ = read_imu(args)
     with err.status(f"Allan deviation of {len(imu)} samples"):
         rate = mean_rate_hz(imu)
         fits = allan_fits(imu, rate)

@@ -4,6 +4,7 @@ a magnetometer; the dataset readers of :mod:`imukit.io` do not (yet)."""
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 from typing import NamedTuple
 
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Slerp
 
 from imukit._arrays import FloatArray
-from imukit.cli._common import CliError, err, read_imu
+from imukit.cli._common import CliError, err, read_imu, refuse_bag_options
 from imukit.imu import ImuData
 from imukit.state import Trajectory
 
@@ -63,10 +64,13 @@ def truth_at(truth: Trajectory, imu: ImuData) -> FloatArray:
     return q
 
 
-def read_attitude_input(path: str, *, skip_bad_lines: bool) -> AttitudeInput:
-    """BROAD ``.mat`` / ``.npz`` by suffix; anything else through :func:`imukit.io.read_imu`."""
+def read_attitude_input(args: argparse.Namespace) -> AttitudeInput:
+    """``args.path``: BROAD ``.mat`` / ``.npz`` by suffix (bag options refused); anything else through
+    :func:`imukit.cli._common.read_imu`."""
+    path = args.path
     if Path(path).suffix.lower() in (".mat", ".npz"):
+        refuse_bag_options(args, "a BROAD trial")
         with err.status(f"reading {path}"):
             return read_broad(path)
-    imu, truth = read_imu(path, skip_bad_lines=skip_bad_lines)
+    imu, truth = read_imu(args)
     return AttitudeInput(imu, None, None if truth is None else truth_at(truth, imu), None)

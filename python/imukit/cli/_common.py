@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
 from imukit import io
-from imukit._errors import ImukitError
+from imukit._errors import ImukitError, ParameterError
 from imukit.imu import ImuData
 from imukit.io import ReadReport
 from imukit.state import Trajectory
@@ -63,14 +63,56 @@ def _report_skips(report: ReadReport) -> None:
         err.print(f"imukit: {report}", markup=False)
 
 
-def read_imu(path: str, *, skip_bad_lines: bool) -> tuple[ImuData, Trajectory | None]:
-    """The IMU samples and ground truth at ``path``, whatever its format (:func:`imukit.io.read_imu`);
-    with ``skip_bad_lines``, bad lines are skipped and listed on stderr instead of ending the command."""
+# read_imu's bag arguments and the options that set them.
+BAG_OPTIONS = {"imu_topic": "--imu-topic", "groundtruth_topic": "--groundtruth-topic", "time_source": "--time-source"}
+
+
+def add_bag_options(parser: argparse.ArgumentParser) -> None:
+    """``--imu-topic``, ``--groundtruth-topic``, ``--time-source``: for a ROS bag PATH only."""
+    bag = parser.add_argument_group("ROS bags (PATH a .bag, .mcap or .db3 file, or a ROS 2 bag folder)")
+    bag.add_argument(
+        "--imu-topic",
+        metavar="TOPIC",
+        help="the sensor_msgs/Imu topic (default: the bag's only one; several: an error)",
+    )
+    bag.add_argument(
+        "--groundtruth-topic",
+        metavar="TOPIC",
+        help="the PoseStamped / TransformStamped / Odometry ground truth (default: the bag's only one, else none)",
+    )
+    bag.add_argument(
+        "--time-source",
+        choices=("header", "record"),
+        help="stamps from each message's header.stamp (the default) or the time the recorder received it",
+    )
+
+
+def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
+    """The IMU samples and ground truth at ``args.path``, whatever its format (:func:`imukit.io.read_imu`,
+    with the bag options of :func:`add_bag_options`); with ``args.skip_bad_lines``, bad lines are skipped
+    and listed on stderr instead of ending the command."""
     report = ReadReport()
-    with err.status(f"reading {path}"):
-        result = io.read_imu(path, on_bad_line="skip" if skip_bad_lines else "raise", report=report)
+    bag = {name: getattr(args, name) for name in BAG_OPTIONS}
+    try:
+        with err.status(f"reading {args.path}"):
+            result = io.read_imu(
+                args.path, **bag, on_bad_line="skip" if args.skip_bad_lines else "raise", report=report
+            )
+    except ParameterError as exc:
+        # The library names its argument (imu_topic: ...); the user typed the option.
+        name, _, rest = str(exc).partition(": ")
+        if name in BAG_OPTIONS:
+            raise CliError(f"{BAG_OPTIONS[name]}: {rest}") from exc
+        raise
     _report_skips(report)
     return result
+
+
+def refuse_bag_options(args: argparse.Namespace, what: str) -> None:
+    """A CliError naming the first bag option given, for an input that is not a bag (``what`` says what it is)."""
+    for name, option in BAG_OPTIONS.items():
+        if getattr(args, name) is not None:
+            raise CliError(f"{option}: is for ROS bags, but {args.path} is {what}")
 
 
 def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
@@ -112,4 +154,14 @@ def wrote(what: str, path: str | os.PathLike[str]) -> None:
 def add_plot_option(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument(
         "--plot", metavar="PNG", help=f"write {what} to this PNG file (needs matplotlib: pip install 'imukit[plot]')"
+    )
+
+
+def unpaired(what: str, n_outside_span: int, n_in_gaps: int, max_dt: str) -> str:
+    """One line saying which ``what`` (e.g. ``"estimate poses"``) had no ground truth to be scored
+    against and why: outside the truth's span, or in its gaps longer than ``max_dt`` (e.g.
+    ``"--max-dt = 0.02 s"``); from :func:`imukit.eval.ape`'s counts."""
+    return (
+        f"{n_outside_span + n_in_gaps} {what} had no ground truth and were left out: {n_outside_span} outside "
+        f"its span (before its first or after its last stamp), {n_in_gaps} in its gaps longer than {max_dt}"
     )

@@ -8,7 +8,7 @@ from typing import Any
 
 from rich.table import Table
 
-from imukit.cli._common import add_plot_option, out, output_path, positive, read_trajectory, wrote
+from imukit.cli._common import add_plot_option, out, output_path, positive, read_trajectory, unpaired, wrote
 from imukit.eval import ErrorStats, ape, rpe
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
@@ -20,7 +20,8 @@ Definitions and the comparison with evo: docs/evaluation.md.
 
 Reads: EST and GT as trajectory files, format detected: TUM (`t x y z qx qy qz qw`), an EuRoC
 ground-truth CSV, a TUM-VI mocap CSV. Each EST pose is paired with GT interpolated at its stamp
-(position linear, rotation slerp; not across GT gaps over --max-dt s); unpaired poses are counted.
+(position linear, rotation slerp; not across GT gaps over --max-dt s); unpaired poses are counted,
+those outside GT's span apart from those in its gaps.
 Alignment (--align): se3 (rotation + translation, Umeyama; the default), sim3 (+ scale: monocular
 VO), yaw (rotation about z + translation: the 4 unobservable DoF of VIO), position (translation
 only), none.
@@ -74,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
         _row(table, f"RPE rotation / {span}", relative.rotation_stats, "deg", math.degrees(1.0))
     out.print(table)
     if absolute.n_dropped:
-        out.print(f"{absolute.n_dropped} estimate poses had no ground truth within --max-dt and were left out")
+        counts = absolute.n_outside_span, absolute.n_in_gaps
+        out.print(unpaired("estimate poses", *counts, f"--max-dt = {args.max_dt:g} s"), markup=False)
     if absolute.alignment.scale != 1.0:
         out.print(f"sim3 scale: {absolute.alignment.scale:.6g}", markup=False)
     if png is not None:

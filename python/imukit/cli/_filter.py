@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray
 from imukit.cli._attitude_input import AttitudeInput, read_attitude_input
-from imukit.cli._common import CliError, add_plot_option, chunks, out, output_path, progress, wrote
+from imukit.cli._common import CliError, add_bag_options, add_plot_option, chunks, out, output_path, progress, wrote
 from imukit.eval import attitude_error
 from imukit.filters import FilterResult, FilterState, Madgwick, Mahony
 from imukit.state import Trajectory
@@ -52,6 +52,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--world", choices=("ENU", "NED"), default="ENU", help="world frame (default: %(default)s)")
     p.add_argument("--out", metavar="FILE", help="write the attitudes: TUM (.txt, .tum) or quaternion CSV (.csv)")
     add_plot_option(p, "the attitude error over time")
+    add_bag_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -79,7 +80,7 @@ def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".txt", ".tum", ".csv"), "--out")
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
-    data = read_attitude_input(args.path, skip_bad_lines=args.skip_bad_lines)
+    data = read_attitude_input(args)
     if args.mag and data.mag is None:
         raise CliError(
             f"--mag: {args.path} has no magnetometer samples (the EuRoC, TUM-VI, KITTI and ROS readers give "

@@ -7,9 +7,23 @@ from typing import Any
 
 import numpy as np
 
-from imukit.cli._common import CliError, add_plot_option, err, note, out, output_path, positive, read_imu, wrote
+from imukit.cli._common import (
+    CliError,
+    add_bag_options,
+    add_plot_option,
+    err,
+    note,
+    out,
+    output_path,
+    positive,
+    read_imu,
+    unpaired,
+    wrote,
+)
 from imukit.cli._initial import from_truth, levelled_at_rest, trim_to_truth
 from imukit.strapdown import SCHEMES, integrate
+
+MAX_DT = 0.02  # [s] longest ground-truth interval the ATE interpolates across (imukit.eval.ape's default)
 
 DESCRIPTION = """\
 Integrate the IMU samples of PATH into positions, velocities and attitudes (strapdown dead
@@ -32,7 +46,8 @@ The initial state:
 Writes: --out, a TUM file (`t x y z qx qy qz qw`, one line per IMU sample); --plot, a top view
 (x-y, metres) of the trajectory and the ground truth.
 Prints: with ground truth, the final position error and the absolute trajectory error (RMSE over
-the samples inside the truth's span, no alignment: the start is the truth's).
+the samples inside the truth's span, no alignment: the start is the truth's), and how many samples
+were left out of it: after the truth ends, or in its gaps longer than 0.02 s.
 
 Example:
   imukit integrate MH_01_easy/ --scheme rk4 --bias-from-groundtruth --out traj.txt --plot top.png"""
@@ -59,6 +74,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--out", metavar="TUM", help="write the trajectory to this TUM file (.txt or .tum)")
     add_plot_option(p, "a top view of the trajectory and the ground truth")
+    add_bag_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -66,7 +82,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     tum = None if args.out is None else output_path(args.out, (".txt", ".tum"), "--out")
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
-    imu, truth = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
+    imu, truth = read_imu(args)
     bias = None
     if truth is not None:
         imu = trim_to_truth(imu, truth)
@@ -101,10 +117,12 @@ def run(args: argparse.Namespace) -> int:
 def _report_errors(trajectory: Any, truth: Any) -> None:
     from imukit.eval import ape
 
-    error = ape(trajectory, truth, align="none")
+    error = ape(trajectory, truth, align="none", max_dt=MAX_DT)
     final = float(np.linalg.norm(error.estimate.position[-1] - error.reference.position[-1]))
     out.print(
         f"final position error {final:.4g} m; ATE RMSE {error.translation_stats.rmse:.4g} m, max "
         f"{error.translation_stats.max:.4g} m over {error.translation_stats.n} samples (no alignment)",
         markup=False,
     )
+    if error.n_dropped:
+        out.print(unpaired("samples", error.n_outside_span, error.n_in_gaps, f"{MAX_DT:g} s"), markup=False)

@@ -3,16 +3,27 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
-from imukit.cli._common import CliError, chunks, out, output_path, positive, progress, read_imu, wrote
+from imukit.cli._common import (
+    CliError,
+    add_bag_options,
+    chunks,
+    note,
+    out,
+    output_path,
+    positive,
+    progress,
+    read_imu,
+    wrote,
+)
 from imukit.imu import ImuData, ImuNoise
-from imukit.io import read_kalibr_imu
+from imukit.io import read_euroc_sensor, read_kalibr_imu
+from imukit.io._euroc import euroc_extrinsics
 from imukit.preint import PreintegratedImu, preintegrate_windows
 
 WINDOWS_PER_CALL = 2_000  # a progress step; each window is computed alone, so the split changes nothing
@@ -68,22 +79,23 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--scheme", choices=("euler", "midpoint"), default="midpoint", help="(default: %(default)s)")
     p.add_argument("--noise", metavar="YAML", help="Kalibr imu.yaml with the noise densities")
     p.add_argument("--out", metavar="FILE", help="write the windows to this .csv or .npz file")
+    add_bag_options(p)
     p.set_defaults(run=run)
     return p
 
 
 def noise_for(path: str, noise_yaml: str | None) -> ImuNoise:
-    """``--noise``, else the EuRoC ``imu0/sensor.yaml`` beside the data, else an error."""
+    """``--noise``, else the EuRoC ``imu0/sensor.yaml`` that goes with PATH
+    (:func:`imukit.io.read_euroc_sensor`), else an error."""
     if noise_yaml is not None:
         return read_kalibr_imu(noise_yaml).noise
-    root = Path(path)
-    # A folder: its imu0/ (or mav0/imu0/); a bare imu0/data.csv: the file beside it.
-    candidates = [root / "imu0", root / "mav0" / "imu0"] if root.is_dir() else [root.parent]
-    for folder in candidates:
-        candidate = folder / "sensor.yaml"
-        if candidate.is_file():
-            return read_kalibr_imu(candidate).noise
-    raise CliError(f"--noise: {path} has no imu0/sensor.yaml; give the noise model as a Kalibr imu.yaml")
+    sensor = read_euroc_sensor(path)
+    if sensor is None:
+        raise CliError(f"--noise: {path} has no imu0/sensor.yaml; give the noise model as a Kalibr imu.yaml")
+    t_bs = euroc_extrinsics(sensor)
+    if t_bs is not None and not np.array_equal(t_bs, np.eye(4)):
+        note("the sensor.yaml's T_BS is not the identity; it is not applied: the body frame is the IMU's")
+    return sensor.noise
 
 
 def boundaries(imu: ImuData, window_s: float) -> NDArray[Any]:
@@ -123,7 +135,7 @@ def arrays(imu: ImuData, edges: NDArray[Any], pims: list[PreintegratedImu]) -> d
 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
-    imu, _ = read_imu(args.path, skip_bad_lines=args.skip_bad_lines)
+    imu, _ = read_imu(args)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
     table = arrays(imu, edges, windows(imu, edges, noise, args.scheme))

@@ -8,7 +8,8 @@ TUM                    :func:`write_tum`, :func:`read_tum`: ``timestamp tx ty tz
                        quaternion ``q_wb`` scalar-last; ``t_ns`` printed exactly with 9 decimals
 EuRoC / ASL            :func:`write_euroc`, :func:`read_euroc` (a folder), :func:`read_euroc_imu`,
                        :func:`read_euroc_groundtruth` (one CSV each): integer-nanosecond stamps,
-                       ``q_RS`` = ``R_wb`` scalar-first, EuRoC's header lines
+                       ``q_RS`` = ``R_wb`` scalar-first, EuRoC's header lines;
+                       :func:`read_euroc_sensor`: the noise and rate of ``imu0/sensor.yaml``
 TUM-VI                 :func:`read_tumvi`: EuRoC-layout folder with ``mocap0/data.csv`` poses
 GTSAM / KITTI          :func:`read_gtsam_imu`: ``Time dt accelX … omegaZ`` text (dt checked against the
                        stamps); :func:`read_kitti_poses`: 3×4 pose rows plus a times file
@@ -33,7 +34,7 @@ from __future__ import annotations
 from imukit._errors import FileFormatError
 from imukit.io._csv import read_imu_csv
 from imukit.io._detect import read_imu, read_trajectory
-from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, write_euroc
+from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, read_euroc_sensor, write_euroc
 from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
 from imukit.io._kitti import read_kitti_poses
@@ -52,6 +53,7 @@ __all__ = [
     "read_euroc",
     "read_euroc_groundtruth",
     "read_euroc_imu",
+    "read_euroc_sensor",
     "read_gtsam_imu",
     "read_imu",
     "read_imu_csv",

@@ -5,8 +5,9 @@ from __future__ import annotations
 import os
 from itertools import islice
 from pathlib import Path
+from typing import Any, Literal
 
-from imukit._errors import FileFormatError
+from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
 from imukit.io._euroc import GROUNDTRUTH_CSV, IMU_CSV, euroc_folder, euroc_groundtruth, euroc_imu
 from imukit.io._gtsam import GTSAM_COLUMNS, gtsam_imu
@@ -34,7 +35,13 @@ TRAJECTORY_FORMATS = (
 
 
 def read_imu(
-    path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
+    path: str | os.PathLike[str],
+    *,
+    imu_topic: str | None = None,
+    groundtruth_topic: str | None = None,
+    time_source: Literal["header", "record"] | None = None,
+    on_bad_line: OnBadLine = "raise",
+    report: ReadReport | None = None,
 ) -> tuple[ImuData, Trajectory | None]:
     """Read IMU samples (and ground truth where the source has it) from any supported source.
 
@@ -57,6 +64,10 @@ def read_imu(
     ----------
     path
         File or folder.
+    imu_topic, groundtruth_topic, time_source
+        For ROS bags only, passed to :func:`imukit.io.read_rosbag` (None: its defaults, the bag's
+        only IMU / ground-truth topic and ``header.stamp`` times); given for any other source they
+        are a :class:`ParameterError`, since nothing would use them.
     on_bad_line, report
         Passed to the reader chosen (see :func:`imukit.io.read_euroc_imu`).
 
@@ -71,12 +82,25 @@ def read_imu(
         ``path`` does not exist.
     FileFormatError
         No format recognised, or as the reader chosen.
+    ParameterError
+        A bag option for a source that is not a bag, or as :func:`imukit.io.read_rosbag` (a topic
+        missing, of the wrong type, or not given where the bag has several candidates).
     """
     source = Path(path)
+    bag_options = {"imu_topic": imu_topic, "groundtruth_topic": groundtruth_topic, "time_source": time_source}
+    given: dict[str, Any] = {name: value for name, value in bag_options.items() if value is not None}
     if (source.is_dir() and (source / "metadata.yaml").is_file()) or _is_bag_file(source):
         from imukit.io._rosbag import read_rosbag  # optional dependency, loaded on first use
 
-        return read_rosbag(path, on_bad_line=on_bad_line, report=report)
+        return read_rosbag(path, **given, on_bad_line=on_bad_line, report=report)
+    if not source.exists():
+        raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
+    if given:  # nothing but read_rosbag would use them
+        name, value = next(iter(given.items()))
+        raise ParameterError(
+            f"{name}: {value!r} is for ROS bags, but {os.fspath(path)} is not one "
+            "(a .bag, .mcap or .db3 file, or a folder with metadata.yaml)"
+        )
     bad = BadLines(on_bad_line, report)
     root = _dataset_root(source)
     if root is not None:

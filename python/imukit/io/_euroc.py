@@ -6,10 +6,11 @@ sensor, which is imukit's body frame ``b``; ``q_RS`` is imukit's ``R_wb`` writte
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,7 +18,7 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, ImukitError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
-from imukit.io._kalibr import noise_lines, yaml_float
+from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
@@ -34,7 +35,7 @@ from imukit.io._lines import (
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.state import Trajectory
 
-__all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "write_euroc"]
+__all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "read_euroc_sensor", "write_euroc"]
 
 # The header lines of the EuRoC files, character for character.
 IMU_HEADER = (
@@ -220,7 +221,7 @@ def read_euroc(
     ``folder`` holds ``imu0/data.csv`` and, optionally, ``state_groundtruth_estimate0/data.csv``;
     a folder whose ``mav0/`` holds them (a downloaded sequence) works too. The ground truth keeps
     its own stamps (it is not interpolated to the IMU's); it is None when its file is absent. The
-    noise of ``imu0/sensor.yaml`` is read by :func:`imukit.io.read_kalibr_imu`.
+    noise model and rate of ``imu0/sensor.yaml`` are read by :func:`read_euroc_sensor`.
 
     ``on_bad_line`` and ``report`` as in :func:`read_euroc_imu`, for both files (one warning for both).
 
@@ -240,6 +241,77 @@ def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData
     root = mav0_root(folder)
     truth = root / GROUNDTRUTH_CSV
     return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+
+
+def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
+    """The noise model and rate of the EuRoC ``imu0/sensor.yaml`` that goes with ``path``, or None.
+
+    Parameters
+    ----------
+    path
+        An EuRoC / ASL folder (``sensor.yaml`` looked for in ``imu0/``, then in ``mav0/imu0/``) or a
+        file, typically ``imu0/data.csv`` (``sensor.yaml`` looked for beside it). A folder's parent
+        is never searched.
+
+    Returns
+    -------
+    KalibrImu or None
+        None when there is no such ``sensor.yaml``. Else, as :func:`imukit.io.read_kalibr_imu` reads
+        it: ``noise`` from ``gyroscope_noise_density`` [rad/s/√Hz], ``gyroscope_random_walk``
+        [rad/s²/√Hz], ``accelerometer_noise_density`` [m/s²/√Hz], ``accelerometer_random_walk``
+        [m/s³/√Hz]; ``rate_hz`` [Hz]; ``extra`` every other key as PyYAML parsed it, among them
+        ``T_BS`` (``{"rows": 4, "cols": 4, "data": [16 numbers, row-major]}``), the sensor's pose in
+        EuRoC's body frame. imukit's body frame is the IMU frame, so ``T_BS`` is reported there and
+        never applied: the samples are used in the sensor's own axes (EuRoC's ``imu0`` has the
+        identity; ``np.reshape(np.asarray(extra["T_BS"]["data"], float), (4, 4))`` is the matrix).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    FileFormatError
+        The ``sensor.yaml`` found is not an IMU sensor file (as :func:`imukit.io.read_kalibr_imu`:
+        missing noise keys or rate, a value that is not a finite number), or its ``T_BS`` is not a
+        4×4 matrix of finite numbers.
+    """
+    source = Path(path)
+    if not source.exists():
+        raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
+    folders = [source / "imu0", source / "mav0" / "imu0"] if source.is_dir() else [source.parent]
+    for folder in folders:
+        candidate = folder / "sensor.yaml"
+        if candidate.is_file():
+            sensor = read_kalibr_imu(candidate)
+            euroc_extrinsics(sensor, where=os.fspath(candidate))  # a malformed T_BS is refused here
+            return sensor
+    return None
+
+
+def euroc_extrinsics(sensor: KalibrImu, *, where: str = "sensor.yaml") -> FloatArray | None:
+    """``T_BS`` of a ``sensor.yaml`` read by :func:`read_euroc_sensor` as a (4, 4) array, None
+    without one; a malformed one is a :class:`FileFormatError` naming ``where``."""
+    if "T_BS" not in sensor.extra:
+        return None
+    entry: Any = sensor.extra["T_BS"]
+    data = entry.get("data") if isinstance(entry, dict) else None
+    shape = (entry.get("rows"), entry.get("cols")) if isinstance(entry, dict) else None
+    numbers = [_finite(x) for x in data] if isinstance(data, list) else []
+    if shape != (4, 4) or len(numbers) != 16 or None in numbers:
+        raise FileFormatError(
+            f"path: {where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}"
+        )
+    return np.array(numbers, dtype=np.float64).reshape(4, 4)
+
+
+def _finite(x: object) -> float | None:
+    """``x`` as a finite float (YAML 1.1 reads ``1e-3`` as text), else None."""
+    if isinstance(x, bool) or not isinstance(x, (int, float, str)):
+        return None
+    try:
+        value = float(x)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
 
 
 def mav0_root(folder: str | os.PathLike[str]) -> Path:
