@@ -449,3 +449,27 @@ def test_integrate_counts_samples_after_the_truth_apart_from_those_in_gaps(tmp_p
         "last stamp), 19 in its gaps longer than 0.02 s" in run.stdout
     )
     assert "over 582 samples (no alignment)" in run.stdout
+
+
+def test_preintegrate_notes_a_t_bs_it_does_not_apply(tmp_path: Path) -> None:
+    """A sensor.yaml whose T_BS turns the sensor 90° about z: the noise is used, the note says T_BS is
+    not applied, and the deltas are the same as with the identity (level rest: Δv = (0, 0, g·Δt))."""
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=RATE, duration=1.0)
+    ik.io.write_euroc(tmp_path, imu, noise=NOISE, rate_hz=RATE)
+    yaml = tmp_path / "imu0" / "sensor.yaml"
+    out = tmp_path / "w.npz"
+    identity = cli("preintegrate", tmp_path, "--window", "0.5", "--out", out)
+    assert "T_BS" not in identity.stderr
+    with np.load(out) as data:
+        dv_identity = data["dv"]
+    yaml.write_text(
+        yaml.read_text().replace(
+            "data: [1.0, 0.0, 0.0, 0.0,\n         0.0, 1.0,", "data: [0.0, -1.0, 0.0, 0.0,\n         1.0, 0.0,"
+        )
+    )
+    turned = cli("preintegrate", tmp_path, "--window", "0.5", "--out", out)
+    assert "imukit: the sensor.yaml's T_BS is not the identity; it is not applied" in turned.stderr
+    with np.load(out) as data:
+        assert np.array_equal(data["dv"], dv_identity)
+        np.testing.assert_allclose(data["dv"], np.tile([0.0, 0.0, 9.81 * 0.5], (2, 1)), atol=1e-12)
+        assert data["covariance"][0, 0, 0] > 0.0

@@ -50,7 +50,8 @@ Preintegrate the IMU samples of PATH over consecutive windows of --window second
 2017; docs/preintegration.md), from the first sample; a last partial window is dropped.
 
 Reads: PATH in any format imukit detects; the noise model (for the covariance) from --noise, a
-Kalibr imu.yaml, else from the sensor.yaml next to an EuRoC imu0/data.csv.
+Kalibr imu.yaml, else from the EuRoC sensor.yaml of PATH (imu0/ or mav0/imu0/ of a folder, or
+beside a bare data.csv; its T_BS is not applied: the body frame is the IMU's).
 Frames and units: each window's deltas are in the body frame at its start (frame i); gravity is not
 in them (add it with PreintegratedImu.predict); the covariance is in [dtheta, dv, dp] order with
 the right perturbation of dR; rad, m/s, m.
