@@ -144,10 +144,10 @@ def test_malformed_files_name_file_and_line(tmp_path: Path, text: str, options: 
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"gyro_unit": "dps"}, r"^gyro_unit: expected one of 'rad/s', 'deg/s', got 'dps'$"),
-        ({"accel_unit": "m/s2"}, r"^accel_unit: expected one of 'm/s\^2', 'g', got 'm/s2'$"),
-        ({"time_unit": "sec"}, r"^time_unit: expected one of 's', 'ms', 'us', 'ns', got 'sec'$"),
-        ({"delimiter": "|"}, r"^delimiter: expected one of ',', ';', '\\t', ' ', got '\|'$"),
+        ({"gyro_unit": "dps"}, r"^gyro_unit: expected one of \('rad/s', 'deg/s'\), got 'dps'$"),
+        ({"accel_unit": "m/s2"}, r"^accel_unit: expected one of \('m/s\^2', 'g'\), got 'm/s2'$"),
+        ({"time_unit": "sec"}, r"^time_unit: expected one of \('s', 'ms', 'us', 'ns'\), got 'sec'$"),
+        ({"delimiter": "|"}, r"^delimiter: expected one of \(',', ';', '\\t', ' '\), got '\|'$"),
         ({"standard_gravity": 0.0}, r"^standard_gravity: expected a positive, finite number of m/s\^2 per g, got 0\.0"),
         ({"gyro_columns": [1, 2]}, r"^gyro_columns: expected 3 column names or 0-based .*got \[1, 2\]$"),
         ({"gyro_columns": "gx"}, r"^gyro_columns: expected 3 column names or 0-based indices .*got 'gx'$"),

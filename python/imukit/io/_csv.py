@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Collection, Sequence
+from collections.abc import Sequence
 from typing import Literal, Union
 
 import numpy as np
 
+from imukit._arrays import choice
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
 from imukit.io._euroc import build
@@ -22,7 +23,7 @@ TimeUnit = Literal["s", "ms", "us", "ns"]
 # Nanoseconds per unit, for integer stamps; float stamps are divided by the unit's count per second.
 _NS_PER = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}
 _PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
-_DELIMITERS = {",": ",", ";": ";", "\t": "tab", " ": "white space"}
+_DELIMITERS = (",", ";", "\t", " ")
 
 
 def read_imu_csv(
@@ -47,7 +48,7 @@ def read_imu_csv(
         The text file. Its first non-blank line is the header when it is not all numbers (a leading
         ``#`` is dropped from it, as in EuRoC's ``#timestamp [ns],…``); every data line must have as
         many fields as the header (without one, as the first data line). Later ``#`` lines and
-        blank lines are skipped.
+        blank lines are skipped. UTF-8, with or without a byte order mark.
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
         header name (exact, after stripping white space) or a 0-based index. Other columns
@@ -87,12 +88,12 @@ def read_imu_csv(
     FileFormatError
         Naming the file and line: bad lines ("raise" mode), no data.
     """
-    _choice(time_unit, "time_unit", _NS_PER)
-    _choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
-    _choice(accel_unit, "accel_unit", ("m/s^2", "g"))
+    choice(time_unit, "time_unit", tuple(_NS_PER))
+    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
+    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
     gravity = _gravity(standard_gravity)
     if delimiter is not None:
-        _choice(delimiter, "delimiter", _DELIMITERS)
+        choice(delimiter, "delimiter", _DELIMITERS)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
     for name, columns in wanted.items():
         _check_columns(columns, name, 1 if name == "time_column" else 3)
@@ -113,7 +114,8 @@ def imu_csv(
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``, with checked arguments."""
     where = os.fspath(path)
-    with open(path, encoding="utf-8", errors="surrogateescape") as f:
+    # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
+    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
         numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
     split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
     header: list[str] | None = None
@@ -163,11 +165,6 @@ def imu_csv(
         return build(path, lambda: ImuData(t_ns, gyro, accel))
     t = data[:, 0] / _PER_SECOND[time_unit]
     return build(path, lambda: ImuData(t, gyro, accel))
-
-
-def _choice(value: object, name: str, allowed: Collection[str]) -> None:
-    if not isinstance(value, str) or value not in allowed:
-        raise ParameterError(f"{name}: expected one of {', '.join(map(repr, allowed))}, got {value!r}")
 
 
 def _gravity(value: object) -> float:

@@ -7,6 +7,7 @@ how EuRoC's ``imu0/sensor.yaml`` states its noise (with ``rate_hz`` in place of 
 
 from __future__ import annotations
 
+import codecs
 import math
 import os
 import re
@@ -72,7 +73,8 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
     """
     where = os.fspath(path)
     with open(path, "rb") as f:
-        raw = f.read()
+        # Without a byte order mark (Excel, Notepad): it would hide an OpenCV directive from the pattern's \A.
+        raw = f.read().removeprefix(codecs.BOM_UTF8)
     try:
         text = _OPENCV_DIRECTIVE.sub("", raw.decode("utf-8"), count=1)  # keeps the newline: line numbers hold
     except UnicodeDecodeError as exc:

@@ -6,8 +6,9 @@ every writer prints floats with ``repr``, the shortest text that reads back to t
 write → read round trip is bit-exact.
 
 A reader runs two passes through :class:`BadLines`: :func:`parse_rows` checks each line on its own
-(field count, numbers, finiteness, a format's own row check), then :func:`increasing` checks the
-stamps of the rows that passed, in file order, against the last one kept.
+(field count, numbers, finiteness, a format's own row check), then :func:`increasing` keeps the
+longest strictly increasing run of the stamps of the rows that passed (:func:`in_order`, shared with the
+ROS bag reader), so one wild stamp costs its own line only.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import NamedTuple, Union
 
@@ -25,6 +27,7 @@ from imukit._arrays import FloatArray, rotation_from_unit_quat
 from imukit._errors import FileFormatError
 from imukit.io._report import BadLines
 
+NS_PER_S = 1_000_000_000
 INT64_MIN = -(2**63)
 INT64_MAX = 2**63 - 1
 # Quaternions within this of unit norm are kept bit for bit; others are normalised.
@@ -65,9 +68,10 @@ def data_lines(path: str | os.PathLike[str]) -> Iterator[tuple[int, str]]:
 
     Stripping also removes the ``\\r`` of files written with Windows line ends. Bytes that are not
     UTF-8 come through as lone surrogates (``surrogateescape``), so a damaged line is one bad line
-    (not a number), not a ``UnicodeDecodeError`` for the whole file.
+    (not a number), not a ``UnicodeDecodeError`` for the whole file. A UTF-8 byte order mark (as Excel
+    writes) is dropped, so a first ``#`` line stays a comment.
     """
-    with open(path, encoding="utf-8", errors="surrogateescape") as f:
+    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
         for number, line in enumerate(f, start=1):
             text = line.strip()
             if text and not text.startswith("#"):
@@ -132,6 +136,76 @@ def integer_stamp(text: str, scale: int = 1) -> int | None:
     return value if INT64_MIN <= value <= INT64_MAX else None
 
 
+class Disorder(NamedTuple):
+    """A stamp :func:`in_order` leaves out, and the kept stamp it clashes with."""
+
+    at: int
+    """The stamp left out."""
+    kind: str
+    """``duplicate stamp`` (equal to the kept stamp before it), ``stamp going back`` (below it) or
+    ``stamp out of order`` (above the kept stamp after it: a stamp from the future)."""
+    other: int
+    """The kept stamp it is compared with: the last kept one before it, or for ``stamp out of order`` the
+    first kept one after it."""
+
+    def detail(self, shown: Sequence[str], where: Callable[[int], str]) -> str:
+        """``time must increase strictly, but 5 follows 5 (line 3)``: ``shown[k]`` prints stamp k and
+        ``where(k)`` names its place (``line 3``)."""
+        relation = "comes before" if self.kind == "stamp out of order" else "follows"
+        return f"time must increase strictly, but {shown[self.at]} {relation} {shown[self.other]} ({where(self.other)})"
+
+
+def in_order(stamps: Sequence[int] | Sequence[float], *, first: bool = False) -> tuple[list[int], list[Disorder]]:
+    """The indices of the longest strictly increasing subsequence of ``stamps``, and the others.
+
+    A stamp shifted far into the future or the past is one element off that subsequence, so it alone is
+    left out, and of a block of stamps shifted back, the shorter side is. Among subsequences of the
+    same length the one of the earliest indices is kept: of equal stamps the first, and a stamp below
+    its predecessor is left out (rather than the predecessor) when that costs no more. In O(n log n).
+
+    ``first``: only the first stamp not above its predecessor, as ``stamp going back`` or ``duplicate
+    stamp`` (what ``on_bad_line="raise"`` reports), and no kept indices.
+    """
+    n = len(stamps)
+    stop = next((k for k in range(1, n) if not stamps[k - 1] < stamps[k]), None)
+    if stop is None:
+        return list(range(n)), []
+    if first:
+        return [], [Disorder(stop, _behind(stamps[stop], stamps[stop - 1]), stop - 1)]
+    # ahead[k]: the length of the longest strictly increasing subsequence starting at k, from patience
+    # sorting of the reversed, negated stamps (tails[m]: the least last value of such a run of m + 1).
+    ahead = [0] * n
+    tails: list[int | float] = []
+    for k in range(n - 1, -1, -1):
+        m = bisect_left(tails, -stamps[k])
+        if m == len(tails):
+            tails.append(-stamps[k])
+        else:
+            tails[m] = -stamps[k]
+        ahead[k] = m + 1
+    # Greedy from the front: the first stamp that can still start a run of the remaining length.
+    keep: list[int] = []
+    need = len(tails)
+    for k in range(n):
+        if ahead[k] == need and (not keep or stamps[keep[-1]] < stamps[k]):
+            keep.append(k)
+            need -= 1
+    out: list[Disorder] = []
+    p = 0  # keep[p]: the first kept index after k
+    for k in range(n):
+        if p < len(keep) and keep[p] == k:
+            p += 1
+        elif p > 0 and stamps[k] <= stamps[keep[p - 1]]:
+            out.append(Disorder(k, _behind(stamps[k], stamps[keep[p - 1]]), keep[p - 1]))
+        else:  # above the last kept stamp: then above the next one, or the subsequence would be longer
+            out.append(Disorder(k, "stamp out of order", keep[p]))
+    return keep, out
+
+
+def _behind(stamp: int | float, kept: int | float) -> str:
+    return "duplicate stamp" if stamp == kept else "stamp going back"
+
+
 def increasing(
     rows: Rows,
     stamps: Sequence[int] | Sequence[float],
@@ -139,19 +213,18 @@ def increasing(
     path: str | os.PathLike[str],
     bad: BadLines,
 ) -> list[int]:
-    """Indices of the rows whose stamp exceeds the last kept one; the others go to ``bad`` as a
-    duplicate stamp (equal: the first is kept) or a stamp going back (smaller: later, larger stamps
-    are kept). ``shown[k]`` is the stamp as the messages print it."""
-    keep: list[int] = []
-    for k, stamp in enumerate(stamps):
-        if keep and stamp <= stamps[keep[-1]]:
-            last = keep[-1]
-            kind = "duplicate stamp" if stamp == stamps[last] else "stamp going back"
-            detail = f"time must increase strictly, but {shown[k]} follows {shown[last]} (line {rows.lines[last]})"
-            bad.bad(path, rows.lines[k], kind, detail, rows.texts[k])
-        else:
-            keep.append(k)
+    """Indices of the rows :func:`in_order` keeps; the others go to ``bad`` (in "raise" mode: the first
+    row whose stamp does not exceed its predecessor's). ``shown[k]`` is the stamp as the messages print it."""
+    keep, out = in_order(stamps, first=not bad.skip)
+    for d in out:
+        bad.bad(path, rows.lines[d.at], d.kind, d.detail(shown, lambda k: f"line {rows.lines[k]}"), rows.texts[d.at])
     return keep
+
+
+def ns_text(ns: int) -> str:
+    """Integer nanoseconds as exact decimal seconds, ``1403636579.758555392``."""
+    sign, ns = ("-", -ns) if ns < 0 else ("", ns)
+    return f"{sign}{ns // NS_PER_S}.{ns % NS_PER_S:09d}"
 
 
 def require_rows(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:

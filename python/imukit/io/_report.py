@@ -28,9 +28,12 @@ KINDS = {
     "non-finite": "non-finite",
     "duplicate stamp": "duplicate stamps",
     "stamp going back": "stamps going back",
+    "stamp out of order": "stamps out of order",
     "zero quaternion": "zero quaternions",
     "not a rotation": "not rotations",
     "unpaired": "unpaired",
+    "missing field": "missing fields",
+    "zero stamp": "zero stamps",
 }
 
 
@@ -42,11 +45,24 @@ class SkippedLine(NamedTuple):
     line: int
     """1-based line number in that file (for a ROS bag: the message's 1-based index on its topic)."""
     reason: str
-    """``"<kind>: <detail>"``, kind one of ``malformed``, ``wrong column count``, ``non-finite``,
-    ``duplicate stamp``, ``stamp going back``, ``zero quaternion``, ``not a rotation``, ``unpaired``
-    (a line whose partner in another file was skipped); the detail
-    is the message "raise" mode would have given (``"duplicate stamp: time must increase strictly,
-    but 5 follows 5 (line 3)"``)."""
+    """``"<kind>: <detail>"``; the detail is the message "raise" mode would have given
+    (``"duplicate stamp: time must increase strictly, but 5 follows 5 (line 3)"``). The kinds:
+
+    - ``malformed``: not a number (or not an integer stamp) where one is read; for a ROS bag also an
+      undecodable message or ``nanosec`` ≥ 10⁹;
+    - ``wrong column count``;
+    - ``non-finite``: inf or NaN, or a value that overflows when converted to SI units;
+    - ``duplicate stamp``: the stamp of the last kept line before it (the first is kept);
+    - ``stamp going back``: below the stamp of the last kept line before it;
+    - ``stamp out of order``: above the stamp of the first kept line after it (e.g. a stamp from the
+      far future: it alone is skipped, the lines after it are kept);
+    - ``zero quaternion``; ``not a rotation`` (KITTI: a rotation block that is not orthonormal);
+    - ``unpaired``: a line whose partner in another file was skipped (KITTI poses and times);
+    - ``missing field``: a ROS message flagging a field absent (covariance element 0 = -1);
+    - ``zero stamp``: a ROS message with an unset (zero) header stamp.
+
+    Which stamps are kept: the longest strictly increasing subsequence of the stamps of the lines that
+    are otherwise valid, the earliest lines among equally long ones."""
     text: str
     """The line, stripped of surrounding white space."""
 

@@ -20,15 +20,16 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, MissingDependencyError, ParameterError
 from imukit.imu import ImuData
-from imukit.io._lines import Problem, rotations_from_rows, zero_quaternion
+from imukit.io._euroc import build
+from imukit.io._lines import NS_PER_S, Problem, in_order, ns_text, rotations_from_rows, zero_quaternion
 from imukit.io._report import BadLines, ReadReport
 from imukit.state import Trajectory
 
-__all__ = ["list_rosbag_topics", "read_rosbag"]
+__all__ = ["is_bag_path", "list_rosbag_topics", "read_rosbag"]
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/TransformStamped", "nav_msgs/msg/Odometry")
-_NS_PER_S = 1_000_000_000
+_SUFFIXES = (".bag", ".mcap", ".db3")
 
 
 class _Sample(NamedTuple):
@@ -78,9 +79,10 @@ _DECODERS: dict[str, tuple[Callable[[Any], _Values], str]] = {
 }
 
 
-def _stamp_text(ns: int) -> str:
-    sign, ns = ("-", -ns) if ns < 0 else ("", ns)
-    return f"{sign}{ns // _NS_PER_S}.{ns % _NS_PER_S:09d}"
+def is_bag_path(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is a file named like a bag: ``.bag``, ``.mcap`` or ``.db3``, in any case."""
+    bag = Path(path)
+    return bag.is_file() and bag.suffix.lower() in _SUFFIXES
 
 
 @contextmanager
@@ -96,7 +98,7 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
     bag = Path(path)
     if not bag.exists():
         raise FileNotFoundError(f"path: {bag}: no such file or folder")
-    if not (bag.is_dir() or bag.suffix in (".bag", ".mcap", ".db3")):
+    if not (bag.is_dir() or is_bag_path(bag)):
         raise FileFormatError(
             f"path: {bag}: not a ROS bag; expected a ROS 1 .bag file, a ROS 2 bag folder (with metadata.yaml), "
             "or a ROS 2 .mcap / .db3 file"
@@ -106,7 +108,11 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
         reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
     except (AnyReaderError, OSError, KeyError, ValueError) as e:
-        hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if bag.suffix == ".mcap" else ""
+        hint = (
+            " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)"
+            if bag.suffix.lower() == ".mcap"
+            else ""
+        )
         raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
     try:
         yield reader
@@ -173,8 +179,8 @@ def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: 
     if time_source == "record":
         return _Sample(record_ns, "record time", values, problem)
     sec, nanosec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
-    stamp_ns = sec * _NS_PER_S + nanosec
-    if problem is None and not 0 <= nanosec < _NS_PER_S:
+    stamp_ns = sec * NS_PER_S + nanosec
+    if problem is None and not 0 <= nanosec < NS_PER_S:
         problem = ("malformed", f"header.stamp.nanosec = {nanosec} is not below 10^9")
     if problem is None and stamp_ns == 0:
         problem = (
@@ -187,44 +193,58 @@ def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: 
 def _read_topic(
     reader: Any, topic: str, msgtype: str, time_source: str, where: str, bad: BadLines
 ) -> tuple[NDArray[np.int64], FloatArray]:
-    """Stamps [ns] and value rows of the valid messages of ``topic``, in bag order."""
-    stamps: list[int] = []
-    rows: list[tuple[float, ...]] = []
-    kept_at = 0  # message index of the last kept sample
+    """Stamps [ns] and value rows of the valid messages of ``topic``, in bag order; of their stamps, the
+    longest strictly increasing subsequence is kept (:func:`imukit.io._lines.in_order`, as for text files)."""
+    samples: list[_Sample] = []
+    indices: list[int] = []  # the 1-based message index of each of samples
     index = 0
     for index, (connection, record_ns, raw) in enumerate(
         reader.messages([c for c in reader.connections if c.topic == topic]), start=1
     ):
         sample = _sample(reader, connection.msgtype, record_ns, raw, time_source)
         problem = sample.problem
-        if problem is None and stamps and sample.stamp_ns <= stamps[-1]:
-            kind = "duplicate stamp" if sample.stamp_ns == stamps[-1] else "stamp going back"
-            shown = (_stamp_text(sample.stamp_ns), _stamp_text(stamps[-1]))
-            problem = (kind, "time must increase strictly, but {} follows {} (message {})".format(*shown, kept_at))
+        if problem is None and not bad.skip and samples and not samples[-1].stamp_ns < sample.stamp_ns:
+            # "raise": the first message not after its predecessor, as the line readers report it.
+            _, (disorder,) = in_order([samples[-1].stamp_ns, sample.stamp_ns], first=True)
+            shown = [ns_text(samples[-1].stamp_ns), ns_text(sample.stamp_ns)]
+            problem = disorder.kind, disorder.detail(shown, lambda _: f"message {indices[-1]}")
         if problem is None:
-            stamps.append(sample.stamp_ns)
-            rows.append(sample.values)
-            kept_at = index
-            continue
-        text = f"{sample.clock} {_stamp_text(sample.stamp_ns)}"
-        if sample.values:
-            text += ", " + _DECODERS[msgtype][1].format(*map(repr, sample.values))
-        detail = f"topic {topic}, message {index}: {problem[1]}"
-        if not bad.skip:
-            raise FileFormatError(f"path: {where}, {detail}: {text}")
-        bad.bad(where, index, problem[0], detail, text)
-    if not stamps:
+            samples.append(sample)
+            indices.append(index)
+        else:
+            _bad_message(bad, where, topic, msgtype, index, sample, problem)
+    keep, out = in_order([s.stamp_ns for s in samples])
+    shown = [ns_text(s.stamp_ns) for s in samples]
+    for d in out:
+        detail = d.detail(shown, lambda k: f"message {indices[k]}")
+        _bad_message(bad, where, topic, msgtype, indices[d.at], samples[d.at], (d.kind, detail))
+    if not keep:
         left = f"no valid messages (all {index} skipped)" if index else "no messages"
         raise FileFormatError(f"path: {where}, topic {topic}: {left}")
-    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
+    stamps = np.array([samples[k].stamp_ns for k in keep], dtype=np.int64)
+    return stamps, np.array([samples[k].values for k in keep], dtype=np.float64)
 
 
-def _trajectory(t_ns: NDArray[np.int64], pose: FloatArray) -> Trajectory:
+def _bad_message(
+    bad: BadLines, where: str, topic: str, msgtype: str, index: int, sample: _Sample, problem: Problem
+) -> None:
+    """Message ``index`` of ``topic`` is bad: raise ``path: <bag>, topic <t>, message <n>: <detail>: <text>``,
+    or record it with its stamp and values as the text."""
+    text = f"{sample.clock} {ns_text(sample.stamp_ns)}"
+    if sample.values:
+        text += ", " + _DECODERS[msgtype][1].format(*map(repr, sample.values))
+    detail = f"topic {topic}, message {index}: {problem[1]}"
+    if not bad.skip:
+        raise FileFormatError(f"path: {where}, {detail}: {text}")
+    bad.bad(where, index, problem[0], detail, text)
+
+
+def _trajectory(where: str, t_ns: NDArray[np.int64], pose: FloatArray) -> Trajectory:
     # No line list: zero quaternions were skipped or raised already, message by message.
     rotation = rotations_from_rows(np.ascontiguousarray(pose[:, 3:7]), [], "")
     # nav_msgs/Odometry's twist is in child_frame_id (body) coordinates: v_w = R_wb v_b.
     velocity = rotation.apply(pose[:, 7:10]) if pose.shape[1] == 10 else None
-    return Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns)
+    return build(where, lambda: Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns))
 
 
 def read_rosbag(
@@ -261,8 +281,10 @@ def read_rosbag(
         index, ``text`` = the stamp and values) in ``report``, or summarised in one
         :class:`SkippedLinesWarning` without one. Bad: undecodable (``malformed``), a non-finite
         value, a field flagged absent (covariance element 0 = -1: ``missing field``), a zero
-        quaternion, a zero stamp, ``nanosec`` ≥ 10⁹ (``malformed``), a stamp equal to (duplicate: the
-        first is kept) or before (going back) the last kept one.
+        quaternion, a zero stamp, ``nanosec`` ≥ 10⁹ (``malformed``), and stamps out of order: of the
+        stamps of the other messages, the longest strictly increasing subsequence is kept (the earliest
+        messages among equally long ones), the rest are ``duplicate stamp``, ``stamp going back`` or
+        ``stamp out of order`` (a stamp from the future: it alone is skipped), as in the text readers.
     report
         A :class:`ReadReport` that receives the skipped messages.
 
@@ -302,5 +324,5 @@ def read_rosbag(
         t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
         truth = None
         if truth_name is not None:
-            truth = _trajectory(*_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
-    return bad.done((ImuData(t_ns, rows[:, :3], rows[:, 3:]), truth))
+            truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
+    return bad.done((build(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth))

@@ -12,6 +12,7 @@ from imukit.io._lines import (
     all_exact,
     data_lines,
     increasing,
+    ns_text,
     parse_rows,
     require_rows,
     rotations_from_rows,
@@ -26,11 +27,6 @@ __all__ = ["read_tum", "write_tum"]
 _NS_STAMP = re.compile(r"(-?)(\d+)\.(\d{9})")
 
 
-def _ns_text(ns: int) -> str:
-    sign, ns = ("-", -ns) if ns < 0 else ("", ns)
-    return f"{sign}{ns // 10**9}.{ns % 10**9:09d}"
-
-
 def write_tum(trajectory: Trajectory, path: str | os.PathLike[str]) -> None:
     """Write ``trajectory`` as a TUM file: ``timestamp tx ty tz qx qy qz qw`` per sample, no header.
 
@@ -42,7 +38,7 @@ def write_tum(trajectory: Trajectory, path: str | os.PathLike[str]) -> None:
     stamps = (
         [repr(float(t)) for t in trajectory.t]
         if trajectory.t_ns is None
-        else [_ns_text(int(ns)) for ns in trajectory.t_ns]
+        else [ns_text(int(ns)) for ns in trajectory.t_ns]
     )
     write_rows(path, None, stamps, np.concatenate([trajectory.position, trajectory.rotation.as_quat()], axis=1), " ")
 
