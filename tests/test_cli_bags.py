@@ -127,7 +127,8 @@ def test_bag_options_on_other_inputs_are_refused(tmp_path: Path) -> None:
     assert_one_line_error(run, "imukit: error: --time-source: 'record' is for ROS bags")
     broad = broad_excerpt_path()
     run = cli("filter", broad, "--groundtruth-topic", "/gt", code=1)
-    assert_one_line_error(run, f"imukit: error: --groundtruth-topic: is for ROS bags, but {broad} is a BROAD trial")
+    expected = f"imukit: error: --groundtruth-topic: '/gt' is for ROS bags, but {broad} is a BROAD trial"
+    assert_one_line_error(run, expected)
 
 
 def test_bag_options_documented_in_help() -> None:

@@ -111,8 +111,9 @@ def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
 def refuse_bag_options(args: argparse.Namespace, what: str) -> None:
     """A CliError naming the first bag option given, for an input that is not a bag (``what`` says what it is)."""
     for name, option in BAG_OPTIONS.items():
-        if getattr(args, name) is not None:
-            raise CliError(f"{option}: is for ROS bags, but {args.path} is {what}")
+        value = getattr(args, name)
+        if value is not None:
+            raise CliError(f"{option}: {value!r} is for ROS bags, but {args.path} is {what}")
 
 
 def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
