@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import inspect
 import re
 import warnings
 from pathlib import Path
@@ -12,6 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+from euroc import IMU_CSV, requires_euroc
 from imukit.io import ReadReport, SkippedLine, SkippedLinesWarning
 
 HEADER = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"  # noqa: E501
@@ -235,3 +237,157 @@ def test_bytes_that_are_not_utf8_and_huge_stamps_are_bad_lines(tmp_path: Path) -
     assert [(s.line, s.kind) for s in report.skipped] == [(2, "malformed"), (3, "malformed"), (4, "malformed")]
     assert report.skipped[0].reason == "malformed: not a number in '1403715523917140000,0.1,\\udcb00.2,0.3,9.1,9.2,9.3'"
     assert report.skipped[1].reason.startswith("malformed: timestamp '9999999999999999999999999' is not an integer")
+
+
+# Stamps out of order: every reader keeps the longest strictly increasing run of stamps (earliest lines
+# among equally long ones), so one wild stamp costs its own line and nothing else.
+STEP_NS = 5_000_000
+T0_NS = 1_403_715_523_912_140_000
+
+
+def _euroc_with_stamps(tmp_path: Path, steps: list[float]) -> Path:
+    """Line k + 2 holds stamp T0 + steps[k] × 5 ms and gyro x = k + 1 (which samples survive is visible)."""
+    path = tmp_path / "data.csv"
+    rows = [f"{T0_NS + round(s * STEP_NS)},{k + 1}.0,0,0,0,0,9.81" for k, s in enumerate(steps)]
+    path.write_text("\n".join([HEADER, *rows]) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("steps", "skipped"),
+    [
+        # One stamp 10 s in the future: only it goes (the old rule kept it and dropped the 6 after it).
+        ([0, 1, 2, 2000, 4, 5, 6, 7, 8, 9], [(5, "stamp out of order")]),
+        ([2000, 1, 2, 3, 4], [(2, "stamp out of order")]),  # on the first line
+        ([0, 1, 2, 3, 4000], []),  # on the last line it is the latest stamp: kept
+        # One stamp 10 s in the past: only it goes, wherever it is.
+        ([0, 1, 2, -2000, 4, 5, 6], [(5, "stamp going back")]),
+        ([0, 1, 2, 3, -2000], [(6, "stamp going back")]),
+        ([-2000, 1, 2, 3], []),  # on the first line it is the earliest stamp: kept
+        # A run of equal stamps: the first is kept.
+        ([0, 1, 1, 1, 1, 2], [(4, "duplicate stamp"), (5, "duplicate stamp"), (6, "duplicate stamp")]),
+        # A block of 3 shifted back among 10 increasing stamps: the block (the shorter side) goes ...
+        ([0, 1, 2, 3, 4, 5, 6, 7, 3.5, 4.5, 5.5, 8, 9], [(10, "stamp going back"), (11, "stamp going back"),
+                                                        (12, "stamp going back")]),
+        # ... and when the 2 lines before the jump back are the shorter side, they go instead.
+        ([0, 1, 2, 10, 11, 3, 4, 5, 6, 7, 12], [(5, "stamp out of order"), (6, "stamp out of order")]),
+        # Equally long sides: the earlier lines are kept.
+        ([0, 1, 5, 6, 3, 4, 7], [(6, "stamp going back"), (7, "stamp going back")]),
+    ],
+)  # fmt: skip
+def test_stamps_out_of_order_cost_only_the_fewest_lines(
+    tmp_path: Path, steps: list[float], skipped: list[tuple[int, str]]
+) -> None:
+    path = _euroc_with_stamps(tmp_path, steps)
+    report = ReadReport()
+    imu = ik.io.read_euroc_imu(path, on_bad_line="skip", report=report)
+    assert [(s.line, s.kind) for s in report.skipped] == skipped
+    gone = {line - 2 for line, _ in skipped}
+    kept = [k for k in range(len(steps)) if k not in gone]
+    assert imu.gyro[:, 0].tolist() == [k + 1.0 for k in kept]
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [T0_NS + round(steps[k] * STEP_NS) for k in kept]
+
+
+def test_out_of_order_messages_name_the_kept_stamp_they_clash_with(tmp_path: Path) -> None:
+    path = _euroc_with_stamps(tmp_path, [0, 1, 2000, 3, 4, -2000, 5, 5])
+    report = ReadReport()
+    ik.io.read_euroc_imu(path, on_bad_line="skip", report=report)
+    t = [T0_NS + s * STEP_NS for s in (0, 1, 2000, 3, 4, -2000, 5)]
+    assert [s.reason for s in report.skipped] == [
+        f"stamp out of order: time must increase strictly, but {t[2]} comes before {t[3]} (line 5)",
+        f"stamp going back: time must increase strictly, but {t[5]} follows {t[4]} (line 6)",
+        f"duplicate stamp: time must increase strictly, but {t[6]} follows {t[6]} (line 8)",
+    ]
+    # "raise" still stops at the first line whose stamp is not above the line before it.
+    with pytest.raises(
+        ik.io.FileFormatError,
+        match=rf"^path: {re.escape(str(path))}, line 5: time must increase strictly, but {t[3]} follows {t[2]} "
+        r"\(line 4\)$",
+    ):
+        ik.io.read_euroc_imu(path)
+
+
+def _future_stamp_file(fmt: str, tmp_path: Path) -> tuple[Path, ik.ImuData | ik.Trajectory]:
+    """Ten samples 5 ms apart, the 4th (line 5) stamped 10 s late, in format ``fmt``; what it reads as."""
+    t = [1.0 + 0.005 * k for k in range(10)]
+    t[3] += 10.0
+    path = tmp_path / f"{fmt}.txt"
+    if fmt == "tum":
+        lines = ["# t x y z qx qy qz qw", *(f"{s!r} {k}.0 0 0 0 0 0 1" for k, s in enumerate(t))]
+    elif fmt == "csv":
+        lines = ["t,gx,gy,gz,ax,ay,az", *(f"{s!r},{k}.0,0,0,0,0,9.81" for k, s in enumerate(t))]
+    else:  # GTSAM's dt is the step before the sample, printed from the stamps
+        lines = ["Time dt accelX accelY accelZ omegaX omegaY omegaZ"]
+        lines += [f"{s!r} {s - (t[k - 1] if k else 0.0)!r} 0 0 9.81 {k}.0 0 0" for k, s in enumerate(t)]
+    path.write_text("\n".join(lines) + "\n")
+    report = ReadReport()
+    if fmt == "tum":
+        data: ik.ImuData | ik.Trajectory = ik.io.read_tum(path, on_bad_line="skip", report=report)
+    elif fmt == "csv":
+        data = ik.io.read_imu_csv(
+            path, time_column="t", gyro_columns=["gx", "gy", "gz"], accel_columns=["ax", "ay", "az"],
+            on_bad_line="skip", report=report,
+        )  # fmt: skip
+    else:
+        data = ik.io.read_gtsam_imu(path, on_bad_line="skip", report=report)
+    assert [(s.line, s.kind) for s in report.skipped] == [(5, "stamp out of order")]
+    return path, data
+
+
+@pytest.mark.parametrize("fmt", ["tum", "csv", "gtsam"])
+def test_every_text_reader_skips_only_the_future_stamp(fmt: str, tmp_path: Path) -> None:
+    _, data = _future_stamp_file(fmt, tmp_path)
+    values = data.position[:, 0] if isinstance(data, ik.Trajectory) else data.gyro[:, 0]
+    assert values.tolist() == [0.0, 1.0, 2.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+    assert data.t.tolist() == [1.0 + 0.005 * k for k in (0, 1, 2, 4, 5, 6, 7, 8, 9)]
+
+
+@requires_euroc
+@pytest.mark.parametrize(("shift_ns", "kind"), [(10**10, "stamp out of order"), (-(10**10), "stamp going back")])
+def test_real_euroc_excerpt_with_one_wild_stamp_loses_only_that_line(tmp_path: Path, shift_ns: int, kind: str) -> None:
+    lines = IMU_CSV.read_text().splitlines()
+    stamp, rest = lines[100].split(",", 1)
+    lines[100] = f"{int(stamp) + shift_ns},{rest}"  # line 101, 10 s late or early
+    path = tmp_path / "data.csv"
+    path.write_text("\n".join(lines) + "\n")
+    report = ReadReport()
+    imu = ik.io.read_euroc_imu(path, on_bad_line="skip", report=report)
+    assert [(s.line, s.kind) for s in report.skipped] == [(101, kind)]
+    raw = np.loadtxt(IMU_CSV, delimiter=",", skiprows=1, dtype=str)  # an independent parse, line 101 removed
+    raw = np.delete(raw, 99, axis=0)
+    assert len(imu) == len(raw) == 7998
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [int(s) for s in raw[:, 0]]
+    np.testing.assert_array_equal(imu.gyro, raw[:, 1:4].astype(np.float64))
+    np.testing.assert_array_equal(imu.accel, raw[:, 4:7].astype(np.float64))
+
+
+def test_excel_bom_and_crlf_read_as_without(tmp_path: Path) -> None:
+    # Excel's "CSV UTF-8" starts with a byte order mark: the '#' header must stay a comment, not a bad line.
+    plain = tmp_path / "plain.csv"
+    plain.write_text("\n".join([*EUROC_IMU[:2], EUROC_IMU[5]]) + "\n")
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes().replace(b"\n", b"\r\n"))
+    report = ReadReport()
+    imu = ik.io.read_euroc_imu(bom, on_bad_line="skip", report=report)
+    assert not report
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [1403715523912140000, 1403715523932140000]
+    reference = ik.io.read_euroc_imu(plain)
+    np.testing.assert_array_equal(imu.gyro, reference.gyro)
+    np.testing.assert_array_equal(imu.accel, reference.accel)
+
+
+def test_summary_names_every_kind_in_the_plural() -> None:
+    kinds = {
+        "malformed": "malformed", "wrong column count": "wrong column counts", "non-finite": "non-finite",
+        "duplicate stamp": "duplicate stamps", "stamp going back": "stamps going back",
+        "stamp out of order": "stamps out of order", "zero quaternion": "zero quaternions",
+        "not a rotation": "not rotations", "unpaired": "unpaired", "missing field": "missing fields",
+        "zero stamp": "zero stamps",
+    }  # fmt: skip
+    for kind, plural in kinds.items():
+        two = _report([SkippedLine("b.bag", k, f"{kind}: detail", "") for k in (1, 2)])
+        assert two.summary() == f"2 lines skipped in b.bag: 2 {plural}"
+        one = _report([SkippedLine("b.bag", 1, f"{kind}: detail", "")])
+        assert one.summary() == f"1 line skipped in b.bag: 1 {kind}"
+    documented = inspect.getsource(SkippedLine)  # the reason field's docstring lists every kind
+    assert [kind for kind in kinds if f"``{kind}``" not in documented] == []
