@@ -9,6 +9,7 @@ from typing import Any, Literal
 
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
+from imukit.io import _rosbag  # rosbags itself is imported on a bag's first read
 from imukit.io._euroc import GROUNDTRUTH_CSV, IMU_CSV, euroc_folder, euroc_groundtruth, euroc_imu
 from imukit.io._gtsam import GTSAM_COLUMNS, gtsam_imu
 from imukit.io._lines import data_lines, integer_stamp
@@ -89,10 +90,8 @@ def read_imu(
     source = Path(path)
     bag_options = {"imu_topic": imu_topic, "groundtruth_topic": groundtruth_topic, "time_source": time_source}
     given: dict[str, Any] = {name: value for name, value in bag_options.items() if value is not None}
-    if (source.is_dir() and (source / "metadata.yaml").is_file()) or _is_bag_file(source):
-        from imukit.io._rosbag import read_rosbag  # optional dependency, loaded on first use
-
-        return read_rosbag(path, **given, on_bad_line=on_bad_line, report=report)
+    if (source.is_dir() and (source / "metadata.yaml").is_file()) or _rosbag.is_bag_path(source):
+        return _rosbag.read_rosbag(path, **given, on_bad_line=on_bad_line, report=report)
     if not source.exists():
         raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
     if given:  # nothing but read_rosbag would use them
@@ -157,10 +156,6 @@ def read_trajectory(
     if comma == 1 and space == 8:
         return bad.done(tum(path, bad))
     raise FileFormatError(f"path: {os.fspath(path)}: not a trajectory format imukit knows; tried {TRAJECTORY_FORMATS}")
-
-
-def _is_bag_file(source: Path) -> bool:
-    return source.is_file() and source.suffix.lower() in (".bag", ".mcap", ".db3")
 
 
 def _dataset_root(source: Path) -> Path | None:
