@@ -18,6 +18,7 @@ import pytest
 import imukit as ik
 from euroc import GT_CSV, IMU_CSV, requires_euroc
 from imukit.io import ReadReport, SkippedLine, SkippedLinesWarning, list_rosbag_topics, read_rosbag
+from imukit.io._rosbag import is_bag_path
 
 rosbags = pytest.importorskip("rosbags", reason="rosbags is the optional [ros] extra")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
@@ -557,3 +558,88 @@ def test_euroc_excerpt_through_a_bag(kind: str, tmp_path: Path) -> None:
     # R (Rᵀ v) = v up to rounding; without the rotation back to the world the error is ~|v| (up to 1.6 m/s)
     assert np.abs(gt.velocity[span]).max() > 1.0
     np.testing.assert_allclose(truth.velocity, gt.velocity[span], rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize(
+    ("milliseconds", "skipped"),
+    [
+        # 10 s in the future: only that message goes (the old rule kept it and dropped all after it).
+        ([0, 1, 2, 10_003, 4, 5, 6], [(4, "stamp out of order")]),
+        ([0, 1, 2, -4_000, 4, 5], [(4, "stamp going back")]),  # 4 s in the past
+        ([0, 1, 1, 1, 2], [(3, "duplicate stamp"), (4, "duplicate stamp")]),
+        # A block shifted back: the shorter side goes, whichever side that is.
+        ([0, 1, 2, 3, 4, 5, 1.5, 2.5, 6], [(7, "stamp going back"), (8, "stamp going back")]),
+        ([0, 1, 8, 9, 2, 3, 4, 5, 10], [(3, "stamp out of order"), (4, "stamp out of order")]),
+    ],
+)  # fmt: skip
+def test_stamps_out_of_order_cost_only_the_fewest_messages(
+    tmp_path: Path, milliseconds: list[float], skipped: list[tuple[int, str]]
+) -> None:
+    stamps_ns = [10 * 10**9 + round(ms * 10**6) for ms in milliseconds]
+    path, _ = _stamped_imu_bag(tmp_path, "ros1", [divmod(ns, 10**9) for ns in stamps_ns])
+    report = ReadReport()
+    imu, _ = read_rosbag(path, on_bad_line="skip", report=report)
+    assert [(s.line, s.kind) for s in report.skipped] == skipped
+    kept = [k for k in range(len(stamps_ns)) if k + 1 not in {line for line, _ in skipped}]
+    assert imu.gyro[:, 0].tolist() == [k + 1.0 for k in kept]  # message k + 1 has gyro x = k + 1
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [stamps_ns[k] for k in kept]
+
+
+def test_a_future_stamp_message_names_the_stamp_it_comes_before(tmp_path: Path) -> None:
+    path, _ = _stamped_imu_bag(tmp_path, "mcap", [(5, 0), (15, 10**6), (5, 2 * 10**6), (5, 3 * 10**6)])
+    imu, _, report = raise_then_skip(  # "raise" names message 3, the first not after its predecessor
+        path, r"topic /imu0, message 3: time must increase strictly, but 5\.002000000 follows 15\.001000000 "
+        r"\(message 2\): header\.stamp 5\.002000000, angular_velocity 3\.0 ",
+    )  # fmt: skip
+    assert imu.gyro[:, 0].tolist() == [1.0, 3.0, 4.0]
+    assert report.skipped == [
+        SkippedLine(
+            str(path),
+            2,
+            "stamp out of order: topic /imu0, message 2: time must increase strictly, but 15.001000000 comes "
+            "before 5.002000000 (message 3)",
+            "header.stamp 15.001000000, angular_velocity 2.0 0.0 0.0, linear_acceleration 0.0 0.0 9.81",
+        )
+    ]
+
+
+@requires_euroc
+def test_euroc_excerpt_bag_with_one_future_stamp_loses_only_that_message(tmp_path: Path) -> None:
+    euroc = ik.io.read_euroc_imu(IMU_CSV)
+    assert euroc.t_ns is not None
+    stamps = euroc.t_ns.tolist()
+    stamps[99] += 10 * 10**9  # message 100, 10 s late
+    bag = Bag("ros1")
+    # Record times in sample order: a bag is read in record-time order, the header stamp is the wild one.
+    msgs = [
+        (int(record), bag.imu(divmod(ns, 10**9), g, a))
+        for record, ns, g, a in zip(euroc.t_ns, stamps, euroc.gyro, euroc.accel)
+    ]
+    path = bag.write(tmp_path / "euroc", {"/imu0": (IMU, msgs)})
+    report = ReadReport()
+    imu, _ = read_rosbag(path, on_bad_line="skip", report=report)
+    assert [(s.line, s.kind) for s in report.skipped] == [(100, "stamp out of order")]
+    others = np.delete(np.arange(len(euroc)), 99)
+    assert len(imu) == 7998 and imu.t_ns is not None and np.array_equal(imu.t_ns, euroc.t_ns[others])
+    assert bits(imu.gyro) == bits(euroc.gyro[others]) and bits(imu.accel) == bits(euroc.accel[others])
+
+
+@pytest.mark.parametrize(("kind", "suffix"), [("ros1", ".BAG"), ("mcap-file", ".MCAP")])
+def test_upper_case_suffixes_are_bags(kind: str, suffix: str, tmp_path: Path) -> None:
+    # rosbags picks its reader by the suffix, case-sensitively; Windows copies often have .BAG.
+    written, _ = _stamped_imu_bag(tmp_path, kind, [(4, 0), (4, 10**6)])
+    path = written.rename(tmp_path / f"copy{suffix}")
+    assert is_bag_path(path) and is_bag_path(str(path))
+    assert not is_bag_path(tmp_path) and not is_bag_path(tmp_path / "absent.bag")  # a folder; no such file
+    assert list_rosbag_topics(path) == {"/imu0": IMU}
+    imu, _ = read_rosbag(path)
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [4 * 10**9, 4 * 10**9 + 10**6]
+
+
+def test_data_the_imu_type_refuses_is_an_error_naming_the_bag(tmp_path: Path) -> None:
+    # Stamps 1 ns apart are valid messages but not an IMU's nanoseconds (ImuData refuses a median step < 1 µs).
+    path, _ = _stamped_imu_bag(tmp_path, "sqlite3", [(4, k) for k in range(3)])
+    with pytest.raises(
+        ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}: t: integer timestamps are read as nanoseconds"
+    ):
+        read_rosbag(path)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -103,21 +104,36 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
             f"path: {bag}: not a ROS bag; expected a ROS 1 .bag file, a ROS 2 bag folder (with metadata.yaml), "
             "or a ROS 2 .mcap / .db3 file"
         )
-    # Humble-era ROS 2 bags store no message definitions: fall back on the standard ones.
-    try:
-        reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
-        reader.open()
-    except (AnyReaderError, OSError, KeyError, ValueError) as e:
-        hint = (
-            " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)"
-            if bag.suffix.lower() == ".mcap"
-            else ""
-        )
-        raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
-    try:
-        yield reader
-    finally:
-        reader.close()
+    with _lower_case_suffix(bag) as readable:
+        # Humble-era ROS 2 bags store no message definitions: fall back on the standard ones.
+        try:
+            reader = AnyReader([readable], default_typestore=get_typestore(Stores.LATEST))
+            reader.open()
+        except (AnyReaderError, OSError, KeyError, ValueError) as e:
+            mcap = bag.suffix.lower() == ".mcap"
+            hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if mcap else ""
+            raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
+        try:
+            yield reader
+        finally:
+            reader.close()
+
+
+@contextmanager
+def _lower_case_suffix(bag: Path) -> Iterator[Path]:
+    """``bag``, or for a file named ``.BAG``, ``.Mcap``, … a link to it named with the lower-case suffix:
+    rosbags tells ROS 1 from ROS 2, and the storage, by the suffix, case-sensitively."""
+    suffix = bag.suffix.lower()
+    if bag.is_dir() or bag.suffix == suffix:
+        yield bag
+        return
+    with tempfile.TemporaryDirectory(prefix="imukit-bag-") as folder:
+        link = Path(folder) / f"bag{suffix}"
+        try:
+            os.symlink(bag.resolve(), link)
+        except OSError as e:  # e.g. Windows without the right to make links
+            raise FileFormatError(f"path: {bag}: rosbags needs the suffix {suffix}, rename the file ({e})") from e
+        yield link
 
 
 def _topics(reader: Any) -> dict[str, str]:
