@@ -207,3 +207,15 @@ def test_an_acceleration_in_g_that_overflows_is_a_bad_line(tmp_path: Path) -> No
     assert report.skipped == [SkippedLine(str(path), 2, reason, "0.01,1,2,3,0,0,1e308")]
     # In m/s^2 the same number is finite and kept.
     assert len(ik.io.read_imu_csv(path, **COLS)) == 3  # type: ignore[arg-type]
+
+
+def test_byte_order_mark_is_not_part_of_the_first_column_name(tmp_path: Path) -> None:
+    # Excel's "CSV UTF-8" export: a byte order mark, then the header; "time" must still name column 0.
+    path = tmp_path / "excel.csv"
+    path.write_bytes(b"\xef\xbb\xbftime;gx;gy;gz;ax;ay;az\r\n0.5;1;2;3;4;5;6\r\n0.75;-1;-2;-3;-4;-5;-6\r\n")
+    imu = ik.io.read_imu_csv(
+        path, time_column="time", gyro_columns=["gx", "gy", "gz"], accel_columns=["ax", "ay", "az"]
+    )
+    assert imu.t.tolist() == [0.5, 0.75]
+    assert imu.gyro.tolist() == [[1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]]
+    assert imu.accel.tolist() == [[4.0, 5.0, 6.0], [-4.0, -5.0, -6.0]]

@@ -143,3 +143,10 @@ def test_skip_mode_reports_each_bad_line(tmp_path: Path) -> None:
 )
 def test_malformed_files_name_file_and_line(tmp_path: Path, text: str, message: str) -> None:
     assert_file_error(tmp_path / "imu.txt", text, ik.io.read_gtsam_imu, message)
+
+
+def test_byte_order_mark_before_the_header(tmp_path: Path) -> None:
+    path = tmp_path / "imu.txt"
+    path.write_bytes(f"\ufeff{HEADER}\n1.0 1.0 1 2 3 4 5 6\n1.01 0.01 1 2 3 4 5 6\n".encode())
+    imu = ik.io.read_gtsam_imu(path)  # "raise" mode: the header must be recognised, not read as a bad line
+    assert imu.t.tolist() == [1.0, 1.01]

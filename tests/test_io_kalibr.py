@@ -200,3 +200,13 @@ def test_bytes_that_are_not_utf8_name_their_line(tmp_path: Path) -> None:
         ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}, line 2: not UTF-8 text \(byte 0xff\)$"
     ):
         ik.io.read_kalibr_imu(path)
+
+
+def test_byte_order_mark_is_dropped(tmp_path: Path) -> None:
+    # Before an OpenCV directive (which PyYAML refuses unless it is stripped) and before a bad byte.
+    path = tmp_path / "sensor.yaml"
+    path.write_bytes(b"\xef\xbb\xbf%YAML:1.0\n" + EUROC_SENSOR_YAML.encode())
+    assert ik.io.read_kalibr_imu(path).noise == EUROC_NOISE
+    path.write_bytes(b"\xef\xbb\xbfrostopic: /imu0\nupdate_rate: \xfe200.0\n")
+    with pytest.raises(ik.io.FileFormatError, match=r", line 2: not UTF-8 text \(byte 0xfe\)$"):
+        ik.io.read_kalibr_imu(path)

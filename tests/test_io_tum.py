@@ -128,3 +128,11 @@ def test_quaternions_of_extreme_magnitude_are_normalised(tmp_path: Path) -> None
     half = np.sqrt(0.5)
     np.testing.assert_allclose(quat[:2], [[half, half, 0, 0], [half, -half, 0, 0]], rtol=0, atol=1.2e-16)
     np.testing.assert_array_equal(quat[2:], [[0, 0, 1, 0], [0, 0, 0, -1]])
+
+
+def test_byte_order_mark_before_a_comment_line(tmp_path: Path) -> None:
+    path = tmp_path / "traj.txt"
+    path.write_bytes(b"\xef\xbb\xbf# timestamp tx ty tz qx qy qz qw\n1.000000000 1 2 3 0 0 0 1\n")
+    traj = ik.io.read_tum(path)  # "raise" mode: the comment must not read as a bad line
+    assert traj.t_ns is not None and traj.t_ns.tolist() == [1_000_000_000]
+    assert traj.position.tolist() == [[1.0, 2.0, 3.0]]
