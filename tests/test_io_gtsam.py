@@ -39,7 +39,8 @@ def test_real_kitti_file() -> None:
     assert imu.t[1] == 46536.397971133
     assert imu.dt[0] == 46536.397971133 - 46534.47837579 and 1.9195 < imu.dt[0] < 1.9196
     assert imu.dt[1:].max() < 0.02  # ~100 Hz after it, with jitter up to 20 ms
-    # GTSAM integrates sample k over dt[k]; the file's dt[k] is t[k] - t[k-1], so ImuData's steps are those.
+    # The file's dt[k] is t[k] - t[k-1]: ImuData's step lengths are those (GTSAM holds sample k over the
+    # step before it, imukit over the step after it: same lengths, samples shifted by one).
     np.testing.assert_allclose(imu.dt, raw[1:, 1], rtol=0, atol=2e-11)
     with pytest.raises(ik.TimestampError, match=r"^t: gap into sample 1 has dt = 1\.9195953"):
         ik.ImuData(imu.t, imu.gyro, imu.accel, max_gap=0.05)

@@ -37,15 +37,18 @@ def read_gtsam_imu(
     skipped. Returns an :class:`imukit.ImuData` with float-second ``t`` (``t_ns`` None: the source
     prints decimal seconds, ~1e-9 s).
 
-    **The dt column is checked, then dropped.** GTSAM's example integrates sample k over its
-    ``dt[k]``, and the files hold ``dt[k] = t[k] − t[k−1]``, the step *before* the sample;
-    :class:`imukit.ImuData` takes every step from the stamps, so the two agree exactly when that
-    holds. The reader checks it for every line whose previous data line is a kept sample, to
-    1 µs (KITTI 00 agrees to 1.5e-11 s), and raises :class:`FileFormatError` otherwise, in both
-    ``on_bad_line`` modes: a dt that disagrees means a different convention (a step after the sample,
-    or a nominal constant), not a bad line, and keeping or skipping samples could not fix it. Read
-    such a file with :func:`imukit.io.read_imu_csv` (``time_column=0``), which ignores dt. The first
-    line's dt is not checked (GTSAM's KITTI file has ``dt = Time`` there).
+    **The dt column is checked, then dropped.** The files hold ``dt[k] = t[k] − t[k−1]``, the step
+    *before* the sample, and GTSAM's example integrates sample k over it, ``[t[k−1], t[k]]``.
+    :class:`imukit.ImuData` takes every step from the stamps, and imukit's held-input schemes
+    (``euler``, ``exp``) hold sample k over the step *after* it, ``[t[k], t[k+1]]``
+    (``docs/strapdown.md``): the step lengths agree, the samples are assigned to the steps one apart, so
+    imukit does not reproduce GTSAM's integration sample for sample. The reader checks dt for every line
+    whose previous data line is a kept sample, to 1 µs (KITTI 00 agrees to 1.5e-11 s), and raises
+    :class:`FileFormatError` otherwise, in both ``on_bad_line`` modes: a dt that disagrees means a
+    different convention (a step after the sample, or a nominal constant), not a bad line, and keeping
+    or skipping samples could not fix it. Read such a file with :func:`imukit.io.read_imu_csv`
+    (``time_column=0``), which ignores dt. The first line's dt is not checked (GTSAM's KITTI file has
+    ``dt = Time`` there).
 
     All samples are kept, gaps included: KITTI 00 starts with an orphan sample 1.92 s before the
     next one (use ``ImuData(..., max_gap=...)`` or slice it off to integrate without it).
@@ -56,7 +59,8 @@ def read_gtsam_imu(
         The text file.
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`: not 8 fields, text that is not a number, non-finite
-        values, duplicate stamps (first kept) and stamps going back are the bad lines.
+        values, and stamps out of order (the longest strictly increasing run of stamps is kept) are the
+        bad lines.
 
     Raises
     ------
