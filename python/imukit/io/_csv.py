@@ -71,8 +71,8 @@ def read_imu_csv(
         commas are not read.
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`. Bad lines: a wrong field count, text that is not a
-        number (or, with ``"ns"``, not an integer) in a column read, non-finite values, duplicate
-        stamps (first kept) and stamps going back.
+        number (or, with ``"ns"``, not an integer) in a column read, non-finite values, and stamps
+        out of order (the longest strictly increasing subsequence of stamps is kept, first of equal ones).
 
     Returns
     -------

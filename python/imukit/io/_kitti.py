@@ -40,7 +40,8 @@ def read_kitti_poses(
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`. Bad lines: wrong field count, text that is not a
         number, non-finite values, a rotation block that is not a rotation (``RᵀR`` off the identity
-        by more than 1e-4, or ``det R ≤ 0``), duplicate times (first kept), times going back. When a
+        by more than 1e-4, or ``det R ≤ 0``), and times out of order (the longest
+        strictly increasing subsequence of times is kept, first of equal ones). When a
         line of one file is skipped, its partner in the other is skipped too, reported as
         ``unpaired``.
 

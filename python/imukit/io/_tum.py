@@ -59,8 +59,8 @@ def read_tum(
         The text file.
     on_bad_line
         ``"raise"`` (default) or ``"skip"``: bad lines (below) are left out and reported
-        (``docs/io.md``); a repeated stamp keeps its first line, a stamp going back is skipped and
-        the later, larger ones kept.
+        (``docs/io.md``); of the stamps, the longest strictly increasing subsequence is kept (a
+        repeated stamp keeps its first line; one wild stamp costs its own line only).
     report
         An :class:`imukit.io.ReadReport` that receives the skipped lines; without one, skipping
         emits one :class:`imukit.io.SkippedLinesWarning`.
