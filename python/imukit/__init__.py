@@ -11,7 +11,7 @@ array([0., 1., 0.])
 """
 
 from imukit import euler, filters, io, noise, quat, sim, so3
-from imukit import eval as eval  # the module imukit.eval (BROAD-style attitude errors); shadows the builtin here only
+from imukit import eval as eval  # the module imukit.eval (ATE / RPE / attitude errors); shadows the builtin here only
 from imukit._core import __version__
 from imukit._errors import (
     DTypeError,
