@@ -130,3 +130,21 @@ def test_huge_entries_are_not_a_rotation(tmp_path: Path) -> None:
     assert [(s.path, s.line, s.kind) for s in report.skipped] == [
         (str(poses), 2, "not a rotation"), (str(times), 2, "unpaired"),
     ]  # fmt: skip
+
+
+def test_a_time_from_the_future_costs_its_pose_only(tmp_path: Path) -> None:
+    # Pose k is a translation by k along x; time line 3 is 100 s late: only pose 3 goes, as unpaired.
+    poses, times = tmp_path / "poses.txt", tmp_path / "times.txt"
+    poses.write_text("".join(f"1 0 0 {k}.0 0 1 0 0 0 0 1 0\n" for k in range(6)))
+    times.write_text("0.0\n0.1\n100.2\n0.3\n0.4\n0.5\n")
+    report = ReadReport()
+    traj = ik.io.read_kitti_poses(poses, times, on_bad_line="skip", report=report)
+    assert traj.t.tolist() == [0.0, 0.1, 0.3, 0.4, 0.5]
+    assert traj.position[:, 0].tolist() == [0.0, 1.0, 3.0, 4.0, 5.0]
+    assert [(s.path, s.line, s.kind) for s in report.skipped] == [
+        (str(times), 3, "stamp out of order"),
+        (str(poses), 3, "unpaired"),
+    ]
+    assert report.skipped[0].reason == (
+        "stamp out of order: time must increase strictly, but 100.2 comes before 0.3 (line 4)"
+    )
