@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import inspect
+import itertools
 import re
 import warnings
 from pathlib import Path
@@ -15,6 +16,7 @@ from scipy.spatial.transform import Rotation
 import imukit as ik
 from euroc import IMU_CSV, requires_euroc
 from imukit.io import ReadReport, SkippedLine, SkippedLinesWarning
+from imukit.io._lines import in_order
 
 HEADER = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"  # noqa: E501
 # Line numbers in comments; the valid samples are lines 2, 6 and 9.
@@ -391,3 +393,19 @@ def test_summary_names_every_kind_in_the_plural() -> None:
         assert one.summary() == f"1 line skipped in b.bag: 1 {kind}"
     documented = inspect.getsource(SkippedLine)  # the reason field's docstring lists every kind
     assert [kind for kind in kinds if f"``{kind}``" not in documented] == []
+
+
+def test_kept_stamps_are_the_earliest_longest_increasing_subsequence_by_brute_force(rng: np.random.Generator) -> None:
+    # Against exhaustive search: combinations() yields index sets in lexicographic order, so the first
+    # strictly increasing one of the greatest length is the earliest-lines longest subsequence.
+    for _ in range(400):
+        stamps = rng.integers(0, 5, size=int(rng.integers(1, 9))).tolist()
+        expected = next(
+            list(c)
+            for size in range(len(stamps), 0, -1)
+            for c in itertools.combinations(range(len(stamps)), size)
+            if all(stamps[a] < stamps[b] for a, b in zip(c, c[1:]))
+        )
+        keep, out = in_order(stamps)
+        assert keep == expected, stamps
+        assert sorted(keep + [d.at for d in out]) == list(range(len(stamps)))
