@@ -339,8 +339,9 @@ def read_euroc_imu(
     on_bad_line
         ``"raise"`` (default): the first bad line is a :class:`FileFormatError`. ``"skip"``: bad
         lines are left out and reported (``docs/io.md``): not 7 fields, a stamp that is not an
-        integer, a value that is not a finite number, a stamp equal to the last kept one (the first
-        is kept) or smaller (later, larger stamps are kept).
+        integer, a value that is not a finite number, and stamps out of order: the longest strictly
+        increasing subsequence of stamps is kept (the first of equal ones), so one wild stamp costs
+        its own line only.
     report
         An :class:`imukit.io.ReadReport` that receives the skipped lines; without one, skipping
         emits one :class:`imukit.io.SkippedLinesWarning`.
