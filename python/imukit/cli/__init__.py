@@ -13,8 +13,9 @@ import sys
 import traceback
 from collections.abc import Sequence
 
-from imukit._errors import ImukitError
+from imukit._errors import ImukitError, ParameterError
 from imukit.cli._allan import add as add_allan
+from imukit.cli._common import option_message
 from imukit.cli._demo import add as add_demo
 from imukit.cli._evaluate import add as add_evaluate
 from imukit.cli._filter import add as add_filter
@@ -70,6 +71,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             traceback.print_exc()
         message = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, ParameterError):
+            message = option_message(message)
         if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in message:
             message = f"{exc.filename}: {message}"
         print(f"imukit: error: {message}", file=sys.stderr)

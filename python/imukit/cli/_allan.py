@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from imukit.cli._common import add_bag_options, err, out, output_path, read_imu, wrote
+from imukit.cli._common import add_input_options, err, out, output_path, read_imu, wrote
 from imukit.imu import ImuData
 from imukit.io import write_kalibr_imu
 from imukit.noise import AllanDeviation, AllanFit, allan_deviation, fit_allan, plot_allan, to_imu_noise
@@ -37,7 +37,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("path", metavar="PATH", help="a static recording (EuRoC folder, CSV, bag, ...)")
     p.add_argument("--out", required=True, metavar="PNG", help="NAME.png: writes NAME_gyro.png and NAME_accel.png")
     p.add_argument("--yaml", metavar="YAML", help="where to write the fitted Kalibr imu.yaml (default: NAME.yaml)")
-    add_bag_options(p)
+    add_input_options(p)
     p.set_defaults(run=run)
     return p
 

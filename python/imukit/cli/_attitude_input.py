@@ -10,24 +10,26 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Slerp
 
 from imukit._arrays import FloatArray
-from imukit.cli._common import CliError, err, read_imu, refuse_bag_options
+from imukit.cli._common import CliError, err, read_imu, refuse_reader_options
+from imukit.cli._truth import truth_at
 from imukit.imu import ImuData
-from imukit.state import Trajectory
 
 BROAD_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
 
 
 class AttitudeInput(NamedTuple):
     """``imu``; ``mag`` (N, 3) or None; ``truth_xyzw`` (N, 4) reference ``R_wb`` at the IMU samples
-    (NaN rows where there is none) or None; ``mask`` (N,) the samples to score (BROAD's movement)."""
+    (NaN rows where there is none) or None; ``mask`` (N,) the samples to score (BROAD's movement);
+    ``unpaired``: how many IMU samples got no reference from a ground-truth trajectory (outside its
+    span, in its gaps over ``--max-dt``), None for a reference given per sample."""
 
     imu: ImuData
     mag: FloatArray | None
     truth_xyzw: FloatArray | None
     mask: NDArray[np.bool_] | None
+    unpaired: tuple[int, int] | None = None
 
 
 def read_broad(path: str | Path) -> AttitudeInput:
@@ -52,25 +54,18 @@ def read_broad(path: str | Path) -> AttitudeInput:
     return AttitudeInput(imu, mag, np.ascontiguousarray(truth), np.asarray(data["movement"]).ravel().astype(bool))
 
 
-def truth_at(truth: Trajectory, imu: ImuData) -> FloatArray:
-    """Reference quaternions (xyzw) at the IMU's stamps by slerp; NaN outside the truth's span."""
-    q = np.full((len(imu), 4), np.nan)
-    inside = (imu.t >= truth.t[0]) & (imu.t <= truth.t[-1])
-    if len(truth) == 1:
-        inside &= imu.t == truth.t[0]
-        q[inside] = truth.rotation.as_quat()[0]
-    elif inside.any():
-        q[inside] = Slerp(truth.t, truth.rotation)(imu.t[inside]).as_quat()
-    return q
-
-
 def read_attitude_input(args: argparse.Namespace) -> AttitudeInput:
     """``args.path``: BROAD ``.mat`` / ``.npz`` by suffix (bag options refused); anything else through
     :func:`imukit.cli._common.read_imu`."""
     path = args.path
     if Path(path).suffix.lower() in (".mat", ".npz"):
-        refuse_bag_options(args, "a BROAD trial")
+        refuse_reader_options(args, "a BROAD trial")
         with err.status(f"reading {path}"):
             return read_broad(path)
     imu, truth = read_imu(args)
-    return AttitudeInput(imu, None, None if truth is None else truth_at(truth, imu), None)
+    if truth is None:
+        return AttitudeInput(imu, None, None, None)
+    paired = truth_at(truth, imu, max_dt=args.max_dt, option="--max-dt")
+    q = np.full((len(imu), 4), np.nan)  # NaN: no reference, counted by attitude_error, not scored
+    q[paired.mask] = paired.reference.rotation.as_quat()
+    return AttitudeInput(imu, None, q, None, (paired.n_outside_span, paired.n_in_gaps))

@@ -7,14 +7,14 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Literal
 
 import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
 from imukit import io
-from imukit._errors import ImukitError, ParameterError
+from imukit._errors import ImukitError
 from imukit.imu import ImuData
 from imukit.io import ReadReport
 from imukit.state import Trajectory
@@ -63,12 +63,82 @@ def _report_skips(report: ReadReport) -> None:
         err.print(f"imukit: {report}", markup=False)
 
 
-# read_imu's bag arguments and the options that set them.
-BAG_OPTIONS = {"imu_topic": "--imu-topic", "groundtruth_topic": "--groundtruth-topic", "time_source": "--time-source"}
+# Library argument names and the options that set them: a ParameterError from the library names its
+# argument (`delta: ...`), the user typed the option (`--delta: ...`); main() rewrites the first word.
+OPTION_OF = {
+    "imu_topic": "--imu-topic",
+    "groundtruth_topic": "--groundtruth-topic",
+    "time_source": "--time-source",
+    "time_column": "--csv-time-column",
+    "gyro_columns": "--csv-gyro-columns",
+    "accel_columns": "--csv-accel-columns",
+    "time_unit": "--csv-time-unit",
+    "gyro_unit": "--gyro-unit",
+    "accel_unit": "--accel-unit",
+    "delimiter": "--csv-delimiter",
+    "estimate": "EST",
+    "reference": "GT",
+    "delta": "--delta",
+    "unit": "--delta-unit",
+    "max_dt": "--max-dt",
+    "offset": "--offset",
+    "align": "--align",
+    "window": "--window",
+    "max_gap": "--max-gap",
+}
+BAG_OPTIONS = ("imu_topic", "groundtruth_topic", "time_source")
+CSV_OPTIONS = ("time_column", "gyro_columns", "accel_columns", "time_unit", "gyro_unit", "accel_unit", "delimiter")
+GAP_FACTOR = 10.0  # a step longer than this many median steps is named on stderr
 
 
-def add_bag_options(parser: argparse.ArgumentParser) -> None:
-    """``--imu-topic``, ``--groundtruth-topic``, ``--time-source``: for a ROS bag PATH only."""
+def option_message(message: str) -> str:
+    """``message`` with a leading library argument name (``max_dt: ...``) replaced by its option."""
+    name, sep, rest = message.partition(": ")
+    return f"{OPTION_OF[name]}: {rest}" if sep and name in OPTION_OF else message
+
+
+def add_input_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a command that reads IMU samples from PATH: ``--max-gap``, the generic CSV
+    columns and units (:func:`imukit.io.read_imu_csv`), and the ROS bag topics."""
+    parser.add_argument(
+        "--max-gap",
+        type=positive,
+        metavar="S",
+        help=f"refuse input with a step between samples longer than S seconds (default: accept any gap, "
+        f"naming on stderr the longest one when it exceeds {GAP_FACTOR:g} x the median step)",
+    )
+    csv = parser.add_argument_group(
+        "any CSV (PATH a delimited text file of another layout: imukit.io.read_imu_csv; columns by header name "
+        "or 0-based index)"
+    )
+    csv.add_argument("--csv-time-column", dest="time_column", metavar="COL", help="the time column")
+    csv.add_argument(
+        "--csv-gyro-columns", dest="gyro_columns", metavar="X,Y,Z", help="the angular-rate columns, comma-separated"
+    )
+    csv.add_argument(
+        "--csv-accel-columns", dest="accel_columns", metavar="X,Y,Z", help="the specific-force columns, comma-separated"
+    )
+    csv.add_argument(
+        "--csv-time-unit",
+        dest="time_unit",
+        choices=("s", "ms", "us", "ns"),
+        help="unit of the time column (default: s)",
+    )
+    csv.add_argument(
+        "--gyro-unit", dest="gyro_unit", choices=("rad/s", "deg/s"), help="unit of the gyro columns (default: rad/s)"
+    )
+    csv.add_argument(
+        "--accel-unit",
+        dest="accel_unit",
+        choices=("m/s^2", "g"),
+        help="unit of the accelerometer columns (default: m/s^2)",
+    )
+    csv.add_argument(
+        "--csv-delimiter",
+        dest="delimiter",
+        choices=(",", ";", "tab", "space"),
+        help="(default: detected from the first line)",
+    )
     bag = parser.add_argument_group("ROS bags (PATH a .bag, .mcap or .db3 file, or a ROS 2 bag folder)")
     bag.add_argument(
         "--imu-topic",
@@ -87,33 +157,88 @@ def add_bag_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _column(text: str) -> int | str:
+    """A column given on the command line: a 0-based index when all digits, else a header name."""
+    text = text.strip()
+    return int(text) if text.isdigit() else text
+
+
+def _columns(text: str, option: str) -> list[int | str]:
+    columns = [_column(c) for c in text.split(",")]
+    if len(columns) != 3:
+        raise CliError(f"{option}: expected 3 comma-separated columns (x, y, z), got {text!r}")
+    return columns
+
+
+def _csv_arguments(args: argparse.Namespace) -> dict[str, Any] | None:
+    """read_imu_csv's arguments from the --csv-* options, or None when none was given."""
+    given = {name: getattr(args, name) for name in CSV_OPTIONS if getattr(args, name) is not None}
+    if not given:
+        return None
+    for name in ("time_column", "gyro_columns", "accel_columns"):
+        if name not in given:
+            raise CliError(f"{OPTION_OF[name]}: needed with {', '.join(OPTION_OF[n] for n in given)}")
+    for name in BAG_OPTIONS:
+        if getattr(args, name) is not None:
+            raise CliError(f"{OPTION_OF[name]}: is for ROS bags, not with the --csv-* options")
+    given["time_column"] = _column(given["time_column"])
+    given["gyro_columns"] = _columns(given["gyro_columns"], "--csv-gyro-columns")
+    given["accel_columns"] = _columns(given["accel_columns"], "--csv-accel-columns")
+    if "delimiter" in given:
+        given["delimiter"] = {"tab": "\t", "space": " "}.get(given["delimiter"], given["delimiter"])
+    return given
+
+
+def check_gaps(imu: ImuData, max_gap: float | None) -> None:
+    """With ``max_gap`` [s], a CliError naming the first step longer than it; without, a note naming
+    the longest step when it is over ``GAP_FACTOR`` times the median (integrating across it is the
+    user's call, but not a silent one)."""
+    if len(imu) < 2:
+        return
+    steps = np.diff(imu.t_ns) / 1e9 if imu.t_ns is not None else np.diff(imu.t)
+    if max_gap is not None and steps.max() > max_gap:
+        k = int(np.argmax(steps > max_gap))
+        raise CliError(
+            f"--max-gap: the step into sample {k + 1} (t = {imu.t[k + 1]:.9g} s) is {steps[k]:.6g} s, "
+            f"longer than --max-gap = {max_gap:g} s"
+        )
+    k = int(np.argmax(steps))
+    median = float(np.median(steps))
+    if steps[k] > GAP_FACTOR * median:
+        note(
+            f"the step into sample {k + 1} (t = {imu.t[k + 1]:.9g} s) is {steps[k]:.6g} s, "
+            f"{steps[k] / median:.3g} x the median {median:.6g} s; integrated across (--max-gap S refuses it)"
+        )
+
+
 def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
-    """The IMU samples and ground truth at ``args.path``, whatever its format (:func:`imukit.io.read_imu`,
-    with the bag options of :func:`add_bag_options`); with ``args.skip_bad_lines``, bad lines are skipped
-    and listed on stderr instead of ending the command."""
+    """The IMU samples and ground truth at ``args.path``: with the --csv-* options through
+    :func:`imukit.io.read_imu_csv`, else whatever its format (:func:`imukit.io.read_imu`, with the bag
+    options of :func:`add_input_options`); with ``args.skip_bad_lines``, bad lines are skipped and
+    listed on stderr instead of ending the command. Gaps are checked by :func:`check_gaps`."""
     report = ReadReport()
-    bag = {name: getattr(args, name) for name in BAG_OPTIONS}
-    try:
-        with err.status(f"reading {args.path}"):
-            result = io.read_imu(
-                args.path, **bag, on_bad_line="skip" if args.skip_bad_lines else "raise", report=report
-            )
-    except ParameterError as exc:
-        # The library names its argument (imu_topic: ...); the user typed the option.
-        name, _, rest = str(exc).partition(": ")
-        if name in BAG_OPTIONS:
-            raise CliError(f"{BAG_OPTIONS[name]}: {rest}") from exc
-        raise
+    on_bad_line: Literal["raise", "skip"] = "skip" if args.skip_bad_lines else "raise"
+    csv = _csv_arguments(args)
+    result: tuple[ImuData, Trajectory | None]
+    with err.status(f"reading {args.path}"):
+        if csv is not None:
+            result = io.read_imu_csv(args.path, **csv, on_bad_line=on_bad_line, report=report), None
+        else:
+            bag = {name: getattr(args, name) for name in BAG_OPTIONS}
+            result = io.read_imu(args.path, **bag, on_bad_line=on_bad_line, report=report)
     _report_skips(report)
+    check_gaps(result[0], args.max_gap)
     return result
 
 
-def refuse_bag_options(args: argparse.Namespace, what: str) -> None:
-    """A CliError naming the first bag option given, for an input that is not a bag (``what`` says what it is)."""
-    for name, option in BAG_OPTIONS.items():
-        value = getattr(args, name)
-        if value is not None:
-            raise CliError(f"{option}: {value!r} is for ROS bags, but {args.path} is {what}")
+def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
+    """A CliError naming the first bag or CSV option given, for an input read otherwise (``what`` says
+    what it is)."""
+    for names, kind in ((BAG_OPTIONS, "ROS bags"), (CSV_OPTIONS, "a generic CSV")):
+        for name in names:
+            value = getattr(args, name)
+            if value is not None:
+                raise CliError(f"{OPTION_OF[name]}: {value!r} is for {kind}, but {args.path} is {what}")
 
 
 def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:

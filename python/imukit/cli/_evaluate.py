@@ -48,6 +48,13 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--max-dt", type=positive, default=0.02, metavar="S", help="largest GT gap to interpolate over [s] (0.02)"
     )
+    p.add_argument(
+        "--offset",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="clock offset [s] added to EST's stamps before pairing (EST time t is GT time t + S; default 0)",
+    )
     add_plot_option(p, "a top view of the aligned estimate and the ground truth")
     p.set_defaults(run=run)
     return p
@@ -62,14 +69,22 @@ def run(args: argparse.Namespace) -> int:
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
     estimate = read_trajectory(args.estimate, skip_bad_lines=args.skip_bad_lines)
     truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines)
-    absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt)
+    absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt, offset=args.offset)
     table = Table(title=f"{args.estimate} against {args.groundtruth} (alignment: {args.align})")
     for column in ("error", "unit", "RMSE", "mean", "median", "std", "min", "max", "samples"):
         table.add_column(column, justify="left" if column in ("error", "unit") else "right")
     _row(table, "ATE translation", absolute.translation_stats, "m", 1.0)
     _row(table, "ATE rotation", absolute.rotation_stats, "deg", math.degrees(1.0))
     if args.delta is not None:
-        relative = rpe(estimate, truth, delta=args.delta, unit=args.delta_unit, max_dt=args.max_dt)
+        relative = rpe(
+            estimate,
+            truth,
+            delta=args.delta,
+            unit=args.delta_unit,
+            align=args.align,
+            max_dt=args.max_dt,
+            offset=args.offset,
+        )
         span = f"{args.delta:g} {args.delta_unit}"
         _row(table, f"RPE translation / {span}", relative.translation_stats, "m", 1.0)
         _row(table, f"RPE rotation / {span}", relative.rotation_stats, "deg", math.degrees(1.0))

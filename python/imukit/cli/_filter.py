@@ -10,7 +10,18 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray
 from imukit.cli._attitude_input import AttitudeInput, read_attitude_input
-from imukit.cli._common import CliError, add_bag_options, add_plot_option, chunks, out, output_path, progress, wrote
+from imukit.cli._common import (
+    CliError,
+    add_input_options,
+    add_plot_option,
+    chunks,
+    out,
+    output_path,
+    positive,
+    progress,
+    unpaired,
+    wrote,
+)
 from imukit.eval import attitude_error
 from imukit.filters import FilterResult, FilterState, Madgwick, Mahony
 from imukit.state import Trajectory
@@ -30,7 +41,9 @@ z up; --world NED for x north, z down). Default gains are the BROAD-tuned ones.
 
 Prints: with reference attitudes (ground truth, BROAD's motion capture), the RMSE of the total,
 heading and inclination error in degrees (BROAD's split; 6D after removing the constant heading
-offset; BROAD trials over their movement phase).
+offset; BROAD trials over their movement phase). A ground-truth trajectory gives the reference at
+each IMU stamp by slerp, never across its gaps over --max-dt (mocap dropouts): samples without a
+reference are not scored, and how many (outside the truth's span, in its gaps) is printed.
 Writes: --out, .txt/.tum: a TUM file with zero positions and the attitude quaternions;
 .csv: `t [s], qx, qy, qz, qw, bias_x, bias_y, bias_z [rad/s]` with a header line.
 --plot: the attitude errors over time (needs reference attitudes).
@@ -50,9 +63,17 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--method", choices=sorted(METHODS), default="mahony", help="the filter (default: %(default)s)")
     p.add_argument("--mag", action="store_true", help="use the magnetometer (9D); the input must have one")
     p.add_argument("--world", choices=("ENU", "NED"), default="ENU", help="world frame (default: %(default)s)")
+    p.add_argument(
+        "--max-dt",
+        type=positive,
+        default=0.02,
+        metavar="S",
+        help="largest ground-truth gap to interpolate the reference over [s] (default: %(default)s); samples "
+        "in longer gaps or outside the truth's span are not scored, and counted",
+    )
     p.add_argument("--out", metavar="FILE", help="write the attitudes: TUM (.txt, .tum) or quaternion CSV (.csv)")
     add_plot_option(p, "the attitude error over time")
-    add_bag_options(p)
+    add_input_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -106,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
             + ("" if args.mag else " (constant heading offset removed: 6D)"),
             markup=False,
         )
+        if data.unpaired is not None and any(data.unpaired):
+            out.print(unpaired("IMU samples", *data.unpaired, f"--max-dt = {args.max_dt:g} s"), markup=False)
         if png is not None:
             from imukit.plot import attitude_error_plot
 

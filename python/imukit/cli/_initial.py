@@ -3,30 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 from imukit.cli._common import CliError, note
+from imukit.cli._truth import truth_at
 from imukit.imu import ImuBias, ImuData
 from imukit.state import NavState, Trajectory
-
-
-def _bracket(truth: Trajectory, t: float, t_ns: int | None) -> tuple[int, float]:
-    """Index k and fraction f with ``t = (1 − f) t_k + f t_{k+1}``; ``f == 0`` when t is a stamp of truth."""
-    if t_ns is not None and truth.t_ns is not None:
-        k = int(np.searchsorted(truth.t_ns, t_ns, side="right")) - 1
-        if truth.t_ns[k] == t_ns:
-            return k, 0.0
-    else:
-        k = int(np.searchsorted(truth.t, t, side="right")) - 1
-        if truth.t[k] == t:
-            return k, 0.0
-    return k, float((t - truth.t[k]) / (truth.t[k + 1] - truth.t[k]))
-
-
-def _lerp(values: np.ndarray, k: int, f: float) -> np.ndarray:
-    if f == 0.0:  # a stamp of the truth: its values exactly, not a rounded blend
-        return np.array(values[k])
-    return np.asarray((1.0 - f) * values[k] + f * values[k + 1])
 
 
 def trim_to_truth(imu: ImuData, truth: Trajectory) -> ImuData:
@@ -44,21 +26,17 @@ def trim_to_truth(imu: ImuData, truth: Trajectory) -> ImuData:
     return imu[first:]
 
 
-def from_truth(truth: Trajectory, imu: ImuData) -> tuple[NavState, ImuBias | None]:
-    """The ground-truth state (and biases, when it has them) at ``imu``'s first sample: position,
-    velocity and biases interpolated linearly, rotation by slerp; taken exactly at a common stamp.
-    A truth without velocity (TUM) gets it from its positions' central differences."""
-    t_ns = None if imu.t_ns is None else int(imu.t_ns[0])
-    k, f = _bracket(truth, float(imu.t[0]), t_ns)
-    velocity = truth.velocity if truth.velocity is not None else np.gradient(truth.position, truth.t, axis=0)
-    if f == 0.0:
-        rotation = truth.rotation[k]
-    else:
-        rotation = Slerp(truth.t[k : k + 2], truth.rotation[k : k + 2])([float(imu.t[0])])[0]
-    state = NavState(_lerp(truth.position, k, f), _lerp(velocity, k, f), rotation)
-    if truth.gyro_bias is None or truth.accel_bias is None:
+def from_truth(truth: Trajectory, imu: ImuData, *, max_dt: float) -> tuple[NavState, ImuBias | None]:
+    """The ground-truth state (and biases, when it has them) at ``imu``'s first sample, by the rule of
+    :func:`imukit.cli._truth.truth_at`: position, velocity and biases linear, rotation slerp, exact at
+    a common stamp, not across a truth gap over ``max_dt`` [s] (then a CliError). A truth without
+    velocity (TUM) gets it from its positions' central differences."""
+    first = truth_at(truth, imu[:1], max_dt=max_dt, option="PATH").reference
+    velocity = np.zeros(3) if first.velocity is None else first.velocity[0]  # None: a one-pose truth
+    state = NavState(first.position[0], velocity, first.rotation[0])
+    if first.gyro_bias is None or first.accel_bias is None:
         return state, None
-    return state, ImuBias(_lerp(truth.gyro_bias, k, f), _lerp(truth.accel_bias, k, f))
+    return state, ImuBias(first.gyro_bias[0], first.accel_bias[0])
 
 
 def levelled_at_rest(imu: ImuData, static_seconds: float) -> NavState:

@@ -9,7 +9,7 @@ import numpy as np
 
 from imukit.cli._common import (
     CliError,
-    add_bag_options,
+    add_input_options,
     add_plot_option,
     err,
     note,
@@ -74,7 +74,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--out", metavar="TUM", help="write the trajectory to this TUM file (.txt or .tum)")
     add_plot_option(p, "a top view of the trajectory and the ground truth")
-    add_bag_options(p)
+    add_input_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     bias = None
     if truth is not None:
         imu = trim_to_truth(imu, truth)
-        initial, truth_bias = from_truth(truth, imu)
+        initial, truth_bias = from_truth(truth, imu, max_dt=MAX_DT)
         if args.bias_from_groundtruth:
             if truth_bias is None:
                 raise CliError("--bias-from-groundtruth: the ground truth in PATH has no biases")

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit.cli._common import (
     CliError,
-    add_bag_options,
+    add_input_options,
     chunks,
     note,
     out,
@@ -80,7 +80,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--scheme", choices=("euler", "midpoint"), default="midpoint", help="(default: %(default)s)")
     p.add_argument("--noise", metavar="YAML", help="Kalibr imu.yaml with the noise densities")
     p.add_argument("--out", metavar="FILE", help="write the windows to this .csv or .npz file")
-    add_bag_options(p)
+    add_input_options(p)
     p.set_defaults(run=run)
     return p
 

@@ -1,0 +1,44 @@
+"""The ground truth at the IMU's stamps, by one rule for every command: :func:`imukit.eval.associate`
+(position and velocity linear, rotation slerp, never across a truth gap longer than ``max_dt``)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from imukit._errors import ParameterError
+from imukit.cli._common import CliError
+from imukit.eval import Association, associate
+from imukit.imu import ImuData
+from imukit.state import Trajectory
+
+
+def truth_at(truth: Trajectory, imu: ImuData, *, max_dt: float, option: str) -> Association:
+    """``truth`` at ``imu``'s stamps where :func:`imukit.eval.associate` pairs them with ``max_dt``;
+    ``.mask`` marks the IMU samples that have it and ``.n_outside_span`` / ``.n_in_gaps`` count the
+    others. A truth without velocity gets it from its positions' central differences. No sample
+    paired: a CliError naming ``option`` (the command's option that sets ``max_dt``)."""
+    if truth.velocity is None and len(truth) > 1:
+        velocity = np.gradient(truth.position, truth.t, axis=0)
+        t = None if truth.t_ns is not None else truth.t
+        truth = Trajectory(
+            t,
+            truth.position,
+            velocity,
+            truth.rotation,
+            t_ns=truth.t_ns,
+            gyro_bias=truth.gyro_bias,
+            accel_bias=truth.accel_bias,
+        )
+    n = len(imu)
+    stamps = Trajectory(
+        None if imu.t_ns is not None else imu.t, np.zeros((n, 3)), None, Rotation.identity(n), t_ns=imu.t_ns
+    )
+    try:
+        return associate(stamps, truth, max_dt=max_dt)
+    except ParameterError as exc:
+        raise CliError(
+            f"{option}: no IMU sample lies where the ground truth can be interpolated (truth "
+            f"{truth.t[0]:.9g} … {truth.t[-1]:.9g} s, IMU {imu.t[0]:.9g} … {imu.t[-1]:.9g} s, gaps over "
+            f"{max_dt:g} s not bridged)"
+        ) from exc
