@@ -35,12 +35,33 @@ def _harness() -> ModuleType:
 fuzz_readers = _harness()
 
 
+# Open in imukit.io._rosbag (H2): rosbags' own exceptions escape from a malformed MCAP file (a
+# record length of 7e16 bytes: MemoryError from its read_sized; the magic number alone: TypeError
+# from ord() on an empty read). Remove the mark when _rosbag._open turns them into FileFormatError.
+_OPEN = {
+    "read_rosbag-mcap-huge-record-size": "MemoryError from rosbags escapes read_rosbag",
+    "read_rosbag-mcap-truncated": "TypeError from rosbags escapes read_rosbag",
+}
+
+
 def test_the_regression_inputs_are_there() -> None:
-    assert [p.name for p in _REGRESSIONS] == ["read_euroc-stamp-control-char.bin", "read_kalibr_imu-not-utf8.bin"]
+    assert [p.name for p in _REGRESSIONS] == [
+        "read_euroc-stamp-control-char.bin",
+        "read_kalibr_imu-not-utf8.bin",
+        "read_rosbag-mcap-huge-record-size.bin",
+        "read_rosbag-mcap-truncated.bin",
+    ]
 
 
-@pytest.mark.parametrize("path", _REGRESSIONS, ids=[p.stem for p in _REGRESSIONS])
+def _case(path: Path) -> object:
+    marks = [pytest.mark.xfail(strict=True, reason=_OPEN[path.stem])] if path.stem in _OPEN else []
+    return pytest.param(path, id=path.stem, marks=marks)
+
+
+@pytest.mark.parametrize("path", [_case(p) for p in _REGRESSIONS])
 def test_regression_input_meets_the_contract(path: Path) -> None:
+    if path.stem.startswith("read_rosbag"):
+        pytest.importorskip("rosbags", reason="read_rosbag needs imukit[ros]")
     data = path.read_bytes()
     # The file name says which reader the input drives (byte 0).
     assert fuzz_readers.decode(data, Path())[0] == path.stem.split("-")[0]
@@ -59,7 +80,8 @@ def test_every_seed_parses_to_a_valid_result() -> None:
     # Valid files of each format reach the result checks (not only the error paths).
     seeds = fuzz_readers.seeds()
     names = {fuzz_readers.decode(seed, Path())[0] for seed in seeds}
-    assert names == {name for name, _ in fuzz_readers.READERS}
+    # Every reader but read_rosbag (binary containers: its fuzzing starts from their magic numbers).
+    assert names == {name for name, _ in fuzz_readers.READERS} - {"read_rosbag"}
     for seed in seeds:
         with tempfile.TemporaryDirectory() as folder:
             _, reader, case = fuzz_readers.decode(seed, Path(folder))

@@ -4,7 +4,9 @@ Every input is one file (or folder) handed to one reader:
 
 - byte 0 picks the reader (:data:`READERS`, modulo their number);
 - byte 1 holds option bits: bit 0 ``on_bad_line="skip"`` (else ``"raise"``), bits 1-7 the options of
-  :func:`imukit.io.read_imu_csv` (units, delimiter, columns by name or index);
+  :func:`imukit.io.read_imu_csv` (units, delimiter, columns by name or index); bit 1 also picks the
+  file name of the detecting readers (``.txt`` or ``.csv``) and of :func:`imukit.io.read_rosbag`
+  (``.mcap`` or ``.bag``);
 - the rest is the file content; readers of two files (folders with ground truth, KITTI poses and
   times) split it at the first NUL byte.
 
@@ -139,6 +141,11 @@ def _detect_trajectory(case: Case) -> Result:
     return io.read_trajectory(_file(case, "traj.txt" if case.options & 2 else "data.csv", case.first), **_kwargs(case))
 
 
+def _rosbag(case: Case) -> Result:
+    # The extension picks the container: ROS 1 bag or MCAP (rosbags parses both).
+    return io.read_rosbag(_file(case, "imu.mcap" if case.options & 2 else "imu.bag", case.first), **_kwargs(case))
+
+
 READERS: tuple[tuple[str, Callable[[Case], Result]], ...] = (
     ("read_euroc_imu", _euroc_imu),
     ("read_euroc_groundtruth", _euroc_groundtruth),
@@ -151,6 +158,7 @@ READERS: tuple[tuple[str, Callable[[Case], Result]], ...] = (
     ("read_imu_csv", _imu_csv),
     ("read_imu", _detect_imu_file),
     ("read_trajectory", _detect_trajectory),
+    ("read_rosbag", _rosbag),
 )
 
 
@@ -276,6 +284,13 @@ def seeds() -> list[bytes]:
     ]
 
 
+def rosbag_starts() -> list[bytes]:
+    """Starting inputs for :func:`imukit.io.read_rosbag`: the containers' magic numbers only (ROS 1
+    bag, MCAP), enough to reach their record parsers; not valid bags."""
+    index = [name for name, _ in READERS].index("read_rosbag")
+    return [bytes([index, 0]) + b"#ROSBAG V2.0\n", bytes([index, 2]) + b"\x89MCAP0\r\n"]
+
+
 def signature(error: BaseException) -> str:
     """``Type at file:line`` of the innermost imukit frame of a finding (one line per distinct bug)."""
     frames = traceback.extract_tb(error.__traceback__)
@@ -327,7 +342,7 @@ def main(argv: list[str]) -> None:
     corpora = [Path(a) for a in argv[1:] if not a.startswith("-")]
     if corpora and not any(corpora[0].glob("*")):
         corpora[0].mkdir(parents=True, exist_ok=True)
-        for i, seed in enumerate(seeds()):
+        for i, seed in enumerate(seeds() + rosbag_starts()):
             (corpora[0] / f"seed-{i:02d}").write_bytes(seed)
     _instrument_imukit(atheris)
     atheris.Setup(argv, _test_one_input)
