@@ -12,6 +12,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+from euroc import IMU_CSV, requires_euroc
 from test_cli import assert_one_line_error, cli, rmse_in_row
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -179,3 +180,29 @@ def test_filter_on_the_xio_example(tmp_path: Path) -> None:
     written = np.loadtxt(out, delimiter=",")
     # one rounding: the CLI rebuilds its Rotation from the quaternions (a renormalisation)
     assert np.abs(written[:, 1:5] - ik.filters.Mahony().run(read).rotation.as_quat()).max() < 1e-15
+
+
+@requires_euroc
+def test_a_static_euroc_start_with_gyro_bias_is_not_flagged() -> None:
+    """EuRoC V1_02 rests on the ground for its first seconds with a 0.078 rad/s z gyro bias, which a
+    mean-rate test took for motion; its spreads (gyro std 0.036 rad/s, RMS of |a| - g 0.16 m/s^2
+    from rotor vibration) are under the thresholds."""
+    run = cli("integrate", IMU_CSV)
+    assert "starting at rest, levelled from the first 2.0 s" in run.stderr
+    assert "do not look static" not in run.stderr
+
+
+@pytest.mark.parametrize(
+    ("trajectory", "sign"),
+    [
+        (ik.sim.VioEllipse(), "RMS of |accel| - 9.81 6.665 m/s^2 > 0.5"),  # 6.7 m/s^2 of vertical bobbing
+        (ik.sim.FigureEight(angular_rate=1.0), "gyro std 0.815 rad/s > 0.1"),  # the heading rate swings
+        (ik.sim.Circle(), "mean rate 0.500 rad/s > 0.3"),  # a steady 0.5 rad/s turn: no spread at all
+    ],
+)
+def test_a_moving_start_is_flagged(trajectory: object, sign: str, tmp_path: Path) -> None:
+    imu, _ = ik.sim.simulate(trajectory, rate=200.0, duration=4.0)
+    path = tmp_path / "imu.csv"
+    write_euroc_csv(path, np.round(imu.t * 1e9).astype(np.int64), imu.gyro, imu.accel)
+    notes = [line for line in cli("integrate", path).stderr.splitlines() if "do not look static" in line]
+    assert len(notes) == 1 and sign in notes[0], notes

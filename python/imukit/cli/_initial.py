@@ -39,16 +39,33 @@ def from_truth(truth: Trajectory, imu: ImuData, *, max_dt: float) -> tuple[NavSt
     return state, ImuBias(first.gyro_bias[0], first.accel_bias[0])
 
 
+# A start is "not static" when over the levelling window any of these is exceeded (stated in
+# `imukit integrate --help`). Spreads, not the mean rate: a gyro bias (EuRoC's z: 0.08 rad/s) moves the
+# mean but not the spread; the mean rate only above what no MEMS bias reaches.
+STATIC_GYRO_STD = 0.1  # [rad/s] standard deviation of any gyro axis
+STATIC_ACCEL_RMS = 0.5  # [m/s^2] RMS of |accel| - 9.81 (rotor vibration at rest: ~0.16 on EuRoC)
+STATIC_MEAN_RATE = 0.3  # [rad/s] norm of the mean rate
+
+
 def levelled_at_rest(imu: ImuData, static_seconds: float) -> NavState:
     """At the origin, at rest, roll and pitch from the mean specific force over the first
-    ``static_seconds`` (it points up at rest), yaw zero."""
+    ``static_seconds`` (it points up at rest), yaw zero. A note when that window does not look static
+    (the thresholds above)."""
     window = imu.seconds <= static_seconds
     if window.sum() < 2:
         raise CliError(f"--static-seconds: {static_seconds} s holds fewer than 2 IMU samples")
-    ax, ay, az = imu.accel[window].mean(axis=0)
-    spin = float(np.linalg.norm(imu.gyro[window].mean(axis=0)))
-    if spin > 0.05:
-        note(f"the first {static_seconds} s do not look static (mean rate {spin:.3f} rad/s); levelling anyway")
+    accel, gyro = imu.accel[window], imu.gyro[window]
+    spread = float(gyro.std(axis=0).max())
+    shake = float(np.sqrt(np.mean((np.linalg.norm(accel, axis=1) - 9.81) ** 2)))
+    spin = float(np.linalg.norm(gyro.mean(axis=0)))
+    signs = [
+        f"gyro std {spread:.3f} rad/s > {STATIC_GYRO_STD:g}" if spread > STATIC_GYRO_STD else "",
+        f"RMS of |accel| - 9.81 {shake:.3f} m/s^2 > {STATIC_ACCEL_RMS:g}" if shake > STATIC_ACCEL_RMS else "",
+        f"mean rate {spin:.3f} rad/s > {STATIC_MEAN_RATE:g}" if spin > STATIC_MEAN_RATE else "",
+    ]
+    if any(signs):
+        note(f"the first {static_seconds} s do not look static ({'; '.join(filter(None, signs))}); levelling anyway")
+    ax, ay, az = accel.mean(axis=0)
     pitch = float(np.arctan2(-ax, np.hypot(ay, az)))
     roll = float(np.arctan2(ay, az))
     return NavState(np.zeros(3), np.zeros(3), Rotation.from_euler("ZYX", [0.0, pitch, roll]))

@@ -20,12 +20,19 @@ from imukit.cli._common import (
     unpaired,
     wrote,
 )
-from imukit.cli._initial import from_truth, levelled_at_rest, trim_to_truth
+from imukit.cli._initial import (
+    STATIC_ACCEL_RMS,
+    STATIC_GYRO_STD,
+    STATIC_MEAN_RATE,
+    from_truth,
+    levelled_at_rest,
+    trim_to_truth,
+)
 from imukit.strapdown import SCHEMES, integrate
 
 MAX_DT = 0.02  # [s] longest ground-truth interval the ATE interpolates across (imukit.eval.ape's default)
 
-DESCRIPTION = """\
+DESCRIPTION = f"""\
 Integrate the IMU samples of PATH into positions, velocities and attitudes (strapdown dead
 reckoning: no correction, so the error grows with time; see docs/strapdown.md).
 
@@ -39,7 +46,10 @@ The initial state:
     first IMU sample inside the truth's span (IMU samples before the truth starts are skipped,
     and the count is printed);
   - without: at the origin, at rest, roll and pitch levelled from the mean accelerometer over the
-    first --static-seconds (yaw 0), so the recording must start at rest.
+    first --static-seconds (yaw 0), so the recording must start at rest; a note says when that
+    window does not look static: a gyro axis's std over {STATIC_GYRO_STD:g} rad/s, the RMS of
+    |accel| - 9.81 over {STATIC_ACCEL_RMS:g} m/s^2, or a mean rate over {STATIC_MEAN_RATE:g} rad/s (a gyro
+    bias moves the mean, rarely that far).
 --bias-from-groundtruth subtracts the truth's gyro and accelerometer biases at that first sample
 (EuRoC's ground truth has them) as a constant bias.
 
