@@ -185,7 +185,9 @@ def test_preintegrate_windows_match_the_library(simulated: Path, tmp_path: Path)
     edges = np.arange(41) * 500_000_000  # integer ns, as the stamps
     pims = ik.preintegrate_windows(imu, edges, noise=NOISE)
     rows = np.loadtxt(csv, delimiter=",")
-    assert rows.shape == (40, 22)
+    assert rows.shape == (40, 24)
+    exact = np.loadtxt(csv, delimiter=",", usecols=(22, 23), dtype=np.int64)  # t_start_ns, t_end_ns
+    assert np.array_equal(exact, np.column_stack([edges[:-1], edges[1:]]))
     assert np.array_equal(rows[:, 2], [p.delta_t for p in pims])
     assert np.array_equal(rows[:, 3:7], [p.delta_rotation.as_quat() for p in pims])
     assert np.array_equal(rows[:, 10:13], [p.delta_position for p in pims])
@@ -194,6 +196,7 @@ def test_preintegrate_windows_match_the_library(simulated: Path, tmp_path: Path)
         assert np.array_equal(data["covariance"], [p.covariance for p in pims])
         assert np.array_equal(data["dv"], [p.delta_velocity for p in pims])
         assert np.array_equal(data["t_start"], np.arange(40) * 0.5)
+        assert data["t_end_ns"].dtype == np.int64 and np.array_equal(data["t_end_ns"], edges[1:])
 
 
 def test_preintegrate_at_rest_is_gravity(tmp_path: Path, noise_yaml: Path) -> None:
@@ -311,7 +314,7 @@ def test_evaluate_known_offset(tmp_path: Path) -> None:
         (["integrate", "{broad}", "--out", "traj.csv"], ["--out", ".txt"]),
         (["simulate", "spiral", "--out", "x"], ["TRAJECTORY", "spiral"]),
         (["filter", "{broad}", "--plot", "/no/such/dir/e.png"], ["--plot", "does not exist"]),
-        (["preintegrate", "{broad}", "--window", "0.5"], []),
+        (["preintegrate", "{broad}", "--window", "0.5"], ["broad_excerpt.npz: not a text file"]),
     ],
 )
 def test_bad_input_one_line(args: list[str], pieces: list[str], tmp_path: Path) -> None:

@@ -21,6 +21,13 @@ KITTI = SHARED / "kitti_gtsam" / "KittiEquivBiasedImu.txt"
 EUROC_HEADER = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"  # noqa: E501
 
 
+@pytest.fixture(scope="module")
+def noise_yaml(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("noise") / "imu.yaml"
+    ik.io.write_kalibr_imu(path, ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3), rate_hz=200.0)
+    return path
+
+
 def write_euroc_csv(path: Path, t_ns: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> None:
     with open(path, "w", encoding="utf-8") as f:
         f.write(EUROC_HEADER + "\n")
@@ -206,3 +213,47 @@ def test_a_moving_start_is_flagged(trajectory: object, sign: str, tmp_path: Path
     write_euroc_csv(path, np.round(imu.t * 1e9).astype(np.int64), imu.gyro, imu.accel)
     notes = [line for line in cli("integrate", path).stderr.splitlines() if "do not look static" in line]
     assert len(notes) == 1 and sign in notes[0], notes
+
+
+def test_preintegrate_window_edges_in_integer_ns(tmp_path: Path, noise_yaml: Path) -> None:
+    """Unix-epoch ns stamps at 200 Hz, the last one 50 ns short of 200 s: --window 100 is one whole
+    window [0, 100 s] (the float count put a second edge at 200 s, past the last sample, and the
+    library refused `boundaries`), the edges exact in the t_*_ns columns."""
+    start = 1_403_636_579_000_000_000
+    t_ns = np.append(np.arange(0, 200 * 10**9, 5_000_000, dtype=np.int64), 200 * 10**9 - 50) + start
+    n = len(t_ns)
+    ik.io.write_euroc(tmp_path / "seq", ik.ImuData(t_ns, np.zeros((n, 3)), np.tile([0.0, 0.0, 9.81], (n, 1))))
+    out = tmp_path / "w.csv"
+    run = cli("preintegrate", tmp_path / "seq", "--window", "100", "--noise", noise_yaml, "--out", out)
+    assert run.stdout.startswith("1 windows of 100.0 s")
+    with open(out, encoding="utf-8") as f:
+        header, row = f.readline(), f.readline().strip().split(",")
+    assert header.rstrip().endswith(",t_start_ns,t_end_ns") and len(row) == 24
+    assert (int(row[22]), int(row[23])) == (start, start + 100 * 10**9)
+    assert float(row[2]) == 100.0  # delta_t
+    assert float(row[0]) == start / 1e9 and float(row[1]) == (start + 100 * 10**9) / 1e9
+
+
+def test_preintegrate_float_stamps_keep_the_last_edge_inside(tmp_path: Path, noise_yaml: Path) -> None:
+    """Float-second stamps (GTSAM text): 0.1 s steps to 0.3 s with --window 0.1: 0.1 * 3 rounds to
+    0.30000000000000004, past the last sample, so 2 windows, not a refusal."""
+    path = tmp_path / "imu.txt"
+    lines = ["Time dt accelX accelY accelZ omegaX omegaY omegaZ"]
+    lines += [f"{t!r} 0.1 0 0 9.81 0 0 0" for t in (0.0, 0.1, 0.2, 0.3)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    run = cli("preintegrate", path, "--window", "0.1", "--noise", noise_yaml)
+    assert run.stdout.startswith("2 windows of 0.1 s")
+
+
+def test_unknown_and_trajectory_inputs_are_one_short_line(tmp_path: Path) -> None:
+    other = tmp_path / "log.csv"
+    other.write_text("time,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n", encoding="utf-8")
+    run = cli("filter", other, code=1)
+    assert_one_line_error(run, f"imukit: error: path: {other}: not an IMU format imukit knows; tried ")
+    assert run.stderr.rstrip().endswith("other layouts: the --csv-* options")
+    assert len(run.stderr) - len(str(other)) < 170
+    _, truth = ik.sim.simulate(ik.sim.Static(), rate=10.0, duration=1.0)
+    tum = tmp_path / "traj.txt"
+    truth.write_tum(tum)
+    run = cli("integrate", tum, code=1)
+    assert_one_line_error(run, f"imukit: error: path: {tum}: this is a trajectory (TUM: t x y z qx qy qz qw), not IMU")

@@ -17,17 +17,11 @@ from imukit.io import ReadReport
 from test_io_gtsam import KITTI_IMU, requires_kitti
 from test_io_tumvi import MOCAP, dataset
 
-TRIED_IMU = (
-    "tried EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), TUM-VI folder (the same with mocap0/data.csv), "
-    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap, .db3), "
-    "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
-    "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
-    "for other layouts use read_imu_csv with a column mapping"
-)
-TRIED_TRAJECTORY = (
-    "tried TUM (8 white-space-separated fields), EuRoC ground truth (17 comma-separated fields), "
-    "TUM-VI mocap (8 comma-separated fields), EuRoC or TUM-VI folder with one of those files; "
-    "KITTI poses need their times file: use read_kitti_poses"
+TRIED_IMU = "tried EuRoC / TUM-VI folder or imu0/data.csv, GTSAM / KITTI text, ROS bag; other layouts: read_imu_csv"
+TRIED_TRAJECTORY = "tried TUM, EuRoC ground truth, TUM-VI mocap (or their folders); KITTI poses: read_kitti_poses"
+EUROC_IMU_HEADER = (
+    "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+    "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
 )
 
 
@@ -75,7 +69,8 @@ def test_tum_file(tmp_path: Path) -> None:
     assert traj.velocity is None and np.array_equal(traj.position, truth.position)
     # A TUM file is not IMU data: 8 white-space fields without GTSAM's header are not guessed at.
     with pytest.raises(
-        ik.io.FileFormatError, match=rf"^path: .*traj\.txt: not an IMU format imukit knows; {re.escape(TRIED_IMU)}$"
+        ik.io.FileFormatError,
+        match=r"^path: .*traj\.txt: this is a trajectory \(TUM: t x y z qx qy qz qw\), not IMU samples$",
     ):
         ik.io.read_imu(tmp_path / "traj.txt")
 
@@ -130,7 +125,9 @@ def test_unknown_files_list_the_formats_tried(tmp_path: Path) -> None:
     path.write_bytes(b"\xff\xfe\x00binary")
     with pytest.raises(ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}: not a text file; tried EuRoC"):
         ik.io.read_imu(path)
-    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*: a folder of no known layout; tried EuRoC folder"):
+    with pytest.raises(
+        ik.io.FileFormatError, match=rf"^path: .*: a folder of no known layout; {re.escape(TRIED_IMU)}$"
+    ):
         ik.io.read_imu(tmp_path)
     with pytest.raises(FileNotFoundError, match=r"^path: .*missing\.csv does not exist"):
         ik.io.read_imu(tmp_path / "missing.csv")
@@ -193,3 +190,72 @@ def test_real_bags_end_to_end(kind: str, tmp_path: Path) -> None:
     assert imu.t_ns.tolist() == [1_403_715_523_912_140_000, 1_403_715_523_917_140_000]
     np.testing.assert_array_equal(imu.gyro, [[0.0, 0.2, 0.3], [0.1, 0.2, 0.3]])
     np.testing.assert_array_equal(imu.accel, [[9.1, 9.2, 9.3], [9.1, 9.2, 10.3]])
+
+
+def test_empty_and_header_only_files_are_said_to_be(tmp_path: Path) -> None:
+    for text in ("", "\n  \n\n"):
+        path = tmp_path / "empty.csv"
+        path.write_text(text)
+        with pytest.raises(ik.io.FileFormatError, match=rf"^path: {re.escape(str(path))}: empty file, expected IMU"):
+            ik.io.read_imu(path)
+        with pytest.raises(ik.io.FileFormatError, match=r"^path: .*: empty file, expected a trajectory$"):
+            ik.io.read_trajectory(path)
+    path = tmp_path / "imu0.csv"
+    path.write_text(EUROC_IMU_HEADER + "\n")
+    with pytest.raises(ik.io.FileFormatError) as raised:
+        ik.io.read_imu(path)
+    message = str(raised.value)
+    assert message.startswith(f"path: {path}: no data lines, only the header '#timestamp [ns],w_RS_S_x")
+    assert message.endswith("...', expected IMU samples") and len(message) < 200 + len(str(path))
+
+
+def test_trajectories_given_for_imu_samples_are_named(tmp_path: Path) -> None:
+    _, truth = simulated()
+    ik.io.write_euroc(tmp_path / "seq", simulated()[0], truth)
+    gt = tmp_path / "seq" / "mav0" / "state_groundtruth_estimate0" / "data.csv"
+    if not gt.is_file():
+        gt = tmp_path / "seq" / "state_groundtruth_estimate0" / "data.csv"
+    with pytest.raises(ik.io.FileFormatError, match=r"this is a trajectory \(EuRoC ground truth, 17 comma-separated"):
+        ik.io.read_imu(gt)
+    mocap = tmp_path / "mocap.csv"
+    mocap.write_text("\n".join(MOCAP) + "\n")
+    with pytest.raises(ik.io.FileFormatError, match=r"this is a trajectory \(TUM-VI mocap or another pose CSV"):
+        ik.io.read_imu(mocap)
+
+
+def test_unknown_format_message_is_short(tmp_path: Path) -> None:
+    path = tmp_path / "data.csv"
+    path.write_text("time,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n")
+    with pytest.raises(ik.io.FileFormatError) as raised:
+        ik.io.read_imu(path)
+    assert len(str(raised.value)) - len(str(path)) < 150  # was ~520 characters
+
+
+def test_a_byte_order_mark_does_not_hide_the_header(tmp_path: Path) -> None:
+    """Excel's UTF-8 BOM before EuRoC's '#timestamp' header: detected as EuRoC, read like the file without."""
+    imu, _ = simulated()
+    ik.io.write_euroc(tmp_path / "seq", imu)
+    plain = next(tmp_path.glob("seq/**/imu0/data.csv"))
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    back, truth = ik.io.read_imu(bom)
+    assert truth is None and np.array_equal(back.t_ns, imu.t_ns) and np.array_equal(back.gyro, imu.gyro)  # type: ignore[arg-type]
+    mocap = tmp_path / "mocap_bom.csv"
+    mocap.write_bytes(b"\xef\xbb\xbf" + ("\n".join(MOCAP) + "\n").encode())
+    assert len(ik.io.read_trajectory(mocap)) == 2
+
+
+def test_eight_comma_fields_need_a_header_naming_w_first(tmp_path: Path) -> None:
+    """TUM-VI mocap is t, p, q w x y z; a t,x,y,z,qx,qy,qz,qw export read that way would be silently wrong."""
+    w_last = tmp_path / "w_last.csv"
+    w_last.write_text("t_ns,x,y,z,qx,qy,qz,qw\n1000,0,0,0,0,0,0.7071,0.7071\n2000,0,0,0,0,0,0.7071,0.7071\n")
+    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*w_last\.csv: the header puts the quaternion w last"):
+        ik.io.read_trajectory(w_last)
+    headerless = tmp_path / "headerless.csv"
+    headerless.write_text("\n".join(MOCAP[1:]) + "\n")
+    with pytest.raises(ik.io.FileFormatError, match=r"^path: .*: 8 comma-separated fields and no header line to tell"):
+        ik.io.read_trajectory(headerless)
+    named = tmp_path / "named.csv"
+    named.write_text("# t_ns, x, y, z, qw, qx, qy, qz\n" + "\n".join(MOCAP[1:]) + "\n")
+    traj = ik.io.read_trajectory(named)  # qw as the 5th name: w first, as TUM-VI
+    np.testing.assert_allclose(traj.rotation[0].as_quat(), [0.5, -0.5, 0.5, 0.5])  # the row's w x y z = .5 .5 -.5 .5

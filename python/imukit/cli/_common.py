@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
 from imukit import io
-from imukit._errors import ImukitError
+from imukit._errors import FileFormatError, ImukitError
 from imukit.imu import ImuData
 from imukit.io import ReadReport
 from imukit.state import Trajectory
@@ -225,7 +225,11 @@ def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
             result = io.read_imu_csv(args.path, **csv, on_bad_line=on_bad_line, report=report), None
         else:
             bag = {name: getattr(args, name) for name in BAG_OPTIONS}
-            result = io.read_imu(args.path, **bag, on_bad_line=on_bad_line, report=report)
+            try:
+                result = io.read_imu(args.path, **bag, on_bad_line=on_bad_line, report=report)
+            except FileFormatError as exc:  # the library's pointer, in the CLI's words
+                message = str(exc).replace("other layouts: read_imu_csv", "other layouts: the --csv-* options")
+                raise FileFormatError(message) from exc
     _report_skips(report)
     check_gaps(result[0], args.max_gap)
     return result

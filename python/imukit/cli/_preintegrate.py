@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imukit._arrays import FloatArray
 from imukit.cli._common import (
     CliError,
     add_input_options,
@@ -44,6 +43,7 @@ COLUMNS = (
     "dp_z [m]",
     *(f"var_{name}_{axis}" for name in ("theta", "v", "p") for axis in "xyz"),
 )
+EXACT_COLUMNS = ("t_start_ns", "t_end_ns")  # last in the CSV, for nanosecond stamps only
 
 DESCRIPTION = f"""\
 Preintegrate the IMU samples of PATH over consecutive windows of --window seconds (Forster et al.
@@ -59,9 +59,14 @@ the right perturbation of dR; rad, m/s, m.
 Writes --out:
   .csv: one row per window, a header line, columns
         {", ".join(COLUMNS[:13])},
-        then the covariance diagonal var_theta_x..z [rad^2], var_v_x..z [m^2/s^2], var_p_x..z [m^2];
-  .npz: the same as arrays t_start, t_end, delta_t (M,), dR_xyzw, dv, dp (M, 3 or 4), and the full
-        covariance (M, 9, 9) and bias_jacobian (M, 9, 6) (columns [b_g, b_a]).
+        then the covariance diagonal var_theta_x..z [rad^2], var_v_x..z [m^2/s^2], var_p_x..z [m^2],
+        and for nanosecond stamps (EuRoC, TUM-VI, bags) t_start_ns, t_end_ns: the edges as exact
+        integers (the float seconds columns round them to about 0.2 us for Unix-epoch stamps);
+  .npz: the same as arrays t_start, t_end, delta_t (M,), dR_xyzw, dv, dp (M, 3 or 4), the full
+        covariance (M, 9, 9) and bias_jacobian (M, 9, 6) (columns [b_g, b_a]), and t_start_ns,
+        t_end_ns (M,) int64 for nanosecond stamps.
+Window edges: every --window s from the first sample, the last edge at or before the last sample
+(computed in integer ns for nanosecond stamps, the window rounded to a whole ns).
 Prints the number of windows and the largest window's deltas.
 
 Example:
@@ -100,12 +105,21 @@ def noise_for(path: str, noise_yaml: str | None) -> ImuNoise:
 
 
 def boundaries(imu: ImuData, window_s: float) -> NDArray[Any]:
-    """Window edges on ``imu.t``'s clock (integer ns for ns stamps), every ``window_s`` from the start."""
-    count = int(np.floor(imu.duration / window_s + 1e-9))
+    """Window edges on ``imu.t``'s clock, every ``window_s`` from the first sample, the last one at
+    or before the last sample: integer ns for ns stamps (the window rounded to a whole ns, the count
+    by integer division: exact), else float seconds (the count lowered while rounding puts the last
+    edge past the last sample)."""
+    if imu.t_ns is not None:
+        step = max(round(window_s * 1e9), 1)
+        count = int(imu.t_ns[-1] - imu.t_ns[0]) // step
+    else:
+        count = int(np.floor(imu.duration / window_s))
+        while count > 0 and imu.t[0] + count * window_s > imu.t[-1]:
+            count -= 1
     if count < 1:
         raise CliError(f"--window: {window_s} s is longer than the recording ({imu.duration:.6g} s)")
     if imu.t_ns is not None:
-        return np.asarray(imu.t_ns[0] + np.arange(count + 1) * round(window_s * 1e9), dtype=np.int64)
+        return np.asarray(imu.t_ns[0] + np.arange(count + 1, dtype=np.int64) * step, dtype=np.int64)
     return np.asarray(imu.t[0] + np.arange(count + 1) * window_s)
 
 
@@ -119,10 +133,13 @@ def windows(imu: ImuData, edges: NDArray[Any], noise: ImuNoise, scheme: str) -> 
     return result
 
 
-def arrays(imu: ImuData, edges: NDArray[Any], pims: list[PreintegratedImu]) -> dict[str, FloatArray]:
-    """The windows as named arrays (what the ``.npz`` holds)."""
+def arrays(imu: ImuData, edges: NDArray[Any], pims: list[PreintegratedImu]) -> dict[str, NDArray[Any]]:
+    """The windows as named arrays (what the ``.npz`` holds); ``t_start_ns``, ``t_end_ns`` (int64,
+    exact) when the stamps are ns."""
     seconds = edges / 1e9 if imu.t_ns is not None else edges
+    exact = {} if imu.t_ns is None else {"t_start_ns": edges[:-1], "t_end_ns": edges[1:]}
     return {
+        **exact,
         "t_start": np.asarray(seconds[:-1], dtype=np.float64),
         "t_end": np.asarray(seconds[1:], dtype=np.float64),
         "delta_t": np.array([p.delta_t for p in pims]),
@@ -152,8 +169,22 @@ def run(args: argparse.Namespace) -> int:
             named: dict[str, Any] = table
             np.savez_compressed(target, **named)
         else:
-            diag = np.diagonal(table["covariance"], axis1=1, axis2=2)
-            rows = np.column_stack([table[k] for k in ("t_start", "t_end", "delta_t", "dR_xyzw", "dv", "dp")] + [diag])
-            np.savetxt(target, rows, fmt="%.17g", delimiter=",", header=",".join(COLUMNS))
+            _write_csv(target, table)
         wrote("windows", target)
     return 0
+
+
+def _write_csv(target: Any, table: dict[str, NDArray[Any]]) -> None:
+    """One row per window: :data:`COLUMNS` as %.17g, then ``t_start_ns``, ``t_end_ns`` as integers
+    when the table has them (an int64 stamp does not survive a float column)."""
+    diag = np.diagonal(table["covariance"], axis1=1, axis2=2)
+    rows = np.column_stack([table[k] for k in ("t_start", "t_end", "delta_t", "dR_xyzw", "dv", "dp")] + [diag])
+    exact = "t_start_ns" in table
+    header = ",".join(COLUMNS + (EXACT_COLUMNS if exact else ()))
+    with open(target, "w", encoding="utf-8") as f:
+        f.write(f"# {header}\n")
+        for k, row in enumerate(rows):
+            line = ",".join(f"{v:.17g}" for v in row)
+            if exact:
+                line += f",{int(table['t_start_ns'][k])},{int(table['t_end_ns'][k])}"
+            f.write(line + "\n")

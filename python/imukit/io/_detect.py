@@ -20,19 +20,11 @@ from imukit.state import Trajectory
 
 __all__ = ["read_imu", "read_trajectory"]
 
-IMU_FORMATS = (
-    "EuRoC folder (imu0/data.csv or mav0/imu0/data.csv), "
-    "TUM-VI folder (the same with mocap0/data.csv), "
-    "ROS 2 bag folder (metadata.yaml), ROS bag file (.bag, .mcap, .db3), "
-    "EuRoC / TUM-VI IMU CSV (7 comma-separated fields, integer nanosecond stamp), "
-    "GTSAM / KITTI IMU text (header line 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'); "
-    "for other layouts use read_imu_csv with a column mapping"
-)
-TRAJECTORY_FORMATS = (
-    "TUM (8 white-space-separated fields), EuRoC ground truth (17 comma-separated fields), "
-    "TUM-VI mocap (8 comma-separated fields), EuRoC or TUM-VI folder with one of those files; "
-    "KITTI poses need their times file: use read_kitti_poses"
-)
+IMU_FORMATS = "EuRoC / TUM-VI folder or imu0/data.csv, GTSAM / KITTI text, ROS bag; other layouts: read_imu_csv"
+TRAJECTORY_FORMATS = "TUM, EuRoC ground truth, TUM-VI mocap (or their folders); KITTI poses: read_kitti_poses"
+# The column names that put TUM-VI mocap's w first (its header), and the usual names of a w-last one.
+_W_FIRST = ("q_RS_w", "qw", "q_w")
+_W_LAST = ("qx", "q_x", "q_RS_x")
 
 
 def read_imu(
@@ -58,8 +50,9 @@ def read_imu(
     5. a file whose first data line (after ``#`` lines) has 7 comma-separated fields and an integer
        first field: an EuRoC / TUM-VI ``imu0/data.csv`` (:func:`imukit.io.read_euroc_imu`).
 
-    Anything else is a :class:`FileFormatError` listing the formats tried (other CSV layouts:
-    :func:`imukit.io.read_imu_csv`).
+    Anything else is a :class:`FileFormatError`: an empty file, a file with no data lines (a header
+    only), a trajectory (TUM, EuRoC ground truth, TUM-VI mocap) are said to be so; otherwise the
+    message lists the formats tried (other CSV layouts: :func:`imukit.io.read_imu_csv`).
 
     Parameters
     ----------
@@ -111,7 +104,12 @@ def read_imu(
     fields = _first_data_fields(first, ",")
     if len(fields) == 7 and integer_stamp(fields[0].strip()) is not None:
         return bad.done((euroc_imu(path, bad), None))
-    raise FileFormatError(f"path: {os.fspath(path)}: not an IMU format imukit knows; tried {IMU_FORMATS}")
+    where = f"path: {os.fspath(path)}"
+    _refuse_without_data(first, where, "IMU samples")
+    trajectory = _trajectory_kind(first)
+    if trajectory is not None:
+        raise FileFormatError(f"{where}: this is a trajectory ({trajectory}), not IMU samples")
+    raise FileFormatError(f"{where}: not an IMU format imukit knows; tried {IMU_FORMATS}")
 
 
 def read_trajectory(
@@ -123,9 +121,12 @@ def read_trajectory(
     ``state_groundtruth_estimate0/data.csv`` (EuRoC) or else its ``mocap0/data.csv`` (TUM-VI). A file
     is classified by its first data line (after ``#`` and blank lines): 17 comma-separated fields,
     EuRoC ground truth (:func:`imukit.io.read_euroc_groundtruth`); 8 comma-separated fields, TUM-VI
-    mocap (``timestamp [ns], p x y z, q w x y z``); 8 white-space-separated fields, TUM
-    (:func:`imukit.io.read_tum`). Anything else is a :class:`FileFormatError` listing the formats
-    tried (KITTI poses need their times file: :func:`imukit.io.read_kitti_poses`).
+    mocap (``timestamp [ns], p x y z, q w x y z``) when a header line names the quaternion w first
+    (``q_RS_w``, ``qw``), refused without a header or with w last (``t,x,y,z,qx,qy,qz,qw``: the order
+    cannot be guessed from numbers, and a wrong one is silently wrong); 8 white-space-separated
+    fields, TUM (:func:`imukit.io.read_tum`). An empty file or one without data lines is said to be
+    so; anything else is a :class:`FileFormatError` listing the formats tried (KITTI poses need
+    their times file: :func:`imukit.io.read_kitti_poses`).
 
     ``on_bad_line`` and ``report`` are passed to the reader chosen.
 
@@ -148,14 +149,17 @@ def read_trajectory(
             f"(no {GROUNDTRUTH_CSV.as_posix()} nor {MOCAP_CSV.as_posix()} in {root})"
         )
     first = _first_lines(source, TRAJECTORY_FORMATS)
+    where = f"path: {os.fspath(path)}"
+    _refuse_without_data(first, where, "a trajectory")
     comma, space = len(_first_data_fields(first, ",")), len(_first_data_fields(first, None))
     if comma == 17:
         return bad.done(euroc_groundtruth(path, bad))
     if comma == 8:
+        _check_w_first(first, where)
         return bad.done(tumvi_mocap(path, bad))
     if comma == 1 and space == 8:
         return bad.done(tum(path, bad))
-    raise FileFormatError(f"path: {os.fspath(path)}: not a trajectory format imukit knows; tried {TRAJECTORY_FORMATS}")
+    raise FileFormatError(f"{where}: not a trajectory format imukit knows; tried {TRAJECTORY_FORMATS}")
 
 
 def _dataset_root(source: Path) -> Path | None:
@@ -175,7 +179,7 @@ def _first_lines(source: Path, formats: str) -> list[tuple[int, str]]:
     if source.is_dir():
         raise FileFormatError(f"path: {os.fspath(source)}: a folder of no known layout; tried {formats}")
     try:
-        with open(source, encoding="utf-8") as f:
+        with open(source, encoding="utf-8-sig") as f:  # -sig: a byte order mark is not part of the first line
             first = list(islice(((n, line.strip()) for n, line in enumerate(f, 1) if line.strip()), 2))
         return first + list(islice(data_lines(source), 1))
     except UnicodeDecodeError:
@@ -188,3 +192,60 @@ def _first_data_fields(first: list[tuple[int, str]], delimiter: str | None) -> l
         if not text.startswith("#"):
             return text.split(delimiter)
     return []
+
+
+def _refuse_without_data(first: list[tuple[int, str]], where: str, expected: str) -> None:
+    """A FileFormatError for a file with no lines, or with ``#`` lines only (a header without data)."""
+    if not first:
+        raise FileFormatError(f"{where}: empty file, expected {expected}")
+    if all(text.startswith("#") for _, text in first):
+        header = first[0][1]
+        raise FileFormatError(f"{where}: no data lines, only the header {_shorten(header)}, expected {expected}")
+
+
+def _trajectory_kind(first: list[tuple[int, str]]) -> str | None:
+    """The trajectory format the first data line looks like (for an error saying so), else None."""
+    comma, space = _first_data_fields(first, ","), _first_data_fields(first, None)
+    if len(comma) == 17:
+        return "EuRoC ground truth, 17 comma-separated fields"
+    numbers = [text.split(",") for _, text in first if _number(text.split(",")[0])]  # past a names line
+    if len(comma) == 8 and numbers and len(numbers[0]) == 8 and integer_stamp(numbers[0][0].strip()) is not None:
+        return "TUM-VI mocap or another pose CSV, 8 comma-separated fields"
+    if len(comma) == 1 and len(space) == 8 and all(_number(field) for field in space):
+        return "TUM: t x y z qx qy qz qw"
+    return None
+
+
+def _check_w_first(first: list[tuple[int, str]], where: str) -> None:
+    """An 8-field comma file is read as TUM-VI mocap (w x y z) only when its header says so."""
+    header = next((text for _, text in first if text.startswith("#") or not _number(text.split(",")[0])), None)
+    if header is None:
+        raise FileFormatError(
+            f"{where}: 8 comma-separated fields and no header line to tell the quaternion order; TUM-VI mocap "
+            f"(w first) has '#timestamp [ns],p_RS_R_x [m],...,q_RS_w [],q_RS_x [],...': add that header, or "
+            f"write t x y z qx qy qz qw separated by spaces (TUM)"
+        )
+    names = [name.strip().lstrip("#").split(" ")[0].strip() for name in header.split(",")]
+    if len(names) == 8 and names[4] in _W_FIRST:
+        return
+    if len(names) == 8 and names[4] in _W_LAST:
+        raise FileFormatError(
+            f"{where}: the header puts the quaternion w last ({_shorten(header)}); imukit reads 8 comma-separated "
+            "fields as TUM-VI mocap, w first: write the file as TUM (t x y z qx qy qz qw, space-separated)"
+        )
+    raise FileFormatError(
+        f"{where}: the header {_shorten(header)} does not name the quaternion order; TUM-VI mocap has q_RS_w "
+        "(or qw) as its 5th column"
+    )
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _shorten(text: str, limit: int = 80) -> str:
+    return repr(text if len(text) <= limit else text[: limit - 3] + "...")
