@@ -35,15 +35,6 @@ def _harness() -> ModuleType:
 fuzz_readers = _harness()
 
 
-# Open in imukit.io._rosbag (H2): rosbags' own exceptions escape from a malformed MCAP file (a
-# record length of 7e16 bytes: MemoryError from its read_sized; the magic number alone: TypeError
-# from ord() on an empty read). Remove the mark when _rosbag._open turns them into FileFormatError.
-_OPEN = {
-    "read_rosbag-mcap-huge-record-size": "MemoryError from rosbags escapes read_rosbag",
-    "read_rosbag-mcap-truncated": "TypeError from rosbags escapes read_rosbag",
-}
-
-
 def test_the_regression_inputs_are_there() -> None:
     assert [p.name for p in _REGRESSIONS] == [
         "read_euroc-stamp-control-char.bin",
@@ -53,12 +44,7 @@ def test_the_regression_inputs_are_there() -> None:
     ]
 
 
-def _case(path: Path) -> object:
-    marks = [pytest.mark.xfail(strict=True, reason=_OPEN[path.stem])] if path.stem in _OPEN else []
-    return pytest.param(path, id=path.stem, marks=marks)
-
-
-@pytest.mark.parametrize("path", [_case(p) for p in _REGRESSIONS])
+@pytest.mark.parametrize("path", _REGRESSIONS, ids=[p.stem for p in _REGRESSIONS])
 def test_regression_input_meets_the_contract(path: Path) -> None:
     if path.stem.startswith("read_rosbag"):
         pytest.importorskip("rosbags", reason="read_rosbag needs imukit[ros]")

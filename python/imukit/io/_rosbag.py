@@ -90,7 +90,7 @@ def is_bag_path(path: str | os.PathLike[str]) -> bool:
 def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
     """The bag at ``path`` opened with ``rosbags``' AnyReader; errors become :class:`FileFormatError`."""
     try:
-        from rosbags.highlevel import AnyReader, AnyReaderError
+        from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
     except ImportError as e:
         raise MissingDependencyError(
@@ -109,7 +109,10 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
         try:
             reader = AnyReader([readable], default_typestore=get_typestore(Stores.LATEST))
             reader.open()
-        except (AnyReaderError, OSError, KeyError, ValueError) as e:
+        # rosbags' parsers meet untrusted bytes here and fail with many kinds of exception on a
+        # corrupt file (fuzzing found MemoryError for a huge record length, TypeError for a
+        # truncated MCAP): each one means "not a bag we can open".
+        except Exception as e:
             mcap = bag.suffix.lower() == ".mcap"
             hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if mcap else ""
             raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
