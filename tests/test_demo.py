@@ -4,6 +4,7 @@ table's numbers are the library's (recomputed here with direct calls) and the th
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import time
@@ -30,6 +31,7 @@ def demo(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[tuple[str
     wall = time.perf_counter() - start
     assert run.returncode == 0, run.stderr
     assert f"written to {folder}" in run.stdout
+    (folder / "stdout.txt").write_text(run.stdout, encoding="utf-8")
     results = json.loads((folder / "results.json").read_text())
     assert results["parameters"]["noise"] == {
         "gyro_density": NOISE.gyro_density,
@@ -89,9 +91,37 @@ def test_allan_rows_recover_the_simulated_density(demo: tuple[Path, dict, float]
     _, rows, _ = demo
     imu, _ = ik.sim.simulate(ik.sim.Static(), rate=200.0, duration=1800.0, noise=NOISE, seed=1)
     fit = ik.noise.fit_allan(ik.noise.allan_deviation(imu.gyro, 200.0), sensor="gyro")
-    ratio = rows[("Allan fit, gyro", "white noise N / true")]["value"]
-    assert ratio == fit.noise_density / NOISE.gyro_density
-    assert ratio == pytest.approx(1.0, abs=0.02)  # 1800 s of 3-axis white noise pins N to ~0.3%
+    n_row = rows[("Allan fit, gyro", "white noise N / true")]
+    assert n_row["value"] == fit.noise_density / NOISE.gyro_density
+    assert n_row["interval"] == [x / NOISE.gyro_density for x in fit.noise_density_interval]
+    assert n_row["value"] == pytest.approx(1.0, abs=0.02)  # 1800 s of 3-axis white noise pins N to ~0.3%
+    assert n_row["interval"][0] <= 1.0 <= n_row["interval"][1]
+
+
+def test_allan_random_walk_row_and_why_it_is_low(demo: tuple[Path, dict, float]) -> None:
+    """K rests on the few longest clusters of an 1800 s record: over seeds 1..10 K/true came out
+    0.89 to 1.08 (mean 0.99, std 0.057; 7200 s: std 0.037), so seed 1's 0.89 is scatter, not the
+    fit's few-percent low bias (docs/noise.md); its 95% interval holds the truth. The bound 0.2 is
+    3.5 of those standard deviations."""
+    _, rows, _ = demo
+    imu, _ = ik.sim.simulate(ik.sim.Static(), rate=200.0, duration=1800.0, noise=NOISE, seed=1)
+    fit = ik.noise.fit_allan(ik.noise.allan_deviation(imu.gyro, 200.0), sensor="gyro")
+    k_row = rows[("Allan fit, gyro", "random walk K / true")]
+    assert k_row["value"] == fit.random_walk / NOISE.gyro_random_walk
+    assert k_row["interval"] == [x / NOISE.gyro_random_walk for x in fit.random_walk_interval]
+    assert k_row["interval"][0] <= 1.0 <= k_row["interval"][1]
+    assert k_row["value"] == pytest.approx(1.0, abs=0.2)
+
+
+def test_table_heading_and_sections(demo: tuple[Path, dict, float]) -> None:
+    folder, _, _ = demo
+    text = (folder / "stdout.txt").read_text(encoding="utf-8")
+    header = next(line for line in text.splitlines() if "data" in line and "method" in line)
+    cells = [c.strip() for c in re.split(r"[┃│|]", header) if c.strip()]
+    assert cells == ["data", "method", "error", "value [95% interval]", "time (best of 3)"]
+    for label in ("figure-eight 60 s, noisy", "figure-eight 30 s, noise-free", "static 1800 s, noisy"):
+        assert label in text
+    assert re.search(r"random walk K / true\s*│\s*0\.8918 \[0\.7336, 1\.026\]", text)
 
 
 def test_broad_rows_are_the_library_calls(demo: tuple[Path, dict, float]) -> None:
@@ -109,6 +139,11 @@ def test_broad_rows_are_the_library_calls(demo: tuple[Path, dict, float]) -> Non
             name = f"{cls.__name__} {'9D' if nine else '6D'}"
             assert rows[(name, "inclination RMSE")]["value"] == rmse.inclination
             assert rmse.inclination < 1.5  # BROAD-tuned defaults: docs/filters_accuracy.md
+            heading = rows[(name, "heading RMSE" + ("" if nine else " (offset removed)"))]["value"]
+            assert heading == rmse.heading
+            # 3.4-3.5 deg but Madgwick 9D's 1.03 here; a heading gone wrong (mag unused in 9D, the
+            # offset not removed in 6D, a wrong world frame) is tens of degrees
+            assert heading < 5.0
 
 
 def test_the_excerpt_is_small_and_attributed() -> None:
