@@ -212,3 +212,31 @@ fn preintegration_merge_overflow_is_an_error() {
     q.integrate_samples(&samples).unwrap();
     assert!((q.merge(&q).unwrap().delta_t - 1.0).abs() < 1e-15);
 }
+
+/// fuzz/artifacts/filters/crash-1c7ef27b…: a magnetometer reading 5e-8 rad off the measured
+/// gravity direction left the initial north off perpendicular by cancellation, and the first
+/// attitude (`initial_attitude`) was 1.07e-9 off unit norm.
+#[test]
+fn initial_attitude_is_unit_for_a_field_nearly_along_gravity() {
+    use imukit::filters::{initial_attitude, World};
+    use nalgebra::Vector3;
+
+    let accel = Vector3::new(-128.0, -128.0, -128.0);
+    let mag = Vector3::new(1.1278054389845096e45, 1.1278055297264741e45, 1.1278055297264741e45);
+    for world in [World::Enu, World::Ned] {
+        let q = initial_attitude(world, &accel, Some(&mag));
+        assert!(
+            (q.norm() - 1.0).abs() < 1e-15,
+            "{world:?}: |q| − 1 = {:e}",
+            q.norm() - 1.0
+        );
+        // Still the attitude the accelerometer asks for: body "up" is the measured direction.
+        let up_world = if world == World::Enu {
+            Vector3::z()
+        } else {
+            -Vector3::z()
+        };
+        let up_body = q.inverse() * up_world;
+        assert!((up_body - accel.normalize()).norm() < 1e-12, "{world:?}: {up_body:?}");
+    }
+}

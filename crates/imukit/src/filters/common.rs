@@ -372,7 +372,11 @@ pub fn initial_attitude(world: World, accel: &Vector3<f64>, mag: Option<&Vector3
     }
     let up_b = accel / an;
     if let Some(m) = mag {
+        // Twice: for a field nearly along gravity one pass leaves h off perpendicular by
+        // cancellation (|m| ε/|h|: 2e-9 at 5e-8 rad, found by fuzz/fuzz_targets/filters.rs), and
+        // the attitude built from it was neither unit nor level; the second pass removes that.
         let h = m - up_b * m.dot(&up_b);
+        let h = h - up_b * h.dot(&up_b);
         let hn = h.norm();
         if hn > 1e-9 * (1.0 + m.norm()) && hn.is_finite() {
             return world.attitude_from_up_north(&up_b, &(h / hn));
