@@ -170,6 +170,10 @@ def test_filter_on_a_generic_csv_equals_the_library(tmp_path: Path) -> None:
     assert_one_line_error(missing, "imukit: error: --csv-gyro-columns: needed with --csv-time-column")
     wrong = cli("filter", path, *options[:2], "--csv-gyro-columns", "gx,gy,nope", *options[4:], code=1)
     assert_one_line_error(wrong, "imukit: error: ", "nope")
+    semicolon = cli("filter", path, *options, *units, "--csv-delimiter", "semicolon").stdout
+    assert semicolon.startswith("Mahony 6D: 1001 samples")
+    comma = cli("filter", path, *options, *units, "--csv-delimiter", "comma", code=1)  # the line is one field
+    assert_one_line_error(comma, "imukit: error: --csv-time-column: no column named 'ms' in the header")
 
 
 @pytest.mark.skipif(not XIO.is_file(), reason=f"{XIO} absent (../shared/data)")

@@ -35,8 +35,9 @@ trajectory against ground truth, or run the demo.
 
 Inputs are read by format, detected from the path: an EuRoC / ASL folder (or its mav0/), a TUM-VI
 folder, an EuRoC imu0 CSV, GTSAM/KITTI IMU text, a ROS1/ROS2/MCAP bag (and for `filter`, a BROAD
-.mat trial). Frames and units are imukit's everywhere (docs/conventions.md): SI units, world z up,
-gravity (0, 0, -9.81) m/s^2, rotations R_wb (body to world), quaternions x y z w in files.
+.mat trial); any other CSV with the --csv-* options that name its columns and units. Frames
+and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity
+(0, 0, -9.81) m/s^2, rotations R_wb (body to world), quaternions x y z w in files.
 
 Run `imukit COMMAND --help` for what a command reads, writes and prints, with an example."""
 

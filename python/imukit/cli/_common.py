@@ -88,6 +88,7 @@ OPTION_OF = {
 }
 BAG_OPTIONS = ("imu_topic", "groundtruth_topic", "time_source")
 CSV_OPTIONS = ("time_column", "gyro_columns", "accel_columns", "time_unit", "gyro_unit", "accel_unit", "delimiter")
+DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t", "space": " "}  # --csv-delimiter: read_imu_csv's
 GAP_FACTOR = 10.0  # a step longer than this many median steps is named on stderr
 
 
@@ -136,7 +137,7 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
     csv.add_argument(
         "--csv-delimiter",
         dest="delimiter",
-        choices=(",", ";", "tab", "space"),
+        choices=tuple(DELIMITERS),
         help="(default: detected from the first line)",
     )
     bag = parser.add_argument_group("ROS bags (PATH a .bag, .mcap or .db3 file, or a ROS 2 bag folder)")
@@ -185,7 +186,7 @@ def _csv_arguments(args: argparse.Namespace) -> dict[str, Any] | None:
     given["gyro_columns"] = _columns(given["gyro_columns"], "--csv-gyro-columns")
     given["accel_columns"] = _columns(given["accel_columns"], "--csv-accel-columns")
     if "delimiter" in given:
-        given["delimiter"] = {"tab": "\t", "space": " "}.get(given["delimiter"], given["delimiter"])
+        given["delimiter"] = DELIMITERS[given["delimiter"]]
     return given
 
 
