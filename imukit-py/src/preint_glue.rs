@@ -1,9 +1,9 @@
 //! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
 //! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
 
-use imukit::preint::{self, Scheme};
+use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::{bias, noise_of, raise, to_py, SampleCopies};
@@ -27,16 +27,43 @@ fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
     }
 }
 
-fn template(
-    py: Python<'_>,
-    bias_values: [f64; 6],
-    noise: [f64; 4],
-    combined: bool,
-    scheme: &str,
-) -> PyResult<preint::Preintegrator> {
-    let b = bias(bias_values);
-    let inner = preint::Preintegrator::new(b.gyro, b.accel, noise_of(noise)).with_scheme(scheme_of(py, scheme)?);
-    Ok(if combined { inner.with_bias_walk() } else { inner })
+/// Private copies of the per-sample saturation flags `(gyro, accel)`: the run releases the GIL.
+struct FlagCopies {
+    gyro: Vec<bool>,
+    accel: Vec<bool>,
+}
+
+impl FlagCopies {
+    fn new(gyro: &PyReadonlyArray1<'_, bool>, accel: &PyReadonlyArray1<'_, bool>) -> Self {
+        Self {
+            gyro: gyro.as_array().to_vec(),
+            accel: accel.as_array().to_vec(),
+        }
+    }
+
+    /// The mask, or None when nothing is flagged (the unflagged path, bit for bit).
+    fn mask(&self) -> Option<ClipMask<'_>> {
+        let any = self.gyro.iter().chain(&self.accel).any(|&f| f);
+        any.then_some(ClipMask {
+            gyro: &self.gyro,
+            accel: &self.accel,
+        })
+    }
+
+    /// Refuses flags whose count is not the number of samples, naming the flag array.
+    fn check(&self, py: Python<'_>, n: usize) -> PyResult<()> {
+        for (name, flags) in [("gyro_saturated", &self.gyro), ("accel_saturated", &self.accel)] {
+            if flags.len() != n {
+                return Err(raise(
+                    py,
+                    "ShapeError",
+                    name,
+                    format!("expected one flag per sample ({n}), got {}", flags.len()),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
@@ -78,9 +105,21 @@ fn rows<'py>(py: Python<'py>, m: &[f64], r: usize, c: usize) -> PyResult<Bound<'
 #[pymethods]
 impl PyPreintegrator {
     #[new]
-    fn new(py: Python<'_>, bias_values: [f64; 6], noise: [f64; 4], combined: bool, scheme: &str) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        bias_values: [f64; 6],
+        noise: [f64; 4],
+        combined: bool,
+        scheme: &str,
+        saturation_noise_factor: f64,
+    ) -> PyResult<Self> {
+        let b = bias(bias_values);
+        let inner = preint::Preintegrator::new(b.gyro, b.accel, noise_of(noise))
+            .with_scheme(scheme_of(py, scheme)?)
+            .with_saturation_noise_factor(saturation_noise_factor)
+            .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
         Ok(Self {
-            inner: template(py, bias_values, noise, combined, scheme)?,
+            inner: if combined { inner.with_bias_walk() } else { inner },
         })
     }
 
@@ -108,8 +147,16 @@ impl PyPreintegrator {
     }
 
     /// One interval of `dt` seconds: euler, `accel`, `gyro` held over it; midpoint, sampled at its
-    /// end (the window's first sample comes with `dt = 0`).
-    fn integrate_measurement(&mut self, py: Python<'_>, accel: [f64; 3], gyro: [f64; 3], dt: f64) -> PyResult<()> {
+    /// end (the window's first sample comes with `dt = 0`); the flags mark clipped sensors.
+    fn integrate_measurement(
+        &mut self,
+        py: Python<'_>,
+        accel: [f64; 3],
+        gyro: [f64; 3],
+        dt: f64,
+        gyro_saturated: bool,
+        accel_saturated: bool,
+    ) -> PyResult<()> {
         let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
         let starts = self.inner.scheme == Scheme::Midpoint && self.inner.last_sample().is_none();
         if starts && dt != 0.0 {
@@ -132,7 +179,11 @@ impl PyPreintegrator {
         // On a copy: a step that overflows (dt or a reading near f64's limits) must leave the
         // preintegration as it was, not poisoned with NaN.
         let mut next = self.inner.clone();
-        next.integrate_measurement(&a, &w, dt);
+        let clipped = Clipped {
+            gyro: gyro_saturated,
+            accel: accel_saturated,
+        };
+        next.integrate_measurement_clipped(&a, &w, dt, clipped);
         if !all_finite(&next) {
             return Err(raise(
                 py,
@@ -153,11 +204,15 @@ impl PyPreintegrator {
         t: PyReadonlyArray1<'_, f64>,
         gyro: PyReadonlyArray2<'_, f64>,
         accel: PyReadonlyArray2<'_, f64>,
+        gyro_saturated: PyReadonlyArray1<'_, bool>,
+        accel_saturated: PyReadonlyArray1<'_, bool>,
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
+        let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
+        flags.check(py, t.len())?;
         let inner = &mut self.inner;
-        match py.detach(|| inner.integrate_samples(&samples)) {
+        match py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref())) {
             Err(imukit::Error::Parameter {
                 name: "samples",
                 expected,
@@ -198,28 +253,31 @@ impl PyPreintegrator {
     }
 }
 
-/// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, in parallel on `threads`
-/// threads (0: all cores), GIL released.
+/// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, each starting from a copy
+/// of the empty `template` (scheme, bias, noise, saturation factor, bias walk), in parallel on
+/// `threads` threads (0: all cores), GIL released.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.preintegrate_windows
+#[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
 pub(crate) fn preint_windows(
     py: Python<'_>,
     t: PyReadonlyArray1<'_, f64>,
     gyro: PyReadonlyArray2<'_, f64>,
     accel: PyReadonlyArray2<'_, f64>,
+    gyro_saturated: PyReadonlyArray1<'_, bool>,
+    accel_saturated: PyReadonlyArray1<'_, bool>,
     boundaries: PyReadonlyArray1<'_, f64>,
-    bias_values: [f64; 6],
-    noise: [f64; 4],
-    combined: bool,
-    scheme: &str,
+    template: PyRef<'_, PyPreintegrator>,
     threads: usize,
 ) -> PyResult<Vec<PyPreintegrator>> {
-    let template = template(py, bias_values, noise, combined, scheme)?;
+    let template = template.inner.clone();
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
+    let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
+    flags.check(py, t.len())?;
+    let mask = flags.mask();
     let boundaries = crate::private_copy(py, &boundaries)?.readonly();
     let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
-    let run = || preint::preintegrate_windows(&samples, boundaries, &template);
+    let run = || preint::preintegrate_windows_clipped(&samples, mask.as_ref(), boundaries, &template);
     let windows = py.detach(|| {
         if threads == 0 {
             return Ok(run());

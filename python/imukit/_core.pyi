@@ -126,11 +126,22 @@ class AttitudeFilter:
 
 @final
 class Preintegrator:
-    def __new__(cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str) -> Preintegrator: ...
+    def __new__(
+        cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str, saturation_noise_factor: float
+    ) -> Preintegrator: ...
     def covariance_combined(self) -> NDArray[np.float64] | None: ...
     def merge(self, next: Preintegrator) -> Preintegrator: ...
-    def integrate_measurement(self, accel: list[float], gyro: list[float], dt: float) -> None: ...
-    def integrate(self, t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> None: ...
+    def integrate_measurement(
+        self, accel: list[float], gyro: list[float], dt: float, gyro_saturated: bool, accel_saturated: bool
+    ) -> None: ...
+    def integrate(
+        self,
+        t: NDArray[np.float64],
+        gyro: NDArray[np.float64],
+        accel: NDArray[np.float64],
+        gyro_saturated: NDArray[np.bool_],
+        accel_saturated: NDArray[np.bool_],
+    ) -> None: ...
     def state(
         self,
     ) -> tuple[
@@ -141,11 +152,10 @@ def preint_windows(
     t: NDArray[np.float64],
     gyro: NDArray[np.float64],
     accel: NDArray[np.float64],
+    gyro_saturated: NDArray[np.bool_],
+    accel_saturated: NDArray[np.bool_],
     boundaries: NDArray[np.float64],
-    bias_values: list[float],
-    noise: list[float],
-    combined: bool,
-    scheme: str,
+    template: Preintegrator,
     threads: int,
 ) -> list[Preintegrator]: ...
 def sim_motion(

@@ -13,8 +13,11 @@ residual               ``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt
 residual Jacobians     rows ``[θ, v, p]``; state columns ``[δp, δv, δθ]`` (imukit's NavState
                        perturbation: ``p + δp``, ``v + δv``, ``R Exp(δθ)``); bias columns ``[b_g, b_a]``
 saturation             clipped samples (``ImuData.gyro_saturated`` / ``accel_saturated``) are
-                       integrated as read, with the configured noise: the covariance does not grow
-                       for them, so check the flags of a window before trusting its factor
+                       integrated as read (deltas unchanged) with that sensor's white-noise density
+                       × ``saturation_noise_factor`` (default 100, as OKVIS): ``"euler"`` on the
+                       interval the sample starts, ``"midpoint"`` on both intervals it bounds (an
+                       interpolated window boundary is clipped if either neighbour is), so the
+                       covariance grows and the factor's weight drops
 =====================  ===========================================================================
 
 Gravity is added as everywhere in imukit (default ``(0, 0, −9.81)``, z up). Formulas and the noise
@@ -23,6 +26,7 @@ model of each scheme: ``docs/preintegration.md`` and the module docs of ``crates
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -41,6 +45,13 @@ _SCHEMES = ("midpoint", "euler")
 _MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 
 
+def _flag(value: object, name: str) -> bool:
+    """``value`` as a bool, else :class:`ParameterError` naming ``name`` (1 or "yes" are mistakes)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name}: expected a bool, got {value!r}")
+    return bool(value)
+
+
 class ResidualJacobians(NamedTuple):
     """Jacobians of :meth:`PreintegratedImu.residual`, rows ``[θ, v, p]``."""
 
@@ -50,6 +61,16 @@ class ResidualJacobians(NamedTuple):
     """9×9, columns ``[δp_j, δv_j, δθ_j]``."""
     bias: FloatArray
     """9×6, columns ``[δb_g, δb_a]``."""
+
+
+class _Measurement(NamedTuple):
+    """One :meth:`PreintegratedImu.integrate_measurement` call, kept for :meth:`reintegrate`."""
+
+    accel: FloatArray
+    gyro: FloatArray
+    dt: float
+    gyro_saturated: bool
+    accel_saturated: bool
 
 
 class _Window(NamedTuple):
@@ -76,6 +97,7 @@ class PreintegratedImu:
         gravity: ArrayLike = (0.0, 0.0, -9.81),
         scheme: str = "midpoint",
         combined: bool = False,
+        saturation_noise_factor: float = 100.0,
     ) -> None:
         if not isinstance(noise, ImuNoise):
             raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
@@ -86,9 +108,17 @@ class PreintegratedImu:
         self.gravity = vector3(gravity, "gravity")
         self.scheme = choice(scheme, "scheme", _SCHEMES)
         self.combined = bool(combined)
-        self._core = _core.Preintegrator(self._bias_values(), self._noise_values(), self.combined, scheme)
+        self.saturation_noise_factor = real_scalar(
+            saturation_noise_factor,
+            "saturation_noise_factor",
+            what="a finite factor ≥ 1",
+            accept=lambda x: math.isfinite(x) and x >= 1.0,
+        )
+        self._core = _core.Preintegrator(
+            self._bias_values(), self._noise_values(), self.combined, scheme, self.saturation_noise_factor
+        )
         # What was integrated, in order, so that reintegrate() can replay it with another bias.
-        self._inputs: list[ImuData | _Window | tuple[FloatArray, FloatArray, float]] = []
+        self._inputs: list[ImuData | _Window | _Measurement] = []
 
     def _bias_values(self) -> list[float]:
         return [*self.bias.gyro, *self.bias.accel]
@@ -97,31 +127,41 @@ class PreintegratedImu:
         n = self.noise
         return [n.gyro_density, n.accel_density, n.gyro_random_walk, n.accel_random_walk]
 
-    def _like(
-        self, core: _core.Preintegrator, inputs: list[ImuData | _Window | tuple[FloatArray, FloatArray, float]]
-    ) -> PreintegratedImu:
+    def _like(self, core: _core.Preintegrator, inputs: list[ImuData | _Window | _Measurement]) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
-        out.bias, out.noise, out.gravity, out.scheme, out.combined = (
+        out.bias, out.noise, out.gravity, out.scheme, out.combined, out.saturation_noise_factor = (
             self.bias,
             self.noise,
             self.gravity,
             self.scheme,
             self.combined,
+            self.saturation_noise_factor,
         )
         out._core, out._inputs = core, inputs
         return out
 
-    def integrate_measurement(self, accel: ArrayLike, gyro: ArrayLike, dt: float) -> None:
+    def integrate_measurement(
+        self,
+        accel: ArrayLike,
+        gyro: ArrayLike,
+        dt: float,
+        *,
+        gyro_saturated: bool = False,
+        accel_saturated: bool = False,
+    ) -> None:
         """Add one sample, ``accel`` [m/s²] and ``gyro`` [rad/s].
 
         ``"euler"``: the sample is held over the next ``dt`` seconds (GTSAM's
         ``integrateMeasurement``). ``"midpoint"``: the sample was taken ``dt`` seconds after the
         previous one (VINS-Mono's ``push_back``); the window's first sample comes with ``dt=0``.
+        ``gyro_saturated`` / ``accel_saturated`` mark a sensor clipped at its range: its white-noise
+        density is multiplied by ``saturation_noise_factor`` for this sample (module docs).
         """
         a, w = vector3(accel, "accel"), vector3(gyro, "gyro")
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
-        self._core.integrate_measurement([*a], [*w], step)
-        self._inputs.append((a, w, step))
+        flags = [_flag(gyro_saturated, "gyro_saturated"), _flag(accel_saturated, "accel_saturated")]
+        self._core.integrate_measurement([*a], [*w], step, *flags)
+        self._inputs.append(_Measurement(a, w, step, *flags))
 
     def integrate(self, imu: ImuData) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
@@ -131,7 +171,7 @@ class PreintegratedImu:
         rounding (1e-12 relative) and independent of the core count."""
         if not isinstance(imu, ImuData):
             raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
-        self._core.integrate(imu.seconds, imu.gyro, imu.accel)
+        self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated)
         self._inputs.append(imu)
 
     def reintegrate(self, bias: ImuBias) -> PreintegratedImu:
@@ -140,9 +180,7 @@ class PreintegratedImu:
         the change exceeds 0.01 rad/s (gyro) or 0.1 m/s² (accelerometer), a sensible default
         threshold for 200 Hz windows of about 0.5 s.
         """
-        out = PreintegratedImu(
-            noise=self.noise, bias=bias, gravity=self.gravity, scheme=self.scheme, combined=self.combined
-        )
+        out = _empty(self.noise, bias, self.gravity, self.scheme, self.combined, self.saturation_noise_factor)
         for item in self._inputs:
             if isinstance(item, _Window):  # always the first item
                 (out._core,) = _windows(item.imu, [item.lo, item.hi], out, threads=0)
@@ -150,14 +188,20 @@ class PreintegratedImu:
             elif isinstance(item, ImuData):
                 out.integrate(item)
             else:
-                out.integrate_measurement(*item)
+                out.integrate_measurement(
+                    item.accel,
+                    item.gyro,
+                    item.dt,
+                    gyro_saturated=item.gyro_saturated,
+                    accel_saturated=item.accel_saturated,
+                )
         return out
 
     def merge(self, other: PreintegratedImu) -> PreintegratedImu:
         """This preintegration (i → j) followed by ``other`` (j → k) as one (i → k), covariance and
-        bias Jacobian included. Both need the same scheme, bias, noise and gravity; in the midpoint
-        scheme ``other`` starts with this one's last sample. The bias random walk is not merged: the
-        result has no ``covariance_combined``."""
+        bias Jacobian included. Both need the same scheme, bias, noise, saturation noise factor and
+        gravity; in the midpoint scheme ``other`` starts with this one's last sample. The bias random
+        walk is not merged: the result has no ``covariance_combined``."""
         if not isinstance(other, PreintegratedImu):
             raise ParameterError(f"other: expected an imukit.PreintegratedImu, got {type(other).__name__}")
         if not np.array_equal(self.gravity, other.gravity):
@@ -279,6 +323,25 @@ class PreintegratedImu:
         return ResidualJacobians(d_i, d_j, d_b)
 
 
+def _empty(
+    noise: ImuNoise,
+    bias: ImuBias | None,
+    gravity: ArrayLike,
+    scheme: str,
+    combined: bool,
+    saturation_noise_factor: float,
+) -> PreintegratedImu:
+    """An empty :class:`PreintegratedImu` with the options of :func:`preintegrate`."""
+    return PreintegratedImu(
+        noise=noise,
+        bias=bias,
+        gravity=gravity,
+        scheme=scheme,
+        combined=combined,
+        saturation_noise_factor=saturation_noise_factor,
+    )
+
+
 def preintegrate(
     imu: ImuData,
     *,
@@ -287,13 +350,17 @@ def preintegrate(
     gravity: ArrayLike = (0.0, 0.0, -9.81),
     scheme: str = "midpoint",
     combined: bool = False,
+    saturation_noise_factor: float = 100.0,
 ) -> PreintegratedImu:
     """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
 
     ``combined=True`` also tracks the 15×15 covariance with the bias random walk
-    (``covariance_combined``), at about twice the cost per sample.
+    (``covariance_combined``), at about twice the cost per sample. Samples that ``imu`` flags as
+    clipped (``gyro_saturated`` / ``accel_saturated``, from its ``gyro_range`` / ``accel_range``)
+    have that sensor's white-noise density multiplied by ``saturation_noise_factor`` (finite, ≥ 1;
+    1 ignores the flags); see the module docs for which intervals that covers.
     """
-    pim = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme, combined=combined)
+    pim = _empty(noise, bias, gravity, scheme, combined, saturation_noise_factor)
     pim.integrate(imu)
     return pim
 
@@ -315,11 +382,10 @@ def _windows(imu: ImuData, boundaries: ArrayLike, like: PreintegratedImu, *, thr
         imu.seconds,
         imu.gyro,
         imu.accel,
+        imu.gyro_saturated,
+        imu.accel_saturated,
         b,
-        like._bias_values(),
-        like._noise_values(),
-        like.combined,
-        like.scheme,
+        like._core,
         threads,
     )
 
@@ -333,6 +399,7 @@ def preintegrate_windows(
     gravity: ArrayLike = (0.0, 0.0, -9.81),
     scheme: str = "midpoint",
     combined: bool = False,
+    saturation_noise_factor: float = 100.0,
     threads: int | None = None,
 ) -> list[PreintegratedImu]:
     """One :class:`PreintegratedImu` per window ``[boundaries[m], boundaries[m+1]]`` (M times → M − 1
@@ -343,8 +410,10 @@ def preintegrate_windows(
     increasing, within the samples' span. A boundary between two samples is a point of the scheme's
     signal model: the held sample in ``"euler"`` (as ``integrateMeasurement(a_k, ω_k, b − t_k)``),
     the linear interpolation of its neighbours in ``"midpoint"``; consecutive windows share it.
+    Clipped samples inflate the noise as in :func:`preintegrate` (``saturation_noise_factor``), so
+    a window holding one has a larger covariance; the other windows are unchanged.
     """
-    like = PreintegratedImu(noise=noise, bias=bias, gravity=gravity, scheme=scheme, combined=combined)
+    like = _empty(noise, bias, gravity, scheme, combined, saturation_noise_factor)
     if not isinstance(imu, ImuData):
         raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
     if threads is not None and (

@@ -10,7 +10,7 @@
 
 use rayon::prelude::*;
 
-use super::{Preintegrator, Scheme};
+use super::{clipped_at, ClipMask, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::strapdown::Samples;
 
@@ -24,7 +24,19 @@ impl Preintegrator {
     /// deltas or covariance overflow (e.g. a noise density of 1e200, squared) are an
     /// [`Error::Overflow`] at the last sample, again with nothing added.
     pub fn integrate_samples(&mut self, samples: &Samples<'_>) -> Result<()> {
+        self.integrate_samples_clipped(samples, None)
+    }
+
+    /// [`Preintegrator::integrate_samples`] with per-sample saturation flags (`None`: nothing
+    /// clipped): a flagged sample's white noise is inflated as in
+    /// [`Preintegrator::integrate_measurement_clipped`] (euler: on the interval it starts;
+    /// midpoint: on both intervals it bounds; the first sample of a midpoint batch that continues
+    /// a window is the window's last sample, and keeps that sample's flags).
+    pub fn integrate_samples_clipped(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>) -> Result<()> {
         samples.validate()?;
+        if let Some(mask) = clipped {
+            mask.check(samples.t.len())?;
+        }
         let n = samples.t.len();
         let first = (samples.accel_at(0), samples.gyro_at(0));
         if let Some(last) = self.last_sample().filter(|last| *last != first) {
@@ -38,7 +50,7 @@ impl Preintegrator {
             });
         }
         let mut next = self.clone();
-        next.add_validated(samples)?;
+        next.add_validated(samples, clipped)?;
         if !next.is_finite() {
             return Err(Error::Overflow { index: n - 1 });
         }
@@ -47,19 +59,22 @@ impl Preintegrator {
     }
 
     /// The intervals of validated `samples`, continuing this preintegration.
-    fn add_validated(&mut self, samples: &Samples<'_>) -> Result<()> {
+    fn add_validated(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>) -> Result<()> {
         let n = samples.t.len();
         let first = (samples.accel_at(0), samples.gyro_at(0));
         match self.scheme {
             Scheme::Euler if self.bias_walk.is_none() && n > 2 * CHUNK => {
-                let template = Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise);
+                let template = Preintegrator {
+                    saturation_noise_factor: self.saturation_noise_factor,
+                    ..Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise)
+                };
                 let chunks: Vec<Preintegrator> = (0..n - 1)
                     .step_by(CHUNK)
                     .collect::<Vec<_>>()
                     .into_par_iter()
                     .map(|start| {
                         let mut p = template.clone();
-                        p.run_euler(samples, start, (start + CHUNK).min(n - 1));
+                        p.run_euler(samples, clipped, start, (start + CHUNK).min(n - 1));
                         p
                     })
                     .collect();
@@ -67,14 +82,15 @@ impl Preintegrator {
                     *self = self.merge_unchecked(chunk)?;
                 }
             }
-            Scheme::Euler => self.run_euler(samples, 0, n - 1),
+            Scheme::Euler => self.run_euler(samples, clipped, 0, n - 1),
             Scheme::Midpoint => {
                 if self.last_sample().is_none() {
-                    self.integrate_measurement(&first.0, &first.1, 0.0);
+                    self.integrate_measurement_clipped(&first.0, &first.1, 0.0, clipped_at(clipped, 0));
                 }
                 for k in 1..n {
                     let h = samples.t[k] - samples.t[k - 1];
-                    self.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+                    let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
+                    self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
                 }
             }
         }
@@ -82,10 +98,11 @@ impl Preintegrator {
     }
 
     /// Euler intervals `start..end` (interval k from sample k to k+1).
-    fn run_euler(&mut self, samples: &Samples<'_>, start: usize, end: usize) {
+    fn run_euler(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, start: usize, end: usize) {
         for k in start..end {
             let h = samples.t[k + 1] - samples.t[k];
-            self.integrate_measurement(&samples.accel_at(k), &samples.gyro_at(k), h);
+            let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
+            self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
         }
     }
 }

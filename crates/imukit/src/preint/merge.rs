@@ -26,7 +26,7 @@ fn mismatch(expected: &'static str, got: String) -> Error {
 impl Preintegrator {
     /// The preintegration over i → k of this one (i → j) followed by `next` (j → k), covariance
     /// and bias Jacobians included (module docs of `merge.rs`). Both must share the scheme, bias
-    /// and noise, and in the midpoint scheme `next` must start with this one's last sample. The bias
+    /// and noise (and saturation noise factor), and in the midpoint scheme `next` must start with this one's last sample. The bias
     /// random walk is not merged (`covariance_combined` of the result is `None`). Finite
     /// preintegrations whose composition overflows are an [`Error::Overflow`] in `next`.
     pub fn merge(&self, next: &Preintegrator) -> Result<Preintegrator> {
@@ -48,6 +48,13 @@ impl Preintegrator {
                 "a preintegration with the same bias and noise",
                 "a different bias or noise".into(),
             ));
+        }
+        if self.saturation_noise_factor != next.saturation_noise_factor {
+            let got = format!(
+                "{} after {}",
+                next.saturation_noise_factor, self.saturation_noise_factor
+            );
+            return Err(mismatch("a preintegration with the same saturation noise factor", got));
         }
         if self.scheme == Scheme::Midpoint {
             match (&self.ends.last, &next.ends.first) {
@@ -116,6 +123,7 @@ impl Preintegrator {
             bias_gyro: self.bias_gyro,
             bias_accel: self.bias_accel,
             noise: self.noise,
+            saturation_noise_factor: self.saturation_noise_factor,
             // Merged products would accumulate rounding as sample products do (mod.rs).
             delta_rotation: super::project_rotation(&(r * next.delta_rotation)),
             delta_velocity: self.delta_velocity + r * next.delta_velocity,

@@ -37,9 +37,11 @@ use crate::so3;
 pub(super) struct Sample {
     pub accel: Vector3<f64>,
     pub gyro: Vector3<f64>,
-    /// Variances `[gyro, accel]` of its white noise, `σ²/h` with `h` its (first) interval; `None`
-    /// until that interval arrives.
+    /// Variances `[gyro, accel]` of its white noise, `σ²/h` with `h` its (first) interval, times
+    /// `scale`; `None` until that interval arrives.
     pub var: Option<[f64; 2]>,
+    /// Its variance multipliers `[gyro, accel]` (the saturation factor squared where clipped).
+    pub scale: [f64; 2],
 }
 
 /// The samples at the window's ends and the covariances of the state error with their noise.
@@ -114,22 +116,24 @@ impl Preintegrator {
         }
     }
 
-    pub(super) fn integrate_midpoint(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
+    pub(super) fn integrate_midpoint(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
         let Some(prev) = self.ends.last else {
             let first = Sample {
                 accel: *accel,
                 gyro: *gyro,
                 var: None,
+                scale,
             };
             (self.ends.first, self.ends.last) = (Some(first), Some(first));
             return;
         };
         let s = self.midpoint_step(&prev, accel, gyro, h);
-        let q1 = [
+        let q = [
             self.noise.gyro_density * self.noise.gyro_density / h,
             self.noise.accel_density * self.noise.accel_density / h,
         ];
-        let q0 = prev.var.unwrap_or(q1);
+        let q1 = [q[0] * scale[0], q[1] * scale[1]];
+        let q0 = prev.var.unwrap_or([q[0] * prev.scale[0], q[1] * prev.scale[1]]);
         let half_h = 0.5 * h;
         let input = |r_s: &Matrix3<f64>| Input {
             tg: -s.jr * half_h,
@@ -185,6 +189,7 @@ impl Preintegrator {
             accel: *accel,
             gyro: *gyro,
             var: Some(q1),
+            scale,
         });
     }
 

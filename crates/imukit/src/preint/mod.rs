@@ -14,6 +14,7 @@
 //! | bias Jacobian (9×6) | rows `[θ, v, p]`, columns `[b_g, b_a]` |
 //! | noise | continuous densities σ_g, σ_a; each sample's white noise has variance `σ²/h I` (h: its interval) |
 //! | `integrate_measurement(a, ω, h)` | euler: the sample at the start of an interval of `h`; midpoint: the sample at its end (the window's first call only records the first sample) |
+//! | saturation | a sample flagged [`Clipped`] has white-noise densities × [`Preintegrator::saturation_noise_factor`] (per sensor): euler, on the interval it starts; midpoint, its own noise, which enters both intervals it bounds. Deltas unchanged |
 //!
 //! One euler interval of length `h` (all right-hand sides use the values before the update):
 //!
@@ -39,13 +40,14 @@ mod windows;
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+use crate::error::{Error, Result};
 use crate::mat3::mul;
 use crate::propagate::Noise;
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use midpoint::MidpointStepMatrices;
-pub use windows::preintegrate_windows;
+pub use windows::{preintegrate_windows, preintegrate_windows_clipped};
 
 /// 9×9 covariance of `[δθ, δv, δp]`.
 pub type Covariance9 = SMatrix<f64, 9, 9>;
@@ -61,6 +63,70 @@ pub enum Scheme {
     Euler,
     /// VINS-Mono's: averaged rates, specific forces rotated at both ends.
     Midpoint,
+}
+
+/// Default [`Preintegrator::saturation_noise_factor`]: OKVIS multiplies the white-noise densities
+/// by 100 on an interval with a saturated reading (`ImuError::propagation`, `sigma_g_c *= 100`;
+/// Leutenegger et al., "Keyframe-based visual–inertial odometry using nonlinear optimization",
+/// IJRR 2015): a clipped reading says only that the true one is at least the range, so the factor
+/// built on it should carry almost no weight.
+pub const DEFAULT_SATURATION_NOISE_FACTOR: f64 = 100.0;
+
+/// Which sensors of one sample were clipped at their full-scale range.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Clipped {
+    /// Some gyro axis at its range.
+    pub gyro: bool,
+    /// Some accelerometer axis at its range.
+    pub accel: bool,
+}
+
+impl Clipped {
+    /// Nothing clipped.
+    pub const NONE: Clipped = Clipped {
+        gyro: false,
+        accel: false,
+    };
+}
+
+/// Per-sample clipping flags of a batch, one per sample (the same length as its timestamps).
+#[derive(Debug, Clone, Copy)]
+pub struct ClipMask<'a> {
+    /// Samples whose gyro is clipped.
+    pub gyro: &'a [bool],
+    /// Samples whose accelerometer is clipped.
+    pub accel: &'a [bool],
+}
+
+impl ClipMask<'_> {
+    /// The flags of sample `k`.
+    #[inline]
+    pub fn at(&self, k: usize) -> Clipped {
+        Clipped {
+            gyro: self.gyro[k],
+            accel: self.accel[k],
+        }
+    }
+
+    /// Checks that there is one flag per sample.
+    pub(super) fn check(&self, n: usize) -> Result<()> {
+        for (name, flags) in [("gyro_saturated", self.gyro), ("accel_saturated", self.accel)] {
+            if flags.len() != n {
+                return Err(Error::Parameter {
+                    name,
+                    expected: "one flag per sample",
+                    got: format!("{} flags for {n} samples", flags.len()),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The flags of sample `k`, none without a mask.
+#[inline]
+pub(super) fn clipped_at(mask: Option<&ClipMask<'_>>, k: usize) -> Clipped {
+    mask.map_or(Clipped::NONE, |m| m.at(k))
 }
 
 /// Dense `A` (9×9), `B`, `C` (9×3) of one euler interval: `Σ ← A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ`.
@@ -114,6 +180,9 @@ pub struct Preintegrator {
     pub bias_accel: Vector3<f64>,
     /// Noise densities.
     pub noise: Noise,
+    /// Multiplier of the white-noise densities of a clipped sample ([`Clipped`]; module docs),
+    /// [`DEFAULT_SATURATION_NOISE_FACTOR`] unless set.
+    pub saturation_noise_factor: f64,
     /// `ΔR_ij`.
     pub delta_rotation: Matrix3<f64>,
     /// `Δv_ij` [m/s].
@@ -154,6 +223,7 @@ impl Preintegrator {
             bias_gyro,
             bias_accel,
             noise,
+            saturation_noise_factor: DEFAULT_SATURATION_NOISE_FACTOR,
             delta_rotation: Matrix3::identity(),
             delta_velocity: Vector3::zeros(),
             delta_position: Vector3::zeros(),
@@ -183,18 +253,56 @@ impl Preintegrator {
         self
     }
 
+    /// The same, with `factor` multiplying the white-noise densities of clipped samples (it must
+    /// be finite and at least 1: a clipped reading is never better than a measured one).
+    pub fn with_saturation_noise_factor(mut self, factor: f64) -> Result<Self> {
+        if !(factor.is_finite() && factor >= 1.0) {
+            return Err(Error::Parameter {
+                name: "saturation_noise_factor",
+                expected: "a finite factor ≥ 1",
+                got: format!("{factor}"),
+            });
+        }
+        self.saturation_noise_factor = factor;
+        Ok(self)
+    }
+
     /// Adds one interval of `h` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]:
     /// in the euler scheme, held over the interval; in the midpoint scheme, sampled at its end (the
     /// first call of a window records its first sample and ignores `h`). The caller validates
     /// finiteness and `h > 0`.
     pub fn integrate_measurement(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
+        self.integrate_measurement_clipped(accel, gyro, h, Clipped::NONE);
+    }
+
+    /// [`Preintegrator::integrate_measurement`] of a sample whose sensors `clipped` flags as
+    /// saturated: its white-noise densities are multiplied by
+    /// [`Preintegrator::saturation_noise_factor`] (module docs); the deltas are the same.
+    pub fn integrate_measurement_clipped(
+        &mut self,
+        accel: &Vector3<f64>,
+        gyro: &Vector3<f64>,
+        h: f64,
+        clipped: Clipped,
+    ) {
+        let scale = self.variance_scale(clipped);
         match self.scheme {
-            Scheme::Euler => self.integrate_euler(accel, gyro, h),
-            Scheme::Midpoint => self.integrate_midpoint(accel, gyro, h),
+            Scheme::Euler => self.integrate_euler(accel, gyro, h, scale),
+            Scheme::Midpoint => self.integrate_midpoint(accel, gyro, h, scale),
         }
     }
 
-    fn integrate_euler(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
+    /// Multipliers `[gyro, accel]` of a sample's white-noise variances: the factor squared for a
+    /// clipped sensor, else exactly 1 (so unflagged samples give bit-identical results).
+    fn variance_scale(&self, clipped: Clipped) -> [f64; 2] {
+        let f2 = self.saturation_noise_factor * self.saturation_noise_factor;
+        [
+            if clipped.gyro { f2 } else { 1.0 },
+            if clipped.accel { f2 } else { 1.0 },
+        ]
+    }
+
+    fn integrate_euler(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
         let a = accel - self.bias_accel;
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
@@ -205,8 +313,8 @@ impl Preintegrator {
         let half_h2 = 0.5 * h * h;
 
         // Covariance first: A, B, C use the state before the update.
-        let var_a = self.noise.accel_density * self.noise.accel_density / h;
-        let var_g = self.noise.gyro_density * self.noise.gyro_density / h;
+        let var_a = self.noise.accel_density * self.noise.accel_density / h * scale[1];
+        let var_g = self.noise.gyro_density * self.noise.gyro_density / h * scale[0];
         let m = -r_a_cross;
         self.covariance = blocks::propagate(&self.covariance, &step_t, &m, &jr, h, var_a, var_g);
         if let Some(walk) = self.bias_walk.as_mut() {
