@@ -15,7 +15,8 @@ ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
 
 DESCRIPTION = """\
 Score the trajectory EST against the ground truth GT: the absolute trajectory error (ATE / evo's
-APE) after an alignment, and with --delta the relative pose error (RPE) over pairs --delta apart.
+APE) after an alignment, and with --delta the relative pose error (RPE) over pairs --delta apart,
+after the same alignment (sim3's scale matters to the RPE; the others leave it unchanged).
 Definitions and the comparison with evo: docs/evaluation.md.
 
 Reads: EST and GT as trajectory files, format detected: TUM (`t x y z qx qy qz qw`), an EuRoC
