@@ -278,6 +278,56 @@ pub fn integrate(
     out: Option<&mut [f64]>,
 ) -> Result<UnitQuaternion<f64>> {
     check(t, gyro, out.as_ref().map(|o| o.len()))?;
+    check_options(options)?;
+    if !initial.coords.iter().all(|v| v.is_finite()) {
+        return Err(Error::NonFinite { index: 0 }.in_argument("initial"));
+    }
+    let last = match options.representation {
+        Representation::Quaternion => match out {
+            Some(out) if matches!(options.scheme, Scheme::Exp | Scheme::Magnus) && t.len() > 1 => {
+                return quaternion_product(t, gyro, initial, options.scheme, out);
+            }
+            out => run(initial.into_inner(), t, gyro, options, out)?.quaternion(),
+        },
+        Representation::Matrix => run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out)?.quaternion(),
+        Representation::Euler => {
+            let chi = euler::from_rotation(&initial.to_rotation_matrix());
+            run(chi, t, gyro, options, out)?.quaternion()
+        }
+    };
+    Ok(last)
+}
+
+/// Integrates body rates in the rotation-matrix representation from the matrix `initial` and
+/// returns the final matrix itself, with `options.representation` ignored (taken as
+/// [`Representation::Matrix`]). [`integrate`] converts the same state to a quaternion; this form
+/// lets a caller continue a long stream in matrix form, so the state never passes through a
+/// quaternion (and the matrix's own orthonormality can be checked: `tests/stability.rs`).
+pub fn integrate_rotation_matrix(
+    t: &[f64],
+    gyro: &[f64],
+    initial: &Matrix3<f64>,
+    options: &Options,
+) -> Result<Matrix3<f64>> {
+    let options = Options {
+        representation: Representation::Matrix,
+        ..*options
+    };
+    check(t, gyro, None)?;
+    check_options(&options)?;
+    let orthonormal = (initial.transpose() * initial - Matrix3::identity()).abs().max() <= 1e-9;
+    if !(initial.iter().all(|v| v.is_finite()) && orthonormal && initial.determinant() > 0.0) {
+        return Err(Error::Parameter {
+            name: "initial",
+            expected: "a rotation matrix (RᵀR = I to 1e-9, det R = +1)",
+            got: format!("{initial:?}"),
+        });
+    }
+    run(*initial, t, gyro, &options, None)
+}
+
+/// The scheme is supported by the representation and the gimbal tolerance is an angle in [0, π/2).
+fn check_options(options: &Options) -> Result<()> {
     if !options.representation.schemes().contains(&options.scheme) {
         return Err(Error::Unsupported {
             scheme: options.scheme.name(),
@@ -293,22 +343,7 @@ pub fn integrate(
             got: format!("{tol}"),
         });
     }
-    if !initial.coords.iter().all(|v| v.is_finite()) {
-        return Err(Error::NonFinite { index: 0 }.in_argument("initial"));
-    }
-    match options.representation {
-        Representation::Quaternion => match out {
-            Some(out) if matches!(options.scheme, Scheme::Exp | Scheme::Magnus) && t.len() > 1 => {
-                quaternion_product(t, gyro, initial, options.scheme, out)
-            }
-            out => run(initial.into_inner(), t, gyro, options, out),
-        },
-        Representation::Matrix => run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out),
-        Representation::Euler => {
-            let chi = euler::from_rotation(&initial.to_rotation_matrix());
-            run(chi, t, gyro, options, out)
-        }
-    }
+    Ok(())
 }
 
 /// Group schemes multiply exact rotations, so the state leaves the manifold only by rounding
@@ -321,13 +356,7 @@ const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9;
 /// `√3/12`, the commutator weight of the fourth-order Magnus step.
 const MAGNUS_WEIGHT: f64 = 0.144_337_567_297_406_44;
 
-fn run<S: State>(
-    mut y: S,
-    t: &[f64],
-    gyro: &[f64],
-    options: &Options,
-    out: Option<&mut [f64]>,
-) -> Result<UnitQuaternion<f64>> {
+fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Option<&mut [f64]>) -> Result<S> {
     let (rates, _) = gyro.as_chunks::<3>();
     let mut out = out.map(|o| o.as_chunks_mut::<4>().0);
     let gauss = gauss_nodes(t, gyro);
@@ -383,9 +412,8 @@ fn run<S: State>(
         previous = y;
         store(k + 1, &y);
     }
-    let last = y.quaternion();
-    check_finite_quaternions(&last, out.as_deref().map(|o| o.as_flattened()), t.len())?;
-    Ok(last)
+    check_finite_quaternions(&y.quaternion(), out.as_deref().map(|o| o.as_flattened()), t.len())?;
+    Ok(y)
 }
 
 /// Finite rates can still overflow (e.g. 1e200 rad/s): refuse a non-finite result, naming the

@@ -2,9 +2,9 @@
 //! path against the one-pass loop, and input errors naming the first bad sample.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::attitude::{integrate, Options, Representation, Scheme};
+use imukit::attitude::{self, integrate, Options, Representation, Scheme};
 use imukit::{so3, Error};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 fn options(scheme: Scheme, representation: Representation) -> Options {
     Options {
@@ -136,5 +136,31 @@ fn euler_angles_refuse_group_schemes_and_stop_at_gimbal_lock() {
         // starts at sample 1569 evaluates E at pitch 1.570 and is refused, naming that step.
         Error::GimbalLock { index, .. } => assert_eq!(index, 1569),
         other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn rotation_matrix_form_is_the_matrix_representation_and_refuses_a_non_rotation() {
+    let (t, gyro) = smooth_rates(400, 0.005);
+    let initial = UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3);
+    let r0 = *initial.to_rotation_matrix().matrix();
+    for scheme in Representation::Matrix.schemes() {
+        // Same state as integrate(), which converts it to a quaternion only at the end.
+        let opts = options(*scheme, Representation::Matrix);
+        let r = attitude::integrate_rotation_matrix(&t, &gyro, &r0, &opts).unwrap();
+        let q = attitude::integrate(&t, &gyro, &initial, &opts, None).unwrap();
+        assert!((r - q.to_rotation_matrix().matrix()).abs().max() < 1e-14, "{scheme:?}");
+        // The representation field is ignored: quaternion options give the matrix result too.
+        let quaternion_opts = options(*scheme, Representation::Quaternion);
+        assert_eq!(
+            attitude::integrate_rotation_matrix(&t, &gyro, &r0, &quaternion_opts).unwrap(),
+            r
+        );
+    }
+    let opts = options(Scheme::Rk4, Representation::Matrix);
+    let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+    for bad in [r0 * 1.001, reflection, Matrix3::from_element(f64::NAN)] {
+        let e = attitude::integrate_rotation_matrix(&t, &gyro, &bad, &opts).unwrap_err();
+        assert!(e.to_string().contains("initial"), "{e}");
     }
 }

@@ -1,6 +1,7 @@
 //! Long-run numerical stability (issue 9): after `IMUKIT_STABILITY_STEPS` attitude steps (10^8
 //! in `make stability`) every attitude scheme's quaternion is still unit to 1e-12; after a tenth
-//! of that (10^7 at 1 kHz) the preintegrated ΔR is still orthonormal to 1e-12 and the strapdown
+//! of that (10^7 at 1 kHz) the rotation matrix of every scheme in the matrix representation and
+//! the preintegrated ΔR are still orthonormal to 1e-12 and the strapdown
 //! and preintegration covariances are exactly symmetric and positive semidefinite, and the
 //! filters' quaternions are unit to 1e-12. Each run feeds the same 100 s chunk again and again,
 //! continuing from the state the previous call returned (`stability_common`).
@@ -91,6 +92,57 @@ attitude_test! {
 fn every_quaternion_scheme_is_tested() {
     // The five tests above cover the quaternion representation's whole scheme list.
     assert_eq!(Representation::Quaternion.schemes().len(), 5);
+}
+
+/// Runs one scheme in the rotation-matrix representation for `long_steps()` steps, each chunk
+/// continuing from the matrix the previous one returned (never through a quaternion); returns the
+/// worst ‖RᵀR − I‖_F after any chunk.
+fn attitude_matrix_drift(scheme: Scheme) -> f64 {
+    let chunk = Chunk::new();
+    let options = attitude::Options {
+        scheme,
+        representation: Representation::Matrix,
+        ..attitude::Options::default()
+    };
+    let mut r = *UnitQuaternion::from_euler_angles(0.3, -0.2, 1.0)
+        .to_rotation_matrix()
+        .matrix();
+    let (mut worst, mut done) = (0.0_f64, 0usize);
+    let steps = long_steps();
+    timed(&format!("attitude matrix {}", scheme.name()), steps, || {
+        in_chunks(steps, |m| {
+            let s = chunk.samples(m);
+            r = attitude::integrate_rotation_matrix(s.t, s.gyro, &r, &options).unwrap();
+            worst = worst.max(orthonormality_error(&r));
+            done += m;
+        })
+    });
+    assert_eq!(done, steps);
+    println!("attitude matrix {}: worst ‖RᵀR − I‖ = {worst:e}", scheme.name());
+    worst
+}
+
+macro_rules! matrix_test {
+    ($($name:ident: $scheme:expr,)*) => {$(
+        #[test]
+        fn $name() {
+            let e = attitude_matrix_drift($scheme);
+            assert!(e < UNIT_TOLERANCE, "‖RᵀR − I‖ reached {e:e}");
+        }
+    )*};
+}
+
+matrix_test! {
+    attitude_matrix_euler_stays_orthonormal: Scheme::Euler,
+    attitude_matrix_exp_stays_orthonormal: Scheme::Exp,
+    attitude_matrix_midpoint_stays_orthonormal: Scheme::Midpoint,
+    attitude_matrix_rk4_stays_orthonormal: Scheme::Rk4,
+    attitude_matrix_magnus_stays_orthonormal: Scheme::Magnus,
+}
+
+#[test]
+fn every_matrix_scheme_is_tested() {
+    assert_eq!(Representation::Matrix.schemes().len(), 5);
 }
 
 /// Streams `long_steps()` intervals through a preintegrator; checks ΔR and the covariances after
