@@ -37,7 +37,17 @@ def test_samples_at_or_beyond_the_range_are_flagged() -> None:
     assert at_rest.accel_saturated.all() and not at_rest.gyro_saturated.any()
 
 
-@pytest.mark.parametrize("bad", [0.0, -1.0, math.nan, math.inf, "16"])
+def test_an_int16_gyro_pinned_at_either_limit_is_flagged_with_the_documented_range() -> None:
+    # ±2000 °/s on 16 bits: raw −32768 and +32767 are both the limits the sensor reports.
+    lsb = np.deg2rad(2000.0) / 32768
+    readings = [[32767 * lsb, 0.0, 0.0], [0.0, -32768 * lsb, 0.0], [0.0, 0.0, 32766 * lsb]]
+    documented = _imu(readings, gyro_range=np.deg2rad(2000.0) * 32767 / 32768)
+    assert documented.gyro_saturated.tolist() == [True, True, False]
+    datasheet = _imu(readings, gyro_range=np.deg2rad(2000.0))  # the pitfall the docstring names
+    assert datasheet.gyro_saturated.tolist() == [False, True, False]
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, math.nan, math.inf, "16", 10**400])
 @pytest.mark.parametrize("name", ["gyro_range", "accel_range"])
 def test_a_range_must_be_positive_and_finite(name: str, bad: object) -> None:
     with pytest.raises(ik.ParameterError, match=rf"^{name}: expected a positive, finite full-scale range"):

@@ -250,6 +250,28 @@ def test_windows_between_samples_integer_stamps_and_reintegration() -> None:
     assert np.array_equal(again.delta_position, fresh.delta_position)
 
 
+@pytest.mark.parametrize("scheme", ["euler", "midpoint"])
+def test_reintegrate_replays_merged_windows(scheme: str) -> None:
+    # A merged preintegration holds a window after another input: reintegrate must preintegrate
+    # that window on its own and merge it on, as merge() did (it once reused the non-empty result
+    # as the window's start: midpoint then took a dt = 0 step and overflowed).
+    imu, _ = window()
+    b, new_bias = [0.0, 0.4, 0.9], ik.ImuBias(gyro=[0.01, 0.0, -0.01], accel=[0.05, -0.02, 0.0])
+    w = ik.preintegrate_windows(imu, b, noise=NOISE, scheme=scheme)
+    fresh = ik.preintegrate_windows(imu, b, noise=NOISE, bias=new_bias, scheme=scheme)
+    again, expected = w[0].merge(w[1]).reintegrate(new_bias), fresh[0].merge(fresh[1])
+    for name in ("delta_position", "delta_velocity", "covariance", "bias_jacobian"):
+        assert np.array_equal(getattr(again, name), getattr(expected, name)), name
+    assert again.delta_t == expected.delta_t
+    # A batch followed by a window: the same merge, with the new bias.
+    head = ik.preintegrate(imu[:81], noise=NOISE, scheme=scheme)
+    tail = ik.preintegrate_windows(imu, [0.4, 0.9], noise=NOISE, scheme=scheme)[0]
+    mixed = head.merge(tail).reintegrate(new_bias)
+    head_new = ik.preintegrate(imu[:81], noise=NOISE, bias=new_bias, scheme=scheme)
+    tail_new = ik.preintegrate_windows(imu, [0.4, 0.9], noise=NOISE, bias=new_bias, scheme=scheme)[0]
+    assert np.array_equal(mixed.delta_position, head_new.merge(tail_new).delta_position)
+
+
 def test_windows_refuse_bad_boundaries_and_threads() -> None:
     imu, _ = window()
     with pytest.raises(ik.ParameterError, match="boundaries must be times within the samples' span"):

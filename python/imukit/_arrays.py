@@ -56,7 +56,7 @@ def real_scalar(value: object, name: str, *, what: str, accept: Callable[[float]
     if not isinstance(value, (str, bytes)):
         try:
             x = float(value)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond float64
             pass
     if math.isnan(x) or not accept(x):
         raise ParameterError(f"{name}: expected {what}, got {value!r}")

@@ -57,10 +57,13 @@ class ImuData:
         (:class:`imukit.TimestampError` naming sample k): dropped samples are reported, not
         integrated over.
     gyro_range, accel_range
-        The sensor's full-scale range per axis [rad/s], [m/s²] (the largest magnitude it can
-        report; a datasheet's ±2000 °/s is ``np.deg2rad(2000)``), or None when unknown. Samples
-        with some axis at or beyond it are clipped, not measured: :attr:`gyro_saturated` and
-        :attr:`accel_saturated` flag them.
+        The sensor's full-scale range per axis [rad/s], [m/s²], or None when unknown. Samples
+        with some axis at or beyond it in magnitude are clipped, not measured:
+        :attr:`gyro_saturated` and :attr:`accel_saturated` flag them. Give the smaller of the two
+        limits the sensor actually reports: a 16-bit two's-complement gyro rated ±2000 °/s reads
+        −32768 LSB down to −2000 °/s but only +32767 LSB up to 2000·32767/32768 °/s, so its range
+        is ``np.deg2rad(2000) * 32767 / 32768`` — the datasheet's ``np.deg2rad(2000)`` would never
+        flag a gyro pinned at its positive limit.
 
     Attributes
     ----------

@@ -180,10 +180,17 @@ class PreintegratedImu:
         the change exceeds 0.01 rad/s (gyro) or 0.1 m/s² (accelerometer), a sensible default
         threshold for 200 Hz windows of about 0.5 s.
         """
-        out = _empty(self.noise, bias, self.gravity, self.scheme, self.combined, self.saturation_noise_factor)
+
+        def empty() -> PreintegratedImu:
+            return _empty(self.noise, bias, self.gravity, self.scheme, self.combined, self.saturation_noise_factor)
+
+        out = empty()
         for item in self._inputs:
-            if isinstance(item, _Window):  # always the first item
-                (out._core,) = _windows(item.imu, [item.lo, item.hi], out, threads=0)
+            if isinstance(item, _Window):
+                # A window starts from an empty preintegration; after a merge it may follow other
+                # inputs, so it is preintegrated on its own and merged on, as merge() did.
+                (piece,) = _windows(item.imu, [item.lo, item.hi], empty(), threads=0)
+                out._core = out._core.merge(piece) if out._inputs else piece
                 out._inputs.append(item)
             elif isinstance(item, ImuData):
                 out.integrate(item)
