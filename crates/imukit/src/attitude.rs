@@ -422,10 +422,7 @@ fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Opti
 /// rotation, and the following steps keep it zero; so a result off the unit sphere (every valid
 /// one is unit to ~1e-15) is refused the same way.
 fn check_finite_quaternions(last: &UnitQuaternion<f64>, out: Option<&[f64]>, n: usize) -> Result<()> {
-    let valid = |q: &[f64]| {
-        let norm_squared: f64 = q.iter().map(|v| v * v).sum();
-        (norm_squared - 1.0).abs() < 1e-6
-    };
+    let valid = crate::quat::is_unit_coords;
     if valid(last.coords.as_slice()) {
         return Ok(());
     }

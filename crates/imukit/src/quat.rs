@@ -200,6 +200,14 @@ pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     v * k
 }
 
+/// Whether `[x, y, z, w]` is a unit quaternion up to far more than rounding: every state an
+/// integrator keeps is unit to ~1e-15, while an overflowed one is zero, NaN or ±inf. The kernels use
+/// it to refuse a result whose norm overflowed (`q/|q|` with `|q|² = inf` is the zero quaternion).
+pub(crate) fn is_unit_coords(q: &[f64]) -> bool {
+    let norm_squared: f64 = q.iter().map(|v| v * v).sum();
+    (norm_squared - 1.0).abs() < 1e-6
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

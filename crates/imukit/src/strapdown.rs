@@ -222,7 +222,7 @@ impl StatesOut<'_> {
     fn first_non_finite(&self) -> Option<usize> {
         let pv = self.position_velocity.chunks_exact(6);
         pv.zip(self.rotation.chunks_exact(4))
-            .position(|(a, b)| a.iter().any(|v| !v.is_finite()) || !is_unit(b))
+            .position(|(a, b)| a.iter().any(|v| !v.is_finite()) || !crate::quat::is_unit_coords(b))
     }
 }
 
@@ -410,18 +410,11 @@ pub fn integrate(
 /// finite but no rotation, so an attitude off the unit sphere is refused the same way.
 pub(crate) fn check_finite_result(x: &NavState, out: Option<&StatesOut<'_>>, n: usize) -> Result<()> {
     let finite = x.position.iter().chain(x.velocity.iter()).all(|v| v.is_finite());
-    if finite && is_unit(x.rotation.coords.as_slice()) {
+    if finite && crate::quat::is_unit_coords(x.rotation.coords.as_slice()) {
         return Ok(());
     }
     let index = out.and_then(StatesOut::first_non_finite).unwrap_or(n - 1);
     Err(Error::Overflow { index })
-}
-
-/// Whether `[x, y, z, w]` is a unit quaternion up to far more than rounding (every valid state is
-/// unit to ~1e-15; NaN and ±inf are not).
-fn is_unit(q: &[f64]) -> bool {
-    let norm_squared: f64 = q.iter().map(|v| v * v).sum();
-    (norm_squared - 1.0).abs() < 1e-6
 }
 
 /// Finite initial state, biases and gravity.
