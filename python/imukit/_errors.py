@@ -23,7 +23,28 @@ __all__ = [
 
 
 class ImukitError(Exception):
-    """Base class of every exception imukit raises on purpose."""
+    """Base class of every exception imukit raises on purpose.
+
+    ``argument`` names the input at fault (a keyword of the function called, or a dotted field such
+    as ``"gain_ramp.duration_s"``), ``index`` the sample or row of it when one is at fault; both
+    are None where nothing narrower than the call is to blame. ``message`` says what was expected;
+    ``str(exc)`` is ``"<argument>: <message>"``. Callers (the CLI among them) read the fields, never
+    the text.
+    """
+
+    def __init__(self, message: str, *, argument: str | None = None, index: int | None = None) -> None:
+        self.message = message
+        self.argument = argument
+        self.index = index
+        super().__init__(message if argument is None else f"{argument}: {message}")
+
+    def __reduce__(self) -> tuple[object, ...]:
+        # Exceptions pickle as cls(*args): the keyword fields need their own constructor call.
+        return (_rebuild, (type(self), self.message, self.argument, self.index))
+
+
+def _rebuild(cls: type[ImukitError], message: str, argument: str | None, index: int | None) -> ImukitError:
+    return cls(message, argument=argument, index=index)
 
 
 class ShapeError(ImukitError, ValueError):
