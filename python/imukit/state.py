@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import operator
 import os
+import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -206,7 +207,17 @@ class Trajectory(Frozen):
         return NavState(self.position[k], self.velocity[k], self.rotation[k])
 
     def write_tum(self, path: str | os.PathLike[str]) -> None:
-        """Write ``timestamp tx ty tz qx qy qz qw`` lines; see :func:`imukit.io.write_tum`."""
+        """Deprecated: use ``imukit.io.write_tum(trajectory, path)``, which this calls.
+
+        A trajectory is data and the file formats live in :mod:`imukit.io`; this alias stays for
+        existing code and warns with :class:`DeprecationWarning`.
+        """
+        warnings.warn(
+            "Trajectory.write_tum(path) is deprecated; use imukit.io.write_tum(trajectory, path)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        # imported here: imukit.io imports this module (readers build Trajectory objects).
         from imukit.io import write_tum
 
         write_tum(self, path)
