@@ -4,6 +4,7 @@ reproducibility, and bad input."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-from imukit import sim
+from imukit import _core, sim
 
 NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
 
@@ -144,3 +145,36 @@ def test_a_simulation_exports_to_euroc_and_tum_exactly(tmp_path: Path) -> None:
     truth.write_tum(tmp_path / "truth.tum")
     tum = ik.io.read_tum(tmp_path / "truth.tum")
     assert np.array_equal(tum.position, truth.position)
+
+
+def test_sensor_error_defaults_are_the_cores_perfect_triad() -> None:
+    """SensorErrors' defaults are read from the core's SensorModel::default(), not re-typed."""
+    perfect = _core.sim_sensor_default()
+    errors = ik.sim.SensorErrors()
+    assert {f.name for f in dataclasses.fields(errors)} == set(perfect)
+    for name, value in perfect.items():
+        assert np.array_equal(np.asarray(getattr(errors, name)), np.asarray(value)), name
+    assert np.array_equal(np.asarray(perfect["matrix"]), np.eye(3))
+    assert perfect["range"] == math.inf and perfect["gauss_markov_tau"] == math.inf
+
+
+def test_sensor_errors_reach_the_core_by_field_name_whatever_their_number_types() -> None:
+    """The core reads SensorErrors by attribute: ints, float32 and a nested-tuple matrix give the
+    same readings as float64 (a field read under the wrong name or position would not)."""
+    common = {"rate": 200.0, "duration": 2.0, "seed": 5, "noise": ik.ImuNoise(1e-3, 1e-2, 1e-4, 1e-3)}
+    as_floats = ik.sim.SensorErrors(
+        matrix=np.diag([1.01, 0.99, 1.0]), turn_on_sigma=0.5, gauss_markov_sigma=0.25, gauss_markov_tau=2.0, range=4.0
+    )
+    as_others = ik.sim.SensorErrors(
+        matrix=((1.01, 0, 0), (0, 0.99, 0), (0, 0, 1)),
+        turn_on_sigma=np.float32(0.5),
+        gauss_markov_sigma=0.25,
+        gauss_markov_tau=2,
+        range=4,
+    )
+    a, _ = ik.sim.simulate(ik.sim.FigureEight(), gyro_errors=as_floats, **common)
+    b, _ = ik.sim.simulate(ik.sim.FigureEight(), gyro_errors=as_others, **common)
+    assert np.array_equal(a.gyro, b.gyro) and a.gyro_range == b.gyro_range == 4.0
+    swapped = dataclasses.replace(as_floats, gauss_markov_sigma=0.5, turn_on_sigma=0.25)
+    c, _ = ik.sim.simulate(ik.sim.FigureEight(), gyro_errors=swapped, **common)
+    assert not np.array_equal(a.gyro, c.gyro)

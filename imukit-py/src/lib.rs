@@ -496,6 +496,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_default, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,71 +1,124 @@
 //! Simulator bindings: closed-form motions into truth arrays, and the sensor error model; wrapped by
 //! `imukit.sim`.
 
-use imukit::sim::{self, Motion, SensorModel};
+use imukit::sim::{self, Motion, MotionKind, SensorModel};
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::{contiguous, raise, to_py};
 
-fn v3(p: &[f64]) -> Vector3<f64> {
-    Vector3::new(p[0], p[1], p[2])
+fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
+    Ok(Vector3::from(obj.extract::<[f64; 3]>()?))
 }
 
-/// `R_wb` from an `[x, y, z, w]` unit quaternion.
-fn rotation(p: &[f64]) -> Rotation3<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(p[3], p[0], p[1], p[2])).to_rotation_matrix()
+/// `R_wb` from a scipy `Rotation` (its `[x, y, z, w]` unit quaternion).
+fn rotation(obj: &Bound<'_, PyAny>) -> PyResult<Rotation3<f64>> {
+    let [x, y, z, w] = obj.call_method0("as_quat")?.extract::<[f64; 4]>()?;
+    Ok(UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)).to_rotation_matrix())
 }
 
-/// The motion of `kind` from its parameters, in the order `imukit.sim` documents for each class.
-fn motion(py: Python<'_>, kind: &str, p: &[f64]) -> PyResult<Motion> {
-    let expected = match kind {
-        "static" => 7,
-        "constant_twist" => 13,
-        "helix" => 6,
-        "figure_eight" => 9,
-        "vio_ellipse" => 10,
-        other => {
-            let message = format!("expected a motion kind known to imukit.sim, got {other:?}");
-            return Err(raise(py, "ParameterError", "trajectory", message));
-        }
-    };
-    if p.len() != expected || p.iter().any(|v| !v.is_finite()) {
-        let message = format!("{kind}: expected {expected} finite parameters, got {p:?}");
-        return Err(raise(py, "ParameterError", "trajectory", message));
-    }
+// The attributes of the `imukit.sim` classes, read by name: one mirror per `Motion` variant.
+
+#[derive(FromPyObject)]
+struct Static {
+    #[pyo3(from_py_with = vec3)]
+    position: Vector3<f64>,
+    #[pyo3(from_py_with = rotation)]
+    rotation: Rotation3<f64>,
+}
+
+#[derive(FromPyObject)]
+struct ConstantTwist {
+    #[pyo3(from_py_with = vec3)]
+    position: Vector3<f64>,
+    #[pyo3(from_py_with = rotation)]
+    rotation: Rotation3<f64>,
+    #[pyo3(from_py_with = vec3)]
+    body_velocity: Vector3<f64>,
+    #[pyo3(from_py_with = vec3)]
+    body_rate: Vector3<f64>,
+}
+
+#[derive(FromPyObject)]
+struct Helix {
+    #[pyo3(from_py_with = vec3)]
+    center: Vector3<f64>,
+    radius: f64,
+    angular_rate: f64,
+    climb_rate: f64,
+}
+
+#[derive(FromPyObject)]
+struct FigureEight {
+    #[pyo3(from_py_with = vec3)]
+    center: Vector3<f64>,
+    #[pyo3(from_py_with = vec3)]
+    amplitude: Vector3<f64>,
+    angular_rate: f64,
+    roll: f64,
+    pitch: f64,
+}
+
+#[derive(FromPyObject)]
+struct VioEllipse {
+    #[pyo3(from_py_with = vec3)]
+    center: Vector3<f64>,
+    #[pyo3(from_py_with = vec3)]
+    amplitude: Vector3<f64>,
+    angular_rate: f64,
+    height_frequency: f64,
+    roll: f64,
+    pitch: f64,
+}
+
+/// The motion `trajectory` (an `imukit.sim` motion of kind `kind`), read by attribute name.
+fn motion(kind: MotionKind, trajectory: &Bound<'_, PyAny>) -> PyResult<Motion> {
     Ok(match kind {
-        "static" => Motion::Static {
-            position: v3(&p[0..3]),
-            rotation: rotation(&p[3..7]),
-        },
-        "constant_twist" => Motion::ConstantTwist {
-            position: v3(&p[0..3]),
-            rotation: rotation(&p[3..7]),
-            body_velocity: v3(&p[7..10]),
-            body_rate: v3(&p[10..13]),
-        },
-        "helix" => Motion::Helix {
-            center: v3(&p[0..3]),
-            radius: p[3],
-            angular_rate: p[4],
-            climb_rate: p[5],
-        },
-        "figure_eight" => Motion::FigureEight {
-            center: v3(&p[0..3]),
-            amplitude: v3(&p[3..6]),
-            angular_rate: p[6],
-            roll: p[7],
-            pitch: p[8],
-        },
-        _ => Motion::VioEllipse {
-            center: v3(&p[0..3]),
-            amplitude: v3(&p[3..6]),
-            angular_rate: p[6],
-            height_frequency: p[7],
-            roll: p[8],
-            pitch: p[9],
-        },
+        MotionKind::Static => {
+            let Static { position, rotation } = trajectory.extract()?;
+            Motion::Static { position, rotation }
+        }
+        MotionKind::ConstantTwist => {
+            let m: ConstantTwist = trajectory.extract()?;
+            Motion::ConstantTwist {
+                position: m.position,
+                rotation: m.rotation,
+                body_velocity: m.body_velocity,
+                body_rate: m.body_rate,
+            }
+        }
+        MotionKind::Helix => {
+            let m: Helix = trajectory.extract()?;
+            Motion::Helix {
+                center: m.center,
+                radius: m.radius,
+                angular_rate: m.angular_rate,
+                climb_rate: m.climb_rate,
+            }
+        }
+        MotionKind::FigureEight => {
+            let m: FigureEight = trajectory.extract()?;
+            Motion::FigureEight {
+                center: m.center,
+                amplitude: m.amplitude,
+                angular_rate: m.angular_rate,
+                roll: m.roll,
+                pitch: m.pitch,
+            }
+        }
+        MotionKind::VioEllipse => {
+            let m: VioEllipse = trajectory.extract()?;
+            Motion::VioEllipse {
+                center: m.center,
+                amplitude: m.amplitude,
+                angular_rate: m.angular_rate,
+                height_frequency: m.height_frequency,
+                roll: m.roll,
+                pitch: m.pitch,
+            }
+        }
     })
 }
 
@@ -77,16 +130,18 @@ type Arrays<'py> = (
     Bound<'py, PyArray2<f64>>,
 );
 
-/// `(position, velocity, rotation xyzw, gyro, accel)` of a closed-form motion at the times `t`.
+/// `(position, velocity, rotation xyzw, gyro, accel)` of the closed-form motion `trajectory` (an
+/// `imukit.sim` motion, its fields checked there) of kind `kind` at the times `t`.
 #[pyfunction]
 pub(crate) fn sim_motion<'py>(
     py: Python<'py>,
     kind: &str,
-    params: Vec<f64>,
+    trajectory: &Bound<'py, PyAny>,
     t: PyReadonlyArray1<'py, f64>,
     gravity: [f64; 3],
 ) -> PyResult<Arrays<'py>> {
-    let motion = motion(py, kind, &params)?;
+    let kind: MotionKind = kind.parse().map_err(|e| to_py(py, "trajectory", e))?;
+    let motion = motion(kind, trajectory)?;
     // No private copy: imukit.sim passes an array it has just made and shares with no one.
     let t = contiguous(py, "t", &t)?;
     let n = t.len();
@@ -114,30 +169,62 @@ pub(crate) fn sim_motion<'py>(
     Ok((p, v, q, w, a))
 }
 
-/// Measures one triad in place: `ideal` (the caller's fresh `(N, 3)` array) becomes the readings;
-/// returns the true biases. `model` is `[T (9, row-major), bias (3), σ_on, σ, σ_w, σ_gm, τ_gm, range,
-/// resolution]`. Private to `imukit.sim`, which passes arrays it has just made and shares with no one,
-/// so nothing is copied.
+/// `imukit.sim.SensorErrors`, read by attribute name; also the shape of
+/// [`sim_sensor_default`]'s dict.
+#[derive(FromPyObject, IntoPyObject)]
+pub(crate) struct SensorErrors {
+    matrix: [[f64; 3]; 3],
+    turn_on_sigma: f64,
+    gauss_markov_sigma: f64,
+    gauss_markov_tau: f64,
+    range: f64,
+    resolution: f64,
+}
+
+/// The fields of `imukit.sim.SensorErrors` as [`SensorModel::default`] has them (a perfect triad):
+/// the Python defaults are read from here.
 #[pyfunction]
+pub(crate) fn sim_sensor_default(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let m = SensorModel::default();
+    let errors = SensorErrors {
+        matrix: m.matrix.transpose().into(),
+        turn_on_sigma: m.turn_on_sigma,
+        gauss_markov_sigma: m.gauss_markov_sigma,
+        gauss_markov_tau: m.gauss_markov_tau,
+        range: m.range,
+        resolution: m.resolution,
+    };
+    Ok(errors.into_pyobject(py)?.cast_into::<PyDict>()?)
+}
+
+/// Measures one triad in place: `ideal` (the caller's fresh `(N, 3)` array) becomes the readings;
+/// returns the true biases. The model is `errors` (an `imukit.sim.SensorErrors`, read by name) with
+/// the constant `bias` and the white-noise `density` and bias `random_walk` of this triad.
+/// Private to `imukit.sim`, which passes arrays it has just made and shares with no one, so nothing
+/// is copied.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn sim_measure<'py>(
     py: Python<'py>,
     t: PyReadonlyArray1<'py, f64>,
     mut ideal: PyReadwriteArray2<'py, f64>,
-    model: [f64; 19],
+    errors: SensorErrors,
+    bias: [f64; 3],
+    density: f64,
+    random_walk: f64,
     seed: u64,
     triad: u64,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let m = &model;
     let model = SensorModel {
-        matrix: Matrix3::from_row_slice(&m[0..9]),
-        bias: v3(&m[9..12]),
-        turn_on_sigma: m[12],
-        density: m[13],
-        random_walk: m[14],
-        gauss_markov_sigma: m[15],
-        gauss_markov_tau: m[16],
-        range: m[17],
-        resolution: m[18],
+        matrix: Matrix3::from(errors.matrix).transpose(),
+        bias: Vector3::from(bias),
+        turn_on_sigma: errors.turn_on_sigma,
+        density,
+        random_walk,
+        gauss_markov_sigma: errors.gauss_markov_sigma,
+        gauss_markov_tau: errors.gauss_markov_tau,
+        range: errors.range,
+        resolution: errors.resolution,
     };
     let t = contiguous(py, "t", &t)?;
     let n = t.len();
@@ -148,9 +235,9 @@ pub(crate) fn sim_measure<'py>(
         let values = ideal
             .as_slice_mut()
             .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
-        let errors = if triad == 0 { "gyro_errors" } else { "accel_errors" };
+        let argument = if triad == 0 { "gyro_errors" } else { "accel_errors" };
         py.detach(|| sim::measure_in_place(t, values, &model, seed, triad, b))
-            .map_err(|e| raise(py, crate::class_name(&e), errors, e.root()))?;
+            .map_err(|e| raise(py, crate::class_name(&e), argument, e.root()))?;
     }
     Ok(bias)
 }

@@ -1,10 +1,12 @@
 # Stubs of the compiled module (checked by mypy.stubtest). Every function takes a C-contiguous
 # float64 array of shape (n, k), the argument name used in error messages, and options; it returns
 # a new (n, m) float64 array. Use the public modules (imukit.so3, imukit.quat, imukit.euler).
-from typing import final
+from typing import Any, Literal, final
 
 import numpy as np
 from numpy.typing import NDArray
+
+from imukit.sim import ConstantTwist, FigureEight, Helix, SensorErrors, Static, VioEllipse
 
 __all__ = [
     "AttitudeFilter",
@@ -28,6 +30,7 @@ __all__ = [
     "quat_rotate",
     "sim_measure",
     "sim_motion",
+    "sim_sensor_default",
     "so3_exp",
     "so3_hat",
     "so3_jacobian",
@@ -159,8 +162,19 @@ def preint_windows(
     threads: int,
 ) -> list[Preintegrator]: ...
 def sim_motion(
-    kind: str, params: list[float], t: NDArray[np.float64], gravity: list[float]
+    kind: Literal["static", "constant_twist", "helix", "figure_eight", "vio_ellipse"],
+    trajectory: Static | ConstantTwist | Helix | FigureEight | VioEllipse,
+    t: NDArray[np.float64],
+    gravity: list[float],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+def sim_sensor_default() -> dict[str, Any]: ...
 def sim_measure(
-    t: NDArray[np.float64], ideal: NDArray[np.float64], model: list[float], seed: int, triad: int
+    t: NDArray[np.float64],
+    ideal: NDArray[np.float64],
+    errors: SensorErrors,
+    bias: NDArray[np.float64],
+    density: float,
+    random_walk: float,
+    seed: int,
+    triad: int,
 ) -> NDArray[np.float64]: ...

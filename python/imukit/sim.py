@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal, Union
+from typing import Any, ClassVar, Literal, Union, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -60,22 +61,26 @@ def _finite(value: object, name: str) -> float:
     return real_scalar(value, name, what="a finite number", accept=math.isfinite)
 
 
-def _quat(r: Rotation, name: str) -> list[float]:
+def _single(r: Rotation, name: str) -> Rotation:
     if not (isinstance(r, Rotation) and r.single):
         raise ParameterError(f"{name}: expected a single scipy Rotation, got {r!r}")
-    return [float(v) for v in r.as_quat()]
+    return r
+
+
+# How a motion field is checked, by its annotation: float64 3-vectors, finite floats, one rotation.
+_CHECKS: dict[str, Callable[[Any, str], Any]] = {"ArrayLike": vector3, "float": _finite, "Rotation": _single}
 
 
 class _ClosedForm:
-    """A motion evaluated in the compiled core from its parameters."""
+    """A motion evaluated in the compiled core, which reads its fields by name (every subclass is a
+    frozen dataclass, its kind a name the core parses)."""
 
-    _kind: str
-
-    def _params(self) -> list[float]:
-        raise NotImplementedError
+    _kind: ClassVar[Literal["static", "constant_twist", "helix", "figure_eight", "vio_ellipse"]]
 
     def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
-        return _core.sim_motion(self._kind, self._params(), t, [*gravity])
+        motion = cast("Static | ConstantTwist | Helix | FigureEight | VioEllipse", self)
+        checked = {f.name: _CHECKS[str(f.type)](getattr(motion, f.name), f.name) for f in dataclasses.fields(motion)}
+        return _core.sim_motion(self._kind, dataclasses.replace(motion, **checked), t, [*gravity])
 
 
 @dataclass(frozen=True)
@@ -85,9 +90,6 @@ class Static(_ClosedForm):
     position: ArrayLike = (0.0, 0.0, 0.0)
     rotation: Rotation = field(default_factory=Rotation.identity)
     _kind = "static"
-
-    def _params(self) -> list[float]:
-        return [*vector3(self.position, "position"), *_quat(self.rotation, "rotation")]
 
 
 @dataclass(frozen=True)
@@ -101,14 +103,6 @@ class ConstantTwist(_ClosedForm):
     rotation: Rotation = field(default_factory=Rotation.identity)
     _kind = "constant_twist"
 
-    def _params(self) -> list[float]:
-        return [
-            *vector3(self.position, "position"),
-            *_quat(self.rotation, "rotation"),
-            *vector3(self.body_velocity, "body_velocity"),
-            *vector3(self.body_rate, "body_rate"),
-        ]
-
 
 @dataclass(frozen=True)
 class Helix(_ClosedForm):
@@ -119,14 +113,6 @@ class Helix(_ClosedForm):
     climb_rate: float = 0.2
     center: ArrayLike = (0.0, 0.0, 1.0)
     _kind = "helix"
-
-    def _params(self) -> list[float]:
-        return [
-            *vector3(self.center, "center"),
-            _finite(self.radius, "radius"),
-            _finite(self.angular_rate, "angular_rate"),
-            _finite(self.climb_rate, "climb_rate"),
-        ]
 
 
 @dataclass(frozen=True)
@@ -148,15 +134,6 @@ class FigureEight(_ClosedForm):
     center: ArrayLike = (0.0, 0.0, 2.0)
     _kind = "figure_eight"
 
-    def _params(self) -> list[float]:
-        return [
-            *vector3(self.center, "center"),
-            *vector3(self.amplitude, "amplitude"),
-            _finite(self.angular_rate, "angular_rate"),
-            _finite(self.roll, "roll"),
-            _finite(self.pitch, "pitch"),
-        ]
-
 
 @dataclass(frozen=True)
 class VioEllipse(_ClosedForm):
@@ -170,16 +147,6 @@ class VioEllipse(_ClosedForm):
     pitch: float = 0.2
     center: ArrayLike = (5.0, 5.0, 5.0)
     _kind = "vio_ellipse"
-
-    def _params(self) -> list[float]:
-        return [
-            *vector3(self.center, "center"),
-            *vector3(self.amplitude, "amplitude"),
-            _finite(self.angular_rate, "angular_rate"),
-            _finite(self.height_frequency, "height_frequency"),
-            _finite(self.roll, "roll"),
-            _finite(self.pitch, "pitch"),
-        ]
 
 
 class Waypoints:
@@ -245,6 +212,10 @@ Motion = Union[Static, ConstantTwist, Helix, FigureEight, VioEllipse, Waypoints]
 """Every trajectory :func:`simulate` accepts."""
 
 
+# The core's perfect triad (its SensorModel::default()): the defaults of SensorErrors.
+_PERFECT = _core.sim_sensor_default()
+
+
 @dataclass(frozen=True)
 class SensorErrors:
     """Errors of one triad beyond white noise, random walk and constant bias (``ImuNoise``, ``ImuBias``).
@@ -256,19 +227,22 @@ class SensorErrors:
     quantisation step (readings rounded to multiples). Units are the sensor's (rad/s or m/s²).
     """
 
-    matrix: ArrayLike = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    turn_on_sigma: float = 0.0
-    gauss_markov_sigma: float = 0.0
-    gauss_markov_tau: float = math.inf
-    range: float = math.inf
-    resolution: float = 0.0
+    matrix: ArrayLike = tuple(map(tuple, _PERFECT["matrix"]))
+    turn_on_sigma: float = _PERFECT["turn_on_sigma"]
+    gauss_markov_sigma: float = _PERFECT["gauss_markov_sigma"]
+    gauss_markov_tau: float = _PERFECT["gauss_markov_tau"]
+    range: float = _PERFECT["range"]
+    resolution: float = _PERFECT["resolution"]
 
     def __post_init__(self) -> None:
+        # Stored as the floats they were checked as: the core reads these attributes by name.
         for name in ("turn_on_sigma", "gauss_markov_sigma", "resolution"):
             what = "a finite, non-negative number"
-            real_scalar(getattr(self, name), name, what=what, accept=lambda x: math.isfinite(x) and x >= 0)
+            x = real_scalar(getattr(self, name), name, what=what, accept=lambda x: math.isfinite(x) and x >= 0)
+            object.__setattr__(self, name, x)
         for name in ("gauss_markov_tau", "range"):
-            real_scalar(getattr(self, name), name, what="a positive number (inf for none)", accept=lambda x: x > 0)
+            x = real_scalar(getattr(self, name), name, what="a positive number (inf for none)", accept=lambda x: x > 0)
+            object.__setattr__(self, name, x)
         if self._full_scale() == 0.0:
             raise ParameterError(
                 f"resolution / range: a step of {self.resolution!r} rounds the range {self.range!r} "
@@ -302,22 +276,6 @@ class SensorErrors:
             return limit
         whole = math.floor(steps)
         return (whole + (1.0 if steps - whole >= 0.5 else 0.0)) * step
-
-    def _values(self) -> list[float]:
-        return [
-            *as_float_array(self.matrix, "matrix").ravel(),
-            float(self.turn_on_sigma),
-            float(self.gauss_markov_sigma),
-            float(self.gauss_markov_tau),
-            float(self.range),
-            float(self.resolution),
-        ]
-
-
-def _model(bias: FloatArray, density: float, walk: float, errors: SensorErrors) -> list[float]:
-    v = errors._values()
-    # [T (9), bias (3), σ_on, σ, σ_w, σ_gm, τ_gm, range, resolution], as the core reads it.
-    return [*v[0:9], *bias, v[9], density, walk, *v[10:14]]
 
 
 def simulate(
@@ -377,11 +335,13 @@ def simulate(
     if not perfect:
         noise = noise or ImuNoise(0.0, 0.0, 0.0, 0.0)
         b = bias or ImuBias()
-        model_g = _model(b.gyro, noise.gyro_density, noise.gyro_random_walk, gyro_errors or SensorErrors())
-        model_a = _model(b.accel, noise.accel_density, noise.accel_random_walk, accel_errors or SensorErrors())
         # In place: gyro and accel are this call's own fresh arrays (and Waypoints' fresh results).
-        bias_g = _core.sim_measure(t, gyro, model_g, seed, 0)
-        bias_a = _core.sim_measure(t, accel, model_a, seed, 1)
+        bias_g = _core.sim_measure(
+            t, gyro, gyro_errors or SensorErrors(), b.gyro, noise.gyro_density, noise.gyro_random_walk, seed, 0
+        )
+        bias_a = _core.sim_measure(
+            t, accel, accel_errors or SensorErrors(), b.accel, noise.accel_density, noise.accel_random_walk, seed, 1
+        )
     ranges = [None if e is None else e._full_scale() for e in (gyro_errors, accel_errors)]
     imu = ImuData._from_core(t, gyro, accel, *ranges)
     arrays = {"position": position, "velocity": velocity, "gyro_bias": bias_g, "accel_bias": bias_a}

@@ -6,7 +6,7 @@
 mod motion;
 mod sensor;
 
-pub use motion::{Kinematics, Motion};
+pub use motion::{Kinematics, Motion, MotionKind};
 pub use sensor::{measure, measure_in_place, SensorModel, CHUNK};
 
 use nalgebra::{UnitQuaternion, Vector3};

@@ -15,6 +15,7 @@
 
 use nalgebra::{Rotation3, Vector3};
 
+use crate::error::{Error, Result};
 use crate::{euler, so3};
 
 /// The kinematic state at one instant, world frame unless stated.
@@ -99,6 +100,58 @@ pub enum Motion {
         /// Pitch amplitude θ₀ [rad].
         pitch: f64,
     },
+}
+
+/// The kinds of [`Motion`], by the names the bindings use (`imukit.sim`'s classes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionKind {
+    /// [`Motion::Static`]
+    Static,
+    /// [`Motion::ConstantTwist`]
+    ConstantTwist,
+    /// [`Motion::Helix`]
+    Helix,
+    /// [`Motion::FigureEight`]
+    FigureEight,
+    /// [`Motion::VioEllipse`]
+    VioEllipse,
+}
+
+impl MotionKind {
+    /// Every kind, in declaration order.
+    pub const ALL: [Self; 5] = [
+        Self::Static,
+        Self::ConstantTwist,
+        Self::Helix,
+        Self::FigureEight,
+        Self::VioEllipse,
+    ];
+
+    /// The name the bindings use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Static => "static",
+            Self::ConstantTwist => "constant_twist",
+            Self::Helix => "helix",
+            Self::FigureEight => "figure_eight",
+            Self::VioEllipse => "vio_ellipse",
+        }
+    }
+}
+
+impl std::str::FromStr for MotionKind {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| Error::Parameter {
+                name: "trajectory",
+                expected: "one of 'static', 'constant_twist', 'helix', 'figure_eight', 'vio_ellipse'",
+                got: format!("{s:?}"),
+            })
+    }
 }
 
 /// Attitude and body rate from ZYX Euler angles `χ = [ψ, θ, φ]` and their rates.
@@ -205,5 +258,21 @@ impl Motion {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_parses_from_its_name_and_nothing_else_does() {
+        for kind in MotionKind::ALL {
+            assert_eq!(kind.name().parse::<MotionKind>().ok(), Some(kind));
+        }
+        assert!(matches!(
+            "circle".parse::<MotionKind>(),
+            Err(Error::Parameter { name: "trajectory", .. })
+        ));
     }
 }
