@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 from imukit.sim import ConstantTwist, FigureEight, Helix, SensorErrors, Static, VioEllipse
 
 __all__ = [
+    "GRAVITY",
     "AttitudeFilter",
     "Preintegrator",
     "__version__",
@@ -18,6 +19,7 @@ __all__ = [
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
     "euler_to_matrix",
+    "get_num_threads",
     "preint_windows",
     "quat_conjugate",
     "quat_exp",
@@ -28,6 +30,7 @@ __all__ = [
     "quat_omega_matrix",
     "quat_product_matrix",
     "quat_rotate",
+    "set_num_threads",
     "sim_measure",
     "sim_motion",
     "sim_sensor_default",
@@ -41,7 +44,12 @@ __all__ = [
 ]
 
 __version__: str
+# Default world-frame gravity [m/s²], z up: `imukit::imu::GRAVITY`, the one place it is written.
+GRAVITY: tuple[float, float, float]
 
+# The process-wide thread count of the parallel kernels (default: rayon's, one per core).
+def set_num_threads(n: int) -> None: ...
+def get_num_threads() -> int: ...
 def so3_hat(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_vee(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_exp(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
