@@ -5,6 +5,7 @@ reproducibility, and bad input."""
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from pathlib import Path
 
@@ -178,3 +179,8 @@ def test_sensor_errors_reach_the_core_by_field_name_whatever_their_number_types(
     swapped = dataclasses.replace(as_floats, gauss_markov_sigma=0.5, turn_on_sigma=0.25)
     c, _ = ik.sim.simulate(ik.sim.FigureEight(), gyro_errors=swapped, **common)
     assert not np.array_equal(a.gyro, c.gyro)
+
+
+def test_gravity_default_is_the_cores() -> None:
+    default = inspect.signature(ik.sim.simulate).parameters["gravity"].default
+    assert default is ik.imu.GRAVITY and ik.GRAVITY == ik.imu.GRAVITY == _core.GRAVITY == (0.0, 0.0, -9.81)

@@ -21,11 +21,16 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imukit import _core
 from imukit._arrays import FloatArray, as_stamps, readonly_array, readonly_copy, real_scalar
 from imukit._errors import NonFiniteError, ShapeError, TimestampError
 from imukit._frozen import Frozen
 
-__all__ = ["DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "ImuNoise"]
+__all__ = ["GRAVITY", "DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "ImuNoise"]
+
+GRAVITY: tuple[float, float, float] = _core.GRAVITY
+"""The default world-frame gravity [m/s²], z up: ``(0, 0, −9.81)``, the core's ``imukit::imu::GRAVITY``
+(written there only); every ``gravity=`` default refers to it."""
 
 
 class ImuData(Frozen):

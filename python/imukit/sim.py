@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation, RotationSpline
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
-from imukit.imu import ImuBias, ImuData, ImuNoise
+from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
 
 __all__ = [
@@ -53,7 +53,6 @@ __all__ = [
     "simulate",
 ]
 
-_GRAVITY = (0.0, 0.0, -9.81)
 _MAX_SAMPLES = 2**31  # 5 arrays of (n, 3) float64 already need 240 GB
 
 
@@ -287,7 +286,7 @@ def simulate(
     bias: ImuBias | None = None,
     gyro_errors: SensorErrors | None = None,
     accel_errors: SensorErrors | None = None,
-    gravity: ArrayLike = _GRAVITY,
+    gravity: ArrayLike = GRAVITY,
     seed: int = 0,
     start: float = 0.0,
 ) -> tuple[ImuData, Trajectory]:
@@ -297,7 +296,8 @@ def simulate(
     true biases (``gyro_bias``, ``accel_bias``) at every sample. Without ``noise``, ``bias`` and
     errors, the readings are the exact ideal ones. A finite ``SensorErrors.range`` becomes the
     ImuData's ``gyro_range`` / ``accel_range``, so the clipped samples are flagged
-    (``ImuData.gyro_saturated``, ``accel_saturated``).
+    (``ImuData.gyro_saturated``, ``accel_saturated``). ``gravity`` is the world-frame ``g`` [m/s²] in
+    ``R_wbᵀ (a − g)``, by default :data:`imukit.GRAVITY`.
     """
     rate_hz = real_scalar(
         rate, "rate", what="a positive, finite rate in Hz", accept=lambda x: math.isfinite(x) and x > 0

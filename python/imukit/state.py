@@ -5,7 +5,8 @@ frames                 position and velocity in the world frame ``w`` (z up by d
                        ``R_wb`` maps body vectors to world (``docs/conventions.md``)
 position               [m], velocity [m/s]; ``(3,)`` for a state, ``(N, 3)`` for a trajectory
 rotation               a scipy ``Rotation``: single for a state, length N for a trajectory
-time                   float64 seconds ``t``; optionally exact int64 nanoseconds ``t_ns``
+time                   float64 seconds ``t``; optionally exact int64 nanoseconds ``t_ns`` (integer input,
+                       told apart by dtype as in ``ImuData``)
 covariance             optional ``(M, 15, 15)`` at times ``covariance_t`` (M,) [s], error-state order
                        ``[δp, δv, δθ, δb_a, δb_g]`` unless the producer states otherwise (row 12)
 =====================  ===========================================================================

@@ -15,7 +15,6 @@
 
 use nalgebra::{Rotation3, Vector3};
 
-use crate::error::{Error, Result};
 use crate::{euler, so3};
 
 /// The kinematic state at one instant, world frame unless stated.
@@ -117,42 +116,17 @@ pub enum MotionKind {
     VioEllipse,
 }
 
-impl MotionKind {
-    /// Every kind, in declaration order.
-    pub const ALL: [Self; 5] = [
-        Self::Static,
-        Self::ConstantTwist,
-        Self::Helix,
-        Self::FigureEight,
-        Self::VioEllipse,
-    ];
-
-    /// The name the bindings use.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Static => "static",
-            Self::ConstantTwist => "constant_twist",
-            Self::Helix => "helix",
-            Self::FigureEight => "figure_eight",
-            Self::VioEllipse => "vio_ellipse",
-        }
-    }
-}
-
-impl std::str::FromStr for MotionKind {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| Error::Parameter {
-                name: "trajectory",
-                expected: "one of 'static', 'constant_twist', 'helix', 'figure_eight', 'vio_ellipse'",
-                got: format!("{s:?}"),
-            })
-    }
-}
+crate::named_enum!(
+    MotionKind,
+    "trajectory",
+    [
+        Static => "static",
+        ConstantTwist => "constant_twist",
+        Helix => "helix",
+        FigureEight => "figure_eight",
+        VioEllipse => "vio_ellipse",
+    ]
+);
 
 /// Attitude and body rate from ZYX Euler angles `χ = [ψ, θ, φ]` and their rates.
 fn from_euler(chi: Vector3<f64>, chi_dot: Vector3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
@@ -264,10 +238,12 @@ impl Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::names::Named;
+    use crate::Error;
 
     #[test]
     fn every_kind_parses_from_its_name_and_nothing_else_does() {
-        for kind in MotionKind::ALL {
+        for &kind in MotionKind::ALL {
             assert_eq!(kind.name().parse::<MotionKind>().ok(), Some(kind));
         }
         assert!(matches!(
