@@ -12,8 +12,17 @@ import numpy as np
 from imukit._arrays import choice
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
-from imukit.io._euroc import build
-from imukit.io._lines import Problem, Split, all_exact, increasing, integer_stamp, parse_rows, require_rows
+from imukit.io._lines import (
+    Problem,
+    Split,
+    all_exact,
+    as_file_error,
+    increasing,
+    integer_stamp,
+    parse_rows,
+    public_reader,
+    require_rows,
+)
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 
 __all__ = ["read_imu_csv"]
@@ -26,7 +35,34 @@ _PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
 _DELIMITERS = (",", ";", "\t", " ")
 
 
-def read_imu_csv(
+def imu_csv(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    *,
+    time_column: Column,
+    gyro_columns: Sequence[Column],
+    accel_columns: Sequence[Column],
+    time_unit: TimeUnit,
+    gyro_unit: str,
+    accel_unit: str,
+    standard_gravity: float,
+    delimiter: str | None,
+) -> ImuData:
+    """:func:`read_imu_csv` reporting to ``bad``."""
+    choice(time_unit, "time_unit", tuple(_NS_PER))
+    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
+    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
+    gravity = _gravity(standard_gravity)
+    if delimiter is not None:
+        choice(delimiter, "delimiter", _DELIMITERS)
+    wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
+    for name, columns in wanted.items():
+        _check_columns(columns, name, 1 if name == "time_column" else 3)
+    return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
+
+
+@public_reader(imu_csv)
+def read_imu_csv(  # type: ignore[empty-body]
     path: str | os.PathLike[str],
     *,
     time_column: Column,
@@ -88,22 +124,9 @@ def read_imu_csv(
     FileFormatError
         Naming the file and line: bad lines ("raise" mode), no data.
     """
-    choice(time_unit, "time_unit", tuple(_NS_PER))
-    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
-    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
-    gravity = _gravity(standard_gravity)
-    if delimiter is not None:
-        choice(delimiter, "delimiter", _DELIMITERS)
-    wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
-    for name, columns in wanted.items():
-        _check_columns(columns, name, 1 if name == "time_column" else 3)
-    bad = BadLines(on_bad_line, report)
-    return bad.done(
-        imu_csv(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
-    )
 
 
-def imu_csv(
+def _read(
     path: str | os.PathLike[str],
     bad: BadLines,
     wanted: dict[str, Sequence[Column]],
@@ -112,7 +135,7 @@ def imu_csv(
     gravity: float | None,
     delimiter: str | None,
 ) -> ImuData:
-    """:func:`read_imu_csv` reporting to ``bad``, with checked arguments."""
+    """:func:`imu_csv` with checked arguments."""
     where = os.fspath(path)
     # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
     with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
@@ -162,9 +185,9 @@ def imu_csv(
     accel = data[:, 4:7] * gravity if gravity is not None else data[:, 4:7]
     if ns is not None:
         t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-        return build(path, lambda: ImuData(t_ns, gyro, accel))
+        return as_file_error(path, lambda: ImuData(t_ns, gyro, accel))
     t = data[:, 0] / _PER_SECOND[time_unit]
-    return build(path, lambda: ImuData(t, gyro, accel))
+    return as_file_error(path, lambda: ImuData(t, gyro, accel))
 
 
 def _gravity(value: object) -> float:

@@ -8,25 +8,27 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
-from imukit._errors import FileFormatError, ImukitError, ParameterError, TimestampError
+from imukit._errors import FileFormatError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
+from imukit.io._format import Format, Head
 from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
     Problem,
+    as_file_error,
     data_lines,
     increasing,
     integer_stamp,
     parse_rows,
+    public_reader,
     require_rows,
     rotations_from_rows,
     write_rows,
@@ -52,7 +54,6 @@ IMU_CSV = Path("imu0", "data.csv")
 GROUNDTRUTH_CSV = Path("state_groundtruth_estimate0", "data.csv")
 SENSOR_YAML = Path("imu0", "sensor.yaml")
 
-_T = TypeVar("_T")
 # EuRoC's imu0/sensor.yaml layout; the IMU is the body frame, so T_BS is the identity.
 _SENSOR_YAML_HEAD = """\
 # EuRoC / ASL imu0 sensor file, written by imukit
@@ -213,7 +214,15 @@ def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: 
     return ns
 
 
-def read_euroc(
+def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_euroc` reporting to ``bad``."""
+    root = mav0_root(folder)
+    truth = root / GROUNDTRUTH_CSV
+    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+
+
+@public_reader(euroc_folder)
+def read_euroc(  # type: ignore[empty-body]
     folder: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> tuple[ImuData, Trajectory | None]:
     """Read the IMU and ground truth of an EuRoC / ASL folder (as :func:`write_euroc` writes it).
@@ -232,15 +241,6 @@ def read_euroc(
     FileFormatError
         As :func:`read_euroc_imu` and :func:`read_euroc_groundtruth`.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_folder(folder, bad))
-
-
-def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
-    """:func:`read_euroc` reporting to ``bad``."""
-    root = mav0_root(folder)
-    truth = root / GROUNDTRUTH_CSV
-    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
 
 
 def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
@@ -324,7 +324,14 @@ def mav0_root(folder: str | os.PathLike[str]) -> Path:
     return root
 
 
-def read_euroc_imu(
+def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
+    """:func:`read_euroc_imu` reporting to ``bad``."""
+    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
+    return as_file_error(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+
+
+@public_reader(euroc_imu)
+def read_euroc_imu(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> ImuData:
     """Read an EuRoC ``imu0/data.csv``: ``timestamp [ns], ω_x,y,z [rad/s], a_x,y,z [m/s²]`` rows.
@@ -352,17 +359,30 @@ def read_euroc_imu(
         (a ``ValueError``) naming the file and line: not 7 fields, a stamp that is not an integer,
         a value that is not a finite number, time not strictly increasing, or no data.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_imu(path, bad))
 
 
-def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
-    """:func:`read_euroc_imu` reporting to ``bad``."""
-    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
-    return build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_euroc_groundtruth` reporting to ``bad``."""
+    t_ns, values, lines = read_stamped_csv(
+        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
+    )
+    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
+    return as_file_error(
+        path,
+        lambda: Trajectory(
+            None,
+            values[:, 0:3],
+            values[:, 7:10],
+            rotation,
+            t_ns=t_ns,
+            gyro_bias=values[:, 10:13],
+            accel_bias=values[:, 13:16],
+        ),
+    )
 
 
-def read_euroc_groundtruth(
+@public_reader(euroc_groundtruth)
+def read_euroc_groundtruth(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> Trajectory:
     """Read an EuRoC ``state_groundtruth_estimate0/data.csv`` into a :class:`imukit.Trajectory`.
@@ -380,28 +400,6 @@ def read_euroc_groundtruth(
     FileFormatError
         As :func:`read_euroc_imu` (17 fields), and for a zero quaternion.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_groundtruth(path, bad))
-
-
-def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    """:func:`read_euroc_groundtruth` reporting to ``bad``."""
-    t_ns, values, lines = read_stamped_csv(
-        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
-    )
-    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
-    return build(
-        path,
-        lambda: Trajectory(
-            None,
-            values[:, 0:3],
-            values[:, 7:10],
-            rotation,
-            t_ns=t_ns,
-            gyro_bias=values[:, 10:13],
-            accel_bias=values[:, 13:16],
-        ),
-    )
 
 
 def read_stamped_csv(
@@ -444,9 +442,39 @@ def _split_comma(text: str) -> list[str]:
     return text.split(",")
 
 
-def build(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
-    """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
-    try:
-        return make()
-    except ImukitError as exc:
-        raise FileFormatError(f"path: {os.fspath(path)}: {exc}") from exc
+def dataset_root(path: str | os.PathLike[str]) -> Path | None:
+    """``path`` or its ``mav0/`` when it is a folder holding ``imu0/data.csv``, else None."""
+    folder = Path(path)
+    for root in (folder, folder / "mav0"):
+        if folder.is_dir() and (root / IMU_CSV).is_file():
+            return root
+    return None
+
+
+def _groundtruth_of(folder: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    return euroc_groundtruth(mav0_root(folder) / GROUNDTRUTH_CSV, bad)
+
+
+def _has_groundtruth(path: Path, head: Head) -> bool:
+    root = dataset_root(path)
+    return root is not None and (root / GROUNDTRUTH_CSV).is_file()
+
+
+def _imu_csv_like(path: Path, head: Head) -> bool:
+    fields = head.fields(",")
+    return len(fields) == 7 and integer_stamp(fields[0].strip()) is not None
+
+
+DATASET = "EuRoC / TUM-VI folder or imu0/data.csv"  # the description of the EuRoC-layout formats
+EUROC_FOLDER = Format("euroc-folder", "imu", lambda path, head: dataset_root(path) is not None, euroc_folder, DATASET)
+EUROC_IMU_CSV = Format("euroc-imu-csv", "imu", _imu_csv_like, euroc_imu, DATASET)
+EUROC_GROUNDTRUTH_FOLDER = Format(
+    "euroc-groundtruth-folder", "trajectory", _has_groundtruth, _groundtruth_of, "EuRoC ground truth"
+)
+EUROC_GROUNDTRUTH = Format(
+    "euroc-groundtruth",
+    "trajectory",
+    lambda path, head: len(head.fields(",")) == 17,
+    euroc_groundtruth,
+    "EuRoC ground truth",
+)

@@ -5,26 +5,32 @@ Every reader reports problems as :class:`imukit.FileFormatError` messages starti
 every writer prints floats with ``repr``, the shortest text that reads back to the same float, so a
 write → read round trip is bit-exact.
 
-A reader runs two passes through :class:`BadLines`: :func:`parse_rows` checks each line on its own
-(field count, numbers, finiteness, a format's own row check), then :func:`increasing` keeps the
-longest strictly increasing run of the stamps of the rows that passed (:func:`in_order`, shared with the
-ROS bag reader), so one wild stamp costs its own line only.
+A reader is a private ``x(path, bad)`` made public by :func:`public_reader`, which makes the
+``on_bad_line`` / ``report`` pair into one :class:`BadLines`; it builds its result through
+:func:`as_file_error`, so a value the data types refuse (stamps that are not nanoseconds) is a
+:class:`imukit.FileFormatError` naming the file. It runs two passes through :class:`BadLines`:
+:func:`parse_rows` checks each line on its own (field count, numbers, finiteness, a format's own row
+check), then :func:`increasing` keeps the longest strictly increasing run of the stamps of the rows
+that passed (:func:`in_order`, shared with the ROS bag reader), so one wild stamp costs its own line
+only.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import os
 import re
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import NamedTuple, Union
+from typing import Any, NamedTuple, TypeVar, Union
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, rotation_from_unit_quat
-from imukit._errors import FileFormatError
+from imukit._errors import FileFormatError, ImukitError
 from imukit.io._report import BadLines
 
 NS_PER_S = 1_000_000_000
@@ -40,6 +46,8 @@ _INTEGER = re.compile(r"[+-]?[0-9]{1,20}")
 Problem = tuple[str, str]  # (kind, detail) of a bad line
 RowCheck = Callable[[list[str], list[float]], Union[Problem, None]]
 Split = Callable[[str], list[str]]
+_T = TypeVar("_T")
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 class Rows(NamedTuple):
@@ -276,3 +284,36 @@ def write_rows(
             f.write(header + "\n")
         for stamp, row in zip(stamps, values.tolist()):
             f.write(stamp + sep + sep.join(map(repr, row)) + "\n")
+
+
+def as_file_error(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
+    """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
+    try:
+        return make()
+    except ImukitError as exc:
+        raise FileFormatError(f"{os.fspath(path)}: {exc}", argument="path") from exc
+
+
+def public_reader(private: Callable[..., Any]) -> Callable[[_F], _F]:
+    """The public ``read_x(..., on_bad_line="raise", report=None)`` from the private ``x(..., bad)``.
+
+    The decorated function gives the signature, its defaults and the docstring; its body is never run.
+    A call binds its arguments to that signature, makes ``on_bad_line`` and ``report`` into one
+    :class:`BadLines`, calls ``private(**the other arguments, bad=bad)`` and hands the skipped lines
+    over with :meth:`BadLines.done` (whose warning then points at the caller of ``read_x``).
+    """
+
+    def decorate(public: _F) -> _F:
+        signature = inspect.signature(public)
+
+        @functools.wraps(public)
+        def read(*args: Any, **kwargs: Any) -> Any:
+            arguments = signature.bind(*args, **kwargs)
+            arguments.apply_defaults()
+            given = arguments.arguments
+            bad = BadLines(given.pop("on_bad_line"), given.pop("report"))
+            return bad.done(private(**given, bad=bad))
+
+        return read  # type: ignore[return-value]
+
+    return decorate

@@ -21,8 +21,17 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, MissingDependencyError, ParameterError
 from imukit.imu import ImuData
-from imukit.io._euroc import build
-from imukit.io._lines import NS_PER_S, Problem, in_order, ns_text, rotations_from_rows, zero_quaternion
+from imukit.io._format import Format, Head
+from imukit.io._lines import (
+    NS_PER_S,
+    Problem,
+    as_file_error,
+    in_order,
+    ns_text,
+    public_reader,
+    rotations_from_rows,
+    zero_quaternion,
+)
 from imukit.io._report import BadLines, ReadReport
 from imukit.state import Trajectory
 
@@ -263,10 +272,38 @@ def _trajectory(where: str, t_ns: NDArray[np.int64], pose: FloatArray) -> Trajec
     rotation = rotations_from_rows(np.ascontiguousarray(pose[:, 3:7]), [], "")
     # nav_msgs/Odometry's twist is in child_frame_id (body) coordinates: v_w = R_wb v_b.
     velocity = rotation.apply(pose[:, 7:10]) if pose.shape[1] == 10 else None
-    return build(where, lambda: Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns))
+    return as_file_error(where, lambda: Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns))
 
 
-def read_rosbag(
+def rosbag(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    *,
+    imu_topic: str | None,
+    groundtruth_topic: str | None,
+    time_source: str,
+) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_rosbag` reporting to ``bad``."""
+    if time_source not in ("header", "record"):
+        raise ParameterError(f"time_source: expected 'header' or 'record', got {time_source!r}")
+    where = os.fspath(path)
+    with _open(path, "read_rosbag") as reader:
+        topics = _topics(reader)
+        imu_name = _select(reader, topics, imu_topic, "imu_topic", (IMU_TYPE,))
+        if imu_name is None:
+            raise ParameterError(
+                f"imu_topic: the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}"
+            )
+        truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
+        t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
+        truth = None
+        if truth_name is not None:
+            truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
+    return as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth
+
+
+@public_reader(rosbag)
+def read_rosbag(  # type: ignore[empty-body]
     path: str | os.PathLike[str],
     *,
     imu_topic: str | None = None,
@@ -328,20 +365,22 @@ def read_rosbag(
         No such path; not a readable bag, a bad message, a topic without valid messages; a topic
         that is missing, of the wrong type or ambiguous, or a bad option.
     """
-    if time_source not in ("header", "record"):
-        raise ParameterError(f"time_source: expected 'header' or 'record', got {time_source!r}")
-    bad = BadLines(on_bad_line, report)
-    where = os.fspath(path)
-    with _open(path, "read_rosbag") as reader:
-        topics = _topics(reader)
-        imu_name = _select(reader, topics, imu_topic, "imu_topic", (IMU_TYPE,))
-        if imu_name is None:
-            raise ParameterError(
-                f"imu_topic: the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}"
-            )
-        truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
-        t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
-        truth = None
-        if truth_name is not None:
-            truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
-    return bad.done((build(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth))
+
+
+def _detected(path: str | os.PathLike[str], bad: BadLines, **options: Any) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_rosbag` for :func:`imukit.io.read_imu`, looked up when called (tests replace it),
+    its skipped messages handed to ``bad`` (whose warning points at the caller of ``read_imu``)."""
+    report = bad.report if bad.report is not None else ReadReport()
+    result = read_rosbag(path, **options, on_bad_line="skip" if bad.skip else "raise", report=report)
+    if bad.report is None:
+        bad.records += report.skipped
+    return result
+
+
+def _bag_like(path: Path, head: Head) -> bool:
+    return (path.is_dir() and (path / "metadata.yaml").is_file()) or is_bag_path(path)
+
+
+ROSBAG = Format(
+    "rosbag", "imu", _bag_like, _detected, "ROS bag", options=("imu_topic", "groundtruth_topic", "time_source")
+)
