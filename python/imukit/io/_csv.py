@@ -148,7 +148,7 @@ def _read(
         header_line = numbered.pop(0)[0]
     numbered = [(n, text) for n, text in numbered if not text.startswith("#")]
     if not numbered:
-        raise FileFormatError(f"path: {where}: no data lines")
+        raise FileFormatError(f"{where}: no data lines", argument="path")
     width = len(header) if header is not None else len(split(numbered[0][1]))
     index = {
         name: [_index(c, name, header, header_line, width, where) for c in columns] for name, columns in wanted.items()
@@ -196,38 +196,43 @@ def _gravity(value: object) -> float:
     except (TypeError, ValueError):
         g = math.nan
     if not (math.isfinite(g) and g > 0.0):
-        raise ParameterError(f"standard_gravity: expected a positive, finite number of m/s^2 per g, got {value!r}")
+        raise ParameterError(
+            f"expected a positive, finite number of m/s^2 per g, got {value!r}", argument="standard_gravity"
+        )
     return g
 
 
 def _check_columns(columns: object, name: str, count: int) -> None:
     """``columns`` must be ``count`` names or indices (``time_column`` arrives wrapped in a list)."""
     if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        raise ParameterError(f"{name}: expected {count} column names or 0-based indices (x, y, z), got {columns!r}")
+        raise ParameterError(
+            f"expected {count} column names or 0-based indices (x, y, z), got {columns!r}", argument=name
+        )
     for column in columns:
         if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"{name}: expected a column name or a 0-based index (int ≥ 0), got {column!r}")
+            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
 
 
 def _index(column: Column, name: str, header: list[str] | None, line: int, width: int, where: str) -> int:
     if isinstance(column, int):
         if column >= width:
             raise ParameterError(
-                f"{name}: column {column} is out of range: {where} has {width} columns "
-                f"(0-based indices 0 to {width - 1})"
+                f"column {column} is out of range: {where} has {width} columns (0-based indices 0 to {width - 1})",
+                argument=name,
             )
         return column
     if header is None:
         raise ParameterError(
-            f"{name}: column {column!r} is a name, but {where} has no header line (its first line is numbers); "
-            "pass 0-based indices"
+            f"column {column!r} is a name, but {where} has no header line (its first line is numbers); "
+            "pass 0-based indices",
+            argument=name,
         )
     found = [k for k, h in enumerate(header) if h == column]
     if len(found) != 1:
         problem = "no column named" if not found else f"{len(found)} columns named"
         raise ParameterError(
-            f"{name}: {problem} {column!r} in the header of {where} (line {line}), "
-            f"which has {', '.join(map(repr, header))}"
+            f"{problem} {column!r} in the header of {where} (line {line}), which has {', '.join(map(repr, header))}",
+            argument=name,
         )
     return found[0]
 

@@ -7,14 +7,16 @@ path with the first whose sniff accepts it; the "tried …" text of an unknown p
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
+from imukit.io._csv import read_imu_csv
 from imukit.io._euroc import GROUNDTRUTH_CSV, dataset_root
 from imukit.io._format import Format, Head, is_number, shorten
-from imukit.io._lines import integer_stamp, public_reader
+from imukit.io._lines import integer_stamp, public_reader, read_into
 from imukit.io._registry import formats, listing
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.io._tumvi import MOCAP_CSV
@@ -33,11 +35,16 @@ def detect_imu(
     imu_topic: str | None,
     groundtruth_topic: str | None,
     time_source: str | None,
+    csv: Mapping[str, Any] | None,
 ) -> tuple[ImuData, Trajectory | None]:
     """:func:`read_imu` reporting to ``bad``."""
     source, head = Path(path), Head(Path(path))
     options = {"imu_topic": imu_topic, "groundtruth_topic": groundtruth_topic, "time_source": time_source}
     given: dict[str, Any] = {name: value for name, value in options.items() if value is not None}
+    if csv is not None:
+        for name, value in given.items():
+            raise ParameterError(f"{value!r} is for ROS bags, not for a CSV file read by its columns", argument=name)
+        return read_into(bad, read_imu_csv, path, **csv), None
     fmt = _first(source, head, "imu")
     if fmt is None and not source.exists():
         raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
@@ -67,6 +74,7 @@ def read_imu(  # type: ignore[empty-body]
     imu_topic: str | None = None,
     groundtruth_topic: str | None = None,
     time_source: Literal["header", "record"] | None = None,
+    csv: Mapping[str, Any] | None = None,
     on_bad_line: OnBadLine = "raise",
     report: ReadReport | None = None,
 ) -> tuple[ImuData, Trajectory | None]:
@@ -99,6 +107,10 @@ def read_imu(  # type: ignore[empty-body]
         For ROS bags only, passed to :func:`imukit.io.read_rosbag` (None: its defaults, the bag's
         only IMU / ground-truth topic and ``header.stamp`` times); given for any other source they
         are a :class:`ParameterError`, since nothing would use them.
+    csv
+        The keyword arguments of :func:`imukit.io.read_imu_csv` (``time_column``, ``gyro_columns``,
+        ``accel_columns``, units, ``delimiter``): ``path`` is a CSV file of that layout, read by it
+        (no ground truth) instead of found by its format. None (default): detection.
     on_bad_line, report
         Passed to the reader chosen (see :func:`imukit.io.read_euroc_imu`).
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -123,17 +124,19 @@ def write_euroc(
     if truth is not None and not isinstance(truth, Trajectory):
         raise TypeError(f"truth: expected an imukit Trajectory or None, got {type(truth).__name__}")
     if (noise is None) != (rate_hz is None):
-        raise ParameterError("noise: give noise and rate_hz together (for imu0/sensor.yaml), or neither")
+        raise ParameterError("give noise and rate_hz together (for imu0/sensor.yaml), or neither", argument="noise")
     rate = None if rate_hz is None else _rate(rate_hz)
     if noise is not None and not isinstance(noise, ImuNoise):
         raise TypeError(f"noise: expected an imukit ImuNoise, got {type(noise).__name__}")
     if epoch_ns is not None and imu.t_ns is not None and (truth is None or truth.t_ns is not None):
-        raise ParameterError("epoch_ns: offsets float-second stamps, but every stream given has t_ns already")
+        raise ParameterError(
+            "offsets float-second stamps, but every stream given has t_ns already", argument="epoch_ns"
+        )
     epoch = _epoch(epoch_ns)
     imu_ns = _stamps_ns(imu.t_ns, imu.t, epoch, "imu")
     gt_rows = None if truth is None else _groundtruth_rows(truth, truth_bias, epoch)
     if truth is None and truth_bias is not None:
-        raise ParameterError("truth_bias: given without truth")
+        raise ParameterError("given without truth", argument="truth_bias")
 
     root = Path(folder)
     (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
@@ -159,19 +162,20 @@ def _groundtruth_rows(
     truth: Trajectory, truth_bias: ImuBias | None, epoch: int
 ) -> tuple[NDArray[np.int64], FloatArray]:
     if truth.velocity is None:
-        raise ParameterError("truth: has no velocity, but EuRoC's ground truth has v_RS_R columns")
+        raise ParameterError("has no velocity, but EuRoC's ground truth has v_RS_R columns", argument="truth")
     if truth.gyro_bias is None or truth.accel_bias is None:
         if truth_bias is None:
             raise ParameterError(
-                "truth: has no gyro_bias / accel_bias histories for EuRoC's b_w_RS_S / b_a_RS_S columns; "
-                "pass truth_bias=ImuBias(...) to write a constant bias (ImuBias() for zeros)"
+                "has no gyro_bias / accel_bias histories for EuRoC's b_w_RS_S / b_a_RS_S columns; "
+                "pass truth_bias=ImuBias(...) to write a constant bias (ImuBias() for zeros)",
+                argument="truth",
             )
         if not isinstance(truth_bias, ImuBias):
             raise TypeError(f"truth_bias: expected an imukit ImuBias, got {type(truth_bias).__name__}")
         n = len(truth)
         biases = [np.broadcast_to(truth_bias.gyro, (n, 3)), np.broadcast_to(truth_bias.accel, (n, 3))]
     elif truth_bias is not None:
-        raise ParameterError("truth_bias: truth has bias histories already; pass one or the other")
+        raise ParameterError("truth has bias histories already; pass one or the other", argument="truth_bias")
     else:
         biases = [truth.gyro_bias, truth.accel_bias]
     quat_wxyz = truth.rotation.as_quat()[:, [3, 0, 1, 2]]
@@ -183,9 +187,9 @@ def _epoch(epoch_ns: int | None) -> int:
     if epoch_ns is None:
         return 0
     if not isinstance(epoch_ns, (int, np.integer)) or isinstance(epoch_ns, bool):
-        raise ParameterError(f"epoch_ns: expected an integer number of nanoseconds, got {epoch_ns!r}")
+        raise ParameterError(f"expected an integer number of nanoseconds, got {epoch_ns!r}", argument="epoch_ns")
     if not INT64_MIN <= int(epoch_ns) <= INT64_MAX:
-        raise ParameterError(f"epoch_ns: {epoch_ns} is outside the int64 range")
+        raise ParameterError(f"{epoch_ns} is outside the int64 range", argument="epoch_ns")
     return int(epoch_ns)
 
 
@@ -200,16 +204,17 @@ def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: 
     last = (int(whole[-1]) + epoch_s) * 10**9 + int(frac_ns[-1]) + epoch_rest
     if first < INT64_MIN or last > INT64_MAX:
         raise ParameterError(
-            f"{name}: float stamps {float(t[0])!r} … {float(t[-1])!r} s with epoch_ns = {epoch} "
-            "do not fit int64 nanoseconds"
+            f"float stamps {float(t[0])!r} … {float(t[-1])!r} s with epoch_ns = {epoch} do not fit int64 nanoseconds",
+            argument=name,
         )
     ns = (whole.astype(np.int64) + epoch_s) * 10**9 + (frac_ns.astype(np.int64) + epoch_rest)
     same = np.flatnonzero(np.diff(ns) <= 0)
     if same.size:
         k = int(same[0])
         raise TimestampError(
-            f"{name}: samples {k} and {k + 1} ({float(t[k])!r} and {float(t[k + 1])!r} s) "
-            f"fall on the same nanosecond {int(ns[k])}"
+            f"samples {k} and {k + 1} ({float(t[k])!r} and {float(t[k + 1])!r} s) "
+            f"fall on the same nanosecond {int(ns[k])}",
+            argument=name,
         )
     return ns
 
@@ -298,7 +303,8 @@ def euroc_extrinsics(sensor: KalibrImu, *, where: str = "sensor.yaml") -> FloatA
     numbers = [_finite(x) for x in data] if isinstance(data, list) else []
     if shape != (4, 4) or len(numbers) != 16 or None in numbers:
         raise FileFormatError(
-            f"path: {where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}"
+            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}",
+            argument="path",
         )
     return np.array(numbers, dtype=np.float64).reshape(4, 4)
 
@@ -451,13 +457,14 @@ def dataset_root(path: str | os.PathLike[str]) -> Path | None:
     return None
 
 
-def _groundtruth_of(folder: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    return euroc_groundtruth(mav0_root(folder) / GROUNDTRUTH_CSV, bad)
+def dataset_file(name: str, file: Path, read: Callable[..., Any], description: str) -> Format:
+    """The trajectory format of a dataset folder (or its ``mav0/``) holding ``file``, read by ``read``."""
 
+    def holds(path: Path, head: Head) -> bool:
+        root = dataset_root(path)
+        return root is not None and (root / file).is_file()
 
-def _has_groundtruth(path: Path, head: Head) -> bool:
-    root = dataset_root(path)
-    return root is not None and (root / GROUNDTRUTH_CSV).is_file()
+    return Format(name, "trajectory", holds, lambda folder, bad: read(mav0_root(folder) / file, bad), description)
 
 
 def _imu_csv_like(path: Path, head: Head) -> bool:
@@ -465,16 +472,12 @@ def _imu_csv_like(path: Path, head: Head) -> bool:
     return len(fields) == 7 and integer_stamp(fields[0].strip()) is not None
 
 
-DATASET = "EuRoC / TUM-VI folder or imu0/data.csv"  # the description of the EuRoC-layout formats
+# The descriptions of the formats (folders and files share one: listed once).
+DATASET = "EuRoC / TUM-VI folder or imu0/data.csv"
+GROUNDTRUTH = "EuRoC ground truth"
 EUROC_FOLDER = Format("euroc-folder", "imu", lambda path, head: dataset_root(path) is not None, euroc_folder, DATASET)
 EUROC_IMU_CSV = Format("euroc-imu-csv", "imu", _imu_csv_like, euroc_imu, DATASET)
-EUROC_GROUNDTRUTH_FOLDER = Format(
-    "euroc-groundtruth-folder", "trajectory", _has_groundtruth, _groundtruth_of, "EuRoC ground truth"
-)
+EUROC_GROUNDTRUTH_FOLDER = dataset_file("euroc-groundtruth-folder", GROUNDTRUTH_CSV, euroc_groundtruth, GROUNDTRUTH)
 EUROC_GROUNDTRUTH = Format(
-    "euroc-groundtruth",
-    "trajectory",
-    lambda path, head: len(head.fields(",")) == 17,
-    euroc_groundtruth,
-    "EuRoC ground truth",
+    "euroc-groundtruth", "trajectory", lambda path, head: len(head.fields(",")) == 17, euroc_groundtruth, GROUNDTRUTH
 )

@@ -114,9 +114,10 @@ def _check_dt(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:
     if off.size:
         k = int(off[0]) + 1
         raise FileFormatError(
-            f"path: {where}, line {rows.lines[k]}: dt = {float(data[k, 1])!r} s, but the stamps step by "
+            f"{where}, line {rows.lines[k]}: dt = {float(data[k, 1])!r} s, but the stamps step by "
             f"{float(step[k - 1])!r} s since line {rows.lines[k - 1]}; read_gtsam_imu expects GTSAM's "
-            "dt[k] = t[k] - t[k-1] (read_imu_csv reads the file without its dt)"
+            "dt[k] = t[k] - t[k-1] (read_imu_csv reads the file without its dt)",
+            argument="path",
         )
 
 

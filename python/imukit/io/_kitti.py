@@ -32,8 +32,9 @@ def kitti_poses(poses_path: str | os.PathLike[str], times_path: str | os.PathLik
     pose_lines, time_lines = list(data_lines(poses_path)), list(data_lines(times_path))
     if len(pose_lines) != len(time_lines):
         raise FileFormatError(
-            f"path: {os.fspath(poses_path)}: {len(pose_lines)} pose lines, but {os.fspath(times_path)} has "
-            f"{len(time_lines)} time lines (line k of each belong together)"
+            f"{os.fspath(poses_path)}: {len(pose_lines)} pose lines, but {os.fspath(times_path)} has "
+            f"{len(time_lines)} time lines (line k of each belong together)",
+            argument="path",
         )
     poses = parse_rows(
         pose_lines,

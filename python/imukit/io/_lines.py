@@ -31,7 +31,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, rotation_from_unit_quat
 from imukit._errors import FileFormatError, ImukitError
-from imukit.io._report import BadLines
+from imukit.io._report import BadLines, ReadReport
 
 NS_PER_S = 1_000_000_000
 INT64_MIN = -(2**63)
@@ -238,7 +238,7 @@ def ns_text(ns: int) -> str:
 def require_rows(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:
     """:class:`FileFormatError` when no line is left (saying how many were skipped)."""
     if not rows.lines:
-        raise FileFormatError(f"path: {os.fspath(path)}: no data lines{bad.skipped_in(path)}")
+        raise FileFormatError(f"{os.fspath(path)}: no data lines{bad.skipped_in(path)}", argument="path")
 
 
 def zero_quaternion(quat: Sequence[float]) -> Problem | None:
@@ -263,7 +263,9 @@ def rotations_from_rows(quat: FloatArray, lines: Sequence[int], where: str) -> R
     extreme = np.flatnonzero(off & ~plain)
     largest = np.abs(quat[extreme]).max(axis=1, initial=0.0)
     if np.any(largest == 0.0):
-        raise FileFormatError(f"path: {where}, line {lines[int(extreme[largest == 0.0][0])]}: zero quaternion")
+        raise FileFormatError(
+            f"{where}, line {lines[int(extreme[largest == 0.0][0])]}: zero quaternion", argument="path"
+        )
     scaled = quat[extreme] / largest[:, None]
     quat[extreme] = scaled / np.linalg.norm(scaled, axis=1)[:, None]
     return rotation_from_unit_quat(quat)
@@ -317,3 +319,13 @@ def public_reader(private: Callable[..., Any]) -> Callable[[_F], _F]:
         return read  # type: ignore[return-value]
 
     return decorate
+
+
+def read_into(bad: BadLines, read: Callable[..., _T], *args: Any, **options: Any) -> _T:
+    """``read(*args, **options)``, a public reader, in ``bad``'s mode, its skipped lines handed to ``bad``
+    (so that a reader calling another one warns once, at its own caller)."""
+    report = bad.report if bad.report is not None else ReadReport()
+    result = read(*args, **options, on_bad_line="skip" if bad.skip else "raise", report=report)
+    if bad.report is None:
+        bad.records += report.skipped
+    return result

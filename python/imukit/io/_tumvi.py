@@ -13,7 +13,7 @@ import numpy as np
 
 from imukit._errors import FileFormatError
 from imukit.imu import ImuData
-from imukit.io._euroc import DATASET, IMU_CSV, dataset_root, euroc_imu, mav0_root, read_stamped_csv
+from imukit.io._euroc import DATASET, IMU_CSV, dataset_file, euroc_imu, mav0_root, read_stamped_csv
 from imukit.io._format import Format, Head, is_number, shorten
 from imukit.io._lines import as_file_error, public_reader, rotations_from_rows
 from imukit.io._report import BadLines, OnBadLine, ReadReport
@@ -75,15 +75,6 @@ def tumvi_mocap(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     return as_file_error(path, lambda: Trajectory(None, values[:, 0:3], None, rotation, t_ns=t_ns))
 
 
-def _mocap_of(folder: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    return tumvi_mocap(mav0_root(folder) / MOCAP_CSV, bad)
-
-
-def _has_mocap(path: Path, head: Head) -> bool:
-    root = dataset_root(path)
-    return root is not None and (root / MOCAP_CSV).is_file()
-
-
 def _mocap_like(path: Path, head: Head) -> bool:
     """8 comma-separated fields; read as TUM-VI mocap (w x y z) only when a header line says so."""
     if len(head.fields(",")) != 8:
@@ -113,6 +104,6 @@ def _mocap_like(path: Path, head: Head) -> bool:
     )
 
 
-TUMVI_FOLDER = Format("tumvi-folder", "imu", _has_mocap, tumvi_folder, DATASET)
-TUMVI_MOCAP_FOLDER = Format("tumvi-mocap-folder", "trajectory", _has_mocap, _mocap_of, "TUM-VI mocap")
+TUMVI_MOCAP_FOLDER = dataset_file("tumvi-mocap-folder", MOCAP_CSV, tumvi_mocap, "TUM-VI mocap")
+TUMVI_FOLDER = Format("tumvi-folder", "imu", TUMVI_MOCAP_FOLDER.sniff, tumvi_folder, DATASET)
 TUMVI_MOCAP = Format("tumvi-mocap", "trajectory", _mocap_like, tumvi_mocap, "TUM-VI mocap")
