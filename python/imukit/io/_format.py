@@ -1,20 +1,20 @@
 """What a file format is to detection: a :class:`Format` (``docs/io.md``, "Adding a format").
 
-=============  ==================================================================================
-``name``       unique, e.g. ``"euroc-imu-csv"`` (:func:`imukit.io.unregister_format` takes it)
-``kind``       what ``read`` returns: ``"imu"`` ``(ImuData, Trajectory | None)``, ``"trajectory"``
-               a ``Trajectory``; ``"both"`` ``(ImuData, Trajectory | None)``, whose trajectory
-               :func:`imukit.io.read_trajectory` takes
-``sniff``      ``sniff(path, head) -> bool``: whether ``path`` is of this format, from its name or
-               layout, or its first lines (:class:`Head`); may raise :class:`FileFormatError` for a
-               file it recognises but cannot read safely (a pose CSV whose quaternion order is not
-               said)
-``read``       ``read(path, bad, **options)``: the private reader, reporting bad lines to ``bad``
-               (:class:`imukit.io._report.BadLines`); ``options`` are the ones named in ``options``
-``description`` one line for the "tried …" error text and the CLI's help (formats that share it
-               are listed once)
-``options``    the keyword options of :func:`imukit.io.read_imu` the reader takes (ROS bags' topics)
-=============  ==================================================================================
+===============  ================================================================================
+``name``         unique, e.g. ``"euroc-imu-csv"`` (:func:`imukit.io.unregister_format` takes it)
+``kind``         what ``read`` returns: ``"imu"`` ``ImuData`` or ``(ImuData, Trajectory | None)``,
+                 ``"trajectory"`` a ``Trajectory``, ``"both"`` ``(ImuData, Trajectory | None)``
+                 (:func:`imukit.io.read_trajectory` takes its trajectory)
+``sniff``        ``sniff(path, head) -> bool``: whether ``path`` is of this format, from its name or
+                 layout, or its first lines (:class:`Head`); may raise :class:`FileFormatError` for
+                 a file it recognises but cannot read safely (a pose CSV whose quaternion order is
+                 not said)
+``read``         ``read(path, bad, **options)``: the private reader, reporting bad lines to ``bad``
+                 (:class:`imukit.io._report.BadLines`); ``options`` as named in ``options``
+``description``  one line for the "tried …" error text and the CLI's help (formats that share it
+                 are listed once)
+``options``      the keyword options of :func:`imukit.io.read_imu` the reader takes (ROS bags' topics)
+===============  ================================================================================
 """
 
 from __future__ import annotations

@@ -3,9 +3,9 @@
 A path goes to the first format whose ``sniff`` accepts it (:class:`imukit.io.Format`); the
 "tried …" text of an unknown file and the CLI's list of inputs are made from the same list, so a
 format added here (or with :func:`register_format`) is detected, named and listed at once. The
-built-in sniffs do not overlap (by layout, file name, field count), so their order decides only
-which description comes first; a dataset folder with both ground truth and motion capture gives
-its EuRoC ground truth to ``read_trajectory``, its IMU and mocap (TUM-VI) to ``read_imu``.
+built-in sniffs tell formats apart by layout, file name and field count; where two accept the same
+path the first wins: TUM-VI's folder (with ``mocap0/``) comes before EuRoC's, and a folder with
+both ground truth and motion capture gives its EuRoC ground truth to ``read_trajectory``.
 """
 
 from __future__ import annotations
