@@ -164,7 +164,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "ReadReport": _report,
     "SkippedLine": lambda: _report().skipped[0],
     "SkippedLinesWarning": lambda: ik.io.SkippedLinesWarning("1 line skipped in imu.csv: 1 malformed"),
-    "Gap": lambda: ik.io.find_gaps(ik.ImuData([0.0, 0.01, 0.02, 0.5], [[0.0, 0.0, 0.0]] * 4, [[0.0, 0.0, 9.81]] * 4))[0],
+    "Gap": lambda: ik.io.find_gaps(ik.ImuData([0.0, 0.01, 0.02, 0.5], [[0.0] * 3] * 4, [[0.0, 0.0, 9.81]] * 4))[0],
     "KalibrImu": lambda: ik.io.KalibrImu(NOISE, 200.0, {"rostopic": "/imu0", "T_BS": [[1.0, 0.0], [0.0, 1.0]]}),
     # imukit.filters: options, the saved state and the result
     "GainRamp": lambda: ik.filters.GainRamp(),
