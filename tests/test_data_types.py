@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -440,3 +441,40 @@ def test_trajectory_carries_optional_bias_histories() -> None:
         ik.Trajectory(t, np.zeros((3, 3)), None, rot, gyro_bias=bg)
     with pytest.raises(ik.ShapeError, match=r"accel_bias: expected shape \(N, 3\) with N = len\(t\) = 3"):
         ik.Trajectory(t, np.zeros((3, 3)), None, rot, gyro_bias=bg, accel_bias=np.zeros((2, 3)))
+
+
+def test_trajectory_write_tum_is_a_deprecated_alias_of_io_write_tum(tmp_path: Path) -> None:
+    traj = make_trajectory()
+    with pytest.warns(DeprecationWarning, match=r"use imukit\.io\.write_tum\(trajectory, path\)"):
+        traj.write_tum(tmp_path / "alias.txt")
+    ik.io.write_tum(traj, tmp_path / "io.txt")
+    assert (tmp_path / "alias.txt").read_text() == (tmp_path / "io.txt").read_text()
+
+
+def test_trajectory_takes_integer_nanoseconds_as_t_like_imudata() -> None:
+    t_ns = 1_400_000_000_000_000_000 + 5_000_192 * np.arange(3)
+    pos, rot = np.arange(9.0).reshape(3, 3), Rotation.identity(3)
+    by_dtype = ik.Trajectory(t_ns, pos, None, rot)
+    by_keyword = ik.Trajectory(None, pos, None, rot, t_ns=t_ns)
+    assert by_dtype.t_ns is not None and by_dtype.t_ns.dtype == np.int64
+    assert np.array_equal(by_dtype.t_ns, t_ns) and np.array_equal(by_dtype.t, by_keyword.t)
+    imu = ik.ImuData(t_ns, np.zeros((3, 3)), np.zeros((3, 3)))
+    assert np.array_equal(by_dtype.t, imu.t)
+    with pytest.raises(ik.ParameterError, match=r"^t_ns: integer timestamps are read as nanoseconds"):
+        ik.Trajectory(None, pos, None, rot, t_ns=np.arange(3))
+
+
+def test_the_nanosecond_rule_is_one_constant() -> None:
+    from imukit._arrays import MIN_NS_STEP
+
+    step = np.arange(4) * MIN_NS_STEP
+    assert ik.ImuData(step, np.zeros((4, 3)), np.zeros((4, 3))).t_ns is not None
+    assert ik.Trajectory(step, np.zeros((4, 3)), None, Rotation.identity(4)).t_ns is not None
+    assert len(ik.integrate_attitude(step, np.zeros((4, 3)))) == 4
+    finer = np.arange(4) * (MIN_NS_STEP - 1)
+    with pytest.raises(ik.ParameterError, match=r"^t: integer timestamps are read as nanoseconds"):
+        ik.ImuData(finer, np.zeros((4, 3)), np.zeros((4, 3)))
+    with pytest.raises(ik.ParameterError, match=r"^t: integer timestamps are read as nanoseconds"):
+        ik.integrate_attitude(finer, np.zeros((4, 3)))
+    with pytest.raises(ik.DTypeError, match=r"^t: expected float seconds, got an array of dtype int64"):
+        ik.Trajectory(finer, np.zeros((4, 3)), None, Rotation.identity(4))

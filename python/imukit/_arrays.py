@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -140,31 +140,107 @@ def rotation_from_unit_quat(q: FloatArray) -> Rotation:
         return Rotation.from_quat(q)
 
 
-def timestamps_seconds(t: ArrayLike, name: str = "t") -> FloatArray:
-    """Float seconds from float64 seconds or int64 nanoseconds (relative to the first sample).
+# Integer stamps whose median step is below this many ns are almost surely not nanoseconds but
+# seconds or sample indices given as integers: every integer-stamp input refuses them.
+MIN_NS_STEP = 1000
+# Largest |t - t_ns/1e9| accepted when both clocks are given: catches relative-vs-epoch mix-ups.
+_T_NS_TOLERANCE_S = 1e-6
 
-    Integer timestamps are nanoseconds (EuRoC / ROS style); they are converted as offsets from
-    the first stamp, so a 1e18 ns epoch loses nothing. Integer steps under 1 µs are refused:
-    they are almost surely seconds or sample indices given as integers. The stamps must be
-    finite, strictly increasing and at least one (:class:`TimestampError` etc. naming ``name``).
+
+class Stamps(NamedTuple):
+    """Validated sample times (:func:`as_stamps`).
+
+    ``t`` float64 seconds: the float input, or ``t_ns / 1e9`` (nearest float); ``t_ns`` int64
+    nanoseconds for integer input, else None.
     """
-    raw = np.asarray(t)
+
+    t: FloatArray
+    t_ns: NDArray[np.int64] | None
+
+    @property
+    def seconds(self) -> FloatArray:
+        """The clock the integrators consume: float input as given; with ``t_ns``, exact offsets from
+        the first stamp (an epoch in float64 resolves only ~0.24 µs)."""
+        return self.t if self.t_ns is None else seconds_from_ns(self.t_ns - self.t_ns[:1])
+
+
+def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str = "t") -> Stamps:
+    """Sample times from float64 seconds or integer nanoseconds (told apart by dtype), or from both
+    clocks: ``t`` float seconds with ``t_ns`` integer nanoseconds of the same instants (agreeing to
+    1 µs, so relative seconds cannot be paired with epoch stamps), or ``t=None`` and ``t_ns``.
+
+    Integer stamps must be within int64 and have a median step of at least :data:`MIN_NS_STEP` ns;
+    every clock must hold N ≥ 1 finite, strictly increasing stamps (:class:`TimestampError` etc.
+    naming the argument and the first bad sample).
+    """
+    if t_ns is None:
+        if t is None:
+            raise ParameterError(f"{name}: expected (N,) float seconds; {name} may be None only when t_ns is given")
+        raw = _stamp_array(t, name)
+        if raw.dtype.kind in "iu":
+            stamps = nanoseconds(raw, name)
+            return Stamps(seconds_from_ns(stamps), stamps)
+        if raw.dtype.kind != "f":
+            what = f"float seconds or integer nanoseconds, got an array of dtype {raw.dtype}"
+            raise DTypeError(f"expected {what}", argument=name)
+        return Stamps(float_seconds(raw, name), None)
+    stamps = nanoseconds(_stamp_array(t_ns, "t_ns"), "t_ns")
+    if t is None:
+        return Stamps(seconds_from_ns(stamps), stamps)
+    seconds = float_seconds(t, name)
+    if stamps.shape != seconds.shape:
+        raise ShapeError(f"t_ns: expected shape (N,) with N = len({name}) = {len(seconds)}, got {stamps.shape}")
+    off = np.abs(seconds - seconds_from_ns(stamps))
+    if off.max() > _T_NS_TOLERANCE_S:
+        k = int(np.argmax(off))
+        raise TimestampError(
+            f"t_ns: sample {k} is {stamps[k]} ns but {name}[{k}] = {float(seconds[k])!r} s "
+            f"(off by {off[k]:.3g} s; {name} must be t_ns / 1e9, not relative seconds)"
+        )
+    return Stamps(seconds, stamps)
+
+
+def _stamp_array(x: ArrayLike, name: str) -> NDArray[Any]:
+    raw = np.asarray(x)
     if raw.ndim != 1 or len(raw) == 0:
         raise ShapeError(f"{name}: expected shape (N,) with N ≥ 1, got {raw.shape}")
-    if raw.dtype.kind in "iu":
-        stamps = int64_stamps(raw, name)
-        if len(stamps) > 1:
-            steps = np.diff(stamps)
-            if np.median(steps) < 1000:
-                raise ParameterError(
-                    f"{name}: integer timestamps are read as nanoseconds, but the median step is "
-                    f"{np.median(steps)} ns; pass float seconds instead"
-                )
-        return seconds_from_ns(stamps - stamps[:1])
-    seconds = np.ascontiguousarray(as_float_array(raw, name))
+    return raw
+
+
+def float_seconds(x: ArrayLike, name: str) -> FloatArray:
+    """``x`` as (N,) finite, strictly increasing float64 seconds, N ≥ 1; only a float dtype qualifies."""
+    raw = _stamp_array(x, name)
+    if raw.dtype.kind != "f":
+        raise DTypeError(f"expected float seconds, got an array of dtype {raw.dtype}", argument=name)
+    seconds = np.ascontiguousarray(raw, dtype=np.float64)
     check_finite_rows(seconds, name)
     check_increasing(seconds, name, "s")
     return seconds
+
+
+def nanoseconds(raw: NDArray[Any], name: str) -> NDArray[np.int64]:
+    """Integer stamps as int64 nanoseconds (:func:`int64_stamps`) whose median step is at least
+    :data:`MIN_NS_STEP`; other dtypes are a :class:`DTypeError`."""
+    if raw.dtype.kind not in "iu":
+        raise DTypeError(f"expected integer nanoseconds, got an array of dtype {raw.dtype}", argument=name)
+    stamps = int64_stamps(raw, name)
+    median = too_fine_for_ns(stamps)
+    if median is not None:
+        raise ParameterError(
+            f"integer timestamps are read as nanoseconds, but the median step is {median} ns; "
+            "pass float seconds instead",
+            argument=name,
+        )
+    return stamps
+
+
+def too_fine_for_ns(stamps: NDArray[np.int64]) -> float | None:
+    """The median step of int64 ``stamps`` when it is under :data:`MIN_NS_STEP` (they are not
+    nanoseconds), else None."""
+    if len(stamps) < 2:
+        return None
+    median = float(np.median(np.diff(stamps)))
+    return median if median < MIN_NS_STEP else None
 
 
 def int64_stamps(raw: NDArray[Any], name: str) -> NDArray[np.int64]:

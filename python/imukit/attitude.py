@@ -14,11 +14,11 @@ from scipy.spatial.transform import Rotation
 from imukit import _core
 from imukit._arrays import (
     as_float_array,
+    as_stamps,
     check_tail,
     choice,
     real_scalar,
     rotation_from_unit_quat,
-    timestamps_seconds,
 )
 from imukit._errors import ParameterError, ShapeError
 
@@ -76,7 +76,7 @@ def integrate_attitude(
     """
     choice(scheme, "scheme", SCHEMES)
     choice(representation, "representation", REPRESENTATIONS)
-    seconds = timestamps_seconds(t)
+    seconds = as_stamps(t).seconds
     rates = as_float_array(gyro, "gyro")
     check_tail(rates, "gyro", (3,))
     if rates.shape != (len(seconds), 3):

@@ -21,25 +21,14 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imukit._arrays import (
-    FloatArray,
-    check_finite_rows,
-    check_increasing,
-    int64_stamps,
-    readonly_array,
-    readonly_copy,
-    real_scalar,
-    seconds_from_ns,
-)
-from imukit._errors import DTypeError, NonFiniteError, ParameterError, ShapeError, TimestampError
+from imukit._arrays import FloatArray, as_stamps, readonly_array, readonly_copy, real_scalar
+from imukit._errors import NonFiniteError, ShapeError, TimestampError
+from imukit._frozen import Frozen
 
 __all__ = ["DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "ImuNoise"]
 
-# Integer stamps whose median step is below this many ns are almost surely not nanoseconds.
-_MIN_NS_STEP = 1000
 
-
-class ImuData:
+class ImuData(Frozen):
     """Validated, immutable IMU samples: ``t`` (N,), ``gyro`` (N, 3) [rad/s], ``accel`` (N, 3) [m/s²].
 
     Parameters
@@ -84,6 +73,7 @@ class ImuData:
     """
 
     __slots__ = ("_seconds", "accel", "accel_range", "gyro", "gyro_range", "t", "t_ns")
+    _fields = ("t", "t_ns", "gyro", "accel", "_seconds", "gyro_range", "accel_range")
 
     t: FloatArray
     t_ns: NDArray[np.int64] | None
@@ -103,29 +93,9 @@ class ImuData:
         gyro_range: float | None = None,
         accel_range: float | None = None,
     ) -> None:
-        raw = np.asarray(t)
-        if raw.ndim != 1 or len(raw) == 0:
-            raise ShapeError(f"t: expected shape (N,) with N ≥ 1, got {raw.shape}")
-        if raw.dtype.kind in "iu":
-            t_ns = int64_stamps(raw, "t")
-            steps_ns = np.diff(t_ns)
-            if len(steps_ns) and np.median(steps_ns) < _MIN_NS_STEP:
-                raise ParameterError(
-                    f"t: integer timestamps are read as nanoseconds, but the median step is "
-                    f"{np.median(steps_ns)} ns; pass float seconds instead"
-                )
-            seconds = seconds_from_ns(t_ns - t_ns[0])
-            t_s = seconds_from_ns(t_ns)
-            frozen_ns: NDArray[np.int64] | None = readonly_copy(t_ns)
-        elif raw.dtype.kind == "f":
-            t_s = raw.astype(np.float64)
-            check_finite_rows(t_s, "t")
-            check_increasing(t_s, "t", "s")
-            seconds = t_s - t_s[0]
-            frozen_ns = None
-        else:
-            raise DTypeError(f"t: expected float seconds or integer nanoseconds, got an array of dtype {raw.dtype}")
-        n = len(raw)
+        stamps = as_stamps(t)
+        seconds = stamps.seconds - stamps.seconds[0]
+        n = len(seconds)
         gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")
         accel_arr = readonly_array(accel, "accel", (n, 3), f"(N, 3) with N = len(t) = {n}")
         if max_gap is not None:
@@ -134,24 +104,11 @@ class ImuData:
             over = np.flatnonzero(steps > gap)
             if over.size:
                 k = int(over[0])
-                step = f"{steps[k]:.12g} s" if frozen_ns is None else f"{int(frozen_ns[k + 1] - frozen_ns[k])} ns"
+                ns = stamps.t_ns
+                step = f"{steps[k]:.12g} s" if ns is None else f"{int(ns[k + 1] - ns[k])} ns"
                 raise TimestampError(f"t: gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s")
-        set_ = object.__setattr__
-        set_(self, "t", readonly_copy(t_s))
-        set_(self, "t_ns", frozen_ns)
-        set_(self, "gyro", gyro_arr)
-        set_(self, "accel", accel_arr)
-        set_(self, "_seconds", readonly_copy(seconds))
-        self._set_ranges(gyro_range, accel_range)
-
-    def _set_ranges(self, gyro_range: float | None, accel_range: float | None) -> None:
-        for name, value in (("gyro_range", gyro_range), ("accel_range", accel_range)):
-            what = "a positive, finite full-scale range or None"
-            checked = None if value is None else _number(value, name, positive=True, what=what)
-            object.__setattr__(self, name, checked)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError(f"ImuData is immutable: cannot set {name!r}")
+        # t may be the caller's array; t_ns and seconds are fresh.
+        self._set(readonly_copy(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *_ranges(gyro_range, accel_range))
 
     @classmethod
     def _from_core(
@@ -165,14 +122,7 @@ class ImuData:
         """Samples the compiled core has just produced, without validating or copying them (fresh,
         finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
         simulating them). The arrays are made read-only here and must not be shared elsewhere."""
-        imu = object.__new__(cls)
-        seconds = t - t[0]
-        for name, value in (("t", t), ("t_ns", None), ("gyro", gyro), ("accel", accel), ("_seconds", seconds)):
-            if value is not None:
-                value.setflags(write=False)
-            object.__setattr__(imu, name, value)
-        imu._set_ranges(gyro_range, accel_range)
-        return imu
+        return cls._from_validated(t, None, gyro, accel, t - t[0], *_ranges(gyro_range, accel_range))
 
     @property
     def gyro_saturated(self) -> NDArray[np.bool_]:
@@ -232,6 +182,15 @@ class ImuData:
         return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps})"
 
 
+def _ranges(gyro_range: float | None, accel_range: float | None) -> tuple[float | None, float | None]:
+    what = "a positive, finite full-scale range or None"
+    gyro, accel = (
+        None if value is None else _number(value, name, positive=True, what=what)
+        for name, value in (("gyro_range", gyro_range), ("accel_range", accel_range))
+    )
+    return gyro, accel
+
+
 def _at_range(values: FloatArray, full_scale: float | None) -> NDArray[np.bool_]:
     flags: NDArray[np.bool_] = np.zeros(len(values), dtype=bool)
     if full_scale is not None:
@@ -240,7 +199,7 @@ def _at_range(values: FloatArray, full_scale: float | None) -> NDArray[np.bool_]
     return flags
 
 
-class ImuBias:
+class ImuBias(Frozen):
     """Constant IMU biases in the body frame: ``gyro`` (3,) [rad/s], ``accel`` (3,) [m/s²]; immutable.
 
     The measurement model is ``ω_m = ω_b + b_g + n_g`` and ``a_m = R_wbᵀ (a_w − g_w) + b_a + n_a``,
@@ -248,16 +207,16 @@ class ImuBias:
     """
 
     __slots__ = ("accel", "gyro")
+    _fields = ("gyro", "accel")
 
     gyro: FloatArray
     accel: FloatArray
 
     def __init__(self, gyro: ArrayLike = (0.0, 0.0, 0.0), accel: ArrayLike = (0.0, 0.0, 0.0)) -> None:
-        object.__setattr__(self, "gyro", readonly_array(gyro, "gyro", (3,), "(3,)", "element"))
-        object.__setattr__(self, "accel", readonly_array(accel, "accel", (3,), "(3,)", "element"))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError(f"ImuBias is immutable: cannot set {name!r}")
+        self._set(
+            readonly_array(gyro, "gyro", (3,), "(3,)", "element"),
+            readonly_array(accel, "accel", (3,), "(3,)", "element"),
+        )
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, ImuBias):

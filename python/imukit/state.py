@@ -15,37 +15,37 @@ from __future__ import annotations
 
 import operator
 import os
+import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import (
+    MIN_NS_STEP,
     FloatArray,
-    check_finite_rows,
-    check_increasing,
+    Stamps,
+    as_stamps,
+    float_seconds,
     int64_stamps,
     readonly_array,
     readonly_copy,
     rotation_from_unit_quat,
-    seconds_from_ns,
+    too_fine_for_ns,
 )
-from imukit._errors import DTypeError, ParameterError, ShapeError, TimestampError
+from imukit._errors import DTypeError, ParameterError, ShapeError
+from imukit._frozen import Frozen
 
 __all__ = ["NavState", "Trajectory"]
 
-# Largest |t - t_ns/1e9| accepted when both are given: catches relative-vs-epoch mix-ups.
-_T_NS_TOLERANCE_S = 1e-6
-# Integer stamps whose median step is below this many ns are almost surely not nanoseconds (as in ImuData).
-_MIN_NS_STEP = 1000
 
-
-class NavState:
+class NavState(Frozen):
     """One navigation state: ``position`` (3,) [m], ``velocity`` (3,) [m/s] in the world frame, and
     ``rotation`` R_wb (a single scipy ``Rotation``, body to world). Immutable; arrays are read-only.
     """
 
     __slots__ = ("position", "rotation", "velocity")
+    _fields = ("position", "velocity", "rotation")
 
     position: FloatArray
     velocity: FloatArray
@@ -54,12 +54,8 @@ class NavState:
     def __init__(self, position: ArrayLike, velocity: ArrayLike, rotation: Rotation) -> None:
         if not (isinstance(rotation, Rotation) and rotation.single):
             raise ParameterError(f"rotation: expected a single scipy Rotation, got {rotation!r}")
-        object.__setattr__(self, "position", readonly_array(position, "position", (3,), "(3,)", "element"))
-        object.__setattr__(self, "velocity", readonly_array(velocity, "velocity", (3,), "(3,)", "element"))
-        object.__setattr__(self, "rotation", rotation)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError(f"NavState is immutable: cannot set {name!r}")
+        p = readonly_array(position, "position", (3,), "(3,)", "element")
+        self._set(p, readonly_array(velocity, "velocity", (3,), "(3,)", "element"), rotation)
 
     def __repr__(self) -> str:
         return (
@@ -68,15 +64,15 @@ class NavState:
         )
 
 
-class Trajectory:
+class Trajectory(Frozen):
     """N timed navigation states, with an optional covariance history. Immutable; arrays read-only.
 
     Parameters
     ----------
     t
-        ``(N,)`` float **seconds**, strictly increasing, N ≥ 1 (integer nanoseconds go in ``t_ns``).
-        May be None when ``t_ns`` is given: it is then ``t_ns / 1e9`` (nearest float), as in
-        :class:`imukit.ImuData`.
+        ``(N,)`` sample times, strictly increasing, N ≥ 1: float **seconds**, or integer
+        **nanoseconds** (the dtype decides, as in :class:`imukit.ImuData`: ``t`` is then
+        ``t_ns / 1e9``, nearest float, and ``t_ns`` the integers). May be None when ``t_ns`` is given.
     position
         ``(N, 3)`` world-frame positions [m].
     velocity
@@ -84,7 +80,8 @@ class Trajectory:
     rotation
         scipy ``Rotation`` of length N: ``R_wb`` (body to world) at each ``t[k]``.
     t_ns
-        ``(N,)`` integer nanoseconds of the same instants; with both given, ``t`` must agree with
+        ``(N,)`` integer nanoseconds of the same instants (the older spelling of integer ``t``, kept);
+        with float ``t`` also given, ``t`` must agree with
         ``t_ns / 1e9`` to 1 µs (so relative seconds cannot be paired with epoch stamps by mistake).
     covariance
         ``(M, 15, 15)`` error-state covariances (order stated by the producer), with
@@ -104,6 +101,17 @@ class Trajectory:
         "t",
         "t_ns",
         "velocity",
+    )
+    _fields = (
+        "t",
+        "t_ns",
+        "position",
+        "velocity",
+        "rotation",
+        "covariance",
+        "covariance_t",
+        "gyro_bias",
+        "accel_bias",
     )
 
     t: FloatArray
@@ -129,32 +137,11 @@ class Trajectory:
         gyro_bias: ArrayLike | None = None,
         accel_bias: ArrayLike | None = None,
     ) -> None:
-        stamps_ns = None if t_ns is None else _nanoseconds(t_ns)
-        if t is None:
-            if stamps_ns is None:
-                raise ParameterError("t: expected (N,) float seconds; t may be None only when t_ns is given")
-            seconds = seconds_from_ns(stamps_ns)
-        else:
-            seconds = _float_seconds(t, "t")
-            if stamps_ns is not None:
-                if stamps_ns.shape != seconds.shape:
-                    raise ShapeError(
-                        f"t_ns: expected shape (N,) with N = len(t) = {len(seconds)}, got {stamps_ns.shape}"
-                    )
-                off = np.abs(seconds - seconds_from_ns(stamps_ns))
-                if off.max() > _T_NS_TOLERANCE_S:
-                    k = int(np.argmax(off))
-                    raise TimestampError(
-                        f"t_ns: sample {k} is {stamps_ns[k]} ns but t[{k}] = {float(seconds[k])!r} s "
-                        f"(off by {off[k]:.3g} s; t must be t_ns / 1e9, not relative seconds)"
-                    )
-        n = len(seconds)
+        stamps = _stamps(t, t_ns)
+        n = len(stamps.t)
         rows = f"(N, 3) with N = len(t) = {n}"
-        set_ = object.__setattr__
-        set_(self, "t", readonly_copy(seconds))
-        set_(self, "t_ns", None if stamps_ns is None else readonly_copy(stamps_ns))
-        set_(self, "position", readonly_array(position, "position", (n, 3), rows))
-        set_(self, "velocity", None if velocity is None else readonly_array(velocity, "velocity", (n, 3), rows))
+        position_ = readonly_array(position, "position", (n, 3), rows)
+        velocity_ = None if velocity is None else readonly_array(velocity, "velocity", (n, 3), rows)
         if not isinstance(rotation, Rotation) or rotation.single or len(rotation) != n:
             got = (
                 f"a {'single ' if rotation.single else ''}Rotation"
@@ -164,25 +151,22 @@ class Trajectory:
             length = f" of length {len(rotation)}" if isinstance(rotation, Rotation) and not rotation.single else ""
             raise ShapeError(f"rotation: expected a scipy Rotation of length N = len(t) = {n}, got {got}{length}")
         # A copy: the caller's Rotation could be modified in place (Rotation.__setitem__).
-        set_(self, "rotation", rotation_from_unit_quat(rotation.as_quat()))
+        rotation_ = rotation_from_unit_quat(rotation.as_quat())
         if (covariance is None) != (covariance_t is None):
             raise ParameterError("covariance: give covariance and covariance_t together, or neither")
-        if covariance is None or covariance_t is None:
-            set_(self, "covariance", None)
-            set_(self, "covariance_t", None)
-        else:
-            cov_t = _float_seconds(covariance_t, "covariance_t")
+        cov = cov_t = None
+        if covariance is not None and covariance_t is not None:
+            cov_t = readonly_copy(float_seconds(covariance_t, "covariance_t"))
             m = len(cov_t)
             cov = readonly_array(covariance, "covariance", (m, 15, 15), f"(M, 15, 15) with M = len(covariance_t) = {m}")
-            set_(self, "covariance", cov)
-            set_(self, "covariance_t", readonly_copy(cov_t))
         if (gyro_bias is None) != (accel_bias is None):
             raise ParameterError("gyro_bias: give gyro_bias and accel_bias together, or neither")
-        for name, bias in (("gyro_bias", gyro_bias), ("accel_bias", accel_bias)):
-            set_(self, name, None if bias is None else readonly_array(bias, name, (n, 3), rows))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError(f"Trajectory is immutable: cannot set {name!r}")
+        biases = [
+            None if b is None else readonly_array(b, name, (n, 3), rows)
+            for name, b in (("gyro_bias", gyro_bias), ("accel_bias", accel_bias))
+        ]
+        # t may be the caller's array; t_ns is fresh.
+        self._set(readonly_copy(stamps.t), stamps.t_ns, position_, velocity_, rotation_, cov, cov_t, *biases)
 
     @classmethod
     def _from_core(
@@ -201,22 +185,8 @@ class Trajectory:
         ImuData's, read-only already. As everywhere in numpy, the read-only flag is a guard, not a
         lock: the owner of a buffer can set it writeable again.
         """
-        traj = object.__new__(cls)
-        set_ = object.__setattr__
-        for name in ("position", "velocity", "gyro_bias", "accel_bias"):
-            value = arrays.get(name)
-            if value is not None:
-                value.setflags(write=False)
-            set_(traj, name, value)
-        for name, item in (
-            ("t", imu_t),
-            ("t_ns", imu_t_ns),
-            ("rotation", rotation),
-            ("covariance", covariance),
-            ("covariance_t", covariance_t),
-        ):
-            set_(traj, name, item)
-        return traj
+        p, v, bg, ba = (arrays.get(name) for name in ("position", "velocity", "gyro_bias", "accel_bias"))
+        return cls._from_validated(imu_t, imu_t_ns, p, v, rotation, covariance, covariance_t, bg, ba)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -237,7 +207,17 @@ class Trajectory:
         return NavState(self.position[k], self.velocity[k], self.rotation[k])
 
     def write_tum(self, path: str | os.PathLike[str]) -> None:
-        """Write ``timestamp tx ty tz qx qy qz qw`` lines; see :func:`imukit.io.write_tum`."""
+        """Deprecated: use ``imukit.io.write_tum(trajectory, path)``, which this calls.
+
+        A trajectory is data and the file formats live in :mod:`imukit.io`; this alias stays for
+        existing code and warns with :class:`DeprecationWarning`.
+        """
+        warnings.warn(
+            "Trajectory.write_tum(path) is deprecated; use imukit.io.write_tum(trajectory, path)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        # imported here: imukit.io imports this module (readers build Trajectory objects).
         from imukit.io import write_tum
 
         write_tum(self, path)
@@ -248,29 +228,15 @@ class Trajectory:
         return f"Trajectory({len(self)} samples, {float(self.t[0])!r} … {float(self.t[-1])!r} s{with_})"
 
 
-def _float_seconds(t: ArrayLike, name: str) -> FloatArray:
-    raw = np.asarray(t)
-    if raw.dtype.kind != "f":
-        hint = "; pass integer nanoseconds as t_ns=" if raw.dtype.kind in "iu" and name == "t" else ""
-        raise DTypeError(f"{name}: expected float seconds, got an array of dtype {raw.dtype}{hint}")
-    if raw.ndim != 1 or len(raw) == 0:
-        raise ShapeError(f"{name}: expected shape (N,) with N ≥ 1, got {raw.shape}")
-    seconds = raw.astype(np.float64)
-    check_finite_rows(seconds, name)
-    check_increasing(seconds, name, "s")
-    return seconds
-
-
-def _nanoseconds(t_ns: ArrayLike) -> NDArray[np.int64]:
-    raw = np.asarray(t_ns)
-    if raw.dtype.kind not in "iu":
-        raise DTypeError(f"t_ns: expected integer nanoseconds, got an array of dtype {raw.dtype}")
-    if raw.ndim != 1 or len(raw) == 0:
-        raise ShapeError(f"t_ns: expected shape (N,) with N ≥ 1, got {raw.shape}")
-    stamps = int64_stamps(raw, "t_ns")
-    if len(stamps) > 1 and np.median(np.diff(stamps)) < _MIN_NS_STEP:
-        raise ParameterError(
-            f"t_ns: the median step is {np.median(np.diff(stamps))} ns; expected integer nanoseconds "
-            f"(steps of at least {_MIN_NS_STEP} ns), not seconds or sample indices"
-        )
-    return stamps
+def _stamps(t: ArrayLike | None, t_ns: ArrayLike | None) -> Stamps:
+    """:func:`as_stamps`; integer ``t`` that is not nanoseconds keeps the :class:`DTypeError` it got
+    when ``t`` took float seconds only (integer nanoseconds went in ``t_ns``)."""
+    raw = None if t is None else np.asarray(t)
+    if t_ns is None and raw is not None and raw.dtype.kind in "iu" and raw.ndim == 1:
+        if too_fine_for_ns(int64_stamps(raw, "t")) is not None:
+            raise DTypeError(
+                f"expected float seconds, got an array of dtype {raw.dtype}; pass integer nanoseconds "
+                f"(a median step of at least {MIN_NS_STEP} ns), not seconds or sample indices",
+                argument="t",
+            )
+    return as_stamps(t, t_ns)
