@@ -49,6 +49,10 @@ NOT_DATA: dict[str, str] = {
     # state (FilterResult, FilterState) are the data, registered below.
     "Mahony": "an estimator object, not a value",
     "Madgwick": "an estimator object, not a value",
+    # io detection plumbing: a context manager and a lazily read file head, not values.
+    "Registration": "a context manager that unregisters a format on exit",
+    "Format": "a registry entry of functions (sniff, reader): a worker imports the same registry",
+    "Head": "a lazy view of one file's first lines while it is being sniffed",
     # The streaming accumulator; its snapshot is the data (Preintegration, added by the preint branch).
     "PreintegratedImu": "a streaming accumulator over a Rust handle (pickled on the preint branch)",
     # Added by the filters/preint branch: register a factory for each at merge.
@@ -160,6 +164,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "ReadReport": _report,
     "SkippedLine": lambda: _report().skipped[0],
     "SkippedLinesWarning": lambda: ik.io.SkippedLinesWarning("1 line skipped in imu.csv: 1 malformed"),
+    "Gap": lambda: ik.io.find_gaps(ik.ImuData([0.0, 0.01, 0.02, 0.5], [[0.0] * 3] * 4, [[0.0, 0.0, 9.81]] * 4))[0],
     "KalibrImu": lambda: ik.io.KalibrImu(NOISE, 200.0, {"rostopic": "/imu0", "T_BS": [[1.0, 0.0], [0.0, 1.0]]}),
     # imukit.filters: options, the saved state and the result
     "GainRamp": lambda: ik.filters.GainRamp(),

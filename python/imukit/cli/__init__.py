@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 import traceback
 from collections.abc import Sequence
 
-from imukit._errors import ImukitError, ParameterError
+from imukit import io
+from imukit._errors import ImukitError
 from imukit.cli._allan import add as add_allan
-from imukit.cli._common import option_message
+from imukit.cli._common import OTHER_LAYOUTS, error_line
 from imukit.cli._demo import add as add_demo
 from imukit.cli._evaluate import add as add_evaluate
 from imukit.cli._filter import add as add_filter
@@ -33,10 +35,8 @@ IMU kinematics from the command line: integrate a recording into a trajectory, p
 into windows, run an attitude filter, simulate a sensor, identify its noise (Allan), score a
 trajectory against ground truth, or run the demo.
 
-Inputs are read by format, detected from the path: an EuRoC / ASL folder (or its mav0/), a TUM-VI
-folder, an EuRoC imu0 CSV, GTSAM/KITTI IMU text, a ROS1/ROS2/MCAP bag (and for `filter`, a BROAD
-.mat trial); any other CSV with the --csv-* options that name its columns and units. Frames
-and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity
+{inputs}
+Frames and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity
 (0, 0, -9.81) m/s^2, rotations R_wb (body to world), quaternions x y z w in files.
 
 Run `imukit COMMAND --help` for what a command reads, writes and prints, with an example."""
@@ -44,8 +44,16 @@ Run `imukit COMMAND --help` for what a command reads, writes and prints, with an
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every command (``imukit --help``)."""
+    # The formats as registered now (imukit.io.register_format), not as when this module was imported.
+    inputs = textwrap.fill(
+        f"Inputs are read by format, detected from the path: {io.listing('imu', others=OTHER_LAYOUTS)} "
+        "(and for `filter`, a BROAD .mat trial).",
+        width=99,
+    )
     parser = argparse.ArgumentParser(
-        prog="imukit", description=_DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog="imukit",
+        description=_DESCRIPTION.format(inputs=inputs),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--debug", action="store_true", help="on an error, show the Python traceback")
     parser.add_argument(
@@ -71,12 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ImukitError, OSError, ValueError) as exc:
         if args.debug:
             traceback.print_exc()
-        message = " ".join(str(exc).split()) or type(exc).__name__
-        if isinstance(exc, ParameterError):
-            message = option_message(message)
-        if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in message:
-            message = f"{exc.filename}: {message}"
-        print(f"imukit: error: {message}", file=sys.stderr)
+        print(f"imukit: error: {error_line(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("imukit: interrupted", file=sys.stderr)

@@ -7,14 +7,14 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Callable
 
 import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
 from imukit import io
-from imukit._errors import FileFormatError, ImukitError
+from imukit._errors import FileFormatError, ImukitError, ParameterError
 from imukit.imu import ImuData
 from imukit.io import ReadReport
 from imukit.state import Trajectory
@@ -64,7 +64,7 @@ def _report_skips(report: ReadReport) -> None:
 
 
 # Library argument names and the options that set them: a ParameterError from the library names its
-# argument (`delta: ...`), the user typed the option (`--delta: ...`); main() rewrites the first word.
+# argument (exc.argument == "delta"), the user typed the option: main() prints `--delta: <message>`.
 OPTION_OF = {
     "imu_topic": "--imu-topic",
     "groundtruth_topic": "--groundtruth-topic",
@@ -88,14 +88,20 @@ OPTION_OF = {
 }
 BAG_OPTIONS = ("imu_topic", "groundtruth_topic", "time_source")
 CSV_OPTIONS = ("time_column", "gyro_columns", "accel_columns", "time_unit", "gyro_unit", "accel_unit", "delimiter")
+OTHER_LAYOUTS = "other layouts: the --csv-* options"
 DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t", "space": " "}  # --csv-delimiter: read_imu_csv's
-GAP_FACTOR = 10.0  # a step longer than this many median steps is named on stderr
 
 
-def option_message(message: str) -> str:
-    """``message`` with a leading library argument name (``max_dt: ...``) replaced by its option."""
-    name, sep, rest = message.partition(": ")
-    return f"{OPTION_OF[name]}: {rest}" if sep and name in OPTION_OF else message
+def error_line(exc: Exception) -> str:
+    """The one line ``main`` prints for ``exc``: a library ParameterError names the option (``OPTION_OF``)
+    that set its argument, white space is collapsed, an OSError names its file."""
+    message = str(exc)
+    if isinstance(exc, ParameterError) and exc.argument in OPTION_OF:
+        message = f"{OPTION_OF[exc.argument]}: {exc.message}"
+    message = " ".join(message.split()) or type(exc).__name__
+    if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in message:
+        message = f"{exc.filename}: {message}"
+    return message
 
 
 def add_input_options(parser: argparse.ArgumentParser) -> None:
@@ -106,8 +112,9 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
         type=positive,
         metavar="S",
         help=f"refuse input with a step between samples longer than S seconds (default: accept any gap, "
-        f"naming on stderr the longest one when it exceeds {GAP_FACTOR:g} x the median step)",
+        f"naming on stderr the longest one when it exceeds {io.GAP_FACTOR:g} x the median step)",
     )
+    parser.add_argument_group("PATH", f"found by its format: {io.listing('imu', others=OTHER_LAYOUTS)}")
     csv = parser.add_argument_group(
         "any CSV (PATH a delimited text file of another layout: imukit.io.read_imu_csv; columns by header name "
         "or 0-based index)"
@@ -167,7 +174,7 @@ def _column(text: str) -> int | str:
 def _columns(text: str, option: str) -> list[int | str]:
     columns = [_column(c) for c in text.split(",")]
     if len(columns) != 3:
-        raise CliError(f"{option}: expected 3 comma-separated columns (x, y, z), got {text!r}")
+        raise CliError(f"expected 3 comma-separated columns (x, y, z), got {text!r}", argument=option)
     return columns
 
 
@@ -178,10 +185,7 @@ def _csv_arguments(args: argparse.Namespace) -> dict[str, Any] | None:
         return None
     for name in ("time_column", "gyro_columns", "accel_columns"):
         if name not in given:
-            raise CliError(f"{OPTION_OF[name]}: needed with {', '.join(OPTION_OF[n] for n in given)}")
-    for name in BAG_OPTIONS:
-        if getattr(args, name) is not None:
-            raise CliError(f"{OPTION_OF[name]}: is for ROS bags, not with the --csv-* options")
+            raise CliError(f"needed with {', '.join(OPTION_OF[n] for n in given)}", argument=OPTION_OF[name])
     given["time_column"] = _column(given["time_column"])
     given["gyro_columns"] = _columns(given["gyro_columns"], "--csv-gyro-columns")
     given["accel_columns"] = _columns(given["accel_columns"], "--csv-accel-columns")
@@ -192,45 +196,37 @@ def _csv_arguments(args: argparse.Namespace) -> dict[str, Any] | None:
 
 def check_gaps(imu: ImuData, max_gap: float | None) -> None:
     """With ``max_gap`` [s], a CliError naming the first step longer than it; without, a note naming
-    the longest step when it is over ``GAP_FACTOR`` times the median (integrating across it is the
-    user's call, but not a silent one)."""
-    if len(imu) < 2:
-        return
-    steps = np.diff(imu.t_ns) / 1e9 if imu.t_ns is not None else np.diff(imu.t)
-    if max_gap is not None and steps.max() > max_gap:
-        k = int(np.argmax(steps > max_gap))
-        raise CliError(
-            f"--max-gap: the step into sample {k + 1} (t = {imu.t[k + 1]:.9g} s) is {steps[k]:.6g} s, "
-            f"longer than --max-gap = {max_gap:g} s"
-        )
-    k = int(np.argmax(steps))
-    median = float(np.median(steps))
-    if steps[k] > GAP_FACTOR * median:
+    the longest step when it is over ``io.GAP_FACTOR`` times the median (:func:`imukit.io.find_gaps`;
+    integrating across it is the user's call, but not a silent one)."""
+    gaps = io.find_gaps(imu, longer_than=max_gap)
+    if gaps and max_gap is not None:
+        raise CliError(f"{gaps[0]}, longer than --max-gap = {max_gap:g} s", argument="--max-gap")
+    if gaps:
+        gap = max(gaps, key=lambda g: g.step)
         note(
-            f"the step into sample {k + 1} (t = {imu.t[k + 1]:.9g} s) is {steps[k]:.6g} s, "
-            f"{steps[k] / median:.3g} x the median {median:.6g} s; integrated across (--max-gap S refuses it)"
+            f"{gap}, {gap.step / gap.median:.3g} x the median {gap.median:.6g} s; integrated across "
+            "(--max-gap S refuses it)"
         )
 
 
 def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
-    """The IMU samples and ground truth at ``args.path``: with the --csv-* options through
-    :func:`imukit.io.read_imu_csv`, else whatever its format (:func:`imukit.io.read_imu`, with the bag
-    options of :func:`add_input_options`); with ``args.skip_bad_lines``, bad lines are skipped and
+    """The IMU samples and ground truth at ``args.path`` (:func:`imukit.io.read_imu`, with the options of
+    :func:`add_input_options`); with ``args.skip_bad_lines``, bad lines are skipped and
     listed on stderr instead of ending the command. Gaps are checked by :func:`check_gaps`."""
     report = ReadReport()
-    on_bad_line: Literal["raise", "skip"] = "skip" if args.skip_bad_lines else "raise"
-    csv = _csv_arguments(args)
-    result: tuple[ImuData, Trajectory | None]
+    bag = {name: getattr(args, name) for name in BAG_OPTIONS}
     with err.status(f"reading {args.path}"):
-        if csv is not None:
-            result = io.read_imu_csv(args.path, **csv, on_bad_line=on_bad_line, report=report), None
-        else:
-            bag = {name: getattr(args, name) for name in BAG_OPTIONS}
-            try:
-                result = io.read_imu(args.path, **bag, on_bad_line=on_bad_line, report=report)
-            except FileFormatError as exc:  # the library's pointer, in the CLI's words
-                message = str(exc).replace("other layouts: read_imu_csv", "other layouts: the --csv-* options")
-                raise FileFormatError(message) from exc
+        try:
+            result = io.read_imu(
+                args.path,
+                csv=_csv_arguments(args),
+                **bag,
+                on_bad_line="skip" if args.skip_bad_lines else "raise",
+                report=report,
+            )
+        except FileFormatError as exc:  # the formats tried, with the CLI's options for other layouts
+            message = exc.message.replace(io.listing("imu"), io.listing("imu", others=OTHER_LAYOUTS))
+            raise FileFormatError(message, argument=exc.argument) from exc
     _report_skips(report)
     check_gaps(result[0], args.max_gap)
     return result
@@ -243,7 +239,7 @@ def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
         for name in names:
             value = getattr(args, name)
             if value is not None:
-                raise CliError(f"{OPTION_OF[name]}: {value!r} is for {kind}, but {args.path} is {what}")
+                raise CliError(f"{value!r} is for {kind}, but {args.path} is {what}", argument=OPTION_OF[name])
 
 
 def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
@@ -260,9 +256,9 @@ def output_path(path: str, suffixes: tuple[str, ...], option: str) -> Path:
     """``path`` as a file to write: its suffix one of ``suffixes``, its folder existing."""
     p = Path(path)
     if p.suffix.lower() not in suffixes:
-        raise CliError(f"{option}: expected a file name ending in {' or '.join(suffixes)}, got {path!r}")
+        raise CliError(f"expected a file name ending in {' or '.join(suffixes)}, got {path!r}", argument=option)
     if not p.parent.is_dir():
-        raise CliError(f"{option}: folder {os.fspath(p.parent)!r} does not exist")
+        raise CliError(f"folder {os.fspath(p.parent)!r} does not exist", argument=option)
     return p
 
 

@@ -96,7 +96,9 @@ def associate(
     if est.t_ns is not None and ref.t_ns is not None:
         shift = round(offset * 1e9)
         if not (_INT64.min <= int(est.t_ns[0]) + shift and int(est.t_ns[-1]) + shift <= _INT64.max):
-            raise ParameterError(f"offset: {offset:g} s moves the estimate's nanosecond stamps out of the int64 range")
+            raise ParameterError(
+                f"{offset:g} s moves the estimate's nanosecond stamps out of the int64 range", argument="offset"
+            )
         stamps, ref_stamps, max_gap = est.t_ns + shift, ref.t_ns, max_dt * 1e9
     else:
         stamps, ref_stamps, max_gap = est.t + offset, ref.t, max_dt
@@ -115,11 +117,12 @@ def associate(
     if not keep.any():
         a, b = float(est.t[0]) + offset, float(est.t[-1]) + offset
         raise ParameterError(
-            f"{culprit(offset, n_outside, n_gaps)}: no estimate sample can be paired with the reference: the "
+            f"no estimate sample can be paired with the reference: the "
             f"estimate spans [{a:.9g}, {b:.9g}] s "
             f"(offset {offset:g} s applied), the reference [{float(ref.t[0]):.9g}, {float(ref.t[-1]):.9g}] s; "
             f"{n_outside} samples outside the reference span, {n_gaps} inside reference gaps longer than "
-            f"max_dt = {max_dt:g} s"
+            f"max_dt = {max_dt:g} s",
+            argument=culprit(offset, n_outside, n_gaps),
         )
 
     lo, hi, s = lo[keep], hi[keep], stamps[keep]

@@ -89,9 +89,9 @@ def rpe(
     choice(unit, "unit", UNITS)
     delta = finite_float(delta, "delta", positive=True)
     if unit == "frames" and not delta.is_integer():
-        raise ParameterError(f"delta: expected a whole number of frames for unit='frames', got {delta!r}")
+        raise ParameterError(f"expected a whole number of frames for unit='frames', got {delta!r}", argument="delta")
     if not isinstance(all_pairs, (bool, np.bool_)):
-        raise ParameterError(f"all_pairs: expected a bool, got {all_pairs!r}")
+        raise ParameterError(f"expected a bool, got {all_pairs!r}", argument="all_pairs")
     prepared = prepare(estimate, reference, method=align, max_dt=max_dt, offset=offset)
     est, ref = prepared.estimate, prepared.reference
 
@@ -102,7 +102,8 @@ def rpe(
     if len(pairs) == 0:
         extent = float(axis[-1] - axis[0]) * to_unit
         raise ParameterError(
-            f"delta: no pair of associated samples is {delta:g} {unit} apart; they extend over {extent:g} {unit}"
+            f"no pair of associated samples is {delta:g} {unit} apart; they extend over {extent:g} {unit}",
+            argument="delta",
         )
     i, j = pairs[:, 0], pairs[:, 1]
     rel_ref = ref.rotation[i].inv() * ref.rotation[j]

@@ -2,7 +2,8 @@
 
 =====================  ===========================================================================
 any IMU source         :func:`read_imu` → ``(ImuData, Trajectory | None)``: finds the format (EuRoC or
-                       TUM-VI folder, EuRoC IMU CSV, GTSAM/KITTI text, ROS bag); :func:`read_trajectory`
+                       TUM-VI folder, EuRoC IMU CSV, GTSAM/KITTI text, ROS bag), or reads a CSV by
+                       its columns (``csv=``, :func:`read_imu_csv`'s keywords); :func:`read_trajectory`
                        → ``Trajectory`` (TUM, EuRoC ground truth, TUM-VI mocap)
 TUM                    :func:`write_tum`, :func:`read_tum`: ``timestamp tx ty tz qx qy qz qw`` lines,
                        quaternion ``q_wb`` scalar-last; ``t_ns`` printed exactly with 9 decimals
@@ -18,6 +19,9 @@ ROS bags               :func:`read_rosbag`, :func:`list_rosbag_topics` (ROS 1, R
                        ``imukit[ros]``)
 Kalibr ``imu.yaml``    :func:`write_kalibr_imu`, :func:`read_kalibr_imu` → :class:`KalibrImu`:
                        continuous-time noise densities (:class:`imukit.ImuNoise`) and the rate
+new formats            :class:`Format` (a name, a sniff, a reader) and :func:`register_format`: detection,
+                       its error text and the CLI's help take it up; :func:`formats` lists them
+gaps                   :func:`find_gaps`: steps between samples far longer than the others
 bad lines              every reader takes ``on_bad_line="raise" | "skip"`` and ``report=``: skipped
                        lines go to a :class:`ReadReport` (:class:`SkippedLine` records) or, without
                        one, into one :class:`SkippedLinesWarning`
@@ -35,21 +39,32 @@ from imukit._errors import FileFormatError
 from imukit.io._csv import read_imu_csv
 from imukit.io._detect import read_imu, read_trajectory
 from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, read_euroc_sensor, write_euroc
+from imukit.io._format import Format, Head
+from imukit.io._gaps import GAP_FACTOR, Gap, find_gaps
 from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
 from imukit.io._kitti import read_kitti_poses
+from imukit.io._registry import Registration, formats, listing, register_format, unregister_format
 from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 from imukit.io._rosbag import list_rosbag_topics, read_rosbag
 from imukit.io._tum import read_tum, write_tum
 from imukit.io._tumvi import read_tumvi
 
 __all__ = [
+    "GAP_FACTOR",
     "FileFormatError",
+    "Format",
+    "Gap",
+    "Head",
     "KalibrImu",
     "ReadReport",
+    "Registration",
     "SkippedLine",
     "SkippedLinesWarning",
+    "find_gaps",
+    "formats",
     "list_rosbag_topics",
+    "listing",
     "read_euroc",
     "read_euroc_groundtruth",
     "read_euroc_imu",
@@ -63,6 +78,8 @@ __all__ = [
     "read_trajectory",
     "read_tum",
     "read_tumvi",
+    "register_format",
+    "unregister_format",
     "write_euroc",
     "write_kalibr_imu",
     "write_tum",

@@ -12,8 +12,17 @@ import numpy as np
 from imukit._arrays import choice
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
-from imukit.io._euroc import build
-from imukit.io._lines import Problem, Split, all_exact, increasing, integer_stamp, parse_rows, require_rows
+from imukit.io._lines import (
+    Problem,
+    Split,
+    all_exact,
+    as_file_error,
+    increasing,
+    integer_stamp,
+    parse_rows,
+    public_reader,
+    require_rows,
+)
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 
 __all__ = ["read_imu_csv"]
@@ -26,7 +35,34 @@ _PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
 _DELIMITERS = (",", ";", "\t", " ")
 
 
-def read_imu_csv(
+def imu_csv(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    *,
+    time_column: Column,
+    gyro_columns: Sequence[Column],
+    accel_columns: Sequence[Column],
+    time_unit: TimeUnit,
+    gyro_unit: str,
+    accel_unit: str,
+    standard_gravity: float,
+    delimiter: str | None,
+) -> ImuData:
+    """:func:`read_imu_csv` reporting to ``bad``."""
+    choice(time_unit, "time_unit", tuple(_NS_PER))
+    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
+    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
+    gravity = _gravity(standard_gravity)
+    if delimiter is not None:
+        choice(delimiter, "delimiter", _DELIMITERS)
+    wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
+    for name, columns in wanted.items():
+        _check_columns(columns, name, 1 if name == "time_column" else 3)
+    return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
+
+
+@public_reader(imu_csv)
+def read_imu_csv(  # type: ignore[empty-body]
     path: str | os.PathLike[str],
     *,
     time_column: Column,
@@ -88,22 +124,9 @@ def read_imu_csv(
     FileFormatError
         Naming the file and line: bad lines ("raise" mode), no data.
     """
-    choice(time_unit, "time_unit", tuple(_NS_PER))
-    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
-    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
-    gravity = _gravity(standard_gravity)
-    if delimiter is not None:
-        choice(delimiter, "delimiter", _DELIMITERS)
-    wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
-    for name, columns in wanted.items():
-        _check_columns(columns, name, 1 if name == "time_column" else 3)
-    bad = BadLines(on_bad_line, report)
-    return bad.done(
-        imu_csv(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
-    )
 
 
-def imu_csv(
+def _read(
     path: str | os.PathLike[str],
     bad: BadLines,
     wanted: dict[str, Sequence[Column]],
@@ -112,7 +135,7 @@ def imu_csv(
     gravity: float | None,
     delimiter: str | None,
 ) -> ImuData:
-    """:func:`read_imu_csv` reporting to ``bad``, with checked arguments."""
+    """:func:`imu_csv` with checked arguments."""
     where = os.fspath(path)
     # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
     with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
@@ -125,7 +148,7 @@ def imu_csv(
         header_line = numbered.pop(0)[0]
     numbered = [(n, text) for n, text in numbered if not text.startswith("#")]
     if not numbered:
-        raise FileFormatError(f"path: {where}: no data lines")
+        raise FileFormatError(f"{where}: no data lines", argument="path")
     width = len(header) if header is not None else len(split(numbered[0][1]))
     index = {
         name: [_index(c, name, header, header_line, width, where) for c in columns] for name, columns in wanted.items()
@@ -162,9 +185,9 @@ def imu_csv(
     accel = data[:, 4:7] * gravity if gravity is not None else data[:, 4:7]
     if ns is not None:
         t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-        return build(path, lambda: ImuData(t_ns, gyro, accel))
+        return as_file_error(path, lambda: ImuData(t_ns, gyro, accel))
     t = data[:, 0] / _PER_SECOND[time_unit]
-    return build(path, lambda: ImuData(t, gyro, accel))
+    return as_file_error(path, lambda: ImuData(t, gyro, accel))
 
 
 def _gravity(value: object) -> float:
@@ -173,38 +196,43 @@ def _gravity(value: object) -> float:
     except (TypeError, ValueError):
         g = math.nan
     if not (math.isfinite(g) and g > 0.0):
-        raise ParameterError(f"standard_gravity: expected a positive, finite number of m/s^2 per g, got {value!r}")
+        raise ParameterError(
+            f"expected a positive, finite number of m/s^2 per g, got {value!r}", argument="standard_gravity"
+        )
     return g
 
 
 def _check_columns(columns: object, name: str, count: int) -> None:
     """``columns`` must be ``count`` names or indices (``time_column`` arrives wrapped in a list)."""
     if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        raise ParameterError(f"{name}: expected {count} column names or 0-based indices (x, y, z), got {columns!r}")
+        raise ParameterError(
+            f"expected {count} column names or 0-based indices (x, y, z), got {columns!r}", argument=name
+        )
     for column in columns:
         if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"{name}: expected a column name or a 0-based index (int ≥ 0), got {column!r}")
+            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
 
 
 def _index(column: Column, name: str, header: list[str] | None, line: int, width: int, where: str) -> int:
     if isinstance(column, int):
         if column >= width:
             raise ParameterError(
-                f"{name}: column {column} is out of range: {where} has {width} columns "
-                f"(0-based indices 0 to {width - 1})"
+                f"column {column} is out of range: {where} has {width} columns (0-based indices 0 to {width - 1})",
+                argument=name,
             )
         return column
     if header is None:
         raise ParameterError(
-            f"{name}: column {column!r} is a name, but {where} has no header line (its first line is numbers); "
-            "pass 0-based indices"
+            f"column {column!r} is a name, but {where} has no header line (its first line is numbers); "
+            "pass 0-based indices",
+            argument=name,
         )
     found = [k for k, h in enumerate(header) if h == column]
     if len(found) != 1:
         problem = "no column named" if not found else f"{len(found)} columns named"
         raise ParameterError(
-            f"{name}: {problem} {column!r} in the header of {where} (line {line}), "
-            f"which has {', '.join(map(repr, header))}"
+            f"{problem} {column!r} in the header of {where} (line {line}), which has {', '.join(map(repr, header))}",
+            argument=name,
         )
     return found[0]
 

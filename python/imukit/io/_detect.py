@@ -1,54 +1,99 @@
-"""Readers that find the format themselves: :func:`read_imu`, :func:`read_trajectory` (``docs/io.md``)."""
+"""Readers that find the format themselves: :func:`read_imu`, :func:`read_trajectory` (``docs/io.md``).
+
+Both try the formats of :mod:`imukit.io._registry` in order (:func:`imukit.io.formats`) and read the
+path with the first whose sniff accepts it; the "tried …" text of an unknown path lists them.
+"""
 
 from __future__ import annotations
 
 import os
-from itertools import islice
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
-from imukit.io import _rosbag  # rosbags itself is imported on a bag's first read
-from imukit.io._euroc import GROUNDTRUTH_CSV, IMU_CSV, euroc_folder, euroc_groundtruth, euroc_imu
-from imukit.io._gtsam import GTSAM_COLUMNS, gtsam_imu
-from imukit.io._lines import data_lines, integer_stamp
+from imukit.io._csv import read_imu_csv
+from imukit.io._euroc import GROUNDTRUTH_CSV, dataset_root
+from imukit.io._format import Format, Head, is_number, shorten
+from imukit.io._lines import integer_stamp, public_reader, read_into
+from imukit.io._registry import formats, listing
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._tum import tum
-from imukit.io._tumvi import MOCAP_CSV, tumvi_folder, tumvi_mocap
+from imukit.io._tumvi import MOCAP_CSV
 from imukit.state import Trajectory
 
 __all__ = ["read_imu", "read_trajectory"]
 
-IMU_FORMATS = "EuRoC / TUM-VI folder or imu0/data.csv, GTSAM / KITTI text, ROS bag; other layouts: read_imu_csv"
-TRAJECTORY_FORMATS = "TUM, EuRoC ground truth, TUM-VI mocap (or their folders); KITTI poses: read_kitti_poses"
-# The column names that put TUM-VI mocap's w first (its header), and the usual names of a w-last one.
-_W_FIRST = ("q_RS_w", "qw", "q_w")
-_W_LAST = ("qx", "q_x", "q_RS_x")
+# The bag options of read_imu, for the error when they are given for another format.
+_BAG_PATHS = "a .bag, .mcap or .db3 file, or a folder with metadata.yaml"
 
 
-def read_imu(
+def detect_imu(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    *,
+    imu_topic: str | None,
+    groundtruth_topic: str | None,
+    time_source: str | None,
+    csv: Mapping[str, Any] | None,
+) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_imu` reporting to ``bad``."""
+    source, head = Path(path), Head(Path(path))
+    options = {"imu_topic": imu_topic, "groundtruth_topic": groundtruth_topic, "time_source": time_source}
+    given: dict[str, Any] = {name: value for name, value in options.items() if value is not None}
+    if csv is not None:
+        for name, value in given.items():
+            raise ParameterError(f"{value!r} is for ROS bags, not for a CSV file read by its columns", argument=name)
+        return read_into(bad, read_imu_csv, path, **csv), None
+    fmt = _first(source, head, "imu")
+    if fmt is None and not source.exists():
+        raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
+    extra = [name for name in given if fmt is None or name not in fmt.options]
+    if extra:  # nothing but the ROS bag reader would use them
+        raise ParameterError(
+            f"{given[extra[0]]!r} is for ROS bags, but {os.fspath(path)} is not one ({_BAG_PATHS})", argument=extra[0]
+        )
+    if fmt is None:
+        _refuse(path, head, "imu", "IMU samples")
+        trajectory = _trajectory_kind(head)
+        if trajectory is not None:
+            raise FileFormatError(
+                f"{os.fspath(path)}: this is a trajectory ({trajectory}), not IMU samples", argument="path"
+            )
+        raise FileFormatError(
+            f"{os.fspath(path)}: not an IMU format imukit knows; tried {listing('imu')}", argument="path"
+        )
+    result = fmt.read(path, bad, **given)
+    return result if isinstance(result, tuple) else (result, None)
+
+
+@public_reader(detect_imu)
+def read_imu(  # type: ignore[empty-body]
     path: str | os.PathLike[str],
     *,
     imu_topic: str | None = None,
     groundtruth_topic: str | None = None,
     time_source: Literal["header", "record"] | None = None,
+    csv: Mapping[str, Any] | None = None,
     on_bad_line: OnBadLine = "raise",
     report: ReadReport | None = None,
 ) -> tuple[ImuData, Trajectory | None]:
     """Read IMU samples (and ground truth where the source has it) from any supported source.
 
-    Detection, in this order:
+    Detection: the first of :func:`imukit.io.formats` ``("imu")`` whose sniff accepts ``path``; the
+    built-in ones, in this order:
 
-    1. a folder with ``metadata.yaml``: a ROS 2 bag (:func:`imukit.io.read_rosbag`);
-    2. a folder with ``imu0/data.csv`` (or ``mav0/imu0/data.csv``): TUM-VI
+    1. a folder with ``imu0/data.csv`` (or ``mav0/imu0/data.csv``): TUM-VI
        (:func:`imukit.io.read_tumvi`) when ``mocap0/data.csv`` is next to ``imu0/``, else EuRoC
        (:func:`imukit.io.read_euroc`);
-    3. a file named ``*.bag``, ``*.mcap`` or ``*.db3`` (any case): a ROS bag;
-    4. a file whose first non-blank line is ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``:
+    2. a file whose first data line (after ``#`` lines) has 7 comma-separated fields and an integer
+       first field: an EuRoC / TUM-VI ``imu0/data.csv`` (:func:`imukit.io.read_euroc_imu`);
+    3. a file whose first non-blank line is ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``:
        GTSAM / KITTI text (:func:`imukit.io.read_gtsam_imu`);
-    5. a file whose first data line (after ``#`` lines) has 7 comma-separated fields and an integer
-       first field: an EuRoC / TUM-VI ``imu0/data.csv`` (:func:`imukit.io.read_euroc_imu`).
+    4. a folder with ``metadata.yaml`` (a ROS 2 bag), or a file named ``*.bag``, ``*.mcap`` or
+       ``*.db3`` (any case): a ROS bag (:func:`imukit.io.read_rosbag`).
+
+    Formats added with :func:`imukit.io.register_format` come after these (or where they are put).
 
     Anything else is a :class:`FileFormatError`: an empty file, a file with no data lines (a header
     only), a trajectory (TUM, EuRoC ground truth, TUM-VI mocap) are said to be so; otherwise the
@@ -62,6 +107,10 @@ def read_imu(
         For ROS bags only, passed to :func:`imukit.io.read_rosbag` (None: its defaults, the bag's
         only IMU / ground-truth topic and ``header.stamp`` times); given for any other source they
         are a :class:`ParameterError`, since nothing would use them.
+    csv
+        The keyword arguments of :func:`imukit.io.read_imu_csv` (``time_column``, ``gyro_columns``,
+        ``accel_columns``, units, ``delimiter``): ``path`` is a CSV file of that layout, read by it
+        (no ground truth) instead of found by its format. None (default): detection.
     on_bad_line, report
         Passed to the reader chosen (see :func:`imukit.io.read_euroc_imu`).
 
@@ -80,44 +129,42 @@ def read_imu(
         A bag option for a source that is not a bag, or as :func:`imukit.io.read_rosbag` (a topic
         missing, of the wrong type, or not given where the bag has several candidates).
     """
-    source = Path(path)
-    bag_options = {"imu_topic": imu_topic, "groundtruth_topic": groundtruth_topic, "time_source": time_source}
-    given: dict[str, Any] = {name: value for name, value in bag_options.items() if value is not None}
-    if (source.is_dir() and (source / "metadata.yaml").is_file()) or _rosbag.is_bag_path(source):
-        return _rosbag.read_rosbag(path, **given, on_bad_line=on_bad_line, report=report)
-    if not source.exists():
-        raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
-    if given:  # nothing but read_rosbag would use them
-        name, value = next(iter(given.items()))
-        raise ParameterError(
-            f"{name}: {value!r} is for ROS bags, but {os.fspath(path)} is not one "
-            "(a .bag, .mcap or .db3 file, or a folder with metadata.yaml)"
+
+
+def detect_trajectory(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_trajectory` reporting to ``bad``."""
+    source, head = Path(path), Head(Path(path))
+    fmt = _first(source, head, "trajectory")
+    if fmt is None:
+        root = dataset_root(source)
+        if root is not None:
+            raise FileFormatError(
+                f"{os.fspath(path)}: a dataset folder without ground truth "
+                f"(no {GROUNDTRUTH_CSV.as_posix()} nor {MOCAP_CSV.as_posix()} in {root})",
+                argument="path",
+            )
+        _refuse(path, head, "trajectory", "a trajectory")
+        raise FileFormatError(
+            f"{os.fspath(path)}: not a trajectory format imukit knows; tried {listing('trajectory')}", argument="path"
         )
-    bad = BadLines(on_bad_line, report)
-    root = _dataset_root(source)
-    if root is not None:
-        read = tumvi_folder if (root / MOCAP_CSV).is_file() else euroc_folder
-        return bad.done(read(root, bad))
-    first = _first_lines(source, IMU_FORMATS)
-    if first and first[0][1].split() == GTSAM_COLUMNS:
-        return bad.done((gtsam_imu(path, bad), None))
-    fields = _first_data_fields(first, ",")
-    if len(fields) == 7 and integer_stamp(fields[0].strip()) is not None:
-        return bad.done((euroc_imu(path, bad), None))
-    where = f"path: {os.fspath(path)}"
-    _refuse_without_data(first, where, "IMU samples")
-    trajectory = _trajectory_kind(first)
-    if trajectory is not None:
-        raise FileFormatError(f"{where}: this is a trajectory ({trajectory}), not IMU samples")
-    raise FileFormatError(f"{where}: not an IMU format imukit knows; tried {IMU_FORMATS}")
+    if fmt.kind != "both":
+        trajectory: Trajectory = fmt.read(path, bad)
+        return trajectory
+    truth: Trajectory | None = fmt.read(path, bad)[1]
+    if truth is None:
+        raise FileFormatError(f"{os.fspath(path)}: {fmt.description} without a trajectory", argument="path")
+    return truth
 
 
-def read_trajectory(
+@public_reader(detect_trajectory)
+def read_trajectory(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> Trajectory:
     """Read a trajectory (ground truth or an estimate) from a TUM, EuRoC or TUM-VI file or folder.
 
-    Detection: a folder with ``imu0/data.csv`` (or under ``mav0/``) gives its
+    Detection: the first of :func:`imukit.io.formats` ``("trajectory")`` whose sniff accepts ``path``
+    (formats added with :func:`imukit.io.register_format` after the built-in ones); built in: a
+    folder with ``imu0/data.csv`` (or under ``mav0/``) gives its
     ``state_groundtruth_estimate0/data.csv`` (EuRoC) or else its ``mocap0/data.csv`` (TUM-VI). A file
     is classified by its first data line (after ``#`` and blank lines): 17 comma-separated fields,
     EuRoC ground truth (:func:`imukit.io.read_euroc_groundtruth`); 8 comma-separated fields, TUM-VI
@@ -137,115 +184,42 @@ def read_trajectory(
     FileFormatError
         No format recognised, a folder without ground truth, or as the reader chosen.
     """
+
+
+def _first(source: Path, head: Head, kind: Literal["imu", "trajectory"]) -> Format | None:
+    """The first format of ``kind`` whose sniff accepts ``source``."""
+    return next((fmt for fmt in formats(kind) if fmt.sniff(source, head)), None)
+
+
+def _refuse(path: str | os.PathLike[str], head: Head, kind: Literal["imu", "trajectory"], expected: str) -> None:
+    """The FileFormatError for a path no format accepts, when it is a folder, missing, not text, empty, or
+    without data lines (a header only)."""
+    where = os.fspath(path)
     source = Path(path)
-    bad = BadLines(on_bad_line, report)
-    root = _dataset_root(source)
-    if root is not None:
-        for name, read in ((GROUNDTRUTH_CSV, euroc_groundtruth), (MOCAP_CSV, tumvi_mocap)):
-            if (root / name).is_file():
-                return bad.done(read(root / name, bad))
-        raise FileFormatError(
-            f"path: {os.fspath(path)}: a dataset folder without ground truth "
-            f"(no {GROUNDTRUTH_CSV.as_posix()} nor {MOCAP_CSV.as_posix()} in {root})"
-        )
-    first = _first_lines(source, TRAJECTORY_FORMATS)
-    where = f"path: {os.fspath(path)}"
-    _refuse_without_data(first, where, "a trajectory")
-    comma, space = len(_first_data_fields(first, ",")), len(_first_data_fields(first, None))
-    if comma == 17:
-        return bad.done(euroc_groundtruth(path, bad))
-    if comma == 8:
-        _check_w_first(first, where)
-        return bad.done(tumvi_mocap(path, bad))
-    if comma == 1 and space == 8:
-        return bad.done(tum(path, bad))
-    raise FileFormatError(f"{where}: not a trajectory format imukit knows; tried {TRAJECTORY_FORMATS}")
-
-
-def _dataset_root(source: Path) -> Path | None:
-    """``source`` or its ``mav0/`` when it holds ``imu0/data.csv``, else None."""
-    for root in (source, source / "mav0"):
-        if source.is_dir() and (root / IMU_CSV).is_file():
-            return root
-    return None
-
-
-def _first_lines(source: Path, formats: str) -> list[tuple[int, str]]:
-    """The first two non-blank lines, and the first data line after them if it comes later (a header
-    block of ``#`` lines); FileNotFoundError for a missing path, FileFormatError for a folder or a file
-    that is not UTF-8 text."""
     if not source.exists():
-        raise FileNotFoundError(f"path: {os.fspath(source)} does not exist")
+        raise FileNotFoundError(f"path: {where} does not exist")
     if source.is_dir():
-        raise FileFormatError(f"path: {os.fspath(source)}: a folder of no known layout; tried {formats}")
-    try:
-        with open(source, encoding="utf-8-sig") as f:  # -sig: a byte order mark is not part of the first line
-            first = list(islice(((n, line.strip()) for n, line in enumerate(f, 1) if line.strip()), 2))
-        return first + list(islice(data_lines(source), 1))
-    except UnicodeDecodeError:
-        raise FileFormatError(f"path: {os.fspath(source)}: not a text file; tried {formats}") from None
-
-
-def _first_data_fields(first: list[tuple[int, str]], delimiter: str | None) -> list[str]:
-    """The fields of the first line that is not a ``#`` comment, [] if there is none."""
-    for _, text in first:
-        if not text.startswith("#"):
-            return text.split(delimiter)
-    return []
-
-
-def _refuse_without_data(first: list[tuple[int, str]], where: str, expected: str) -> None:
-    """A FileFormatError for a file with no lines, or with ``#`` lines only (a header without data)."""
+        raise FileFormatError(f"{where}: a folder of no known layout; tried {listing(kind)}", argument="path")
+    first = head.lines
+    if first is None:
+        raise FileFormatError(f"{where}: not a text file; tried {listing(kind)}", argument="path")
     if not first:
-        raise FileFormatError(f"{where}: empty file, expected {expected}")
+        raise FileFormatError(f"{where}: empty file, expected {expected}", argument="path")
     if all(text.startswith("#") for _, text in first):
         header = first[0][1]
-        raise FileFormatError(f"{where}: no data lines, only the header {_shorten(header)}, expected {expected}")
+        raise FileFormatError(
+            f"{where}: no data lines, only the header {shorten(header)}, expected {expected}", argument="path"
+        )
 
 
-def _trajectory_kind(first: list[tuple[int, str]]) -> str | None:
+def _trajectory_kind(head: Head) -> str | None:
     """The trajectory format the first data line looks like (for an error saying so), else None."""
-    comma, space = _first_data_fields(first, ","), _first_data_fields(first, None)
+    comma, space = head.fields(","), head.fields(None)
     if len(comma) == 17:
         return "EuRoC ground truth, 17 comma-separated fields"
-    numbers = [text.split(",") for _, text in first if _number(text.split(",")[0])]  # past a names line
+    numbers = [text.split(",") for _, text in head.lines or () if is_number(text.split(",")[0])]  # past a names line
     if len(comma) == 8 and numbers and len(numbers[0]) == 8 and integer_stamp(numbers[0][0].strip()) is not None:
         return "TUM-VI mocap or another pose CSV, 8 comma-separated fields"
-    if len(comma) == 1 and len(space) == 8 and all(_number(field) for field in space):
+    if len(comma) == 1 and len(space) == 8 and all(is_number(field) for field in space):
         return "TUM: t x y z qx qy qz qw"
     return None
-
-
-def _check_w_first(first: list[tuple[int, str]], where: str) -> None:
-    """An 8-field comma file is read as TUM-VI mocap (w x y z) only when its header says so."""
-    header = next((text for _, text in first if text.startswith("#") or not _number(text.split(",")[0])), None)
-    if header is None:
-        raise FileFormatError(
-            f"{where}: 8 comma-separated fields and no header line to tell the quaternion order; TUM-VI mocap "
-            f"(w first) has '#timestamp [ns],p_RS_R_x [m],...,q_RS_w [],q_RS_x [],...': add that header, or "
-            f"write t x y z qx qy qz qw separated by spaces (TUM)"
-        )
-    names = [name.strip().lstrip("#").split(" ")[0].strip() for name in header.split(",")]
-    if len(names) == 8 and names[4] in _W_FIRST:
-        return
-    if len(names) == 8 and names[4] in _W_LAST:
-        raise FileFormatError(
-            f"{where}: the header puts the quaternion w last ({_shorten(header)}); imukit reads 8 comma-separated "
-            "fields as TUM-VI mocap, w first: write the file as TUM (t x y z qx qy qz qw, space-separated)"
-        )
-    raise FileFormatError(
-        f"{where}: the header {_shorten(header)} does not name the quaternion order; TUM-VI mocap has q_RS_w "
-        "(or qw) as its 5th column"
-    )
-
-
-def _number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _shorten(text: str, limit: int = 80) -> str:
-    return repr(text if len(text) <= limit else text[: limit - 3] + "...")

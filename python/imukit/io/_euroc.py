@@ -10,23 +10,26 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
-from imukit._errors import FileFormatError, ImukitError, ParameterError, TimestampError
+from imukit._errors import FileFormatError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
+from imukit.io._format import Format, Head
 from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
     Problem,
+    as_file_error,
     data_lines,
     increasing,
     integer_stamp,
     parse_rows,
+    public_reader,
     require_rows,
     rotations_from_rows,
     write_rows,
@@ -52,7 +55,6 @@ IMU_CSV = Path("imu0", "data.csv")
 GROUNDTRUTH_CSV = Path("state_groundtruth_estimate0", "data.csv")
 SENSOR_YAML = Path("imu0", "sensor.yaml")
 
-_T = TypeVar("_T")
 # EuRoC's imu0/sensor.yaml layout; the IMU is the body frame, so T_BS is the identity.
 _SENSOR_YAML_HEAD = """\
 # EuRoC / ASL imu0 sensor file, written by imukit
@@ -122,17 +124,19 @@ def write_euroc(
     if truth is not None and not isinstance(truth, Trajectory):
         raise TypeError(f"truth: expected an imukit Trajectory or None, got {type(truth).__name__}")
     if (noise is None) != (rate_hz is None):
-        raise ParameterError("noise: give noise and rate_hz together (for imu0/sensor.yaml), or neither")
+        raise ParameterError("give noise and rate_hz together (for imu0/sensor.yaml), or neither", argument="noise")
     rate = None if rate_hz is None else _rate(rate_hz)
     if noise is not None and not isinstance(noise, ImuNoise):
         raise TypeError(f"noise: expected an imukit ImuNoise, got {type(noise).__name__}")
     if epoch_ns is not None and imu.t_ns is not None and (truth is None or truth.t_ns is not None):
-        raise ParameterError("epoch_ns: offsets float-second stamps, but every stream given has t_ns already")
+        raise ParameterError(
+            "offsets float-second stamps, but every stream given has t_ns already", argument="epoch_ns"
+        )
     epoch = _epoch(epoch_ns)
     imu_ns = _stamps_ns(imu.t_ns, imu.t, epoch, "imu")
     gt_rows = None if truth is None else _groundtruth_rows(truth, truth_bias, epoch)
     if truth is None and truth_bias is not None:
-        raise ParameterError("truth_bias: given without truth")
+        raise ParameterError("given without truth", argument="truth_bias")
 
     root = Path(folder)
     (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
@@ -158,19 +162,20 @@ def _groundtruth_rows(
     truth: Trajectory, truth_bias: ImuBias | None, epoch: int
 ) -> tuple[NDArray[np.int64], FloatArray]:
     if truth.velocity is None:
-        raise ParameterError("truth: has no velocity, but EuRoC's ground truth has v_RS_R columns")
+        raise ParameterError("has no velocity, but EuRoC's ground truth has v_RS_R columns", argument="truth")
     if truth.gyro_bias is None or truth.accel_bias is None:
         if truth_bias is None:
             raise ParameterError(
-                "truth: has no gyro_bias / accel_bias histories for EuRoC's b_w_RS_S / b_a_RS_S columns; "
-                "pass truth_bias=ImuBias(...) to write a constant bias (ImuBias() for zeros)"
+                "has no gyro_bias / accel_bias histories for EuRoC's b_w_RS_S / b_a_RS_S columns; "
+                "pass truth_bias=ImuBias(...) to write a constant bias (ImuBias() for zeros)",
+                argument="truth",
             )
         if not isinstance(truth_bias, ImuBias):
             raise TypeError(f"truth_bias: expected an imukit ImuBias, got {type(truth_bias).__name__}")
         n = len(truth)
         biases = [np.broadcast_to(truth_bias.gyro, (n, 3)), np.broadcast_to(truth_bias.accel, (n, 3))]
     elif truth_bias is not None:
-        raise ParameterError("truth_bias: truth has bias histories already; pass one or the other")
+        raise ParameterError("truth has bias histories already; pass one or the other", argument="truth_bias")
     else:
         biases = [truth.gyro_bias, truth.accel_bias]
     quat_wxyz = truth.rotation.as_quat()[:, [3, 0, 1, 2]]
@@ -182,9 +187,9 @@ def _epoch(epoch_ns: int | None) -> int:
     if epoch_ns is None:
         return 0
     if not isinstance(epoch_ns, (int, np.integer)) or isinstance(epoch_ns, bool):
-        raise ParameterError(f"epoch_ns: expected an integer number of nanoseconds, got {epoch_ns!r}")
+        raise ParameterError(f"expected an integer number of nanoseconds, got {epoch_ns!r}", argument="epoch_ns")
     if not INT64_MIN <= int(epoch_ns) <= INT64_MAX:
-        raise ParameterError(f"epoch_ns: {epoch_ns} is outside the int64 range")
+        raise ParameterError(f"{epoch_ns} is outside the int64 range", argument="epoch_ns")
     return int(epoch_ns)
 
 
@@ -199,21 +204,30 @@ def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: 
     last = (int(whole[-1]) + epoch_s) * 10**9 + int(frac_ns[-1]) + epoch_rest
     if first < INT64_MIN or last > INT64_MAX:
         raise ParameterError(
-            f"{name}: float stamps {float(t[0])!r} … {float(t[-1])!r} s with epoch_ns = {epoch} "
-            "do not fit int64 nanoseconds"
+            f"float stamps {float(t[0])!r} … {float(t[-1])!r} s with epoch_ns = {epoch} do not fit int64 nanoseconds",
+            argument=name,
         )
     ns = (whole.astype(np.int64) + epoch_s) * 10**9 + (frac_ns.astype(np.int64) + epoch_rest)
     same = np.flatnonzero(np.diff(ns) <= 0)
     if same.size:
         k = int(same[0])
         raise TimestampError(
-            f"{name}: samples {k} and {k + 1} ({float(t[k])!r} and {float(t[k + 1])!r} s) "
-            f"fall on the same nanosecond {int(ns[k])}"
+            f"samples {k} and {k + 1} ({float(t[k])!r} and {float(t[k + 1])!r} s) "
+            f"fall on the same nanosecond {int(ns[k])}",
+            argument=name,
         )
     return ns
 
 
-def read_euroc(
+def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_euroc` reporting to ``bad``."""
+    root = mav0_root(folder)
+    truth = root / GROUNDTRUTH_CSV
+    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+
+
+@public_reader(euroc_folder)
+def read_euroc(  # type: ignore[empty-body]
     folder: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> tuple[ImuData, Trajectory | None]:
     """Read the IMU and ground truth of an EuRoC / ASL folder (as :func:`write_euroc` writes it).
@@ -232,15 +246,6 @@ def read_euroc(
     FileFormatError
         As :func:`read_euroc_imu` and :func:`read_euroc_groundtruth`.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_folder(folder, bad))
-
-
-def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
-    """:func:`read_euroc` reporting to ``bad``."""
-    root = mav0_root(folder)
-    truth = root / GROUNDTRUTH_CSV
-    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
 
 
 def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
@@ -298,7 +303,8 @@ def euroc_extrinsics(sensor: KalibrImu, *, where: str = "sensor.yaml") -> FloatA
     numbers = [_finite(x) for x in data] if isinstance(data, list) else []
     if shape != (4, 4) or len(numbers) != 16 or None in numbers:
         raise FileFormatError(
-            f"path: {where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}"
+            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}",
+            argument="path",
         )
     return np.array(numbers, dtype=np.float64).reshape(4, 4)
 
@@ -324,7 +330,14 @@ def mav0_root(folder: str | os.PathLike[str]) -> Path:
     return root
 
 
-def read_euroc_imu(
+def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
+    """:func:`read_euroc_imu` reporting to ``bad``."""
+    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
+    return as_file_error(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+
+
+@public_reader(euroc_imu)
+def read_euroc_imu(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> ImuData:
     """Read an EuRoC ``imu0/data.csv``: ``timestamp [ns], ω_x,y,z [rad/s], a_x,y,z [m/s²]`` rows.
@@ -352,17 +365,30 @@ def read_euroc_imu(
         (a ``ValueError``) naming the file and line: not 7 fields, a stamp that is not an integer,
         a value that is not a finite number, time not strictly increasing, or no data.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_imu(path, bad))
 
 
-def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
-    """:func:`read_euroc_imu` reporting to ``bad``."""
-    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
-    return build(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
+def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_euroc_groundtruth` reporting to ``bad``."""
+    t_ns, values, lines = read_stamped_csv(
+        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
+    )
+    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
+    return as_file_error(
+        path,
+        lambda: Trajectory(
+            None,
+            values[:, 0:3],
+            values[:, 7:10],
+            rotation,
+            t_ns=t_ns,
+            gyro_bias=values[:, 10:13],
+            accel_bias=values[:, 13:16],
+        ),
+    )
 
 
-def read_euroc_groundtruth(
+@public_reader(euroc_groundtruth)
+def read_euroc_groundtruth(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> Trajectory:
     """Read an EuRoC ``state_groundtruth_estimate0/data.csv`` into a :class:`imukit.Trajectory`.
@@ -380,28 +406,6 @@ def read_euroc_groundtruth(
     FileFormatError
         As :func:`read_euroc_imu` (17 fields), and for a zero quaternion.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(euroc_groundtruth(path, bad))
-
-
-def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    """:func:`read_euroc_groundtruth` reporting to ``bad``."""
-    t_ns, values, lines = read_stamped_csv(
-        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
-    )
-    rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
-    return build(
-        path,
-        lambda: Trajectory(
-            None,
-            values[:, 0:3],
-            values[:, 7:10],
-            rotation,
-            t_ns=t_ns,
-            gyro_bias=values[:, 10:13],
-            accel_bias=values[:, 13:16],
-        ),
-    )
 
 
 def read_stamped_csv(
@@ -444,9 +448,36 @@ def _split_comma(text: str) -> list[str]:
     return text.split(",")
 
 
-def build(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
-    """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
-    try:
-        return make()
-    except ImukitError as exc:
-        raise FileFormatError(f"path: {os.fspath(path)}: {exc}") from exc
+def dataset_root(path: str | os.PathLike[str]) -> Path | None:
+    """``path`` or its ``mav0/`` when it is a folder holding ``imu0/data.csv``, else None."""
+    folder = Path(path)
+    for root in (folder, folder / "mav0"):
+        if folder.is_dir() and (root / IMU_CSV).is_file():
+            return root
+    return None
+
+
+def dataset_file(name: str, file: Path, read: Callable[..., Any], description: str) -> Format:
+    """The trajectory format of a dataset folder (or its ``mav0/``) holding ``file``, read by ``read``."""
+
+    def holds(path: Path, head: Head) -> bool:
+        root = dataset_root(path)
+        return root is not None and (root / file).is_file()
+
+    return Format(name, "trajectory", holds, lambda folder, bad: read(mav0_root(folder) / file, bad), description)
+
+
+def _imu_csv_like(path: Path, head: Head) -> bool:
+    fields = head.fields(",")
+    return len(fields) == 7 and integer_stamp(fields[0].strip()) is not None
+
+
+# The descriptions of the formats (folders and files share one: listed once).
+DATASET = "EuRoC / TUM-VI folder or imu0/data.csv"
+GROUNDTRUTH = "EuRoC ground truth"
+EUROC_FOLDER = Format("euroc-folder", "imu", lambda path, head: dataset_root(path) is not None, euroc_folder, DATASET)
+EUROC_IMU_CSV = Format("euroc-imu-csv", "imu", _imu_csv_like, euroc_imu, DATASET)
+EUROC_GROUNDTRUTH_FOLDER = dataset_file("euroc-groundtruth-folder", GROUNDTRUTH_CSV, euroc_groundtruth, GROUNDTRUTH)
+EUROC_GROUNDTRUTH = Format(
+    "euroc-groundtruth", "trajectory", lambda path, head: len(head.fields(",")) == 17, euroc_groundtruth, GROUNDTRUTH
+)

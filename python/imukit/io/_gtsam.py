@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 
 from imukit._errors import FileFormatError
 from imukit.imu import ImuData
-from imukit.io._euroc import build
-from imukit.io._lines import Rows, data_lines, increasing, parse_rows, require_rows
+from imukit.io._format import Format, Head
+from imukit.io._lines import Rows, as_file_error, data_lines, increasing, parse_rows, public_reader, require_rows
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 
 __all__ = ["read_gtsam_imu"]
@@ -27,7 +28,27 @@ GTSAM_COLUMNS = ["Time", "dt", "accelX", "accelY", "accelZ", "omegaX", "omegaY",
 DT_TOLERANCE_S = 1e-6
 
 
-def read_gtsam_imu(
+def gtsam_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
+    """:func:`read_gtsam_imu` reporting to ``bad``."""
+    rows = parse_rows(
+        _without_header(path),
+        path,
+        bad,
+        split=str.split,
+        width=8,
+        expected="fields 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'",
+        columns=range(8),
+    )
+    stamps = [f[0] for f in rows.fields]
+    rows = rows.take(increasing(rows, [row[0] for row in rows.values], stamps, path, bad))
+    require_rows(rows, path, bad)
+    _check_dt(rows, path, bad)
+    data = np.array(rows.values, dtype=np.float64)
+    return as_file_error(path, lambda: ImuData(data[:, 0], data[:, 5:8], data[:, 2:5]))
+
+
+@public_reader(gtsam_imu)
+def read_gtsam_imu(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> ImuData:
     """Read a GTSAM / KITTI IMU text file: ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``.
@@ -68,27 +89,6 @@ def read_gtsam_imu(
         Naming the file and line: the bad lines above ("raise" mode), a dt that disagrees with the
         stamps, or no data.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(gtsam_imu(path, bad))
-
-
-def gtsam_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
-    """:func:`read_gtsam_imu` reporting to ``bad``."""
-    rows = parse_rows(
-        _without_header(path),
-        path,
-        bad,
-        split=str.split,
-        width=8,
-        expected="fields 'Time dt accelX accelY accelZ omegaX omegaY omegaZ'",
-        columns=range(8),
-    )
-    stamps = [f[0] for f in rows.fields]
-    rows = rows.take(increasing(rows, [row[0] for row in rows.values], stamps, path, bad))
-    require_rows(rows, path, bad)
-    _check_dt(rows, path, bad)
-    data = np.array(rows.values, dtype=np.float64)
-    return build(path, lambda: ImuData(data[:, 0], data[:, 5:8], data[:, 2:5]))
 
 
 def _without_header(path: str | os.PathLike[str]) -> Iterator[tuple[int, str]]:
@@ -114,7 +114,16 @@ def _check_dt(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:
     if off.size:
         k = int(off[0]) + 1
         raise FileFormatError(
-            f"path: {where}, line {rows.lines[k]}: dt = {float(data[k, 1])!r} s, but the stamps step by "
+            f"{where}, line {rows.lines[k]}: dt = {float(data[k, 1])!r} s, but the stamps step by "
             f"{float(step[k - 1])!r} s since line {rows.lines[k - 1]}; read_gtsam_imu expects GTSAM's "
-            "dt[k] = t[k] - t[k-1] (read_imu_csv reads the file without its dt)"
+            "dt[k] = t[k] - t[k-1] (read_imu_csv reads the file without its dt)",
+            argument="path",
         )
+
+
+def _gtsam_header(path: Path, head: Head) -> bool:
+    lines = head.lines or []
+    return bool(lines) and lines[0][1].split() == GTSAM_COLUMNS
+
+
+GTSAM_TEXT = Format("gtsam-text", "imu", _gtsam_header, gtsam_imu, "GTSAM / KITTI text")

@@ -79,28 +79,36 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
         text = _OPENCV_DIRECTIVE.sub("", raw.decode("utf-8"), count=1)  # keeps the newline: line numbers hold
     except UnicodeDecodeError as exc:
         line = raw[: exc.start].count(b"\n") + 1
-        raise FileFormatError(f"path: {where}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})") from None
+        raise FileFormatError(
+            f"{where}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})", argument="path"
+        ) from None
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise FileFormatError(f"path: {where}{_yaml_problem(exc)}") from None
+        raise FileFormatError(f"{where}{_yaml_problem(exc)}", argument="path") from None
     if section is not None:
         if not isinstance(doc, dict) or section not in doc:
-            raise FileFormatError(f"path: {where}: no section {section!r} at the top level")
+            raise FileFormatError(f"{where}: no section {section!r} at the top level", argument="path")
         doc = doc[section]
     within = "" if section is None else f" in section {section!r}"
     if not isinstance(doc, dict):
-        raise FileFormatError(f"path: {where}: expected a mapping of Kalibr keys{within}, got {type(doc).__name__}")
+        raise FileFormatError(
+            f"{where}: expected a mapping of Kalibr keys{within}, got {type(doc).__name__}", argument="path"
+        )
     missing = [key for key in _NOISE_KEYS if key not in doc]
     rates = [key for key in _RATE_KEYS if key in doc]
     if not rates:
         missing.append("update_rate")
     if missing:
-        raise FileFormatError(f"path: {where}: missing key {', '.join(missing)}{within}{_section_hint(doc, section)}")
+        raise FileFormatError(
+            f"{where}: missing key {', '.join(missing)}{within}{_section_hint(doc, section)}", argument="path"
+        )
     densities = {field: _number(doc, key, where, positive=False) for key, (field, _, _) in _NOISE_KEYS.items()}
     rate, *others = (_number(doc, key, where, positive=True) for key in rates)
     if others and others[0] != rate:
-        raise FileFormatError(f"path: {where}, key 'rate_hz': {others[0]!r} disagrees with update_rate {rate!r}")
+        raise FileFormatError(
+            f"{where}, key 'rate_hz': {others[0]!r} disagrees with update_rate {rate!r}", argument="path"
+        )
     extra = {key: value for key, value in doc.items() if key not in _NOISE_KEYS and key not in _RATE_KEYS}
     return KalibrImu(ImuNoise(**densities), rate, extra)
 
@@ -127,15 +135,15 @@ def write_kalibr_imu(
     more = dict(extra or {})
     taken = sorted(set(more) & {*_NOISE_KEYS, *_RATE_KEYS, *([] if rostopic is None else ["rostopic"])})
     if taken:
-        raise ParameterError(f"extra: keys {taken} are written from noise, rate_hz and rostopic")
+        raise ParameterError(f"keys {taken} are written from noise, rate_hz and rostopic", argument="extra")
     if rostopic is not None:
         if not isinstance(rostopic, str):
-            raise ParameterError(f"rostopic: expected a string such as '/imu0', got {rostopic!r}")
+            raise ParameterError(f"expected a string such as '/imu0', got {rostopic!r}", argument="rostopic")
         more = {"rostopic": rostopic, **more}
     try:
         more_text = [yaml.safe_dump(more, sort_keys=False, allow_unicode=True).rstrip("\n")] if more else []
     except yaml.YAMLError as exc:
-        raise ParameterError(f"extra: cannot be written as YAML (plain Python values only): {exc}") from None
+        raise ParameterError(f"cannot be written as YAML (plain Python values only): {exc}", argument="extra") from None
     lines = [
         "# Kalibr IMU noise model (continuous-time densities), written by imukit",
         *noise_lines(noise, list(_NOISE_KEYS)),
@@ -173,7 +181,7 @@ def _number(doc: dict[Any, Any], key: str, where: str, *, positive: bool) -> flo
             pass
     if not (math.isfinite(x) and (x > 0 if positive else x >= 0)):
         what = "a positive, finite number" if positive else "a finite number ≥ 0"
-        raise FileFormatError(f"path: {where}, key {key!r}: expected {what}, got {value!r}")
+        raise FileFormatError(f"{where}, key {key!r}: expected {what}, got {value!r}", argument="path")
     return x
 
 

@@ -8,8 +8,16 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from imukit._errors import FileFormatError
-from imukit.io._euroc import build
-from imukit.io._lines import Problem, Rows, data_lines, increasing, parse_rows, require_rows
+from imukit.io._lines import (
+    Problem,
+    Rows,
+    as_file_error,
+    data_lines,
+    increasing,
+    parse_rows,
+    public_reader,
+    require_rows,
+)
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.state import Trajectory
 
@@ -19,7 +27,40 @@ __all__ = ["read_kitti_poses"]
 ORTHONORMAL_TOLERANCE = 1e-4
 
 
-def read_kitti_poses(
+def kitti_poses(poses_path: str | os.PathLike[str], times_path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_kitti_poses` reporting to ``bad``."""
+    pose_lines, time_lines = list(data_lines(poses_path)), list(data_lines(times_path))
+    if len(pose_lines) != len(time_lines):
+        raise FileFormatError(
+            f"{os.fspath(poses_path)}: {len(pose_lines)} pose lines, but {os.fspath(times_path)} has "
+            f"{len(time_lines)} time lines (line k of each belong together)",
+            argument="path",
+        )
+    poses = parse_rows(
+        pose_lines,
+        poses_path,
+        bad,
+        split=str.split,
+        width=12,
+        expected="fields (a 3x4 pose [R | p] row by row)",
+        columns=range(12),
+        check=_rotation_check,
+    )
+    times = parse_rows(
+        time_lines, times_path, bad, split=str.split, width=1, expected="field (a time in seconds)", columns=[0]
+    )
+    poses, times = _pair(poses, times, pose_lines, time_lines, poses_path, times_path, bad)
+    keep = increasing(times, [row[0] for row in times.values], times.texts, times_path, bad)
+    poses, times = _pair(poses, times.take(keep), pose_lines, time_lines, poses_path, times_path, bad)
+    require_rows(poses, poses_path, bad)
+    data = np.array(poses.values, dtype=np.float64).reshape(-1, 3, 4)
+    rotation = Rotation.from_matrix(data[:, :, :3])
+    t = np.array(times.values, dtype=np.float64)[:, 0]
+    return as_file_error(poses_path, lambda: Trajectory(t, data[:, :, 3], None, rotation))
+
+
+@public_reader(kitti_poses)
+def read_kitti_poses(  # type: ignore[empty-body]
     poses_path: str | os.PathLike[str],
     times_path: str | os.PathLike[str],
     *,
@@ -57,39 +98,6 @@ def read_kitti_poses(
         Naming the file and line for bad lines ("raise" mode); naming both files when their line
         counts differ; no data.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(kitti_poses(poses_path, times_path, bad))
-
-
-def kitti_poses(poses_path: str | os.PathLike[str], times_path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    """:func:`read_kitti_poses` reporting to ``bad``."""
-    pose_lines, time_lines = list(data_lines(poses_path)), list(data_lines(times_path))
-    if len(pose_lines) != len(time_lines):
-        raise FileFormatError(
-            f"path: {os.fspath(poses_path)}: {len(pose_lines)} pose lines, but {os.fspath(times_path)} has "
-            f"{len(time_lines)} time lines (line k of each belong together)"
-        )
-    poses = parse_rows(
-        pose_lines,
-        poses_path,
-        bad,
-        split=str.split,
-        width=12,
-        expected="fields (a 3x4 pose [R | p] row by row)",
-        columns=range(12),
-        check=_rotation_check,
-    )
-    times = parse_rows(
-        time_lines, times_path, bad, split=str.split, width=1, expected="field (a time in seconds)", columns=[0]
-    )
-    poses, times = _pair(poses, times, pose_lines, time_lines, poses_path, times_path, bad)
-    keep = increasing(times, [row[0] for row in times.values], times.texts, times_path, bad)
-    poses, times = _pair(poses, times.take(keep), pose_lines, time_lines, poses_path, times_path, bad)
-    require_rows(poses, poses_path, bad)
-    data = np.array(poses.values, dtype=np.float64).reshape(-1, 3, 4)
-    rotation = Rotation.from_matrix(data[:, :, :3])
-    t = np.array(times.values, dtype=np.float64)[:, 0]
-    return build(poses_path, lambda: Trajectory(t, data[:, :, 3], None, rotation))
 
 
 def _pair(

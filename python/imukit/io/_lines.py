@@ -5,27 +5,33 @@ Every reader reports problems as :class:`imukit.FileFormatError` messages starti
 every writer prints floats with ``repr``, the shortest text that reads back to the same float, so a
 write → read round trip is bit-exact.
 
-A reader runs two passes through :class:`BadLines`: :func:`parse_rows` checks each line on its own
-(field count, numbers, finiteness, a format's own row check), then :func:`increasing` keeps the
-longest strictly increasing run of the stamps of the rows that passed (:func:`in_order`, shared with the
-ROS bag reader), so one wild stamp costs its own line only.
+A reader is a private ``x(path, bad)`` made public by :func:`public_reader`, which makes the
+``on_bad_line`` / ``report`` pair into one :class:`BadLines`; it builds its result through
+:func:`as_file_error`, so a value the data types refuse (stamps that are not nanoseconds) is a
+:class:`imukit.FileFormatError` naming the file. It runs two passes through :class:`BadLines`:
+:func:`parse_rows` checks each line on its own (field count, numbers, finiteness, a format's own row
+check), then :func:`increasing` keeps the longest strictly increasing run of the stamps of the rows
+that passed (:func:`in_order`, shared with the ROS bag reader), so one wild stamp costs its own line
+only.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import os
 import re
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import NamedTuple, Union
+from typing import Any, NamedTuple, TypeVar, Union
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, rotation_from_unit_quat
-from imukit._errors import FileFormatError
-from imukit.io._report import BadLines
+from imukit._errors import FileFormatError, ImukitError
+from imukit.io._report import BadLines, ReadReport
 
 NS_PER_S = 1_000_000_000
 INT64_MIN = -(2**63)
@@ -40,6 +46,8 @@ _INTEGER = re.compile(r"[+-]?[0-9]{1,20}")
 Problem = tuple[str, str]  # (kind, detail) of a bad line
 RowCheck = Callable[[list[str], list[float]], Union[Problem, None]]
 Split = Callable[[str], list[str]]
+_T = TypeVar("_T")
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 class Rows(NamedTuple):
@@ -230,7 +238,7 @@ def ns_text(ns: int) -> str:
 def require_rows(rows: Rows, path: str | os.PathLike[str], bad: BadLines) -> None:
     """:class:`FileFormatError` when no line is left (saying how many were skipped)."""
     if not rows.lines:
-        raise FileFormatError(f"path: {os.fspath(path)}: no data lines{bad.skipped_in(path)}")
+        raise FileFormatError(f"{os.fspath(path)}: no data lines{bad.skipped_in(path)}", argument="path")
 
 
 def zero_quaternion(quat: Sequence[float]) -> Problem | None:
@@ -255,7 +263,9 @@ def rotations_from_rows(quat: FloatArray, lines: Sequence[int], where: str) -> R
     extreme = np.flatnonzero(off & ~plain)
     largest = np.abs(quat[extreme]).max(axis=1, initial=0.0)
     if np.any(largest == 0.0):
-        raise FileFormatError(f"path: {where}, line {lines[int(extreme[largest == 0.0][0])]}: zero quaternion")
+        raise FileFormatError(
+            f"{where}, line {lines[int(extreme[largest == 0.0][0])]}: zero quaternion", argument="path"
+        )
     scaled = quat[extreme] / largest[:, None]
     quat[extreme] = scaled / np.linalg.norm(scaled, axis=1)[:, None]
     return rotation_from_unit_quat(quat)
@@ -276,3 +286,46 @@ def write_rows(
             f.write(header + "\n")
         for stamp, row in zip(stamps, values.tolist()):
             f.write(stamp + sep + sep.join(map(repr, row)) + "\n")
+
+
+def as_file_error(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
+    """``make()``, its validation errors (e.g. stamps that are not nanoseconds) as FileFormatError."""
+    try:
+        return make()
+    except ImukitError as exc:
+        raise FileFormatError(f"{os.fspath(path)}: {exc}", argument="path") from exc
+
+
+def public_reader(private: Callable[..., Any]) -> Callable[[_F], _F]:
+    """The public ``read_x(..., on_bad_line="raise", report=None)`` from the private ``x(..., bad)``.
+
+    The decorated function gives the signature, its defaults and the docstring; its body is never run.
+    A call binds its arguments to that signature, makes ``on_bad_line`` and ``report`` into one
+    :class:`BadLines`, calls ``private(**the other arguments, bad=bad)`` and hands the skipped lines
+    over with :meth:`BadLines.done` (whose warning then points at the caller of ``read_x``).
+    """
+
+    def decorate(public: _F) -> _F:
+        signature = inspect.signature(public)
+
+        @functools.wraps(public)
+        def read(*args: Any, **kwargs: Any) -> Any:
+            arguments = signature.bind(*args, **kwargs)
+            arguments.apply_defaults()
+            given = arguments.arguments
+            bad = BadLines(given.pop("on_bad_line"), given.pop("report"))
+            return bad.done(private(**given, bad=bad))
+
+        return read  # type: ignore[return-value]
+
+    return decorate
+
+
+def read_into(bad: BadLines, read: Callable[..., _T], *args: Any, **options: Any) -> _T:
+    """``read(*args, **options)``, a public reader, in ``bad``'s mode, its skipped lines handed to ``bad``
+    (so that a reader calling another one warns once, at its own caller)."""
+    report = bad.report if bad.report is not None else ReadReport()
+    result = read(*args, **options, on_bad_line="skip" if bad.skip else "raise", report=report)
+    if bad.report is None:
+        bad.records += report.skipped
+    return result

@@ -125,7 +125,7 @@ def check_on_bad_line(on_bad_line: object) -> OnBadLine:
     """``on_bad_line`` if it is ``"raise"`` or ``"skip"``, else :class:`imukit.ParameterError`."""
     if on_bad_line == "raise" or on_bad_line == "skip":
         return on_bad_line
-    raise ParameterError(f"on_bad_line: expected 'raise' or 'skip', got {on_bad_line!r}")
+    raise ParameterError(f"expected 'raise' or 'skip', got {on_bad_line!r}", argument="on_bad_line")
 
 
 class BadLines:
@@ -146,7 +146,7 @@ class BadLines:
         """Line ``line`` of ``path`` is bad: raise ``path: <path>, line <n>: <detail>``, or record it."""
         where = os.fspath(path)
         if not self.skip:
-            raise FileFormatError(f"path: {where}, line {line}: {detail}")
+            raise FileFormatError(f"{where}, line {line}: {detail}", argument="path")
         self.records.append(SkippedLine(where, line, f"{kind}: {detail}", text))
 
     def skipped_in(self, path: str | os.PathLike[str]) -> str:

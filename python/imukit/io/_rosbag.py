@@ -21,8 +21,18 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, MissingDependencyError, ParameterError
 from imukit.imu import ImuData
-from imukit.io._euroc import build
-from imukit.io._lines import NS_PER_S, Problem, in_order, ns_text, rotations_from_rows, zero_quaternion
+from imukit.io._format import Format, Head
+from imukit.io._lines import (
+    NS_PER_S,
+    Problem,
+    as_file_error,
+    in_order,
+    ns_text,
+    public_reader,
+    read_into,
+    rotations_from_rows,
+    zero_quaternion,
+)
 from imukit.io._report import BadLines, ReadReport
 from imukit.state import Trajectory
 
@@ -94,15 +104,16 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
         from rosbags.typesys import Stores, get_typestore
     except ImportError as e:
         raise MissingDependencyError(
-            f'{caller}: needs the rosbags package, which is not installed (pip install "imukit[ros]")'
+            'needs the rosbags package, which is not installed (pip install "imukit[ros]")', argument=caller
         ) from e
     bag = Path(path)
     if not bag.exists():
         raise FileNotFoundError(f"path: {bag}: no such file or folder")
     if not (bag.is_dir() or is_bag_path(bag)):
         raise FileFormatError(
-            f"path: {bag}: not a ROS bag; expected a ROS 1 .bag file, a ROS 2 bag folder (with metadata.yaml), "
-            "or a ROS 2 .mcap / .db3 file"
+            f"{bag}: not a ROS bag; expected a ROS 1 .bag file, a ROS 2 bag folder (with metadata.yaml), "
+            "or a ROS 2 .mcap / .db3 file",
+            argument="path",
         )
     with _lower_case_suffix(bag) as readable:
         # Humble-era ROS 2 bags store no message definitions: fall back on the standard ones.
@@ -115,7 +126,7 @@ def _open(path: str | os.PathLike[str], caller: str) -> Iterator[Any]:
         except Exception as e:
             mcap = bag.suffix.lower() == ".mcap"
             hint = " (rosbags reads MCAP files of the ros2 profile, CDR-encoded, only)" if mcap else ""
-            raise FileFormatError(f"path: {bag}: cannot open as a ROS bag{hint}: {e}") from e
+            raise FileFormatError(f"{bag}: cannot open as a ROS bag{hint}: {e}", argument="path") from e
         try:
             yield reader
         finally:
@@ -135,7 +146,9 @@ def _lower_case_suffix(bag: Path) -> Iterator[Path]:
         try:
             os.symlink(bag.resolve(), link)
         except OSError as e:  # e.g. Windows without the right to make links
-            raise FileFormatError(f"path: {bag}: rosbags needs the suffix {suffix}, rename the file ({e})") from e
+            raise FileFormatError(
+                f"{bag}: rosbags needs the suffix {suffix}, rename the file ({e})", argument="path"
+            ) from e
         yield link
 
 
@@ -170,19 +183,21 @@ def _select(
     """
     if requested is not None:
         if not isinstance(requested, str):
-            raise ParameterError(f"{name}: expected a topic name or None, got {type(requested).__name__}")
+            raise ParameterError(f"expected a topic name or None, got {type(requested).__name__}", argument=name)
         if requested not in topics:
-            raise ParameterError(f"{name}: topic {requested!r} is not in the bag; its topics: {_listing(topics)}")
+            raise ParameterError(
+                f"topic {requested!r} is not in the bag; its topics: {_listing(topics)}", argument=name
+            )
         if topics[requested] not in wanted:
             raise ParameterError(
-                f"{name}: topic {requested!r} has type {topics[requested]}, expected {' or '.join(wanted)}"
+                f"topic {requested!r} has type {topics[requested]}, expected {' or '.join(wanted)}", argument=name
             )
         return requested
     counts = {t: info.msgcount for t, info in reader.topics.items()}
     candidates = {t: m for t, m in topics.items() if m in wanted and counts[t] > 0}
     if len(candidates) > 1:
         raise ParameterError(
-            f"{name}: the bag has {len(candidates)} candidate topics, pass one: {_listing(candidates)}"
+            f"the bag has {len(candidates)} candidate topics, pass one: {_listing(candidates)}", argument=name
         )
     return next(iter(candidates), None)
 
@@ -239,7 +254,7 @@ def _read_topic(
         _bad_message(bad, where, topic, msgtype, indices[d.at], samples[d.at], (d.kind, detail))
     if not keep:
         left = f"no valid messages (all {index} skipped)" if index else "no messages"
-        raise FileFormatError(f"path: {where}, topic {topic}: {left}")
+        raise FileFormatError(f"{where}, topic {topic}: {left}", argument="path")
     stamps = np.array([samples[k].stamp_ns for k in keep], dtype=np.int64)
     return stamps, np.array([samples[k].values for k in keep], dtype=np.float64)
 
@@ -254,7 +269,7 @@ def _bad_message(
         text += ", " + _DECODERS[msgtype][1].format(*map(repr, sample.values))
     detail = f"topic {topic}, message {index}: {problem[1]}"
     if not bad.skip:
-        raise FileFormatError(f"path: {where}, {detail}: {text}")
+        raise FileFormatError(f"{where}, {detail}: {text}", argument="path")
     bad.bad(where, index, problem[0], detail, text)
 
 
@@ -263,10 +278,38 @@ def _trajectory(where: str, t_ns: NDArray[np.int64], pose: FloatArray) -> Trajec
     rotation = rotations_from_rows(np.ascontiguousarray(pose[:, 3:7]), [], "")
     # nav_msgs/Odometry's twist is in child_frame_id (body) coordinates: v_w = R_wb v_b.
     velocity = rotation.apply(pose[:, 7:10]) if pose.shape[1] == 10 else None
-    return build(where, lambda: Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns))
+    return as_file_error(where, lambda: Trajectory(None, pose[:, :3], velocity, rotation, t_ns=t_ns))
 
 
-def read_rosbag(
+def rosbag(
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    *,
+    imu_topic: str | None,
+    groundtruth_topic: str | None,
+    time_source: str,
+) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_rosbag` reporting to ``bad``."""
+    if time_source not in ("header", "record"):
+        raise ParameterError(f"expected 'header' or 'record', got {time_source!r}", argument="time_source")
+    where = os.fspath(path)
+    with _open(path, "read_rosbag") as reader:
+        topics = _topics(reader)
+        imu_name = _select(reader, topics, imu_topic, "imu_topic", (IMU_TYPE,))
+        if imu_name is None:
+            raise ParameterError(
+                f"the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}", argument="imu_topic"
+            )
+        truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
+        t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
+        truth = None
+        if truth_name is not None:
+            truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
+    return as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth
+
+
+@public_reader(rosbag)
+def read_rosbag(  # type: ignore[empty-body]
     path: str | os.PathLike[str],
     *,
     imu_topic: str | None = None,
@@ -328,20 +371,17 @@ def read_rosbag(
         No such path; not a readable bag, a bad message, a topic without valid messages; a topic
         that is missing, of the wrong type or ambiguous, or a bad option.
     """
-    if time_source not in ("header", "record"):
-        raise ParameterError(f"time_source: expected 'header' or 'record', got {time_source!r}")
-    bad = BadLines(on_bad_line, report)
-    where = os.fspath(path)
-    with _open(path, "read_rosbag") as reader:
-        topics = _topics(reader)
-        imu_name = _select(reader, topics, imu_topic, "imu_topic", (IMU_TYPE,))
-        if imu_name is None:
-            raise ParameterError(
-                f"imu_topic: the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}"
-            )
-        truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
-        t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
-        truth = None
-        if truth_name is not None:
-            truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
-    return bad.done((build(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth))
+
+
+def _detected(path: str | os.PathLike[str], bad: BadLines, **options: Any) -> tuple[ImuData, Trajectory | None]:
+    """:func:`read_rosbag` for :func:`imukit.io.read_imu`, looked up when called (tests replace it)."""
+    return read_into(bad, read_rosbag, path, **options)
+
+
+def _bag_like(path: Path, head: Head) -> bool:
+    return (path.is_dir() and (path / "metadata.yaml").is_file()) or is_bag_path(path)
+
+
+ROSBAG = Format(
+    "rosbag", "imu", _bag_like, _detected, "ROS bag", options=("imu_topic", "groundtruth_topic", "time_source")
+)

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import os
 import re
+from pathlib import Path
 
 import numpy as np
 
+from imukit.io._format import Format, Head
 from imukit.io._lines import (
     INT64_MAX,
     all_exact,
@@ -14,6 +16,7 @@ from imukit.io._lines import (
     increasing,
     ns_text,
     parse_rows,
+    public_reader,
     require_rows,
     rotations_from_rows,
     write_rows,
@@ -43,7 +46,33 @@ def write_tum(trajectory: Trajectory, path: str | os.PathLike[str]) -> None:
     write_rows(path, None, stamps, np.concatenate([trajectory.position, trajectory.rotation.as_quat()], axis=1), " ")
 
 
-def read_tum(
+def tum(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
+    """:func:`read_tum` reporting to ``bad``."""
+    rows = parse_rows(
+        data_lines(path),
+        path,
+        bad,
+        split=str.split,
+        width=8,
+        expected="fields 'timestamp tx ty tz qx qy qz qw'",
+        columns=range(8),
+        check=lambda fields, row: zero_quaternion(row[4:8]),
+    )
+    stamps = [f[0] for f in rows.fields]
+    ns = all_exact(stamps, exact_ns)
+    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, path, bad)
+    rows = rows.take(keep)
+    require_rows(rows, path, bad)
+    data = np.array(rows.values, dtype=np.float64)
+    rotation = rotations_from_rows(np.ascontiguousarray(data[:, 4:8]), rows.lines, os.fspath(path))
+    if ns is None:
+        return Trajectory(data[:, 0], data[:, 1:4], None, rotation)
+    # With t_ns, Trajectory sets t = t_ns / 1e9.
+    return Trajectory(None, data[:, 1:4], None, rotation, t_ns=np.array([ns[k] for k in keep], dtype=np.int64))
+
+
+@public_reader(tum)
+def read_tum(  # type: ignore[empty-body]
     path: str | os.PathLike[str], *, on_bad_line: OnBadLine = "raise", report: ReadReport | None = None
 ) -> Trajectory:
     """Read a TUM file into a :class:`imukit.Trajectory` (``velocity`` None).
@@ -71,33 +100,6 @@ def read_tum(
         (a ``ValueError``) naming the file and line: wrong number of fields, text that is not a
         number, non-finite values, a zero quaternion, time not strictly increasing, or no data.
     """
-    bad = BadLines(on_bad_line, report)
-    return bad.done(tum(path, bad))
-
-
-def tum(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    """:func:`read_tum` reporting to ``bad``."""
-    rows = parse_rows(
-        data_lines(path),
-        path,
-        bad,
-        split=str.split,
-        width=8,
-        expected="fields 'timestamp tx ty tz qx qy qz qw'",
-        columns=range(8),
-        check=lambda fields, row: zero_quaternion(row[4:8]),
-    )
-    stamps = [f[0] for f in rows.fields]
-    ns = all_exact(stamps, exact_ns)
-    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, path, bad)
-    rows = rows.take(keep)
-    require_rows(rows, path, bad)
-    data = np.array(rows.values, dtype=np.float64)
-    rotation = rotations_from_rows(np.ascontiguousarray(data[:, 4:8]), rows.lines, os.fspath(path))
-    if ns is None:
-        return Trajectory(data[:, 0], data[:, 1:4], None, rotation)
-    # With t_ns, Trajectory sets t = t_ns / 1e9.
-    return Trajectory(None, data[:, 1:4], None, rotation, t_ns=np.array([ns[k] for k in keep], dtype=np.int64))
 
 
 def exact_ns(stamp: str) -> int | None:
@@ -108,3 +110,10 @@ def exact_ns(stamp: str) -> int | None:
     sign, whole, frac = match.groups()
     ns = (-1 if sign else 1) * (int(whole) * 10**9 + int(frac))
     return ns if abs(ns) <= INT64_MAX else None
+
+
+def _tum_like(path: Path, head: Head) -> bool:
+    return len(head.fields(",")) == 1 and len(head.fields(None)) == 8
+
+
+TUM = Format("tum", "trajectory", _tum_like, tum, "TUM")
