@@ -24,9 +24,9 @@
 
 pub mod allan;
 pub mod attitude;
-pub mod batch;
 mod error;
 pub mod euler;
+pub mod ffi;
 pub mod filters;
 pub mod imu;
 pub mod interp;
