@@ -30,6 +30,7 @@ pub mod ffi;
 pub mod filters;
 pub mod imu;
 pub mod interp;
+pub mod lie;
 mod mat3;
 pub mod names;
 pub mod preint;
