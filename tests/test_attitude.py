@@ -16,7 +16,7 @@ PAIRS = [
     for s in ik.attitude.SCHEMES
     if r != "euler" or s not in ("exp", "magnus")
 ]
-EXPECTED_ORDER = {"euler": 1, "exp": 1, "midpoint": 2, "rk4": 4, "magnus": 4}
+EXPECTED_ORDER = {"euler": 1, "exp": 1, "rk2": 2, "midpoint": 2, "rk4": 4, "magnus": 4}
 
 
 def angle_error(a: Rotation, b: Rotation) -> np.ndarray:
@@ -160,7 +160,7 @@ def test_bad_input() -> None:
         ik.integrate_attitude(t, bad)
     with pytest.raises(ik.ShapeError, match=r"gyro: expected shape \(N, 3\) with N = len\(t\) = 11"):
         ik.integrate_attitude(t, w[:10])
-    with pytest.raises(ik.ParameterError, match=r"supports \[\"euler\", \"midpoint\", \"rk4\"\]"):
+    with pytest.raises(ik.ParameterError, match=r"supports \[\"euler\", \"rk2\", \"rk4\"\]"):
         ik.integrate_attitude(t, w, scheme="magnus", representation="euler")
     with pytest.raises(ik.ParameterError, match="scheme"):
         ik.integrate_attitude(t, w, scheme="rk45")

@@ -3,8 +3,12 @@ the glue builds ``cls(message, argument=..., index=...)``, and ``str(exc)`` is u
 
 from __future__ import annotations
 
+import inspect
+import warnings
+
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
 from imukit import _core
@@ -35,3 +39,36 @@ def test_an_unknown_name_is_a_parameter_error_without_an_index() -> None:
         _core.quat_multiply(np.zeros((1, 8)), "q", "nope")
     assert info.value.argument == "convention"
     assert info.value.index is None
+
+
+def test_scheme_lists_come_from_the_core_and_old_names_warn_but_give_the_same_result() -> None:
+    assert ik.attitude.SCHEMES == _core.ATTITUDE_SCHEMES == ("euler", "exp", "rk2", "rk4", "magnus")
+    assert ik.strapdown.SCHEMES == _core.STRAPDOWN_SCHEMES == ("lie_euler", "midpoint", "rk4", "exp")
+    assert ik.attitude.SCHEME_ALIASES == {"midpoint": "rk2"}
+    assert ik.strapdown.SCHEME_ALIASES == {"euler": "lie_euler"}
+    t = np.arange(20) * 0.01
+    gyro = np.random.default_rng(3).normal(size=(20, 3))
+    with pytest.warns(DeprecationWarning, match="scheme='midpoint' is deprecated, use scheme='rk2'") as record:
+        old = ik.integrate_attitude(t, gyro, scheme="midpoint")
+    assert record[0].filename == __file__  # points at the caller's line
+    np.testing.assert_array_equal(old.as_quat(), ik.integrate_attitude(t, gyro, scheme="rk2").as_quat())
+    imu = ik.ImuData(t, gyro, np.tile([0.0, 0.0, 9.81], (20, 1)))
+    x0 = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    with pytest.warns(DeprecationWarning, match="use scheme='lie_euler'") as record:
+        old_traj = ik.integrate(imu, initial=x0, scheme="euler")
+    assert record[0].filename == __file__
+    np.testing.assert_array_equal(old_traj.position, ik.integrate(imu, initial=x0, scheme="lie_euler").position)
+
+
+def test_the_defaults_do_not_warn() -> None:
+    t = np.arange(5) * 0.01
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ik.integrate_attitude(t, np.zeros((5, 3)))
+        imu = ik.ImuData(t, np.zeros((5, 3)), np.zeros((5, 3)))
+        ik.integrate(imu, initial=ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity()))
+
+
+def test_gravity_default_is_the_core_constant() -> None:
+    for fn in (ik.integrate, ik.propagate):
+        assert inspect.signature(fn).parameters["gravity"].default == _core.GRAVITY == (0.0, 0.0, -9.81)

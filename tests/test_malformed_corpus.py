@@ -219,6 +219,20 @@ def _integrate_attitude(rng: np.random.Generator) -> Any:
     )
 
 
+@entry("set_num_threads", ("set_num_threads", "get_num_threads"), {"n": Arg("int")})
+def _set_num_threads(rng: np.random.Generator) -> Any:
+    before = ik.get_num_threads()
+
+    def call(v: dict[str, Any]) -> Any:
+        try:
+            ik.set_num_threads(v["n"])
+            return np.array([float(ik.get_num_threads())])
+        finally:
+            ik.set_num_threads(before)
+
+    return {"n": 2}, call
+
+
 @entry(
     "ImuData",
     ("ImuData",),

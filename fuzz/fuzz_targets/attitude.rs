@@ -21,7 +21,7 @@ struct Input {
 const SCHEMES: [Scheme; 5] = [
     Scheme::Euler,
     Scheme::Exp,
-    Scheme::Midpoint,
+    Scheme::Rk2,
     Scheme::Rk4,
     Scheme::Magnus,
 ];

@@ -28,7 +28,7 @@ struct Input {
     series: Series,
 }
 
-const SCHEMES: [Scheme; 4] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4, Scheme::Exp];
+const SCHEMES: [Scheme; 4] = [Scheme::LieEuler, Scheme::Midpoint, Scheme::Rk4, Scheme::Exp];
 
 fuzz_target!(|input: Input| {
     let a = input.series.arrays();

@@ -2,12 +2,13 @@
 //! `imukit.sim`.
 
 use imukit::sim::{self, Motion, MotionKind, SensorModel};
-use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{contiguous, raise, to_py};
+use crate::convert::{contiguous, unit_quaternion, Name};
+use crate::{raise, to_py};
 
 fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
     Ok(Vector3::from(obj.extract::<[f64; 3]>()?))
@@ -15,8 +16,7 @@ fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
 
 /// `R_wb` from a scipy `Rotation` (its `[x, y, z, w]` unit quaternion).
 fn rotation(obj: &Bound<'_, PyAny>) -> PyResult<Rotation3<f64>> {
-    let [x, y, z, w] = obj.call_method0("as_quat")?.extract::<[f64; 4]>()?;
-    Ok(UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)).to_rotation_matrix())
+    Ok(unit_quaternion(obj.call_method0("as_quat")?.extract()?).to_rotation_matrix())
 }
 
 // The attributes of the `imukit.sim` classes, read by name: one mirror per `Motion` variant.
@@ -135,13 +135,12 @@ type Arrays<'py> = (
 #[pyfunction]
 pub(crate) fn sim_motion<'py>(
     py: Python<'py>,
-    kind: &str,
+    kind: Name<MotionKind>,
     trajectory: &Bound<'py, PyAny>,
     t: PyReadonlyArray1<'py, f64>,
     gravity: [f64; 3],
 ) -> PyResult<Arrays<'py>> {
-    let kind: MotionKind = kind.parse().map_err(|e| to_py(py, "trajectory", e))?;
-    let motion = motion(kind, trajectory)?;
+    let motion = motion(kind.0, trajectory)?;
     // No private copy: imukit.sim passes an array it has just made and shares with no one.
     let t = contiguous(py, "t", &t)?;
     let n = t.len();

@@ -1,15 +1,22 @@
 # Stubs of the compiled module (checked by mypy.stubtest). Every function takes a C-contiguous
 # float64 array of shape (n, k), the argument name used in error messages, and options; it returns
 # a new (n, m) float64 array. Use the public modules (imukit.so3, imukit.quat, imukit.euler).
-from typing import Any, Literal, final
+from typing import Any, Literal, Protocol, final
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from imukit.sim import ConstantTwist, FigureEight, Helix, SensorErrors, Static, VioEllipse
 
 __all__ = [
+    "ATTITUDE_REPRESENTATIONS",
+    "ATTITUDE_SCHEMES",
+    "ATTITUDE_SCHEME_ALIASES",
     "GRAVITY",
+    "QUAT_CONVENTIONS",
+    "STRAPDOWN_SCHEMES",
+    "STRAPDOWN_SCHEME_ALIASES",
     "AttitudeFilter",
     "Preintegrator",
     "__version__",
@@ -43,64 +50,120 @@ __all__ = [
     "strapdown_propagate",
 ]
 
+_Rows = NDArray[np.float64]
+# Names as the core declares them (named_enum!; listed at runtime by the *_SCHEMES tuples below);
+# deprecated aliases parse too (a warning in the public API): attitude "midpoint" (= "rk2"),
+# strapdown "euler" (= "lie_euler"). `| str`: any string is accepted, an unknown one raises
+# ParameterError for that argument.
+_AttitudeScheme = Literal["euler", "exp", "rk2", "rk4", "magnus", "midpoint"]
+_Representation = Literal["quaternion", "matrix", "euler"]
+_StrapdownScheme = Literal["lie_euler", "midpoint", "rk4", "exp", "euler"]
+_Convention = Literal["hamilton", "jpl"]
+_Jacobian = Literal["right", "right_inv", "left", "left_inv"]
+_Side = Literal["left", "right"]
+
+class _Noise(Protocol):  # imukit.ImuNoise
+    @property
+    def gyro_density(self) -> float: ...
+    @property
+    def accel_density(self) -> float: ...
+    @property
+    def gyro_random_walk(self) -> float: ...
+    @property
+    def accel_random_walk(self) -> float: ...
+
+class _Bias(Protocol):  # imukit.ImuBias
+    @property
+    def gyro(self) -> ArrayLike: ...
+    @property
+    def accel(self) -> ArrayLike: ...
+
+class _NavState(Protocol):  # imukit.NavState
+    @property
+    def position(self) -> ArrayLike: ...
+    @property
+    def velocity(self) -> ArrayLike: ...
+    @property
+    def rotation(self) -> Rotation: ...
+
 __version__: str
 # Default world-frame gravity [m/s²], z up: `imukit::imu::GRAVITY`, the one place it is written.
 GRAVITY: tuple[float, float, float]
+# Canonical names (tuples, in the core's order) and deprecated aliases ({old: canonical}).
+ATTITUDE_SCHEMES: tuple[str, ...]
+ATTITUDE_SCHEME_ALIASES: dict[str, str]
+ATTITUDE_REPRESENTATIONS: tuple[str, ...]
+STRAPDOWN_SCHEMES: tuple[str, ...]
+STRAPDOWN_SCHEME_ALIASES: dict[str, str]
+QUAT_CONVENTIONS: tuple[str, ...]
 
 # The process-wide thread count of the parallel kernels (default: rayon's, one per core).
 def set_num_threads(n: int) -> None: ...
 def get_num_threads() -> int: ...
-def so3_hat(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def so3_vee(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def so3_exp(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def so3_log(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def so3_jacobian(x: NDArray[np.float64], name: str, kind: str) -> NDArray[np.float64]: ...
-def quat_multiply(x: NDArray[np.float64], name: str, convention: str) -> NDArray[np.float64]: ...
-def quat_conjugate(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def quat_inverse(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def quat_normalize(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def quat_rotate(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def quat_product_matrix(x: NDArray[np.float64], name: str, side: str, convention: str) -> NDArray[np.float64]: ...
-def quat_omega_matrix(x: NDArray[np.float64], name: str, convention: str) -> NDArray[np.float64]: ...
-def quat_exp(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def quat_log(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def euler_to_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def euler_from_matrix(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
-def euler_rate_matrix(x: NDArray[np.float64], name: str, tolerance: float) -> NDArray[np.float64]: ...
-def euler_rate_matrix_inv(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
+
+# so3 / quat / euler row maps: `x` is a C-contiguous (n, k) float64 array, `name` the argument
+# named in errors; each returns a new (n, m) array. Bad rows raise with `exc.index` = the row.
+def so3_hat(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_vee(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3)
+def so3_exp(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_log(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3)
+def so3_jacobian(x: _Rows, name: str, kind: _Jacobian | str) -> _Rows: ...  # (n, 3) -> (n, 9)
+def quat_multiply(x: _Rows, name: str, convention: _Convention | str) -> _Rows: ...  # (n, 8) [q, p] -> (n, 4)
+def quat_conjugate(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_inverse(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_normalize(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_rotate(x: _Rows, name: str) -> _Rows: ...  # (n, 7) [q, v] -> (n, 3)
+def quat_product_matrix(
+    x: _Rows, name: str, side: _Side | str, convention: _Convention | str
+) -> _Rows: ...  # (n, 4) -> (n, 16)
+def quat_omega_matrix(x: _Rows, name: str, convention: _Convention | str) -> _Rows: ...  # (n, 3) -> (n, 16)
+def quat_exp(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 4)
+def quat_log(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 3)
+def euler_to_matrix(x: _Rows, name: str) -> _Rows: ...  # (n, 3) ZYX -> (n, 9)
+def euler_from_matrix(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3) ZYX
+def euler_rate_matrix(x: _Rows, name: str, tolerance: float) -> _Rows: ...  # (n, 3) -> (n, 9)
+def euler_rate_matrix_inv(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
+
+# Attitudes (n, 4) xyzw from (n,) seconds and (n, 3) rates; (1, 4) with final_only. `initial` xyzw.
+def attitude_integrate(
+    t: _Rows,
+    gyro: _Rows,
+    initial: _Rows | list[float],
+    scheme: _AttitudeScheme | str,
+    representation: _Representation | str,
+    gimbal_tolerance: float,
+    final_only: bool,
+) -> _Rows: ...
+
+# Strapdown: (N, 6) rows [p, v] and (N, 4) quaternions xyzw, row 0 = `initial`. `initial`,
+# `bias` and `noise` are read by attribute name (imukit.NavState, ImuBias, ImuNoise).
+def strapdown_integrate(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    initial: _NavState,
+    bias: _Bias,
+    gravity: list[float],
+    scheme: _StrapdownScheme | str,
+) -> tuple[_Rows, _Rows]: ...
+
+# As strapdown_integrate, plus (M, 225) row-major 15x15 covariances every `every` samples and at
+# the last one, from the initial `covariance` (15, 15).
+def strapdown_propagate(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    initial: _NavState,
+    covariance: _Rows,
+    bias: _Bias,
+    noise: _Noise,
+    gravity: list[float],
+    scheme: _StrapdownScheme | str,
+    every: int,
+) -> tuple[_Rows, _Rows, _Rows]: ...
 def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...  # (M, C) variances, (M,) term counts
-def attitude_integrate(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    initial: NDArray[np.float64],
-    scheme: str,
-    representation: str,
-    gimbal_tolerance: float,
-    final_only: bool,
-) -> NDArray[np.float64]: ...
-def strapdown_integrate(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    accel: NDArray[np.float64],
-    initial: list[float],
-    bias_values: list[float],
-    gravity: list[float],
-    scheme: str,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...  # (N, 6) [p, v] and (N, 4) q (xyzw)
-def strapdown_propagate(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    accel: NDArray[np.float64],
-    initial: list[float],
-    covariance: NDArray[np.float64],
-    bias_values: list[float],
-    noise: list[float],
-    gravity: list[float],
-    scheme: str,
-    every: int,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 
 @final
 class AttitudeFilter:

@@ -16,16 +16,20 @@ from imukit._arrays import (
     as_float_array,
     as_stamps,
     check_tail,
-    choice,
     real_scalar,
     rotation_from_unit_quat,
 )
 from imukit._errors import ParameterError, ShapeError
+from imukit._names import canonical
 
-__all__ = ["REPRESENTATIONS", "SCHEMES", "integrate_attitude"]
+__all__ = ["REPRESENTATIONS", "SCHEMES", "SCHEME_ALIASES", "integrate_attitude"]
 
-SCHEMES = ("euler", "exp", "midpoint", "rk4", "magnus")
-REPRESENTATIONS = ("quaternion", "matrix", "euler")
+#: The schemes, as the core lists them: ``("euler", "exp", "rk2", "rk4", "magnus")``.
+SCHEMES: tuple[str, ...] = _core.ATTITUDE_SCHEMES
+#: Deprecated scheme names and their canonical names: ``{"midpoint": "rk2"}``.
+SCHEME_ALIASES: dict[str, str] = _core.ATTITUDE_SCHEME_ALIASES
+#: The representations: ``("quaternion", "matrix", "euler")``.
+REPRESENTATIONS: tuple[str, ...] = _core.ATTITUDE_REPRESENTATIONS
 
 
 def integrate_attitude(
@@ -33,7 +37,7 @@ def integrate_attitude(
     gyro: ArrayLike,
     *,
     initial: Rotation | None = None,
-    scheme: str = "midpoint",
+    scheme: str = "rk2",
     representation: str = "quaternion",
     final_only: bool = False,
     gimbal_tolerance_rad: float = 1e-6,
@@ -54,7 +58,10 @@ def integrate_attitude(
 
         - ``"euler"``: forward Euler on the ODE with ``ω_k`` (order 1);
         - ``"exp"``: ``R ← R Exp(ω_k h)``, exact for a rate held over the step (order 1);
-        - ``"midpoint"``: explicit midpoint on the ODE with ``(ω_k + ω_{k+1})/2`` (order 2);
+        - ``"rk2"``: explicit midpoint (second-order Runge-Kutta) on the ODE with
+          ``(ω_k + ω_{k+1})/2`` (order 2). Formerly named ``"midpoint"``; that name still works
+          but is deprecated (``DeprecationWarning``): in :func:`imukit.integrate` and
+          preintegration ``"midpoint"`` is a different rule, ``Exp`` of the averaged rate;
         - ``"rk4"``: classical Runge-Kutta; the mid-step rate comes from the cubic through samples
           k-1 … k+2 (order 4 for smooth motion);
         - ``"magnus"``: ``R ← R Exp(½h(ω₁+ω₂) + (√3/12)h² ω₁×ω₂)`` with ω₁, ω₂ from the cubic at
@@ -62,7 +69,7 @@ def integrate_attitude(
     representation
         ``"quaternion"`` (renormalised), ``"matrix"`` (re-orthonormalised: after every step for the ODE
         schemes, every 16 steps for the exact-rotation ``exp``/``magnus``) or
-        ``"euler"`` (ZYX angles through ``χ̇ = E(χ) ω``; ``euler``, ``midpoint`` and ``rk4`` only;
+        ``"euler"`` (ZYX angles through ``χ̇ = E(χ) ω``; ``euler``, ``rk2`` and ``rk4`` only;
         raises :class:`imukit.GimbalLockError` naming the sample where pitch comes within
         ``gimbal_tolerance_rad`` of ±90°).
     final_only
@@ -74,8 +81,8 @@ def integrate_attitude(
         Length N (element 0 is ``initial``, element k the attitude at ``t[k]``), or a single
         rotation with ``final_only``.
     """
-    choice(scheme, "scheme", SCHEMES)
-    choice(representation, "representation", REPRESENTATIONS)
+    scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES)
+    representation = canonical(representation, "representation", REPRESENTATIONS)
     seconds = as_stamps(t).seconds
     rates = as_float_array(gyro, "gyro")
     check_tail(rates, "gyro", (3,))

@@ -21,7 +21,8 @@ from __future__ import annotations
 from numpy.typing import ArrayLike
 
 from imukit import _core
-from imukit._arrays import FloatArray, batched, choice, matrix4_out, quat_out, to_xyzw
+from imukit._arrays import FloatArray, batched, matrix4_out, quat_out, to_xyzw
+from imukit._names import canonical
 
 __all__ = [
     "conjugate",
@@ -36,12 +37,12 @@ __all__ = [
     "rotate",
 ]
 
-_CONVENTIONS = ("hamilton", "jpl")
+_CONVENTIONS: tuple[str, ...] = _core.QUAT_CONVENTIONS
 
 
 def multiply(q: ArrayLike, p: ArrayLike, *, scalar_first: bool = False, convention: str = "hamilton") -> FloatArray:
     """``q ⊗ p``; ``(..., 4)`` × ``(..., 4)`` → ``(..., 4)``. Not normalised."""
-    choice(convention, "convention", _CONVENTIONS)
+    convention = canonical(convention, "convention", _CONVENTIONS)
     q, p = to_xyzw(q, "q", scalar_first), to_xyzw(p, "p", scalar_first)
     out = batched(_core.quat_multiply, [(q, "q", (4,)), (p, "p", (4,))], (4,), convention)
     return quat_out(out, scalar_first)
@@ -82,7 +83,7 @@ def right_matrix(p: ArrayLike, *, scalar_first: bool = False, convention: str = 
 
 
 def _product_matrix(q: ArrayLike, side: str, scalar_first: bool, convention: str) -> FloatArray:
-    choice(convention, "convention", _CONVENTIONS)
+    convention = canonical(convention, "convention", _CONVENTIONS)
     name = "q" if side == "left" else "p"
     out = batched(_core.quat_product_matrix, [(to_xyzw(q, name, scalar_first), name, (4,))], (4, 4), side, convention)
     return matrix4_out(out, scalar_first)
@@ -96,7 +97,7 @@ def omega_matrix(w: ArrayLike, *, convention: str = "hamilton", scalar_first: bo
     rotation. Both equal ``[[-[ω]×, ω], [-ωᵀ, 0]]`` in xyzw layout (VINS-Mono eq. 3, Trawny &
     Roumeliotis eq. 108); ``scalar_first=True`` re-expresses it for wxyz vectors.
     """
-    choice(convention, "convention", _CONVENTIONS)
+    convention = canonical(convention, "convention", _CONVENTIONS)
     out = batched(_core.quat_omega_matrix, [(w, "w", (3,))], (4, 4), convention)
     return matrix4_out(out, scalar_first)
 

@@ -18,35 +18,36 @@ from imukit._arrays import (
     FloatArray,
     as_float_array,
     check_finite_rows,
-    choice,
     readonly_copy,
     rotation_from_unit_quat,
     vector3,
 )
 from imukit._errors import ParameterError, ShapeError
+from imukit._names import canonical
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
 
-__all__ = ["SCHEMES", "integrate", "propagate"]
+__all__ = ["SCHEMES", "SCHEME_ALIASES", "integrate", "propagate"]
 
-SCHEMES = ("euler", "midpoint", "rk4", "exp")
+#: The schemes, as the core lists them: ``("lie_euler", "midpoint", "rk4", "exp")``.
+SCHEMES: tuple[str, ...] = _core.STRAPDOWN_SCHEMES
+#: Deprecated scheme names and their canonical names: ``{"euler": "lie_euler"}``.
+SCHEME_ALIASES: dict[str, str] = _core.STRAPDOWN_SCHEME_ALIASES
 _DEFAULT_GRAVITY = _core.GRAVITY
 
 
 def _common(
     imu: ImuData, initial: NavState, bias: ImuBias | None, gravity: ArrayLike, scheme: str
-) -> tuple[list[float], list[float], list[float]]:
+) -> tuple[ImuBias, list[float], str]:
     if not isinstance(imu, ImuData):
         raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
     if not isinstance(initial, NavState):
         raise ParameterError(f"initial: expected an imukit.NavState, got {type(initial).__name__}")
     if bias is not None and not isinstance(bias, ImuBias):
         raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
-    choice(scheme, "scheme", SCHEMES)
+    scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES, depth=2)
     g = vector3(gravity, "gravity")
-    b = bias or ImuBias()
-    state = [*initial.position, *initial.velocity, *initial.rotation.as_quat()]
-    return state, [*b.gyro, *b.accel], [float(v) for v in g]
+    return bias or ImuBias(), [float(v) for v in g], scheme
 
 
 def _trajectory(
@@ -74,9 +75,12 @@ def integrate(
 
     Schemes over ``h = t[k+1] − t[k]`` with bias-corrected samples ``â = a_m − b_a``, ``ω̂ = ω_m − b_g``:
 
-    - ``"euler"`` (order 1): ``a = R_k â_k + g``; ``p += v h + ½ a h²``; ``v += a h``; ``R ← R Exp(ω̂_k h)``;
+    - ``"lie_euler"`` (order 1): ``a = R_k â_k + g``; ``p += v h + ½ a h²``; ``v += a h``;
+      ``R ← R Exp(ω̂_k h)``. Formerly named ``"euler"``; that name still works but is deprecated
+      (``DeprecationWarning``): in :func:`imukit.integrate_attitude` ``"euler"`` is forward Euler
+      on the ODE, a different rule;
     - ``"midpoint"`` (order 2, VINS-Mono's): ``R⁺ = R Exp(½(ω̂_k + ω̂_{k+1}) h)``,
-      ``a = ½(R_k â_k + R⁺ â_{k+1}) + g``, then as euler;
+      ``a = ½(R_k â_k + R⁺ â_{k+1}) + g``, then as lie_euler;
     - ``"rk4"`` (order 4): classical Runge-Kutta; the mid-step samples come from the cubic through
       samples k-1 … k+2 (see ``docs/attitude.md``);
     - ``"exp"``: exact when ``ω̂_k`` and ``â_k`` are held over the step (zero-order hold; order 1 on
@@ -85,8 +89,8 @@ def integrate(
     ``initial`` is the state at the first sample; ``bias`` (constant) is subtracted from the samples.
     Returns a :class:`Trajectory` with the IMU's timestamps (``t_ns`` kept when the IMU has it).
     """
-    state, bias_values, g = _common(imu, initial, bias, gravity, scheme)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, state, bias_values, g, scheme)
+    b, g, scheme = _common(imu, initial, bias, gravity, scheme)
+    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, initial, b, g, scheme)
     return _trajectory(imu, pv, quaternions)
 
 
@@ -112,7 +116,7 @@ def propagate(
     …`` and at the last sample (``Trajectory.covariance`` with times ``covariance_t``), so memory stays
     bounded for long recordings.
     """
-    state, bias_values, g = _common(imu, initial, bias, gravity, scheme)
+    b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     if not isinstance(noise, ImuNoise):
         raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
@@ -127,9 +131,8 @@ def propagate(
         raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}")
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
-    densities = [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk]
     pv, quaternions, covs = _core.strapdown_propagate(
-        imu.seconds, imu.gyro, imu.accel, state, p0, bias_values, densities, g, scheme, every
+        imu.seconds, imu.gyro, imu.accel, initial, p0, b, noise, g, scheme, every
     )
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)

@@ -28,7 +28,7 @@ fn attitude(c: &mut Criterion) {
     let cases = [
         (Scheme::Exp, Representation::Quaternion),
         (Scheme::Magnus, Representation::Quaternion),
-        (Scheme::Midpoint, Representation::Quaternion),
+        (Scheme::Rk2, Representation::Quaternion),
         (Scheme::Rk4, Representation::Quaternion),
         (Scheme::Magnus, Representation::Matrix),
         (Scheme::Rk4, Representation::Euler),

@@ -9,7 +9,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use imukit::{batch, quat, so3};
+use imukit::{ffi, quat, so3};
 use nalgebra::{Quaternion, Vector3};
 
 const BATCH_ROWS: usize = 1_000_000;
@@ -57,14 +57,14 @@ fn batch_kernels(c: &mut Criterion) {
     group.sample_size(20);
     let vectors = rotation_vectors(BATCH_ROWS);
     let mut matrices = vec![0.0; 9 * BATCH_ROWS];
-    batch::so3_exp(&vectors, &mut matrices).unwrap();
+    ffi::so3_exp(&vectors, &mut matrices).unwrap();
     let mut out3 = vec![0.0; 3 * BATCH_ROWS];
     let mut out9 = vec![0.0; 9 * BATCH_ROWS];
     group.bench_with_input(BenchmarkId::new("so3_exp", BATCH_ROWS), &vectors, |b, input| {
-        b.iter(|| batch::so3_exp(black_box(input), black_box(&mut out9)).unwrap());
+        b.iter(|| ffi::so3_exp(black_box(input), black_box(&mut out9)).unwrap());
     });
     group.bench_with_input(BenchmarkId::new("so3_log", BATCH_ROWS), &matrices, |b, input| {
-        b.iter(|| batch::so3_log(black_box(input), black_box(&mut out3)).unwrap());
+        b.iter(|| ffi::so3_log(black_box(input), black_box(&mut out3)).unwrap());
     });
     group.finish();
 }

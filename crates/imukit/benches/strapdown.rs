@@ -42,7 +42,7 @@ fn strapdown(c: &mut Criterion) {
     let mut group = c.benchmark_group("strapdown_1e6");
     group.throughput(Throughput::Elements(N as u64));
     group.sample_size(10);
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4, Scheme::Exp] {
+    for scheme in [Scheme::LieEuler, Scheme::Midpoint, Scheme::Rk4, Scheme::Exp] {
         let options = Options {
             scheme,
             ..Options::default()

@@ -12,7 +12,7 @@
 //! |---|---|---|
 //! | [`Scheme::Euler`] | `y ← y + h f(y, ω_k)`, then back onto the manifold | 1 |
 //! | [`Scheme::Exp`] | `R ← R Exp(ω_k h)` (exact for a rate held over the step) | 1 (exact for constant ω) |
-//! | [`Scheme::Midpoint`] | explicit midpoint on the ODE with `ω_mid = ½(ω_k + ω_{k+1})` | 2 |
+//! | [`Scheme::Rk2`] | explicit midpoint on the ODE with `ω_mid = ½(ω_k + ω_{k+1})` | 2 |
 //! | [`Scheme::Rk4`] | classical RK4 on the ODE; `ω(t_k + h/2)` from the local cubic | 4 |
 //! | [`Scheme::Magnus`] | `R ← R Exp(½h(ω₁+ω₂) + (√3/12) h² ω₁ × ω₂)`, ω₁, ω₂ at the Gauss nodes from the cubic | 4 (exact for constant ω) |
 //!
@@ -22,7 +22,7 @@
 //! `Y(h) = Exp(−θ) Y(0)`, i.e. `R(h) = R(0) Exp(θ)` with the θ in the table.
 //!
 //! Representation × scheme: quaternion and matrix take all five; ZYX Euler angles have no group
-//! structure and take `euler`, `midpoint` and `rk4` only. Quaternions are renormalised and
+//! structure and take `euler`, `rk2` and `rk4` only. Quaternions are renormalised and
 //! matrices re-orthonormalised (nearest rotation, Björck–Bowie iteration) after every step of the
 //! ODE schemes, and every [`RENORMALIZE_EVERY`] steps of `exp`/`magnus`, which multiply exact
 //! rotations. Euler angles are refused within the gimbal tolerance of ±90°, and when cos(pitch)
@@ -42,8 +42,8 @@ pub enum Scheme {
     Euler,
     /// Zero-order hold: `Exp(ω_k h)`.
     Exp,
-    /// Explicit midpoint on the ODE.
-    Midpoint,
+    /// Explicit midpoint (second-order Runge–Kutta) on the ODE; formerly named `midpoint`.
+    Rk2,
     /// Classical Runge–Kutta on the ODE.
     Rk4,
     /// Fourth-order Magnus (coning-corrected) closed form.
@@ -64,7 +64,9 @@ pub enum Representation {
 crate::named_enum!(
     Scheme,
     "scheme",
-    [Euler => "euler", Exp => "exp", Midpoint => "midpoint", Rk4 => "rk4", Magnus => "magnus"]
+    [Euler => "euler", Exp => "exp", Rk2 => "rk2", Rk4 => "rk4", Magnus => "magnus"],
+    // Deprecated: `midpoint` means Exp of the averaged rate in strapdown and preintegration.
+    aliases ["midpoint" => Rk2]
 );
 crate::named_enum!(
     Representation,
@@ -76,14 +78,10 @@ impl Representation {
     /// The schemes this representation supports.
     pub fn schemes(self) -> &'static [Scheme] {
         match self {
-            Representation::Quaternion | Representation::Matrix => &[
-                Scheme::Euler,
-                Scheme::Exp,
-                Scheme::Midpoint,
-                Scheme::Rk4,
-                Scheme::Magnus,
-            ],
-            Representation::Euler => &[Scheme::Euler, Scheme::Midpoint, Scheme::Rk4],
+            Representation::Quaternion | Representation::Matrix => {
+                &[Scheme::Euler, Scheme::Exp, Scheme::Rk2, Scheme::Rk4, Scheme::Magnus]
+            }
+            Representation::Euler => &[Scheme::Euler, Scheme::Rk2, Scheme::Rk4],
         }
     }
 }
@@ -102,7 +100,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         Self {
-            scheme: Scheme::Midpoint,
+            scheme: Scheme::Rk2,
             representation: Representation::Quaternion,
             gimbal_tolerance: euler::GIMBAL_TOLERANCE,
         }
@@ -374,7 +372,7 @@ fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Opti
         y = match options.scheme {
             Scheme::Euler => (y + f(&y, &w0, k)? * h).project(),
             Scheme::Exp | Scheme::Magnus => y.compose_exp(&group_increment(options.scheme, &gauss, &w0, h, k)),
-            Scheme::Midpoint => {
+            Scheme::Rk2 => {
                 let mid = y + f(&y, &w0, k)? * (0.5 * h);
                 (y + f(&mid, &((w0 + w1) * 0.5), k)? * h).project()
             }

@@ -24,12 +24,13 @@
 
 pub mod allan;
 pub mod attitude;
-pub mod batch;
 mod error;
 pub mod euler;
+pub mod ffi;
 pub mod filters;
 pub mod imu;
 pub mod interp;
+pub mod lie;
 mod mat3;
 pub mod names;
 pub mod preint;

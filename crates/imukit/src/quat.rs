@@ -16,7 +16,8 @@
 
 use nalgebra::{Matrix3, Matrix4, Quaternion, UnitQuaternion, Vector3};
 
-use crate::so3::hat;
+use crate::lie::series;
+use crate::lie::skew::hat;
 use crate::{Error, Result};
 
 /// Below this norm a quaternion is treated as zero: it encodes no rotation.
@@ -141,43 +142,8 @@ pub fn pure(v: &Vector3<f64>) -> Quaternion<f64> {
 /// this is what makes gyro integration cost a few nanoseconds per sample.
 #[inline]
 pub fn exp(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
-    let (k, w) = half_angle_coefficients(phi.norm_squared());
+    let (k, w) = series::half_angle(phi.norm_squared());
     UnitQuaternion::new_unchecked(Quaternion::from_parts(w, phi * k))
-}
-
-/// `(sin(θ/2)/θ, cos(θ/2))` from `θ²`.
-fn half_angle_coefficients(theta_sq: f64) -> (f64, f64) {
-    if theta_sq < 0.25 {
-        // x = θ/2, x² = θ²/4: sin(x)/(2x) and cos(x) through the x¹² term; the first omitted
-        // terms are below 1e-17 relative for x < 0.25.
-        let x2 = 0.25 * theta_sq;
-        // Horner in x² with constant coefficients: division by a literal is not folded into a
-        // multiplication (it is not exact), and eleven divisions would dominate a gyro step.
-        const S: [f64; 6] = [
-            1.0,
-            -1.0 / 6.0,
-            1.0 / 120.0,
-            -1.0 / 5040.0,
-            1.0 / 362_880.0,
-            -1.0 / 39_916_800.0,
-        ];
-        const C: [f64; 7] = [
-            1.0,
-            -1.0 / 2.0,
-            1.0 / 24.0,
-            -1.0 / 720.0,
-            1.0 / 40_320.0,
-            -1.0 / 3_628_800.0,
-            1.0 / 479_001_600.0,
-        ];
-        let sinc = S.iter().rev().fold(0.0, |acc, c| acc * x2 + c);
-        let cos = C.iter().rev().fold(0.0, |acc, c| acc * x2 + c);
-        (0.5 * sinc, cos)
-    } else {
-        let theta = theta_sq.sqrt();
-        let (s, c) = (0.5 * theta).sin_cos();
-        (s / theta, c)
-    }
 }
 
 /// `Log(q)`: the rotation vector with angle in `[0, π]` of the rotation `q` (either sign of `q`).
@@ -206,28 +172,4 @@ pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
 pub(crate) fn is_unit_coords(q: &[f64]) -> bool {
     let norm_squared: f64 = q.iter().map(|v| v * v).sum();
     (norm_squared - 1.0).abs() < 1e-6
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Both branches of the half-angle coefficients against 50-digit values (mpmath).
-    #[test]
-    #[allow(clippy::excessive_precision)] // the references are quoted as computed
-    fn half_angle_coefficients_match_high_precision_values() {
-        // (θ, sin(θ/2)/θ, cos(θ/2))
-        let cases = [
-            (1e-8, 0.4999999999999999979167, 0.9999999999999999875),
-            (0.1, 0.4997916927067832879487, 0.9987502603949662465629),
-            (0.4999, 0.4948099886461344949577, 0.9689247906974618291559),
-            (0.5001, 0.4948058479630740395059, 0.9689000503015466853613),
-            (3.0, 0.3324983288680181436472, 0.07073720166770291008819),
-        ];
-        for (theta, k, w) in cases {
-            let (k_ours, w_ours) = half_angle_coefficients(theta * theta);
-            assert!((k_ours - k).abs() < 2e-16, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
-            assert!((w_ours - w).abs() < 2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
-        }
-    }
 }

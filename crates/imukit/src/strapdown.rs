@@ -11,13 +11,13 @@
 //!
 //! | scheme | update | order |
 //! |---|---|---|
-//! | [`Scheme::Euler`] | `a = R_k â_k + g`; `p += v h + ½ a h²`; `v += a h`; `R ← R Exp(ω̂_k h)` | 1 |
-//! | [`Scheme::Midpoint`] | `R⁺ = R Exp(½(ω̂_k + ω̂_{k+1}) h)`; `a = ½(R_k â_k + R⁺ â_{k+1}) + g`; then as euler | 2 |
+//! | [`Scheme::LieEuler`] | `a = R_k â_k + g`; `p += v h + ½ a h²`; `v += a h`; `R ← R Exp(ω̂_k h)` | 1 |
+//! | [`Scheme::Midpoint`] | `R⁺ = R Exp(½(ω̂_k + ω̂_{k+1}) h)`; `a = ½(R_k â_k + R⁺ â_{k+1}) + g`; then as lie_euler | 2 |
 //! | [`Scheme::Rk4`] | classical RK4 on the ODE; mid-step `ω`, `a` from the local cubic | 4 |
 //! | [`Scheme::Exp`] | exact for `ω̂_k`, `â_k` held over the step: `v += R Γ₁ â h + g h`, `p += v h + R Γ₂ â h² + ½ g h²` | 1 (exact for constant input) |
 //!
 //! `Γ₁ = J_l(ω̂ h)` and `Γ₂` = [`so3::exp_double_integral`]`(ω̂ h)`. The seed's discrete model
-//! omits the ½ on the position term; with it, the euler scheme is the exact solution for a
+//! omits the ½ on the position term; with it, the lie_euler scheme is the exact solution for a
 //! world-frame acceleration held over the step.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -29,8 +29,8 @@ use crate::{imu, quat, so3, Error, Result};
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scheme {
-    /// First order, samples at the start of the step.
-    Euler,
+    /// First order, samples at the start of the step, `R Exp(ω̂_k h)`; formerly named `euler`.
+    LieEuler,
     /// VINS-style midpoint: averaged rates, specific force rotated at both ends.
     Midpoint,
     /// Classical Runge–Kutta with cubic-interpolated inputs.
@@ -39,7 +39,13 @@ pub enum Scheme {
     Exp,
 }
 
-crate::named_enum!(Scheme, "scheme", [Euler => "euler", Midpoint => "midpoint", Rk4 => "rk4", Exp => "exp"]);
+crate::named_enum!(
+    Scheme,
+    "scheme",
+    [LieEuler => "lie_euler", Midpoint => "midpoint", Rk4 => "rk4", Exp => "exp"],
+    // Deprecated: `euler` means forward Euler on the ODE in attitude integration.
+    aliases ["euler" => LieEuler]
+);
 
 // Scheme tags for the const-generic step (an enum cannot be a const parameter on stable Rust).
 const EULER: u8 = 0;
@@ -136,7 +142,7 @@ impl<'a> Stepper<'a> {
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
         match self.options.scheme {
-            Scheme::Euler => self.drive::<EULER>(x0, visit),
+            Scheme::LieEuler => self.drive::<EULER>(x0, visit),
             Scheme::Midpoint => self.drive::<MIDPOINT>(x0, visit),
             Scheme::Rk4 => self.drive::<RK4>(x0, visit),
             Scheme::Exp => self.drive::<EXP>(x0, visit),

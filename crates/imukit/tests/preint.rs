@@ -92,7 +92,7 @@ fn deltas_equal_strapdown_from_rest_without_gravity() {
         rotation: UnitQuaternion::identity(),
     };
     let options = Options {
-        scheme: Scheme::Euler,
+        scheme: Scheme::LieEuler,
         gravity: Vector3::zeros(),
     };
     let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();

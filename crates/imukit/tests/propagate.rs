@@ -141,7 +141,7 @@ fn block_propagation_equals_the_dense_product() {
         accel: x.ba,
     };
     let options = Options {
-        scheme: Scheme::Euler,
+        scheme: Scheme::LieEuler,
         gravity: G,
     };
     let mut covs = vec![0.0; 2 * 225];

@@ -84,7 +84,7 @@ macro_rules! attitude_test {
 attitude_test! {
     attitude_euler_stays_unit: Scheme::Euler,
     attitude_exp_stays_unit: Scheme::Exp,
-    attitude_midpoint_stays_unit: Scheme::Midpoint,
+    attitude_midpoint_stays_unit: Scheme::Rk2,
     attitude_rk4_stays_unit: Scheme::Rk4,
     attitude_magnus_stays_unit: Scheme::Magnus,
 }
@@ -136,7 +136,7 @@ macro_rules! matrix_test {
 matrix_test! {
     attitude_matrix_euler_stays_orthonormal: Scheme::Euler,
     attitude_matrix_exp_stays_orthonormal: Scheme::Exp,
-    attitude_matrix_midpoint_stays_orthonormal: Scheme::Midpoint,
+    attitude_matrix_midpoint_stays_orthonormal: Scheme::Rk2,
     attitude_matrix_rk4_stays_orthonormal: Scheme::Rk4,
     attitude_matrix_magnus_stays_orthonormal: Scheme::Magnus,
 }
@@ -254,7 +254,7 @@ macro_rules! strapdown_test {
 }
 
 strapdown_test! {
-    strapdown_euler_covariance_stays_psd: strapdown::Scheme::Euler,
+    strapdown_euler_covariance_stays_psd: strapdown::Scheme::LieEuler,
     strapdown_midpoint_covariance_stays_psd: strapdown::Scheme::Midpoint,
     strapdown_rk4_covariance_stays_psd: strapdown::Scheme::Rk4,
     strapdown_exp_covariance_stays_psd: strapdown::Scheme::Exp,

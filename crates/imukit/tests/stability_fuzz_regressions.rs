@@ -14,7 +14,7 @@ fn rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     let w = 31611.0 * 2f64.powi(113);
     let t = [0.0, 3.1611, 6.3222];
     let gyro = [w; 9];
-    for scheme in [Scheme::Rk4, Scheme::Midpoint, Scheme::Euler] {
+    for scheme in [Scheme::Rk4, Scheme::Rk2, Scheme::Euler] {
         let options = attitude::Options {
             scheme,
             representation: Representation::Quaternion,
@@ -158,7 +158,7 @@ fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     );
     // Every other scheme composes exact rotations: still unit, still Ok.
     for scheme in [
-        strapdown::Scheme::Euler,
+        strapdown::Scheme::LieEuler,
         strapdown::Scheme::Midpoint,
         strapdown::Scheme::Exp,
     ] {

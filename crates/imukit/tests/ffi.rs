@@ -1,10 +1,10 @@
-//! Tests of `imukit::batch`: shape errors, the first bad row reported on both the serial and the
+//! Tests of `imukit::ffi`: shape errors, the first bad row reported on both the serial and the
 //! parallel (> 8192 rows) path, overflow and non-rotation detection, and bit-for-bit agreement
 //! of every kernel with the single-element function it wraps.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 #![allow(missing_docs)]
 
-use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
+use imukit::ffi::{self, Convention, Jacobian, ProductMatrix};
 use imukit::{euler, quat, so3, Error, Result};
 use nalgebra::{Matrix3, Matrix4, Quaternion, Vector3};
 
@@ -113,37 +113,37 @@ fn copy3(x: &[f64; 3]) -> Result<[f64; 3]> {
 fn map_rows_shape_errors() {
     let mut out = [0.0; 9];
     assert_eq!(
-        batch::map_rows::<3, 3, _>(&[0.0; 7], &mut out, copy3),
+        ffi::map_rows::<3, 3, _>(&[0.0; 7], &mut out, copy3),
         Err(Error::RowLength { len: 7, row: 3 })
     );
     let mut short = [0.0; 5];
     assert_eq!(
-        batch::map_rows::<3, 3, _>(&[0.0; 6], &mut short, copy3),
+        ffi::map_rows::<3, 3, _>(&[0.0; 6], &mut short, copy3),
         Err(Error::RowLength { len: 5, row: 3 })
     );
     assert_eq!(
-        batch::map_rows::<3, 3, _>(&[0.0; 6], &mut out, copy3),
+        ffi::map_rows::<3, 3, _>(&[0.0; 6], &mut out, copy3),
         Err(Error::RowCount { input: 2, output: 3 })
     );
     let mut empty: [f64; 0] = [];
-    assert_eq!(batch::map_rows::<3, 3, _>(&[], &mut empty, copy3), Ok(()));
+    assert_eq!(ffi::map_rows::<3, 3, _>(&[], &mut empty, copy3), Ok(()));
     // The kernels check shapes the same way, with their own widths.
     let mut out9 = [0.0; 18];
     assert_eq!(
-        batch::so3_exp(&[0.0; 6], &mut out9[..17]),
+        ffi::so3_exp(&[0.0; 6], &mut out9[..17]),
         Err(Error::RowLength { len: 17, row: 9 })
     );
     assert_eq!(
-        batch::so3_exp(&[0.0; 3], &mut out9),
+        ffi::so3_exp(&[0.0; 3], &mut out9),
         Err(Error::RowCount { input: 1, output: 2 })
     );
     assert_eq!(
-        batch::quat_multiply(Convention::Hamilton, &[0.0; 12], &mut [0.0; 8]),
+        ffi::quat_multiply(Convention::Hamilton, &[0.0; 12], &mut [0.0; 8]),
         Err(Error::RowLength { len: 12, row: 8 })
     );
     // Output rows are written.
     let mut out = [0.0; 6];
-    batch::map_rows::<3, 3, _>(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], &mut out, copy3).unwrap();
+    ffi::map_rows::<3, 3, _>(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], &mut out, copy3).unwrap();
     assert_eq!(out, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
 }
 
@@ -163,7 +163,7 @@ fn non_finite_input_reports_the_first_bad_row() {
             input[3 * bad[0] + 1] = poison;
             let mut out = vec![0.0; 9 * n];
             assert_eq!(
-                batch::so3_exp(&input, &mut out),
+                ffi::so3_exp(&input, &mut out),
                 Err(Error::NonFinite { index: bad[0] }),
                 "n = {n}, bad rows {bad:?}, {poison}"
             );
@@ -189,14 +189,14 @@ fn first_error_wins_whatever_its_kind() {
         input[3 * b] = f64::NAN;
         let mut out = vec![0.0; 3 * n];
         assert_eq!(
-            batch::map_rows::<3, 3, _>(&input, &mut out, refuse_negative),
+            ffi::map_rows::<3, 3, _>(&input, &mut out, refuse_negative),
             Err(Error::ZeroQuaternion { index: a, norm: 0.0 })
         );
         let mut input = vec![1.0; 3 * n];
         input[3 * a] = f64::NAN;
         input[3 * b] = -1.0;
         assert_eq!(
-            batch::map_rows::<3, 3, _>(&input, &mut out, refuse_negative),
+            ffi::map_rows::<3, 3, _>(&input, &mut out, refuse_negative),
             Err(Error::NonFinite { index: a })
         );
     }
@@ -208,31 +208,31 @@ fn huge_finite_input_overflows() {
     // The kernel must say so (Overflow) and not return NaN rows.
     let mut out = [0.0; 9];
     assert_eq!(
-        batch::so3_exp(&[1e200, 1e200, 1e200], &mut out),
+        ffi::so3_exp(&[1e200, 1e200, 1e200], &mut out),
         Err(Error::Overflow { index: 0 })
     );
     let mut out4 = [0.0; 4];
     assert_eq!(
-        batch::quat_exp(&[1e200, 1e200, 1e200], &mut out4),
+        ffi::quat_exp(&[1e200, 1e200, 1e200], &mut out4),
         Err(Error::Overflow { index: 0 })
     );
     // vee of a finite skew matrix with entries ±1e308 is representable: halving comes first.
     let mut out3 = [0.0; 3];
     let vee_in = [0.0, -1e308, 0.0, 1e308, 0.0, 0.0, 0.0, 0.0, 0.0];
-    batch::so3_vee(&vee_in, &mut out3).unwrap();
+    ffi::so3_vee(&vee_in, &mut out3).unwrap();
     assert_eq!(out3, [0.0, 0.0, 1e308]);
     for (n, bad) in [(SMALL, 42), (LARGE, 12_345)] {
         let mut input = Rng(3).rows(n, 3, -3.0, 3.0);
         input[3 * bad..3 * bad + 3].copy_from_slice(&[1e200, -1e200, 1e200]);
         let mut out = vec![0.0; 9 * n];
         assert_eq!(
-            batch::so3_exp(&input, &mut out),
+            ffi::so3_exp(&input, &mut out),
             Err(Error::Overflow { index: bad }),
             "n = {n}"
         );
     }
     // Large but squarable magnitudes are fine (and still rotations).
-    batch::so3_exp(&[1e150, 0.0, 0.0], &mut out).unwrap();
+    ffi::so3_exp(&[1e150, 0.0, 0.0], &mut out).unwrap();
     let m = m9(&out);
     assert!((m.transpose() * m - Matrix3::identity()).abs().max() < 1e-12);
 }
@@ -242,14 +242,14 @@ fn huge_quaternion_rows_are_not_silently_wrong() {
     // [1e200, 0, 0, 0] (xyzw) is a valid rotation: π about x. Any Ok result must be right.
     let q = [1e200, 0.0, 0.0, 0.0];
     let mut out4 = [0.0; 4];
-    if batch::quat_normalize(&q, &mut out4).is_ok() {
+    if ffi::quat_normalize(&q, &mut out4).is_ok() {
         assert_eq!(out4, [1.0, 0.0, 0.0, 0.0], "quat_normalize");
     }
     let mut out3 = [0.0; 3];
-    if batch::quat_rotate(&[1e200, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0], &mut out3).is_ok() {
+    if ffi::quat_rotate(&[1e200, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0], &mut out3).is_ok() {
         assert_eq!(out3, [1.0, -2.0, -3.0], "quat_rotate");
     }
-    if batch::quat_inverse(&q, &mut out4).is_ok() {
+    if ffi::quat_inverse(&q, &mut out4).is_ok() {
         assert!(out4[0] < 0.0, "quat_inverse: {out4:?}");
     }
 }
@@ -259,12 +259,12 @@ fn non_rotations_are_refused() {
     let mut out = [0.0; 3];
     let scaled = [2.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 2.0];
     assert_eq!(
-        batch::so3_log(&scaled, &mut out),
+        ffi::so3_log(&scaled, &mut out),
         Err(Error::NotRotation {
             index: 0,
             orthogonality: 3.0,
             det: 8.0,
-            tolerance: batch::ROTATION_TOLERANCE
+            tolerance: ffi::ROTATION_TOLERANCE
         })
     );
     // Orthonormal but improper: −I and a reflection.
@@ -272,7 +272,7 @@ fn non_rotations_are_refused() {
         ([-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0], -1.0),
         ([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0], -1.0),
     ] {
-        match batch::so3_log(&m, &mut out) {
+        match ffi::so3_log(&m, &mut out) {
             Err(Error::NotRotation {
                 index: 0,
                 orthogonality,
@@ -285,7 +285,7 @@ fn non_rotations_are_refused() {
             other => panic!("{m:?}: {other:?}"),
         }
         assert!(matches!(
-            batch::euler_from_matrix(&m, &mut out),
+            ffi::euler_from_matrix(&m, &mut out),
             Err(Error::NotRotation { .. })
         ));
     }
@@ -297,16 +297,16 @@ fn non_rotations_are_refused() {
         for x in &mut input[9 * 5..9 * 6] {
             *x *= 1.0 + 1e-7;
         }
-        batch::so3_log(&input, &mut out).unwrap();
+        ffi::so3_log(&input, &mut out).unwrap();
         for x in &mut input[9 * bad..9 * bad + 9] {
             *x *= 1.0 + 1e-5;
         }
         assert!(
-            matches!(batch::so3_log(&input, &mut out), Err(Error::NotRotation { index, .. }) if index == bad),
+            matches!(ffi::so3_log(&input, &mut out), Err(Error::NotRotation { index, .. }) if index == bad),
             "n = {n}"
         );
         assert!(
-            matches!(batch::euler_from_matrix(&input, &mut out), Err(Error::NotRotation { index, .. }) if index == bad)
+            matches!(ffi::euler_from_matrix(&input, &mut out), Err(Error::NotRotation { index, .. }) if index == bad)
         );
     }
 }
@@ -319,27 +319,27 @@ fn zero_quaternions_and_gimbal_lock_are_located() {
         let mut out4 = vec![0.0; 4 * n];
         let mut out3 = vec![0.0; 3 * n];
         let zero = Err(Error::ZeroQuaternion { index: bad, norm: 0.0 });
-        assert_eq!(batch::quat_inverse(&q, &mut out4), zero);
-        assert_eq!(batch::quat_normalize(&q, &mut out4), zero);
-        assert_eq!(batch::quat_log(&q, &mut out3), zero);
+        assert_eq!(ffi::quat_inverse(&q, &mut out4), zero);
+        assert_eq!(ffi::quat_normalize(&q, &mut out4), zero);
+        assert_eq!(ffi::quat_log(&q, &mut out3), zero);
         let qv: Vec<f64> = q
             .chunks_exact(4)
             .flat_map(|x| [x[0], x[1], x[2], x[3], 1.0, 2.0, 3.0])
             .collect();
-        assert_eq!(batch::quat_rotate(&qv, &mut out3), zero);
+        assert_eq!(ffi::quat_rotate(&qv, &mut out3), zero);
 
         let mut chi = Rng(9).rows(n, 3, -1.0, 1.0);
         chi[3 * bad + 1] = -std::f64::consts::FRAC_PI_2;
         let mut out9 = vec![0.0; 9 * n];
         assert!(matches!(
-            batch::euler_rate_matrix(1e-6, &chi, &mut out9),
+            ffi::euler_rate_matrix(1e-6, &chi, &mut out9),
             Err(Error::GimbalLock { index, tolerance_deg, .. }) if index == bad && tolerance_deg == 1e-6f64.to_degrees()
         ));
     }
     // A bad tolerance is a parameter error even with no rows.
     let mut empty: [f64; 0] = [];
     assert!(matches!(
-        batch::euler_rate_matrix(-1.0, &[], &mut empty),
+        ffi::euler_rate_matrix(-1.0, &[], &mut empty),
         Err(Error::Parameter { name: "tolerance", .. })
     ));
 }
@@ -360,13 +360,13 @@ fn batch_results_equal_single_element_functions_bit_for_bit() {
         let chis: Vec<f64> = rng.rows(n, 3, -1.5, 1.5);
         let mats = rng.rows(n, 9, -2.0, 2.0);
 
-        let out = run(batch::so3_hat, &vecs, 9, 3);
+        let out = run(ffi::so3_hat, &vecs, 9, 3);
         assert_bitwise("so3_hat", &out, &vecs, 3, |x| row9(&so3::hat(&v3(x))).to_vec());
-        let out = run(batch::so3_vee, &mats, 3, 9);
+        let out = run(ffi::so3_vee, &mats, 3, 9);
         assert_bitwise("so3_vee", &out, &mats, 9, |x| so3::vee(&m9(x)).as_slice().to_vec());
-        let out = run(batch::so3_exp, &vecs, 9, 3);
+        let out = run(ffi::so3_exp, &vecs, 9, 3);
         assert_bitwise("so3_exp", &out, &vecs, 3, |x| row9(so3::exp(&v3(x)).matrix()).to_vec());
-        let out = run(batch::so3_log, &rots, 3, 9);
+        let out = run(ffi::so3_log, &rots, 3, 9);
         assert_bitwise("so3_log", &out, &rots, 9, |x| {
             so3::log(&nalgebra::Rotation3::from_matrix_unchecked(m9(x)))
                 .as_slice()
@@ -379,7 +379,7 @@ fn batch_results_equal_single_element_functions_bit_for_bit() {
             (Jacobian::LeftInv, so3::left_jacobian_inv),
         ];
         for (kind, f) in jacobians {
-            let out = run(|i, o| batch::so3_jacobian(kind, i, o), &vecs, 9, 3);
+            let out = run(|i, o| ffi::so3_jacobian(kind, i, o), &vecs, 9, 3);
             assert_bitwise(&format!("{kind:?}"), &out, &vecs, 3, |x| row9(&f(&v3(x))).to_vec());
         }
         let products: [(Convention, QuatProduct); 2] = [
@@ -387,24 +387,24 @@ fn batch_results_equal_single_element_functions_bit_for_bit() {
             (Convention::Jpl, quat::multiply_jpl),
         ];
         for (convention, f) in products {
-            let out = run(|i, o| batch::quat_multiply(convention, i, o), &pairs, 4, 8);
+            let out = run(|i, o| ffi::quat_multiply(convention, i, o), &pairs, 4, 8);
             assert_bitwise(&format!("{convention:?}"), &out, &pairs, 8, |x| {
                 xyzw(&f(&q4(&x[..4]), &q4(&x[4..]))).to_vec()
             });
         }
-        let out = run(batch::quat_conjugate, &quats, 4, 4);
+        let out = run(ffi::quat_conjugate, &quats, 4, 4);
         assert_bitwise("conjugate", &out, &quats, 4, |x| {
             xyzw(&quat::conjugate(&q4(x))).to_vec()
         });
-        let out = run(batch::quat_inverse, &quats, 4, 4);
+        let out = run(ffi::quat_inverse, &quats, 4, 4);
         assert_bitwise("inverse", &out, &quats, 4, |x| {
             xyzw(&quat::inverse(&q4(x)).unwrap()).to_vec()
         });
-        let out = run(batch::quat_normalize, &quats, 4, 4);
+        let out = run(ffi::quat_normalize, &quats, 4, 4);
         assert_bitwise("normalize", &out, &quats, 4, |x| {
             xyzw(quat::normalize(&q4(x)).unwrap().quaternion()).to_vec()
         });
-        let out = run(batch::quat_rotate, &qv, 3, 7);
+        let out = run(ffi::quat_rotate, &qv, 3, 7);
         assert_bitwise("rotate", &out, &qv, 7, |x| {
             quat::rotate(&q4(&x[..4]), &v3(&x[4..])).unwrap().as_slice().to_vec()
         });
@@ -415,7 +415,7 @@ fn batch_results_equal_single_element_functions_bit_for_bit() {
             (ProductMatrix::Right, Convention::Jpl, quat::right_matrix_jpl),
         ];
         for (kind, convention, f) in matrices {
-            let out = run(|i, o| batch::quat_product_matrix(kind, convention, i, o), &quats, 16, 4);
+            let out = run(|i, o| ffi::quat_product_matrix(kind, convention, i, o), &quats, 16, 4);
             assert_bitwise(&format!("{kind:?} {convention:?}"), &out, &quats, 4, |x| {
                 row16(&f(&q4(x))).to_vec()
             });
@@ -425,34 +425,34 @@ fn batch_results_equal_single_element_functions_bit_for_bit() {
             (Convention::Jpl, quat::omega_matrix_jpl),
         ];
         for (convention, f) in omegas {
-            let out = run(|i, o| batch::quat_omega_matrix(convention, i, o), &vecs, 16, 3);
+            let out = run(|i, o| ffi::quat_omega_matrix(convention, i, o), &vecs, 16, 3);
             assert_bitwise(&format!("Ω {convention:?}"), &out, &vecs, 3, |x| {
                 row16(&f(&v3(x))).to_vec()
             });
         }
-        let out = run(batch::quat_exp, &vecs, 4, 3);
+        let out = run(ffi::quat_exp, &vecs, 4, 3);
         assert_bitwise("quat_exp", &out, &vecs, 3, |x| {
             xyzw(quat::exp(&v3(x)).quaternion()).to_vec()
         });
-        let out = run(batch::quat_log, &quats, 3, 4);
+        let out = run(ffi::quat_log, &quats, 3, 4);
         assert_bitwise("quat_log", &out, &quats, 4, |x| {
             quat::log(&quat::normalize(&q4(x)).unwrap()).as_slice().to_vec()
         });
-        let out = run(batch::euler_to_matrix, &chis, 9, 3);
+        let out = run(ffi::euler_to_matrix, &chis, 9, 3);
         assert_bitwise("euler_to_matrix", &out, &chis, 3, |x| {
             row9(euler::to_rotation(&v3(x)).matrix()).to_vec()
         });
-        let out = run(batch::euler_from_matrix, &rots, 3, 9);
+        let out = run(ffi::euler_from_matrix, &rots, 3, 9);
         assert_bitwise("euler_from_matrix", &out, &rots, 9, |x| {
             euler::from_rotation(&nalgebra::Rotation3::from_matrix_unchecked(m9(x)))
                 .as_slice()
                 .to_vec()
         });
-        let out = run(|i, o| batch::euler_rate_matrix(1e-6, i, o), &chis, 9, 3);
+        let out = run(|i, o| ffi::euler_rate_matrix(1e-6, i, o), &chis, 9, 3);
         assert_bitwise("euler_rate_matrix", &out, &chis, 3, |x| {
             row9(&euler::rate_matrix(&v3(x), 1e-6).unwrap()).to_vec()
         });
-        let out = run(batch::euler_rate_matrix_inv, &chis, 9, 3);
+        let out = run(ffi::euler_rate_matrix_inv, &chis, 9, 3);
         assert_bitwise("euler_rate_matrix_inv", &out, &chis, 3, |x| {
             row9(&euler::rate_matrix_inv(&v3(x))).to_vec()
         });
@@ -464,25 +464,25 @@ fn batch_layout_is_row_major_and_xyzw() {
     // One hand-checked row per layout convention, so that a transposed or reordered output
     // cannot pass just because the single-element comparison used the same helper.
     let mut out9 = [0.0; 9];
-    batch::so3_hat(&[1.0, 2.0, 3.0], &mut out9).unwrap();
+    ffi::so3_hat(&[1.0, 2.0, 3.0], &mut out9).unwrap();
     assert_eq!(out9, [0.0, -3.0, 2.0, 3.0, 0.0, -1.0, -2.0, 1.0, 0.0]);
     let mut out4 = [0.0; 4];
     // i ⊗ j = k in [x, y, z, w]
-    batch::quat_multiply(
+    ffi::quat_multiply(
         Convention::Hamilton,
         &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
         &mut out4,
     )
     .unwrap();
     assert_eq!(out4, [0.0, 0.0, 1.0, 0.0]);
-    batch::quat_multiply(Convention::Jpl, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0], &mut out4).unwrap();
+    ffi::quat_multiply(Convention::Jpl, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0], &mut out4).unwrap();
     assert_eq!(out4, [0.0, 0.0, -1.0, 0.0]);
     // Exp of a quarter turn about z: w = cos(π/4) last.
-    batch::quat_exp(&[0.0, 0.0, std::f64::consts::FRAC_PI_2], &mut out4).unwrap();
+    ffi::quat_exp(&[0.0, 0.0, std::f64::consts::FRAC_PI_2], &mut out4).unwrap();
     let h = std::f64::consts::FRAC_1_SQRT_2;
     assert!((out4[2] - h).abs() <= 2e-16 && (out4[3] - h).abs() <= 2e-16, "{out4:?}");
     // Ω(ω) row 0 = [0, ω_z, −ω_y, ω_x]
     let mut out16 = [0.0; 16];
-    batch::quat_omega_matrix(Convention::Hamilton, &[1.0, 2.0, 3.0], &mut out16).unwrap();
+    ffi::quat_omega_matrix(Convention::Hamilton, &[1.0, 2.0, 3.0], &mut out16).unwrap();
     assert_eq!(out16[..4], [0.0, 3.0, -2.0, 1.0]);
 }

@@ -1,4 +1,7 @@
-//! Batch kernels over flat, row-major `f64` slices: the entry points of the Python bindings.
+//! Foreign-function kernels: batch maps over flat, row-major `f64` slices, the shape a binding
+//! (the PyO3 glue `imukit-py`, or a C API) hands over. Not the Rust API: Rust callers use the
+//! typed functions of [`so3`], [`quat`] and [`euler`]. The kernels stay in this crate, rather than
+//! in the glue, so that `cargo test` (which never links libpython) tests them.
 //!
 //! Each function reads `n` rows of a fixed width from `input` and writes `n` rows to `out`.
 //! Every input row is checked to be finite and every output row to be finite, so a batch

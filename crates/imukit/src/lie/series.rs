@@ -1,0 +1,254 @@
+//! Scalar coefficients of `Exp`, `Log` and the SO(3) Jacobians, each written once.
+//!
+//! | function | value | series (in θ²) below | used by |
+//! |---|---|---|---|
+//! | [`sinc`] | `sin θ / θ` | 0.5 | Jacobians |
+//! | [`rodrigues`] | `(sin θ/θ, (1 − cos θ)/θ²)` | 0.5 | `so3::exp` |
+//! | [`half_angle`] | `(sin(θ/2)/θ, cos(θ/2))` from θ² | 0.5 (x = θ/2 < 0.25) | `quat::exp` |
+//! | [`one_minus_cos_over_sq`] | `(1 − cos θ)/θ² = ½ (sin(θ/2)/(θ/2))²` | via `sinc` | Jacobians |
+//! | [`theta_minus_sin_over_cube`] | `(θ − sin θ)/θ³` | 0.2 | Jacobians, `Γ₂` |
+//! | [`cos_remainder`] | `(θ²/2 + cos θ − 1)/θ⁴` | 0.2 | `Γ₂` |
+//! | [`inv_jacobian_coefficient`] | `(1 − (θ/2) cot(θ/2))/θ²` | 0.2 | inverse Jacobians |
+//!
+//! Each switches to its Taylor series where the closed form cancels catastrophically or where a
+//! series is cheaper than libm (most IMU steps have θ ≪ 1); the thresholds keep both the
+//! truncation and the rounding error near 1e-15 absolute (checked in the tests against 50-digit
+//! values on both sides of every switch). Series coefficients are constants: a division by a
+//! literal is not folded into a multiplication and would cost more than the libm call it replaces.
+
+/// `sin x / x = Σ (−1)ᵏ x²ᵏ/(2k+1)!` in x², through x¹².
+const SINC: [f64; 7] = [
+    1.0,
+    -1.0 / 6.0,
+    1.0 / 120.0,
+    -1.0 / 5_040.0,
+    1.0 / 362_880.0,
+    -1.0 / 39_916_800.0,
+    1.0 / 6_227_020_800.0,
+];
+
+/// `(1 − cos x)/x² = Σ (−1)ᵏ x²ᵏ/(2k+2)!` in x², through x¹².
+const ONE_MINUS_COS: [f64; 7] = [
+    0.5,
+    -1.0 / 24.0,
+    1.0 / 720.0,
+    -1.0 / 40_320.0,
+    1.0 / 3_628_800.0,
+    -1.0 / 479_001_600.0,
+    1.0 / 87_178_291_200.0,
+];
+
+/// `cos x = Σ (−1)ᵏ x²ᵏ/(2k)!` in x², through x¹².
+const COS: [f64; 7] = [
+    1.0,
+    -1.0 / 2.0,
+    1.0 / 24.0,
+    -1.0 / 720.0,
+    1.0 / 40_320.0,
+    -1.0 / 3_628_800.0,
+    1.0 / 479_001_600.0,
+];
+
+/// `Σ cₖ xᵏ` by Horner's rule.
+#[inline(always)]
+fn horner<const N: usize>(x: f64, c: &[f64; N]) -> f64 {
+    let mut acc = 0.0;
+    for k in (0..N).rev() {
+        acc = acc * x + c[k];
+    }
+    acc
+}
+
+/// `sin θ / θ` (series below θ = 0.5, first omitted term < 5e-17).
+#[inline]
+pub fn sinc(theta: f64) -> f64 {
+    if theta < 0.5 {
+        horner(theta * theta, &SINC)
+    } else {
+        theta.sin() / theta
+    }
+}
+
+/// `(sin θ/θ, (1 − cos θ)/θ²)`, the Rodrigues coefficients of `Exp(φ) = I + a [φ]× + b [φ]×²`.
+/// Series below θ = 0.5 (first omitted terms below 5e-17); above, one `sin_cos` of θ/2 gives
+/// both: `sin θ = 2 s c`, `1 − cos θ = 2 s²`.
+#[inline]
+pub fn rodrigues(theta: f64) -> (f64, f64) {
+    if theta < 0.5 {
+        let t = theta * theta;
+        (horner(t, &SINC), horner(t, &ONE_MINUS_COS))
+    } else {
+        let (s, c) = (0.5 * theta).sin_cos();
+        let s_over = s / theta;
+        (2.0 * c * s_over, 2.0 * s_over * s_over)
+    }
+}
+
+/// `(sin(θ/2)/θ, cos(θ/2))` from `θ²`: the quaternion `Exp(φ) = [φ sin(θ/2)/θ, cos(θ/2)]`. Below
+/// θ² = 0.25 a series in `x² = θ²/4` (sin x/x through x¹⁰, cos x through x¹²; the first omitted
+/// terms are below 1e-17 relative), which needs neither a square root nor a libm call.
+#[inline]
+pub fn half_angle(theta_sq: f64) -> (f64, f64) {
+    if theta_sq < 0.25 {
+        let x2 = 0.25 * theta_sq;
+        let sinc = match SINC.first_chunk::<6>() {
+            Some(c) => horner(x2, c),
+            None => horner(x2, &SINC),
+        };
+        (0.5 * sinc, horner(x2, &COS))
+    } else {
+        let theta = theta_sq.sqrt();
+        let (s, c) = (0.5 * theta).sin_cos();
+        (s / theta, c)
+    }
+}
+
+/// `(1 − cos θ)/θ² = ½ (sin(θ/2)/(θ/2))²`, written with the half angle to avoid cancellation.
+#[inline]
+pub fn one_minus_cos_over_sq(theta: f64) -> f64 {
+    let s = sinc(0.5 * theta);
+    0.5 * s * s
+}
+
+/// `(θ − sin θ)/θ³ = Σ (−1)ᵏ θ²ᵏ/(2k+3)!`.
+#[inline]
+pub fn theta_minus_sin_over_cube(theta: f64) -> f64 {
+    const C: [f64; 5] = [
+        1.0 / 6.0,
+        -1.0 / 120.0,
+        1.0 / 5_040.0,
+        -1.0 / 362_880.0,
+        1.0 / 39_916_800.0,
+    ];
+    if theta < 0.2 {
+        horner(theta * theta, &C)
+    } else {
+        (theta - theta.sin()) / (theta * theta * theta)
+    }
+}
+
+/// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ² = Σ (−1)ᵏ θ²ᵏ/(2k+4)!`.
+#[inline]
+pub fn cos_remainder(theta: f64) -> f64 {
+    const C: [f64; 5] = [
+        1.0 / 24.0,
+        -1.0 / 720.0,
+        1.0 / 40_320.0,
+        -1.0 / 3_628_800.0,
+        1.0 / 479_001_600.0,
+    ];
+    if theta < 0.2 {
+        horner(theta * theta, &C)
+    } else {
+        (0.5 - one_minus_cos_over_sq(theta)) / (theta * theta)
+    }
+}
+
+/// `(1 − (θ/2) cot(θ/2))/θ²`, equal to `1/θ² − (1 + cos θ)/(2 θ sin θ)` but finite at θ = π.
+#[inline]
+pub fn inv_jacobian_coefficient(theta: f64) -> f64 {
+    // (1 − x cot x)/(4x²) with x = θ/2, from x cot x = 1 − Σ 4ⁿ|B₂ₙ| x²ⁿ/(2n)!.
+    const C: [f64; 5] = [
+        1.0 / 12.0,
+        1.0 / 720.0,
+        1.0 / 30_240.0,
+        1.0 / 1_209_600.0,
+        1.0 / 47_900_160.0,
+    ];
+    if theta < 0.2 {
+        horner(theta * theta, &C)
+    } else {
+        let half = 0.5 * theta;
+        (1.0 - half * half.cos() / half.sin()) / (theta * theta)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reference values of the coefficients computed with 50-digit arithmetic (mpmath) at points
+    /// on both sides of each series/closed-form switch.
+    #[test]
+    #[allow(clippy::excessive_precision)] // the references are quoted as computed
+    fn coefficients_match_high_precision_values() {
+        // (θ, (1−cosθ)/θ², (θ−sinθ)/θ³, (1−(θ/2)cot(θ/2))/θ²), 19 significant digits
+        let cases = [
+            (
+                1e-8,
+                0.4999999999999999958,
+                0.1666666666666666658,
+                0.08333333333333333347,
+            ),
+            (
+                0.199_999,
+                0.498335570591187701,
+                0.1663336539443291972,
+                0.0833889412952914013,
+            ),
+            (
+                0.200_001,
+                0.4983355373466480749,
+                0.1663336472903503664,
+                0.08338894240852209342,
+            ),
+            (
+                3.0,
+                0.2211102774000494953,
+                0.1058844441459308436,
+                0.09929197039400236965,
+            ),
+            (
+                std::f64::consts::PI,
+                0.2026423672846755429,
+                0.1013211836423377714,
+                0.1013211836423377714,
+            ),
+        ];
+        for (theta, d) in [
+            (1e-8, 0.041_666_666_666_666_666_53),
+            (0.199_999, 0.041_611_151_330_780_503_33),
+            (0.200_001, 0.041_611_150_221_255_636_03),
+            (3.0, 0.030_987_746_955_550_056_08),
+        ] {
+            assert!((cos_remainder(theta) - d).abs() < 3e-15, "d at {theta}");
+        }
+        for (theta, a, b, c) in cases {
+            assert!((one_minus_cos_over_sq(theta) - a).abs() < 1e-15, "a at {theta}");
+            assert!((theta_minus_sin_over_cube(theta) - b).abs() < 3e-15, "b at {theta}");
+            assert!((inv_jacobian_coefficient(theta) - c).abs() < 3e-15, "c at {theta}");
+        }
+    }
+
+    /// Both branches of the half-angle coefficients against 50-digit values (mpmath).
+    #[test]
+    #[allow(clippy::excessive_precision)] // the references are quoted as computed
+    fn half_angle_matches_high_precision_values() {
+        // (θ, sin(θ/2)/θ, cos(θ/2))
+        let cases = [
+            (1e-8, 0.4999999999999999979167, 0.9999999999999999875),
+            (0.1, 0.4997916927067832879487, 0.9987502603949662465629),
+            (0.4999, 0.4948099886461344949577, 0.9689247906974618291559),
+            (0.5001, 0.4948058479630740395059, 0.9689000503015466853613),
+            (3.0, 0.3324983288680181436472, 0.07073720166770291008819),
+        ];
+        for (theta, k, w) in cases {
+            let (k_ours, w_ours) = half_angle(theta * theta);
+            assert!((k_ours - k).abs() < 2e-16, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
+            assert!((w_ours - w).abs() < 2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
+        }
+    }
+
+    /// The Rodrigues pair on both sides of its switch, against the half-angle forms (which
+    /// agree with the 50-digit values above) and the Jacobians' `(1 − cos θ)/θ²`.
+    #[test]
+    fn rodrigues_agrees_with_the_other_forms_on_both_sides_of_its_switch() {
+        for theta in [1e-8, 0.1, 0.499_999, 0.500_001, 2.0, std::f64::consts::PI] {
+            let (a, b) = rodrigues(theta);
+            let (k, w) = half_angle(theta * theta);
+            assert!((a - 2.0 * k * w).abs() < 1e-15, "sin θ/θ at {theta}");
+            assert!((a - sinc(theta)).abs() < 1e-15, "sinc at {theta}");
+            assert!((b - one_minus_cos_over_sq(theta)).abs() < 1e-15, "b at {theta}");
+        }
+    }
+}

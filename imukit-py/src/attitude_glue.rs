@@ -1,0 +1,47 @@
+//! `attitude_integrate`: `imukit.integrate_attitude` over [`imukit::attitude::integrate`].
+
+use imukit::attitude::{self, Representation, Scheme};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::convert::{contiguous, private_copy, unit_quaternion, Name};
+use crate::{threads, to_py};
+
+/// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate_attitude
+pub(crate) fn attitude_integrate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    initial: [f64; 4],
+    scheme: Name<Scheme>,
+    representation: Name<Representation>,
+    gimbal_tolerance: f64,
+    final_only: bool,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let options = attitude::Options {
+        scheme: scheme.0,
+        representation: representation.0,
+        gimbal_tolerance,
+    };
+    let initial = unit_quaternion(initial);
+    let (t, gyro) = (private_copy(py, &t)?, private_copy(py, &gyro)?);
+    let (t, gyro) = (t.readonly(), gyro.readonly());
+    let (t, gyro) = (contiguous(py, "t", &t)?, contiguous(py, "gyro", &gyro)?);
+    let rows = if final_only { 1 } else { t.len() };
+    let out = PyArray2::<f64>::zeros(py, [rows, 4], false);
+    {
+        let mut guard = out.readwrite();
+        let out_slice = guard.as_slice_mut()?;
+        let store = (!final_only).then_some(&mut *out_slice);
+        let last =
+            py.detach(|| threads::run_in_pool(None, || attitude::integrate(t, gyro, &initial, &options, store)))?;
+        // Errors that name no argument (gimbal lock, overflow) are about the rates.
+        let last = last.map_err(|e| to_py(py, "gyro", e))?;
+        if final_only {
+            out_slice.copy_from_slice(&[last.i, last.j, last.k, last.w]);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,207 @@
+//! Conversion between Python objects and the core's types, and nothing else: no value checks
+//! (the core makes them), no math, no defaults.
+//!
+//! - arrays: [`private_copy`] (a copy no other thread can write while the GIL is released),
+//!   [`contiguous`], [`rows`] (`(n, N)` as `&[[f64; N]]`), [`SampleCopies`];
+//! - values by field name: [`NoiseFields`] (`imukit.ImuNoise`), [`BiasFields`]
+//!   (`imukit.ImuBias`), [`NavStateFields`] (`imukit.NavState`);
+//! - enums by name: [`Name`], through the core's `FromStr` ([`imukit::names::Named`]).
+
+use imukit::imu::{Bias, NavState, Noise, Samples};
+use imukit::names::Named;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use numpy::{PyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::{raise, to_py};
+
+/// A copy of `x` that no other Python code can see, so its buffer may be read with the GIL
+/// released: another thread could write to the caller's array meanwhile (rust-numpy issue 497).
+/// numpy allocates it (and the kernels' outputs) because numpy asks for huge pages: a Rust Vec of
+/// the same size costs three times as much in page faults.
+pub(crate) fn private_copy<'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    x: &PyReadonlyArray<'py, f64, D>,
+) -> PyResult<Bound<'py, PyArray<f64, D>>> {
+    let _ = py;
+    Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
+}
+
+/// The buffer of a C-contiguous array.
+pub(crate) fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    name: &str,
+    x: &'a PyReadonlyArray<'py, f64, D>,
+) -> PyResult<&'a [f64]> {
+    x.as_slice()
+        .map_err(|_| raise(py, "ShapeError", name, "expected a C-contiguous float64 array"))
+}
+
+/// The rows of a C-contiguous `(n, N)` array.
+pub(crate) fn rows<'a, 'py, const N: usize>(
+    py: Python<'py>,
+    name: &str,
+    x: &'a PyReadonlyArray2<'py, f64>,
+) -> PyResult<&'a [[f64; N]]> {
+    match contiguous(py, name, x)?.as_chunks::<N>() {
+        (rows, []) if x.shape()[1] == N => Ok(rows),
+        _ => Err(raise(
+            py,
+            "ShapeError",
+            name,
+            format!("expected shape (n, {N}), got {:?}", x.shape()),
+        )),
+    }
+}
+
+/// Private copies of a sample set ([`private_copy`]), alive while a kernel borrows them
+/// without the GIL.
+pub(crate) struct SampleCopies<'py> {
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+}
+
+impl<'py> SampleCopies<'py> {
+    pub(crate) fn new(
+        py: Python<'py>,
+        t: &PyReadonlyArray1<'py, f64>,
+        gyro: &PyReadonlyArray2<'py, f64>,
+        accel: &PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            t: private_copy(py, t)?.readonly(),
+            gyro: private_copy(py, gyro)?.readonly(),
+            accel: private_copy(py, accel)?.readonly(),
+        })
+    }
+
+    pub(crate) fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<Samples<'s>> {
+        let t = contiguous(py, "t", &self.t)?;
+        let (gyro, accel) = (rows(py, "gyro", &self.gyro)?, rows(py, "accel", &self.accel)?);
+        Samples::new(t, gyro, accel).map_err(|e| to_py(py, "imu", e))
+    }
+}
+
+/// A string argument parsed as the core enum `T`; an unknown name raises `ParameterError` for
+/// the argument `T::ARGUMENT`, listing the names.
+pub(crate) struct Name<T>(pub(crate) T);
+
+impl<'a, 'py, T: Named> FromPyObject<'a, 'py> for Name<T> {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let text: String = obj.extract()?;
+        text.parse::<T>().map(Name).map_err(|e| to_py(obj.py(), T::ARGUMENT, e))
+    }
+}
+
+/// Registers `T`'s canonical names as the tuple `_core.<names>` and, when it has any, its
+/// deprecated aliases as the dict `_core.<aliases>` (`{"old": "canonical"}`).
+pub(crate) fn add_names<T: Named>(m: &Bound<'_, PyModule>, names: &str, aliases: Option<&str>) -> PyResult<()> {
+    m.add(names, PyTuple::new(m.py(), T::names())?)?;
+    if let Some(aliases) = aliases {
+        let dict = PyDict::new(m.py());
+        for (alias, variant) in T::ALIASES {
+            dict.set_item(alias, variant.name())?;
+        }
+        m.add(aliases, dict)?;
+    }
+    Ok(())
+}
+
+/// `imukit.ImuNoise` by field name.
+#[derive(FromPyObject)]
+pub(crate) struct NoiseFields {
+    #[pyo3(attribute)]
+    gyro_density: f64,
+    #[pyo3(attribute)]
+    accel_density: f64,
+    #[pyo3(attribute)]
+    gyro_random_walk: f64,
+    #[pyo3(attribute)]
+    accel_random_walk: f64,
+}
+
+impl From<NoiseFields> for Noise {
+    fn from(n: NoiseFields) -> Self {
+        Noise {
+            gyro_density: n.gyro_density,
+            accel_density: n.accel_density,
+            gyro_random_walk: n.gyro_random_walk,
+            accel_random_walk: n.accel_random_walk,
+        }
+    }
+}
+
+/// `imukit.ImuBias` by field name.
+#[derive(FromPyObject)]
+pub(crate) struct BiasFields {
+    #[pyo3(attribute)]
+    gyro: [f64; 3],
+    #[pyo3(attribute)]
+    accel: [f64; 3],
+}
+
+impl From<BiasFields> for Bias {
+    fn from(b: BiasFields) -> Self {
+        Bias {
+            gyro: Vector3::from(b.gyro),
+            accel: Vector3::from(b.accel),
+        }
+    }
+}
+
+/// `imukit.NavState` by field name; `rotation` is a scipy `Rotation`.
+#[derive(FromPyObject)]
+pub(crate) struct NavStateFields {
+    #[pyo3(attribute)]
+    position: [f64; 3],
+    #[pyo3(attribute)]
+    velocity: [f64; 3],
+    #[pyo3(attribute, from_py_with = xyzw)]
+    rotation: [f64; 4],
+}
+
+/// A scipy `Rotation`'s quaternion, `[x, y, z, w]`.
+fn xyzw(rotation: &Bound<'_, PyAny>) -> PyResult<[f64; 4]> {
+    rotation.call_method0("as_quat")?.extract()
+}
+
+/// An `[x, y, z, w]` quaternion as a rotation; Python passes a scipy `Rotation`'s quaternion
+/// (unit already), renormalised here regardless.
+pub(crate) fn unit_quaternion([x, y, z, w]: [f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z))
+}
+
+impl From<NavStateFields> for NavState {
+    fn from(s: NavStateFields) -> Self {
+        NavState {
+            position: Vector3::from(s.position),
+            velocity: Vector3::from(s.velocity),
+            rotation: unit_quaternion(s.rotation),
+        }
+    }
+}
+
+/// `[σ_g, σ_a, σ_bg, σ_ba]` as the core's noise densities (positional; for bindings not yet on
+/// [`NoiseFields`]).
+pub(crate) fn noise_of(values: [f64; 4]) -> Noise {
+    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = values;
+    Noise {
+        gyro_density,
+        accel_density,
+        gyro_random_walk,
+        accel_random_walk,
+    }
+}
+
+/// `[b_g, b_a]` as the core's biases (positional; for bindings not yet on [`BiasFields`]).
+pub(crate) fn bias(values: [f64; 6]) -> Bias {
+    let [gx, gy, gz, ax, ay, az] = values;
+    Bias {
+        gyro: Vector3::new(gx, gy, gz),
+        accel: Vector3::new(ax, ay, az),
+    }
+}

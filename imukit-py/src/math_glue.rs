@@ -1,0 +1,119 @@
+//! so3, quat and euler: row maps from `(n, k)` float64 arrays to new `(n, m)` arrays over the
+//! core's [`imukit::ffi`] kernels, GIL released, in the process-wide thread pool.
+
+use imukit::ffi::{self, Convention, Jacobian, ProductMatrix};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::convert::{contiguous, private_copy, Name};
+use crate::{raise, threads, to_py};
+
+/// Runs `kernel` over the rows of `x` (shape `(n, width_in)`) into a new `(n, width_out)` array.
+fn run<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    width_in: usize,
+    width_out: usize,
+    kernel: impl FnOnce(&[f64], &mut [f64]) -> imukit::Result<()> + Send,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let shape = x.shape();
+    if shape[1] != width_in {
+        let message = format!("expected shape (n, {width_in}), got {shape:?}");
+        return Err(raise(py, "ShapeError", name, message));
+    }
+    let input = private_copy(py, &x)?;
+    let input = input.readonly();
+    let input = contiguous(py, name, &input)?;
+    let out = PyArray2::<f64>::zeros(py, [shape[0], width_out], false);
+    {
+        let mut guard = out.readwrite();
+        let out_slice = guard.as_slice_mut()?;
+        py.detach(|| threads::run_in_pool(None, || kernel(input, out_slice)))?
+            .map_err(|e| to_py(py, name, e))?;
+    }
+    Ok(out)
+}
+
+/// A `#[pyfunction] name(x, name)` running `ffi::kernel` from `(n, in)` to `(n, out)`.
+macro_rules! unary {
+    ($func:ident, $kernel:path, $width_in:expr, $width_out:expr) => {
+        #[pyfunction]
+        pub(crate) fn $func<'py>(
+            py: Python<'py>,
+            x: PyReadonlyArray2<'py, f64>,
+            name: &str,
+        ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+            run(py, x, name, $width_in, $width_out, $kernel)
+        }
+    };
+}
+
+unary!(so3_hat, ffi::so3_hat, 3, 9);
+unary!(so3_vee, ffi::so3_vee, 9, 3);
+unary!(so3_exp, ffi::so3_exp, 3, 9);
+unary!(so3_log, ffi::so3_log, 9, 3);
+unary!(quat_conjugate, ffi::quat_conjugate, 4, 4);
+unary!(quat_inverse, ffi::quat_inverse, 4, 4);
+unary!(quat_normalize, ffi::quat_normalize, 4, 4);
+unary!(quat_rotate, ffi::quat_rotate, 7, 3);
+unary!(quat_exp, ffi::quat_exp, 3, 4);
+unary!(quat_log, ffi::quat_log, 4, 3);
+unary!(euler_to_matrix, ffi::euler_to_matrix, 3, 9);
+unary!(euler_from_matrix, ffi::euler_from_matrix, 9, 3);
+unary!(euler_rate_matrix_inv, ffi::euler_rate_matrix_inv, 3, 9);
+
+#[pyfunction]
+pub(crate) fn so3_jacobian<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    kind: Name<Jacobian>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 3, 9, move |i, o| ffi::so3_jacobian(kind.0, i, o))
+}
+
+#[pyfunction]
+pub(crate) fn quat_multiply<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    convention: Name<Convention>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 8, 4, move |i, o| ffi::quat_multiply(convention.0, i, o))
+}
+
+#[pyfunction]
+pub(crate) fn quat_product_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    side: Name<ProductMatrix>,
+    convention: Name<Convention>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 4, 16, move |i, o| {
+        ffi::quat_product_matrix(side.0, convention.0, i, o)
+    })
+}
+
+#[pyfunction]
+pub(crate) fn quat_omega_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    convention: Name<Convention>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 3, 16, move |i, o| {
+        ffi::quat_omega_matrix(convention.0, i, o)
+    })
+}
+
+#[pyfunction]
+pub(crate) fn euler_rate_matrix<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    name: &str,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    run(py, x, name, 3, 9, move |i, o| ffi::euler_rate_matrix(tolerance, i, o))
+}

@@ -1,0 +1,109 @@
+//! `strapdown_integrate`, `strapdown_propagate`: `imukit.integrate` and `imukit.propagate` over
+//! [`imukit::strapdown::integrate`] and [`imukit::propagate::propagate`]. The initial state, the
+//! biases and the noise cross by field name ([`NavStateFields`], [`BiasFields`],
+//! [`NoiseFields`]).
+
+use imukit::imu::{Bias, NavState, Noise};
+use imukit::strapdown::{Options, Scheme, StatesOut};
+use imukit::{propagate, strapdown};
+use nalgebra::Vector3;
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::convert::{contiguous, BiasFields, Name, NavStateFields, NoiseFields, SampleCopies};
+use crate::{raise, to_py};
+
+/// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
+type States<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+/// States and `(M, 225)` covariances.
+type StatesAndCovariances<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// Zeroed `(n, 6)` and `(n, 4)` state arrays.
+fn state_arrays(py: Python<'_>, n: usize) -> States<'_> {
+    (
+        PyArray2::<f64>::zeros(py, [n, 6], false),
+        PyArray2::<f64>::zeros(py, [n, 4], false),
+    )
+}
+
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate
+pub(crate) fn strapdown_integrate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    initial: NavStateFields,
+    bias: BiasFields,
+    gravity: [f64; 3],
+    scheme: Name<Scheme>,
+) -> PyResult<States<'py>> {
+    let options = Options {
+        scheme: scheme.0,
+        gravity: Vector3::from(gravity),
+    };
+    let (initial, bias) = (NavState::from(initial), Bias::from(bias));
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
+    let (pv, rot) = state_arrays(py, samples.len());
+    {
+        let (mut pv_guard, mut rot_guard) = (pv.readwrite(), rot.readwrite());
+        let out = StatesOut {
+            position_velocity: pv_guard.as_slice_mut()?,
+            rotation: rot_guard.as_slice_mut()?,
+        };
+        py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out)))
+            .map_err(|e| to_py(py, "imu / bias", e))?;
+    }
+    Ok((pv, rot))
+}
+
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.propagate
+pub(crate) fn strapdown_propagate<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    initial: NavStateFields,
+    covariance: PyReadonlyArray2<'py, f64>,
+    bias: BiasFields,
+    noise: NoiseFields,
+    gravity: [f64; 3],
+    scheme: Name<Scheme>,
+    every: usize,
+) -> PyResult<StatesAndCovariances<'py>> {
+    let options = Options {
+        scheme: scheme.0,
+        gravity: Vector3::from(gravity),
+    };
+    let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
+    if covariance.shape() != [15, 15] {
+        let message = format!("expected shape (15, 15), got {:?}", covariance.shape());
+        return Err(raise(py, "ShapeError", "covariance", message));
+    }
+    let p0 = propagate::Covariance::from_row_slice(contiguous(py, "covariance", &covariance)?);
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
+    let n = samples.len();
+    let (pv, rot) = state_arrays(py, n);
+    let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
+    {
+        let (mut pv_guard, mut rot_guard, mut c_guard) = (pv.readwrite(), rot.readwrite(), covariances.readwrite());
+        let outputs = propagate::Outputs {
+            states: Some(StatesOut {
+                position_velocity: pv_guard.as_slice_mut()?,
+                rotation: rot_guard.as_slice_mut()?,
+            }),
+            covariances: c_guard.as_slice_mut()?,
+            every,
+        };
+        py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))
+            .map_err(|e| to_py(py, "imu / bias", e))?;
+    }
+    Ok((pv, rot, covariances))
+}
