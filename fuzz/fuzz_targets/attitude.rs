@@ -42,7 +42,7 @@ fuzz_target!(|input: Input| {
         gimbal_tolerance: input.gimbal_tolerance,
     };
     let mut out = vec![0.0; 4 * a.t.len()];
-    let result = integrate(&a.t, &a.gyro, &initial, &options, input.store.then_some(&mut out[..]));
+    let result = integrate(&a.t, a.gyro.as_chunks().0, &initial, &options, input.store.then_some(out.as_chunks_mut().0));
     let finite_input = finite(&a.t) && finite(&a.gyro) && finite(initial.coords.as_slice());
     if let (Ok(q), true) = (result, finite_input) {
         assert_finite("attitude", q.coords.as_slice());

@@ -4,7 +4,7 @@ use imukit::attitude::{self, Representation, Scheme};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, private_copy, unit_quaternion, Name};
+use crate::convert::{contiguous, private_copy, rows, unit_quaternion, Name};
 use crate::{threads, to_py};
 
 /// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`.
@@ -28,13 +28,13 @@ pub(crate) fn attitude_integrate<'py>(
     let initial = unit_quaternion(initial);
     let (t, gyro) = (private_copy(py, &t)?, private_copy(py, &gyro)?);
     let (t, gyro) = (t.readonly(), gyro.readonly());
-    let (t, gyro) = (contiguous(py, "t", &t)?, contiguous(py, "gyro", &gyro)?);
-    let rows = if final_only { 1 } else { t.len() };
-    let out = PyArray2::<f64>::zeros(py, [rows, 4], false);
+    let (t, gyro) = (contiguous(py, "t", &t)?, rows::<3>(py, "gyro", &gyro)?);
+    let n = if final_only { 1 } else { t.len() };
+    let out = PyArray2::<f64>::zeros(py, [n, 4], false);
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
-        let store = (!final_only).then_some(&mut *out_slice);
+        let store = (!final_only).then_some(out_slice.as_chunks_mut::<4>().0);
         let last =
             py.detach(|| threads::run_in_pool(None, || attitude::integrate(t, gyro, &initial, &options, store)))?;
         // Errors that name no argument (gimbal lock, overflow) are about the rates.

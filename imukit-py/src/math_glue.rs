@@ -35,85 +35,52 @@ fn run<'py>(
     Ok(out)
 }
 
-/// A `#[pyfunction] name(x, name)` running `ffi::kernel` from `(n, in)` to `(n, out)`.
-macro_rules! unary {
-    ($func:ident, $kernel:path, $width_in:expr, $width_out:expr) => {
+/// A `#[pyfunction] name(x, name, options…)` running `kernel` from `(n, in)` to `(n, out)`.
+macro_rules! kernel {
+    ($func:ident, $width_in:expr, $width_out:expr, $kernel:expr $(, $arg:ident: $ty:ty)*) => {
         #[pyfunction]
         pub(crate) fn $func<'py>(
             py: Python<'py>,
             x: PyReadonlyArray2<'py, f64>,
             name: &str,
+            $($arg: $ty),*
         ) -> PyResult<Bound<'py, PyArray2<f64>>> {
             run(py, x, name, $width_in, $width_out, $kernel)
         }
     };
 }
 
-unary!(so3_hat, ffi::so3_hat, 3, 9);
-unary!(so3_vee, ffi::so3_vee, 9, 3);
-unary!(so3_exp, ffi::so3_exp, 3, 9);
-unary!(so3_log, ffi::so3_log, 9, 3);
-unary!(quat_conjugate, ffi::quat_conjugate, 4, 4);
-unary!(quat_inverse, ffi::quat_inverse, 4, 4);
-unary!(quat_normalize, ffi::quat_normalize, 4, 4);
-unary!(quat_rotate, ffi::quat_rotate, 7, 3);
-unary!(quat_exp, ffi::quat_exp, 3, 4);
-unary!(quat_log, ffi::quat_log, 4, 3);
-unary!(euler_to_matrix, ffi::euler_to_matrix, 3, 9);
-unary!(euler_from_matrix, ffi::euler_from_matrix, 9, 3);
-unary!(euler_rate_matrix_inv, ffi::euler_rate_matrix_inv, 3, 9);
-
-#[pyfunction]
-pub(crate) fn so3_jacobian<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray2<'py, f64>,
-    name: &str,
-    kind: Name<Jacobian>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    run(py, x, name, 3, 9, move |i, o| ffi::so3_jacobian(kind.0, i, o))
-}
-
-#[pyfunction]
-pub(crate) fn quat_multiply<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray2<'py, f64>,
-    name: &str,
-    convention: Name<Convention>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    run(py, x, name, 8, 4, move |i, o| ffi::quat_multiply(convention.0, i, o))
-}
-
-#[pyfunction]
-pub(crate) fn quat_product_matrix<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray2<'py, f64>,
-    name: &str,
-    side: Name<ProductMatrix>,
-    convention: Name<Convention>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    run(py, x, name, 4, 16, move |i, o| {
-        ffi::quat_product_matrix(side.0, convention.0, i, o)
-    })
-}
-
-#[pyfunction]
-pub(crate) fn quat_omega_matrix<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray2<'py, f64>,
-    name: &str,
-    convention: Name<Convention>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    run(py, x, name, 3, 16, move |i, o| {
-        ffi::quat_omega_matrix(convention.0, i, o)
-    })
-}
-
-#[pyfunction]
-pub(crate) fn euler_rate_matrix<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray2<'py, f64>,
-    name: &str,
-    tolerance: f64,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    run(py, x, name, 3, 9, move |i, o| ffi::euler_rate_matrix(tolerance, i, o))
-}
+kernel!(so3_hat, 3, 9, ffi::so3_hat);
+kernel!(so3_vee, 9, 3, ffi::so3_vee);
+kernel!(so3_exp, 3, 9, ffi::so3_exp);
+kernel!(so3_log, 9, 3, ffi::so3_log);
+kernel!(so3_jacobian, 3, 9, move |i, o| ffi::so3_jacobian(kind.0, i, o), kind: Name<Jacobian>);
+kernel!(quat_conjugate, 4, 4, ffi::quat_conjugate);
+kernel!(quat_inverse, 4, 4, ffi::quat_inverse);
+kernel!(quat_normalize, 4, 4, ffi::quat_normalize);
+kernel!(quat_rotate, 7, 3, ffi::quat_rotate);
+kernel!(quat_exp, 3, 4, ffi::quat_exp);
+kernel!(quat_log, 4, 3, ffi::quat_log);
+kernel!(
+    quat_multiply, 8, 4,
+    move |i, o| ffi::quat_multiply(convention.0, i, o),
+    convention: Name<Convention>
+);
+kernel!(
+    quat_product_matrix, 4, 16,
+    move |i, o| ffi::quat_product_matrix(side.0, convention.0, i, o),
+    side: Name<ProductMatrix>, convention: Name<Convention>
+);
+kernel!(
+    quat_omega_matrix, 3, 16,
+    move |i, o| ffi::quat_omega_matrix(convention.0, i, o),
+    convention: Name<Convention>
+);
+kernel!(euler_to_matrix, 3, 9, ffi::euler_to_matrix);
+kernel!(euler_from_matrix, 9, 3, ffi::euler_from_matrix);
+kernel!(euler_rate_matrix_inv, 3, 9, ffi::euler_rate_matrix_inv);
+kernel!(
+    euler_rate_matrix, 3, 9,
+    move |i, o| ffi::euler_rate_matrix(tolerance, i, o),
+    tolerance: f64
+);

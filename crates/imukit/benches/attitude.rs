@@ -44,10 +44,10 @@ fn attitude(c: &mut Criterion) {
             b.iter(|| {
                 integrate(
                     black_box(&t),
-                    black_box(&gyro),
+                    black_box(gyro.as_chunks().0),
                     &UnitQuaternion::identity(),
                     options,
-                    Some(&mut out),
+                    Some(out.as_chunks_mut().0),
                 )
             })
         });

@@ -2,7 +2,7 @@
 //!
 //! | item | convention |
 //! |---|---|
-//! | input | timestamps `t` [s] (strictly increasing, any spacing), body rates `ω` [rad/s], flat `3n` |
+//! | input | timestamps `t` [s] (strictly increasing, any spacing), body rates `ω` [rad/s], one row per sample |
 //! | ODE | `Ṙ = R [ω]×`; `q̇ = ½ q ⊗ [ω, 0]`; `χ̇ = E(χ) ω` for ZYX angles χ |
 //! | output | Hamilton `q_wb` per sample, `[x, y, z, w]`, element 0 = the initial attitude |
 //!
@@ -253,17 +253,19 @@ fn check_values(t: &[f64], gyro: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// Integrates body rates `gyro` (flat `3n`, rad/s) sampled at `t` (n, seconds) from `initial`.
+/// Integrates body rates `gyro` (n rows, rad/s) sampled at `t` (n, seconds) from `initial`.
 ///
-/// Writes every attitude (`[x, y, z, w]`, element 0 = `initial`) to `out` (length `4n`) when
-/// given, and returns the final attitude. No allocation per sample.
+/// Writes every attitude (`[x, y, z, w]`, row 0 = `initial`) to `out` (n rows) when given, and
+/// returns the final attitude. No allocation per sample.
 pub fn integrate(
     t: &[f64],
-    gyro: &[f64],
+    gyro: &[[f64; 3]],
     initial: &UnitQuaternion<f64>,
     options: &Options,
-    out: Option<&mut [f64]>,
+    out: Option<&mut [[f64; 4]]>,
 ) -> Result<UnitQuaternion<f64>> {
+    // The steps index flat rows; the views are the same memory.
+    let (gyro, out) = (gyro.as_flattened(), out.map(|o| o.as_flattened_mut()));
     check(t, gyro, out.as_ref().map(|o| o.len()))?;
     check_options(options)?;
     if !initial.coords.iter().all(|v| v.is_finite()) {
@@ -292,10 +294,11 @@ pub fn integrate(
 /// quaternion (and the matrix's own orthonormality can be checked: `tests/stability.rs`).
 pub fn integrate_rotation_matrix(
     t: &[f64],
-    gyro: &[f64],
+    gyro: &[[f64; 3]],
     initial: &Matrix3<f64>,
     options: &Options,
 ) -> Result<Matrix3<f64>> {
+    let gyro = gyro.as_flattened();
     let options = Options {
         representation: Representation::Matrix,
         ..*options

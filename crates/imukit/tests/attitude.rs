@@ -40,7 +40,14 @@ fn constant_rate_is_exact_for_the_closed_forms() {
     for scheme in [Scheme::Exp, Scheme::Magnus] {
         for representation in [Representation::Quaternion, Representation::Matrix] {
             let mut out = vec![0.0; 4 * n];
-            let last = integrate(&t, &gyro, &q0, &options(scheme, representation), Some(&mut out)).unwrap();
+            let last = integrate(
+                &t,
+                gyro.as_chunks().0,
+                &q0,
+                &options(scheme, representation),
+                Some(out.as_chunks_mut().0),
+            )
+            .unwrap();
             assert!(
                 last.angle_to(&truth) < 1e-10,
                 "{scheme:?}/{representation:?}: {}",
@@ -63,8 +70,8 @@ fn stored_path_equals_final_only_path_bit_for_bit() {
         let o = options(scheme, Representation::Quaternion);
         let q0 = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -0.1, 0.2));
         let mut out = vec![0.0; 4 * t.len()];
-        let stored = integrate(&t, &gyro, &q0, &o, Some(&mut out)).unwrap();
-        let last = integrate(&t, &gyro, &q0, &o, None).unwrap();
+        let stored = integrate(&t, gyro.as_chunks().0, &q0, &o, Some(out.as_chunks_mut().0)).unwrap();
+        let last = integrate(&t, gyro.as_chunks().0, &q0, &o, None).unwrap();
         assert_eq!(stored.coords, last.coords, "{scheme:?}");
         assert_eq!(&out[out.len() - 4..], stored.coords.as_slice());
         assert_eq!(&out[..4], q0.coords.as_slice());
@@ -79,10 +86,10 @@ fn errors_name_the_first_bad_sample_on_both_paths() {
     for scheme in [Scheme::Exp, Scheme::Rk2, Scheme::Magnus] {
         for store in [true, false] {
             let mut out = vec![0.0; 4 * t.len()];
-            let out = store.then_some(&mut out[..]);
+            let out = store.then_some(out.as_chunks_mut().0);
             let err = integrate(
                 &t,
-                &gyro,
+                gyro.as_chunks().0,
                 &UnitQuaternion::identity(),
                 &options(scheme, Representation::Quaternion),
                 out,
@@ -102,10 +109,10 @@ fn errors_name_the_first_bad_sample_on_both_paths() {
     let mut out = vec![0.0; 4 * t.len()];
     let err = integrate(
         &t,
-        &gyro,
+        gyro.as_chunks().0,
         &UnitQuaternion::identity(),
         &options(Scheme::Magnus, Representation::Quaternion),
-        Some(&mut out),
+        Some(out.as_chunks_mut().0),
     )
     .unwrap_err();
     assert_eq!(
@@ -120,7 +127,7 @@ fn euler_angles_refuse_group_schemes_and_stop_at_gimbal_lock() {
     let pitch_up: Vec<f64> = t.iter().flat_map(|_| [0.0, 1.0, 0.0]).collect();
     let err = integrate(
         &t,
-        &pitch_up,
+        pitch_up.as_chunks().0,
         &UnitQuaternion::identity(),
         &options(Scheme::Exp, Representation::Euler),
         None,
@@ -131,7 +138,7 @@ fn euler_angles_refuse_group_schemes_and_stop_at_gimbal_lock() {
         gimbal_tolerance: 1e-3,
         ..options(Scheme::Rk4, Representation::Euler)
     };
-    match integrate(&t, &pitch_up, &UnitQuaternion::identity(), &o, None).unwrap_err() {
+    match integrate(&t, pitch_up.as_chunks().0, &UnitQuaternion::identity(), &o, None).unwrap_err() {
         // pitch = k·1e-3 reaches π/2 − 1e-3 at k ≈ 1569.8: the last RK4 stage of the step that
         // starts at sample 1569 evaluates E at pitch 1.570 and is refused, naming that step.
         Error::GimbalLock { index, .. } => assert_eq!(index, 1569),
@@ -147,20 +154,20 @@ fn rotation_matrix_form_is_the_matrix_representation_and_refuses_a_non_rotation(
     for scheme in Representation::Matrix.schemes() {
         // Same state as integrate(), which converts it to a quaternion only at the end.
         let opts = options(*scheme, Representation::Matrix);
-        let r = attitude::integrate_rotation_matrix(&t, &gyro, &r0, &opts).unwrap();
-        let q = attitude::integrate(&t, &gyro, &initial, &opts, None).unwrap();
+        let r = attitude::integrate_rotation_matrix(&t, gyro.as_chunks().0, &r0, &opts).unwrap();
+        let q = attitude::integrate(&t, gyro.as_chunks().0, &initial, &opts, None).unwrap();
         assert!((r - q.to_rotation_matrix().matrix()).abs().max() < 1e-14, "{scheme:?}");
         // The representation field is ignored: quaternion options give the matrix result too.
         let quaternion_opts = options(*scheme, Representation::Quaternion);
         assert_eq!(
-            attitude::integrate_rotation_matrix(&t, &gyro, &r0, &quaternion_opts).unwrap(),
+            attitude::integrate_rotation_matrix(&t, gyro.as_chunks().0, &r0, &quaternion_opts).unwrap(),
             r
         );
     }
     let opts = options(Scheme::Rk4, Representation::Matrix);
     let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
     for bad in [r0 * 1.001, reflection, Matrix3::from_element(f64::NAN)] {
-        let e = attitude::integrate_rotation_matrix(&t, &gyro, &bad, &opts).unwrap_err();
+        let e = attitude::integrate_rotation_matrix(&t, gyro.as_chunks().0, &bad, &opts).unwrap_err();
         assert!(e.to_string().contains("initial"), "{e}");
     }
 }

@@ -54,9 +54,9 @@ fn attitude_norm_drift(scheme: Scheme) -> f64 {
     timed(&format!("attitude {}", scheme.name()), steps, || {
         in_chunks(steps, |m| {
             let s = chunk.samples(m);
-            let store = calls.is_multiple_of(2).then(|| &mut out[..4 * (m + 1)]);
+            let store = calls.is_multiple_of(2).then(|| &mut out.as_chunks_mut().0[..m + 1]);
             let stored = store.is_some();
-            q = attitude::integrate(s.t(), s.gyro().as_flattened(), &q, &options, store).unwrap();
+            q = attitude::integrate(s.t(), s.gyro(), &q, &options, store).unwrap();
             if stored {
                 worst = out[..4 * (m + 1)].chunks_exact(4).map(norm_error).fold(worst, f64::max);
             }
@@ -113,7 +113,7 @@ fn attitude_matrix_drift(scheme: Scheme) -> f64 {
     timed(&format!("attitude matrix {}", scheme.name()), steps, || {
         in_chunks(steps, |m| {
             let s = chunk.samples(m);
-            r = attitude::integrate_rotation_matrix(s.t(), s.gyro().as_flattened(), &r, &options).unwrap();
+            r = attitude::integrate_rotation_matrix(s.t(), s.gyro(), &r, &options).unwrap();
             worst = worst.max(orthonormality_error(&r));
             done += m;
         })

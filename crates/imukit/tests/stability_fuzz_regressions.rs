@@ -13,14 +13,14 @@ use nalgebra::UnitQuaternion;
 fn rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     let w = 31611.0 * 2f64.powi(113);
     let t = [0.0, 3.1611, 6.3222];
-    let gyro = [w; 9];
+    let gyro = [[w; 3]; 3];
     for scheme in [Scheme::Rk4, Scheme::Rk2, Scheme::Euler] {
         let options = attitude::Options {
             scheme,
             representation: Representation::Quaternion,
             ..attitude::Options::default()
         };
-        let mut out = [0.0; 12];
+        let mut out = [[0.0; 4]; 3];
         for store in [false, true] {
             let result = attitude::integrate(
                 &t,
@@ -41,7 +41,7 @@ fn rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
         scheme: Scheme::Rk4,
         ..attitude::Options::default()
     };
-    let mut out = [0.0; 12];
+    let mut out = [[0.0; 4]; 3];
     let stored = attitude::integrate(&t, &gyro, &UnitQuaternion::identity(), &options, Some(&mut out));
     assert!(matches!(stored, Err(Error::Overflow { index: 1 })), "{stored:?}");
     let last = attitude::integrate(&t, &gyro, &UnitQuaternion::identity(), &options, None);

@@ -110,7 +110,7 @@ fn streaming_apis_do_not_grow_memory() {
         "attitude integrate",
         growth("attitude integrate", |m| {
             let s = chunk.samples(m);
-            q = attitude::integrate(s.t(), s.gyro().as_flattened(), &q, &options, None).unwrap();
+            q = attitude::integrate(s.t(), s.gyro(), &q, &options, None).unwrap();
         }),
     ));
 
