@@ -85,6 +85,8 @@ class FilterState(_core.FilterState):
             return super().__new__(cls, **fields)
         if isinstance(values, _core.FilterState):
             return super().__new__(cls, **values.fields())
+        if values is None:
+            raise ParameterError("expected the state's fields by name, or a FilterState", argument="state")
         warnings.warn(
             "FilterState(values) from the flat (16,) layout is deprecated: keep or pickle the state",
             DeprecationWarning,
