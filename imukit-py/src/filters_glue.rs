@@ -16,6 +16,7 @@ use imukit::filters::{
     AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
     RestDetection, State, World,
 };
+use imukit::names::Named;
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -187,7 +188,7 @@ impl PyFilterOptions {
     #[classattr]
     #[allow(non_snake_case)] // a Python class constant
     fn WORLDS() -> Vec<&'static str> {
-        World::ALL.iter().map(|w| w.name()).collect()
+        World::names()
     }
 
     fn __getnewargs_ex__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {

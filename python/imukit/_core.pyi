@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from typing_extensions import Self, disjoint_base
 
 __all__ = [
+    "GRAVITY",
     "AccelRejection",
     "FilterOptions",
     "FilterState",
@@ -26,6 +27,7 @@ __all__ = [
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
     "euler_to_matrix",
+    "get_num_threads",
     "preint_windows",
     "quat_conjugate",
     "quat_exp",
@@ -36,6 +38,7 @@ __all__ = [
     "quat_omega_matrix",
     "quat_product_matrix",
     "quat_rotate",
+    "set_num_threads",
     "sim_measure",
     "sim_motion",
     "so3_exp",
@@ -48,7 +51,12 @@ __all__ = [
 ]
 
 __version__: str
+# Default world-frame gravity [m/s²], z up: `imukit::imu::GRAVITY`, the one place it is written.
+GRAVITY: tuple[float, float, float]
 
+# The process-wide thread count of the parallel kernels (default: rayon's, one per core).
+def set_num_threads(n: int) -> None: ...
+def get_num_threads() -> int: ...
 def so3_hat(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_vee(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_exp(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...

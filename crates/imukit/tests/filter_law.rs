@@ -26,9 +26,11 @@ impl Law for GyroOnly {
 
 const N: usize = 5000;
 
+type Rows = Vec<[f64; 3]>;
+
 /// A tumbling body at 200 Hz, with an accelerometer and a magnetometer that the gates would
 /// reject (norm far from g, field jumping) half of the time.
-fn samples() -> (Vec<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+fn samples() -> (Vec<f64>, Rows, Rows, Rows) {
     let t: Vec<f64> = (0..N).map(|k| k as f64 * 0.005).collect();
     let gyro = t
         .iter()

@@ -110,7 +110,8 @@ impl Default for RestDetection {
 pub struct Options {
     /// World frame of the estimate.
     pub world: World,
-    /// Gravity magnitude [m/s²] used by the rejection and rest tests.
+    /// Gravity magnitude [m/s²] used by the rejection and rest tests (default: that of
+    /// [`crate::imu::GRAVITY`]).
     pub gravity: f64,
     /// Start-up gain ramp.
     pub gain_ramp: GainRamp,
@@ -126,7 +127,7 @@ impl Default for Options {
     fn default() -> Self {
         Self {
             world: World::Enu,
-            gravity: 9.81,
+            gravity: crate::imu::GRAVITY[2].abs(),
             gain_ramp: GainRamp::default(),
             acc_rejection: Some(AccelRejection::default()),
             mag_rejection: Some(MagRejection::default()),

@@ -11,18 +11,9 @@ pub enum World {
     Ned,
 }
 
+crate::named_enum!(World, "world", [Enu => "ENU", Ned => "NED"]);
+
 impl World {
-    /// Every frame, by [`World::name`].
-    pub const ALL: [World; 2] = [World::Enu, World::Ned];
-
-    /// `"ENU"` or `"NED"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            World::Enu => "ENU",
-            World::Ned => "NED",
-        }
-    }
-
     /// The world "up" direction, which a resting accelerometer measures (specific force).
     #[inline]
     pub fn up(self) -> Vector3<f64> {
@@ -109,20 +100,4 @@ pub fn initial_attitude(world: World, accel: &Vector3<f64>, mag: Option<&Vector3
     let roll = ay.atan2(az);
     let pitch = (-ax).atan2((ay * ay + az * az).sqrt());
     UnitQuaternion::from_euler_angles(roll, pitch, 0.0)
-}
-
-impl std::str::FromStr for World {
-    type Err = crate::Error;
-
-    /// By [`World::name`]; anything else is a [`crate::Error::Parameter`] naming `world`.
-    fn from_str(name: &str) -> crate::Result<Self> {
-        World::ALL
-            .into_iter()
-            .find(|w| w.name() == name)
-            .ok_or_else(|| crate::Error::Parameter {
-                name: "world",
-                expected: "'ENU' or 'NED'",
-                got: format!("{name:?}"),
-            })
-    }
 }

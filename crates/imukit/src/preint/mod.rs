@@ -41,8 +41,8 @@ mod windows;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::error::{Error, Result};
+use crate::imu::Noise;
 use crate::mat3::mul;
-use crate::propagate::Noise;
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
@@ -64,6 +64,8 @@ pub enum Scheme {
     /// VINS-Mono's: averaged rates, specific forces rotated at both ends.
     Midpoint,
 }
+
+crate::named_enum!(Scheme, "scheme", [Euler => "euler", Midpoint => "midpoint"]);
 
 /// Default [`Preintegrator::saturation_noise_factor`]: OKVIS multiplies the white-noise densities
 /// by 100 on an interval with a saturated reading (`ImuError::propagation`, `sigma_g_c *= 100`;
