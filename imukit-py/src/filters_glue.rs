@@ -352,26 +352,23 @@ impl PyFilterState {
     #[staticmethod]
     #[pyo3(name = "_from_legacy_values")]
     fn from_legacy_values(py: Python<'_>, values: [f64; 16]) -> PyResult<Self> {
-        let v = values;
-        let common = CommonState {
-            bias: Vector3::new(v[4], v[5], v[6]),
-            initialized: v[7] != 0.0,
-            time: v[8],
-            ramp_elapsed: v[9],
-            accel_rejected: v[10],
-            mag_rejected: v[11],
-            rest: v[12],
-            mag_norm: v[13],
-            mag_dip_sin: v[14],
-            mag_dip_cos: v[15],
-            ..CommonState::default()
-        }
-        .restored([v[0], v[1], v[2], v[3]])
-        .map_err(|e| to_py(py, "state", e))?;
-        Ok(Self {
-            common,
-            extra: Vec::new(),
-        })
+        let [x, y, z, w, bx, by, bz, initialized, time, ramp, accel, mag, rest, norm, sin, cos] = values;
+        let q = [x, y, z, w];
+        Self::new(
+            py,
+            q,
+            [bx, by, bz],
+            initialized != 0.0,
+            time,
+            ramp,
+            accel,
+            mag,
+            rest,
+            norm,
+            sin,
+            cos,
+            None,
+        )
     }
 
     /// The deprecated 16-value layout.
