@@ -136,6 +136,13 @@ pub struct Inputs<'a> {
     pub mag: Option<&'a [[f64; 3]]>,
 }
 
+/// One sample's row as a vector, element by element: copying the array whole went through the
+/// stack in a way that stalled store-to-load forwarding (+20% per Madgwick 6D sample, measured).
+#[inline(always)]
+fn row(x: &[f64; 3]) -> Vector3<f64> {
+    Vector3::new(x[0], x[1], x[2])
+}
+
 #[inline]
 fn finite(v: &Vector3<f64>) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
@@ -345,9 +352,9 @@ impl<L: Law> Filter<L> {
             .zip(out_q.iter_mut().zip(out_bias.iter_mut()))
             .enumerate()
         {
-            let gyro = Vector3::from(inputs.gyro[k]);
-            let accel = Vector3::from(inputs.accel[k]);
-            let mag = if NINE { Some(Vector3::from(mags[k])) } else { None };
+            let gyro = row(&inputs.gyro[k]);
+            let accel = row(&inputs.accel[k]);
+            let mag = if NINE { Some(row(&mags[k])) } else { None };
             // One test on the sum (NaN and ±inf propagate); only when it fails, find the culprit
             // (a finite sum overflowing to inf is no error).
             let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.sum());
