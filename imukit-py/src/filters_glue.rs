@@ -1,172 +1,614 @@
-//! Attitude-filter bindings: `AttitudeFilter` (gains and options, no state) wrapped by
-//! `imukit.filters.Mahony` / `Madgwick`. The state travels as a flat `(16,)` array
-//! (`imukit::filters::State::to_array`), so Python can copy, store and restore it freely.
+//! Attitude-filter bindings. Values cross by field name:
+//!
+//! | Python (`imukit._core`) | Rust (`imukit::filters`) |
+//! |---|---|
+//! | `GainRamp`, `AccelRejection`, `MagRejection`, `RestDetection` (frozen values; omitted or None fields take the Rust `Default`) | the option structs, field for field |
+//! | `MahonyGains`, `MadgwickGains` | the laws `Mahony`, `Madgwick` |
+//! | `FilterOptions` (`FilterOptions.default()`: `Options::default()`) | `Options` |
+//! | `FilterState` (named getters, pickles by name) | `CommonState` + the law's `Extra` by `Fields` names |
+//! | `MahonyFilter`, `MadgwickFilter` (one [`filter_class!`] line per law) | `Filter<Mahony>`, `Filter<Madgwick>` |
+//!
+//! The glue converts only: values are checked by the core (errors name the option as
+//! `<option>.<quantity>`), Python types by `imukit.filters`; a number that is not one is a
+//! `ParameterError` here, where the conversion fails.
 
 use imukit::filters::{
-    AccelRejection, Algorithm, Common, Filter, GainRamp, Inputs, Madgwick, MagRejection, Mahony, RestDetection, State,
-    World, STATE_LEN,
+    AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
+    RestDetection, State, World,
 };
+use imukit::names::Named;
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
 use crate::{contiguous, private_copy, raise, to_py};
 
-fn state_of(py: Python<'_>, values: [f64; STATE_LEN]) -> PyResult<State> {
-    State::from_array(&values).map_err(|e| to_py(py, "state", e))
+/// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
+/// numbers: a `ParameterError` naming `name`.
+fn real(py: Python<'_>, name: &str, x: Option<&Bound<'_, PyAny>>, default: f64) -> PyResult<f64> {
+    match x {
+        None => Ok(default),
+        Some(v) => v.extract::<f64>().map_err(|_| {
+            raise(
+                py,
+                "ParameterError",
+                name,
+                format!("expected a real number, got {}", repr(v)),
+            )
+        }),
+    }
 }
 
-/// Gains and options of a Mahony or Madgwick filter.
-#[pyclass(name = "AttitudeFilter", module = "imukit._core", frozen)]
-pub(crate) struct PyAttitudeFilter {
-    inner: Filter,
+fn repr(v: &Bound<'_, PyAny>) -> String {
+    v.repr().map_or_else(|_| "?".to_owned(), |r| r.to_string())
+}
+
+/// A frozen value class mirroring a Rust option struct field for field: keyword (or positional)
+/// construction with the Rust `Default` for what is omitted, equality, hash, repr, pickling.
+macro_rules! value_class {
+    ($(#[$doc:meta])* $py:ident = $rust:ident as $name:literal, errors $prefix:literal { $($field:ident: $label:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[pyclass(name = $name, module = "imukit._core", frozen, get_all, eq, from_py_object)]
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub(crate) struct $py {
+            $($field: f64),+
+        }
+
+        #[pymethods]
+        impl $py {
+            #[new]
+            #[pyo3(signature = ($($field = None),+))]
+            fn new(py: Python<'_>, $($field: Option<&Bound<'_, PyAny>>),+) -> PyResult<Self> {
+                let default = $rust::default();
+                Ok(Self { $($field: real(py, concat!($prefix, $label), $field, default.$field)?),+ })
+            }
+
+            fn __repr__(&self) -> String {
+                let fields = [$(format!(concat!(stringify!($field), "={:?}"), self.$field)),+];
+                format!(concat!($name, "({})"), fields.join(", "))
+            }
+
+            fn __hash__(&self, py: Python<'_>) -> PyResult<isize> {
+                PyTuple::new(py, [$(self.$field),+])?.hash()
+            }
+
+            fn __getnewargs__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+                PyTuple::new(py, [$(self.$field),+])
+            }
+        }
+
+        impl From<$py> for $rust {
+            fn from(v: $py) -> Self {
+                Self { $($field: v.$field),+ }
+            }
+        }
+
+        impl From<$rust> for $py {
+            fn from(v: $rust) -> Self {
+                Self { $($field: v.$field),+ }
+            }
+        }
+    };
+}
+
+value_class!(
+    /// Start-up gain ramp (`imukit::filters::GainRamp`).
+    PyGainRamp = GainRamp as "GainRamp", errors "gain_ramp." { duration_s: "duration", factor: "factor" }
+);
+value_class!(
+    /// Acceleration rejection (`imukit::filters::AccelRejection`).
+    PyAccelRejection = AccelRejection as "AccelRejection", errors "acc_rejection." {
+        norm: "norm", angle_rad: "angle", recovery_s: "recovery"
+    }
+);
+value_class!(
+    /// Magnetic rejection (`imukit::filters::MagRejection`).
+    PyMagRejection = MagRejection as "MagRejection", errors "mag_rejection." {
+        norm_fraction: "norm", dip_rad: "dip", recovery_s: "recovery"
+    }
+);
+value_class!(
+    /// Rest detection (`imukit::filters::RestDetection`).
+    PyRestDetection = RestDetection as "RestDetection", errors "rest_detection." {
+        gyro: "gyro", accel: "accel", duration_s: "duration", tau_s: "tau"
+    }
+);
+value_class!(
+    /// Mahony's gains (`imukit::filters::Mahony`).
+    PyMahonyGains = Mahony as "MahonyGains", errors "" { kp: "kp", ki: "ki" }
+);
+value_class!(
+    /// Madgwick's gain (`imukit::filters::Madgwick`).
+    PyMadgwickGains = Madgwick as "MadgwickGains", errors "" { beta: "beta" }
+);
+
+/// The shared options (`imukit::filters::Options`); `None` switches an option off.
+#[pyclass(name = "FilterOptions", module = "imukit._core", frozen, get_all, eq, from_py_object)]
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PyFilterOptions {
+    world: String,
+    gravity: f64,
+    gain_ramp: Option<PyGainRamp>,
+    acc_rejection: Option<PyAccelRejection>,
+    mag_rejection: Option<PyMagRejection>,
+    rest_detection: Option<PyRestDetection>,
 }
 
 #[pymethods]
-impl PyAttitudeFilter {
-    /// `algorithm` "mahony" (`gains = [kp, ki]`) or "madgwick" (`gains = [beta, _]`); `world`
-    /// "ENU" / "NED"; `ramp = [duration, factor]`; rejections `[norm, angle, recovery]`;
-    /// `rest = [gyro, accel, duration, tau]`.
+impl PyFilterOptions {
     #[new]
-    #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.filters
+    #[pyo3(signature = (*, world, gravity, gain_ramp, acc_rejection, mag_rejection, rest_detection))]
     fn new(
         py: Python<'_>,
-        algorithm: &str,
-        gains: [f64; 2],
-        world: &str,
-        gravity: f64,
-        ramp: [f64; 2],
-        accel_rejection: Option<[f64; 3]>,
-        mag_rejection: Option<[f64; 3]>,
-        rest: Option<[f64; 4]>,
+        world: &Bound<'_, PyAny>,
+        gravity: &Bound<'_, PyAny>,
+        gain_ramp: Option<PyGainRamp>,
+        acc_rejection: Option<PyAccelRejection>,
+        mag_rejection: Option<PyMagRejection>,
+        rest_detection: Option<PyRestDetection>,
     ) -> PyResult<Self> {
-        let algorithm = match algorithm {
-            "mahony" => Algorithm::Mahony(Mahony {
-                kp: gains[0],
-                ki: gains[1],
-            }),
-            "madgwick" => Algorithm::Madgwick(Madgwick { beta: gains[0] }),
-            other => {
-                return Err(raise(
-                    py,
-                    "ParameterError",
-                    "algorithm",
-                    format!("expected 'mahony' or 'madgwick', got {other:?}"),
-                ))
-            }
-        };
-        let world = match world {
-            "ENU" => World::Enu,
-            "NED" => World::Ned,
-            other => {
-                return Err(raise(
+        let world: World = world
+            .extract::<String>()
+            .map_err(|_| {
+                raise(
                     py,
                     "ParameterError",
                     "world",
-                    format!("expected 'ENU' or 'NED', got {other:?}"),
-                ))
-            }
-        };
-        let common = Common {
-            world,
-            gravity,
-            ramp: GainRamp {
-                duration: ramp[0],
-                factor: ramp[1],
+                    format!("expected 'ENU' or 'NED', got {}", repr(world)),
+                )
+            })?
+            .parse()
+            .map_err(|e| to_py(py, "world", e))?;
+        Ok(Self {
+            world: world.name().to_owned(),
+            gravity: real(py, "gravity", Some(gravity), f64::NAN)?,
+            gain_ramp,
+            acc_rejection,
+            mag_rejection,
+            rest_detection,
+        })
+    }
+
+    /// `imukit::filters::Options::default()`.
+    #[staticmethod]
+    fn default() -> Self {
+        let o = Options::default();
+        Self {
+            world: o.world.name().to_owned(),
+            gravity: o.gravity,
+            gain_ramp: Some(o.gain_ramp.into()),
+            acc_rejection: o.acc_rejection.map(Into::into),
+            mag_rejection: o.mag_rejection.map(Into::into),
+            rest_detection: o.rest_detection.map(Into::into),
+        }
+    }
+
+    /// The world frames, by name.
+    #[classattr]
+    #[allow(non_snake_case)] // a Python class constant
+    fn WORLDS() -> Vec<&'static str> {
+        World::names()
+    }
+
+    fn __getnewargs_ex__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("world", &self.world)?;
+        kwargs.set_item("gravity", self.gravity)?;
+        kwargs.set_item("gain_ramp", self.gain_ramp)?;
+        kwargs.set_item("acc_rejection", self.acc_rejection)?;
+        kwargs.set_item("mag_rejection", self.mag_rejection)?;
+        kwargs.set_item("rest_detection", self.rest_detection)?;
+        Ok((PyTuple::empty(py), kwargs))
+    }
+}
+
+impl PyFilterOptions {
+    fn options(&self) -> Options {
+        Options {
+            world: if self.world == World::Ned.name() {
+                World::Ned
+            } else {
+                World::Enu
             },
-            accel_rejection: accel_rejection.map(|[norm, angle, recovery]| AccelRejection { norm, angle, recovery }),
-            mag_rejection: mag_rejection.map(|[norm, dip, recovery]| MagRejection { norm, dip, recovery }),
-            rest: rest.map(|[gyro, accel, duration, tau]| RestDetection {
-                gyro,
-                accel,
-                duration,
-                tau,
-            }),
+            gravity: self.gravity,
+            // No ramp: zero length (its factor then never applies).
+            gain_ramp: self.gain_ramp.map_or(
+                GainRamp {
+                    duration_s: 0.0,
+                    factor: 1.0,
+                },
+                Into::into,
+            ),
+            acc_rejection: self.acc_rejection.map(Into::into),
+            mag_rejection: self.mag_rejection.map(Into::into),
+            rest_detection: self.rest_detection.map(Into::into),
+        }
+    }
+}
+
+/// The state of a filter of any law: the common part and the law's own fields by name.
+#[pyclass(name = "FilterState", module = "imukit._core", frozen, subclass, eq)]
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PyFilterState {
+    common: CommonState,
+    extra: Vec<(String, f64)>,
+}
+
+impl PyFilterState {
+    fn of<L: Law>(s: &State<L>) -> Self {
+        let names = <L::Extra as Fields>::NAMES.iter().map(|n| (*n).to_owned());
+        Self {
+            common: s.common,
+            extra: names.zip(s.extra.values()).collect(),
+        }
+    }
+
+    /// As a state of law `L`; the law's own state starts from its default when this one holds
+    /// another law's (a Mahony state continued by Madgwick keeps attitude, bias and gates).
+    fn typed<L: Law>(&self) -> State<L> {
+        let names = self.extra.iter().map(|(n, _)| n.as_str());
+        let values: Vec<f64> = self.extra.iter().map(|(_, v)| *v).collect();
+        let extra = if names.eq(<L::Extra as Fields>::NAMES.iter().copied()) {
+            <L::Extra as Fields>::from_values(&values).unwrap_or_default()
+        } else {
+            L::Extra::default()
         };
-        let inner = Filter::new(algorithm, common).map_err(|e| to_py(py, "options", e))?;
-        Ok(Self { inner })
+        State {
+            common: self.common,
+            extra,
+        }
+    }
+
+    /// The pre-0.x flat layout `[qx, qy, qz, qw, bx, by, bz, initialized, time, ramp_elapsed,
+    /// accel_rejected, mag_rejected, rest, mag_norm, sin δ₀, cos δ₀]` of the deprecated
+    /// `FilterState(values)` / `.values`; it is written here only.
+    fn flat_values(&self) -> [f64; 16] {
+        let s = &self.common;
+        let c = &s.q.coords;
+        [
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            s.bias.x,
+            s.bias.y,
+            s.bias.z,
+            f64::from(u8::from(s.initialized)),
+            s.time,
+            s.ramp_elapsed,
+            s.accel_rejected,
+            s.mag_rejected,
+            s.rest,
+            s.mag_norm,
+            s.mag_dip_sin,
+            s.mag_dip_cos,
+        ]
+    }
+}
+
+#[pymethods]
+impl PyFilterState {
+    /// A state from its fields by name (what pickling stores); checked and normalised by the core.
+    #[new]
+    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, extra=None))]
+    #[allow(clippy::too_many_arguments)] // one keyword per field of the state
+    fn new(
+        py: Python<'_>,
+        quaternion: [f64; 4],
+        gyro_bias: [f64; 3],
+        initialized: bool,
+        time: f64,
+        ramp_elapsed: f64,
+        accel_rejected: f64,
+        mag_rejected: f64,
+        rest: f64,
+        mag_norm: f64,
+        mag_dip_sin: f64,
+        mag_dip_cos: f64,
+        extra: Option<Vec<(String, f64)>>,
+    ) -> PyResult<Self> {
+        let common = CommonState {
+            bias: Vector3::from(gyro_bias),
+            initialized,
+            time,
+            ramp_elapsed,
+            accel_rejected,
+            mag_rejected,
+            rest,
+            mag_norm,
+            mag_dip_sin,
+            mag_dip_cos,
+            ..CommonState::default()
+        }
+        .restored(quaternion)
+        .map_err(|e| to_py(py, "state", e))?;
+        Ok(Self {
+            common,
+            extra: extra.unwrap_or_default(),
+        })
     }
 
     /// The uninitialised state, or one initialised at quaternion `q` (xyzw) with zero bias.
     #[staticmethod]
     #[pyo3(signature = (q=None))]
-    fn initial_state<'py>(py: Python<'py>, q: Option<[f64; 4]>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let state = match q {
-            None => State::default(),
+    #[pyo3(name = "_initial")]
+    fn initial(py: Python<'_>, q: Option<[f64; 4]>) -> PyResult<Self> {
+        let common = match q {
+            None => CommonState::default(),
             Some([x, y, z, w]) => {
                 let q = imukit::quat::normalize(&nalgebra::Quaternion::new(w, x, y, z))
                     .map_err(|e| to_py(py, "initial", e))?;
-                State::at(q, Vector3::zeros(), 0.0)
+                CommonState::at(q, Vector3::zeros(), 0.0)
             }
         };
-        Ok(PyArray1::from_slice(py, &state.to_array()))
+        Ok(Self {
+            common,
+            extra: Vec::new(),
+        })
     }
 
-    /// One streaming sample; returns the new state.
-    #[pyo3(signature = (state, gyro, accel, dt, mag=None))]
-    fn update<'py>(
-        &self,
-        py: Python<'py>,
-        state: [f64; STATE_LEN],
-        gyro: [f64; 3],
-        accel: [f64; 3],
-        dt: f64,
-        mag: Option<[f64; 3]>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let mut s = state_of(py, state)?;
-        let mag = mag.map(Vector3::from);
-        self.inner
-            .update(&mut s, &Vector3::from(gyro), &Vector3::from(accel), mag.as_ref(), dt)
-            .map_err(|e| to_py(py, "gyro / accel / dt / state", e))?;
-        Ok(PyArray1::from_slice(py, &s.to_array()))
+    /// From the deprecated 16-value layout (shape and dtype checked by `imukit.filters`).
+    #[staticmethod]
+    #[pyo3(name = "_from_legacy_values")]
+    fn from_legacy_values(py: Python<'_>, values: [f64; 16]) -> PyResult<Self> {
+        let [x, y, z, w, bx, by, bz, initialized, time, ramp, accel, mag, rest, norm, sin, cos] = values;
+        let q = [x, y, z, w];
+        Self::new(
+            py,
+            q,
+            [bx, by, bz],
+            initialized != 0.0,
+            time,
+            ramp,
+            accel,
+            mag,
+            rest,
+            norm,
+            sin,
+            cos,
+            None,
+        )
     }
 
-    /// Batch run, GIL released: `(q (n, 4) xyzw, bias (n, 3), final state (16,))`.
-    #[allow(clippy::type_complexity, clippy::too_many_arguments)] // flat arguments and a plain tuple are the simplest across the boundary
-    #[pyo3(signature = (t, gyro, accel, mag, state, continued))]
-    fn run<'py>(
-        &self,
-        py: Python<'py>,
-        t: PyReadonlyArray1<'py, f64>,
-        gyro: PyReadonlyArray2<'py, f64>,
-        accel: PyReadonlyArray2<'py, f64>,
-        mag: Option<PyReadonlyArray2<'py, f64>>,
-        state: [f64; STATE_LEN],
-        continued: bool,
-    ) -> PyResult<(
-        Bound<'py, PyArray2<f64>>,
-        Bound<'py, PyArray2<f64>>,
-        Bound<'py, PyArray1<f64>>,
-    )> {
-        let mut s = state_of(py, state)?;
-        let n = t.shape()[0];
-        let t = private_copy(py, &t)?.readonly();
-        let gyro = private_copy(py, &gyro)?.readonly();
-        let accel = private_copy(py, &accel)?.readonly();
-        let mag = match mag {
-            Some(m) => Some(private_copy(py, &m)?.readonly()),
-            None => None,
-        };
-        let inputs = Inputs {
-            t: contiguous(py, "t", &t)?,
-            gyro: contiguous(py, "gyro", &gyro)?,
-            accel: contiguous(py, "accel", &accel)?,
-            mag: match &mag {
-                Some(m) => Some(contiguous(py, "mag", m)?),
-                None => None,
-            },
-        };
-        let out_q = PyArray2::<f64>::zeros(py, [n, 4], false);
-        let out_b = PyArray2::<f64>::zeros(py, [n, 3], false);
-        {
-            let mut gq = out_q.readwrite();
-            let mut gb = out_b.readwrite();
-            let (sq, sb) = (gq.as_slice_mut()?, gb.as_slice_mut()?);
-            let filter = &self.inner;
-            let state = &mut s;
-            py.detach(|| filter.run(state, &inputs, continued, sq, sb))
-                .map_err(|e| to_py(py, "imu / gains", e))?;
-        }
-        Ok((out_q, out_b, PyArray1::from_slice(py, &s.to_array())))
+    /// The deprecated 16-value layout.
+    #[pyo3(name = "_legacy_values")]
+    fn legacy_values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.flat_values())
+    }
+
+    /// This state with its clock at `time` [s].
+    #[pyo3(name = "_at_time")]
+    fn at_time(&self, time: f64) -> Self {
+        let mut s = self.clone();
+        s.common.time = time;
+        s
+    }
+
+    /// The fields by name: the keywords of the constructor.
+    fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.common;
+        let d = PyDict::new(py);
+        d.set_item("quaternion", <[f64; 4]>::from(s.q.coords))?;
+        d.set_item("gyro_bias", <[f64; 3]>::from(s.bias))?;
+        d.set_item("initialized", s.initialized)?;
+        d.set_item("time", s.time)?;
+        d.set_item("ramp_elapsed", s.ramp_elapsed)?;
+        d.set_item("accel_rejected", s.accel_rejected)?;
+        d.set_item("mag_rejected", s.mag_rejected)?;
+        d.set_item("rest", s.rest)?;
+        d.set_item("mag_norm", s.mag_norm)?;
+        d.set_item("mag_dip_sin", s.mag_dip_sin)?;
+        d.set_item("mag_dip_cos", s.mag_dip_cos)?;
+        d.set_item("extra", self.extra.clone())?;
+        Ok(d)
+    }
+
+    fn __getnewargs_ex__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {
+        Ok((PyTuple::empty(py), self.fields(py)?))
+    }
+
+    /// Attitude `q_wb` as `[x, y, z, w]`.
+    #[getter]
+    fn quaternion<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.q.coords.as_slice())
+    }
+
+    /// Gyro-bias estimate [rad/s].
+    #[getter]
+    fn gyro_bias<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.bias.as_slice())
+    }
+
+    /// Whether the attitude has been initialised.
+    #[getter]
+    fn initialized(&self) -> bool {
+        self.common.initialized
+    }
+
+    /// Time of the last sample [s].
+    #[getter]
+    fn time(&self) -> f64 {
+        self.common.time
+    }
+
+    /// Seconds since start-up or the last recovery (drives the gain ramp).
+    #[getter]
+    fn ramp_elapsed(&self) -> f64 {
+        self.common.ramp_elapsed
+    }
+
+    /// Seconds of uninterrupted accelerometer rejection.
+    #[getter]
+    fn accel_rejected(&self) -> f64 {
+        self.common.accel_rejected
+    }
+
+    /// Seconds of uninterrupted magnetometer rejection.
+    #[getter]
+    fn mag_rejected(&self) -> f64 {
+        self.common.mag_rejected
+    }
+
+    /// Seconds the rest thresholds have held.
+    #[getter]
+    fn rest(&self) -> f64 {
+        self.common.rest
+    }
+
+    /// Reference field norm `m₀` (0: not learned yet).
+    #[getter]
+    fn mag_norm(&self) -> f64 {
+        self.common.mag_norm
+    }
+
+    /// `sin δ₀` of the reference dip angle.
+    #[getter]
+    fn mag_dip_sin(&self) -> f64 {
+        self.common.mag_dip_sin
+    }
+
+    /// `cos δ₀` of the reference dip angle.
+    #[getter]
+    fn mag_dip_cos(&self) -> f64 {
+        self.common.mag_dip_cos
+    }
+
+    /// The law's own state by field name (empty for Mahony and Madgwick).
+    #[getter]
+    fn extra(&self) -> Vec<(String, f64)> {
+        self.extra.clone()
     }
 }
+
+/// One streaming sample through `filter`; the new state.
+fn update<L: Law>(
+    py: Python<'_>,
+    filter: &Filter<L>,
+    state: &PyFilterState,
+    gyro: [f64; 3],
+    accel: [f64; 3],
+    dt: f64,
+    mag: Option<[f64; 3]>,
+) -> PyResult<PyFilterState> {
+    let mut s = state.typed::<L>();
+    let mag = mag.map(Vector3::from);
+    filter
+        .update(&mut s, &Vector3::from(gyro), &Vector3::from(accel), mag.as_ref(), dt)
+        .map_err(|e| to_py(py, "gyro / accel / dt / state", e))?;
+    Ok(PyFilterState::of(&s))
+}
+
+/// The batch outputs: `(q (n, 4) xyzw, bias (n, 3), final state)`.
+type Outputs<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, PyFilterState);
+
+/// A batch run through `filter`, GIL released.
+#[allow(clippy::too_many_arguments)] // the arrays of a run, the start state and how to start
+fn run<'py, L: Law>(
+    py: Python<'py>,
+    filter: &Filter<L>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    mag: Option<PyReadonlyArray2<'py, f64>>,
+    state: &PyFilterState,
+    continued: bool,
+) -> PyResult<Outputs<'py>> {
+    let mut s = state.typed::<L>();
+    let n = t.shape()[0];
+    let t = private_copy(py, &t)?.readonly();
+    let gyro = private_copy(py, &gyro)?.readonly();
+    let accel = private_copy(py, &accel)?.readonly();
+    let mag = match mag {
+        Some(m) => Some(private_copy(py, &m)?.readonly()),
+        None => None,
+    };
+    let rows = |name, x| contiguous(py, name, x).map(|x| x.as_chunks::<3>().0);
+    let inputs = Inputs {
+        t: contiguous(py, "t", &t)?,
+        gyro: rows("gyro", &gyro)?,
+        accel: rows("accel", &accel)?,
+        mag: match &mag {
+            Some(m) => Some(rows("mag", m)?),
+            None => None,
+        },
+    };
+    let out_q = PyArray2::<f64>::zeros(py, [n, 4], false);
+    let out_b = PyArray2::<f64>::zeros(py, [n, 3], false);
+    {
+        let mut gq = out_q.readwrite();
+        let mut gb = out_b.readwrite();
+        let (sq, sb) = (
+            gq.as_slice_mut()?.as_chunks_mut().0,
+            gb.as_slice_mut()?.as_chunks_mut().0,
+        );
+        let state = &mut s;
+        py.detach(|| filter.run(state, &inputs, continued, sq, sb))
+            .map_err(|e| to_py(py, "imu / gains", e))?;
+    }
+    Ok((out_q, out_b, PyFilterState::of(&s)))
+}
+
+/// A filter pyclass for one law: `Name(gains, options)`, `update`, `run`, pickling. Adding a law
+/// to the bindings is its gains' [`value_class!`] and one line here.
+macro_rules! filter_class {
+    ($py:ident = $law:ident as $name:literal, gains $gains:ident) => {
+        #[doc = concat!("A configured `imukit::filters::Filter<", stringify!($law), ">` (no state).")]
+        #[pyclass(name = $name, module = "imukit._core", frozen)]
+        pub(crate) struct $py {
+            inner: Filter<$law>,
+            gains: $gains,
+            options: PyFilterOptions,
+        }
+
+        #[pymethods]
+        impl $py {
+            #[new]
+            fn new(py: Python<'_>, gains: $gains, options: PyFilterOptions) -> PyResult<Self> {
+                let inner = Filter::new(gains.into(), options.options()).map_err(|e| to_py(py, "options", e))?;
+                Ok(Self {
+                    inner,
+                    gains,
+                    options,
+                })
+            }
+
+            fn __getnewargs__(&self) -> ($gains, PyFilterOptions) {
+                (self.gains, self.options.clone())
+            }
+
+            /// One streaming sample; returns the new state.
+            #[pyo3(signature = (state, gyro, accel, dt, mag=None))]
+            fn update(
+                &self,
+                py: Python<'_>,
+                state: PyRef<'_, PyFilterState>,
+                gyro: [f64; 3],
+                accel: [f64; 3],
+                dt: f64,
+                mag: Option<[f64; 3]>,
+            ) -> PyResult<PyFilterState> {
+                update(py, &self.inner, &state, gyro, accel, dt, mag)
+            }
+
+            /// Batch run, GIL released: `(q (n, 4) xyzw, bias (n, 3), final state)`.
+            #[pyo3(signature = (t, gyro, accel, mag, state, continued))]
+            #[allow(clippy::too_many_arguments)] // the arrays of a run, the start state and how to start
+            fn run<'py>(
+                &self,
+                py: Python<'py>,
+                t: PyReadonlyArray1<'py, f64>,
+                gyro: PyReadonlyArray2<'py, f64>,
+                accel: PyReadonlyArray2<'py, f64>,
+                mag: Option<PyReadonlyArray2<'py, f64>>,
+                state: PyRef<'py, PyFilterState>,
+                continued: bool,
+            ) -> PyResult<Outputs<'py>> {
+                run(py, &self.inner, t, gyro, accel, mag, &state, continued)
+            }
+        }
+    };
+}
+
+filter_class!(PyMahonyFilter = Mahony as "MahonyFilter", gains PyMahonyGains);
+filter_class!(PyMadgwickFilter = Madgwick as "MadgwickFilter", gains PyMadgwickGains);

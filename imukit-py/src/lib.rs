@@ -59,7 +59,16 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::add_names::<strapdown::Scheme>(m, "STRAPDOWN_SCHEMES", Some("STRAPDOWN_SCHEME_ALIASES"))?;
     convert::add_names::<ffi::Convention>(m, "QUAT_CONVENTIONS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
-    m.add_class::<filters_glue::PyAttitudeFilter>()?;
+    m.add_class::<filters_glue::PyGainRamp>()?;
+    m.add_class::<filters_glue::PyAccelRejection>()?;
+    m.add_class::<filters_glue::PyMagRejection>()?;
+    m.add_class::<filters_glue::PyRestDetection>()?;
+    m.add_class::<filters_glue::PyFilterOptions>()?;
+    m.add_class::<filters_glue::PyFilterState>()?;
+    m.add_class::<filters_glue::PyMahonyGains>()?;
+    m.add_class::<filters_glue::PyMadgwickGains>()?;
+    m.add_class::<filters_glue::PyMahonyFilter>()?;
+    m.add_class::<filters_glue::PyMadgwickFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;

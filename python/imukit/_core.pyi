@@ -6,6 +6,7 @@ from typing import Any, Literal, Protocol, final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
+from typing_extensions import Self, disjoint_base
 
 from imukit.sim import ConstantTwist, FigureEight, Helix, SensorErrors, Static, VioEllipse
 
@@ -17,8 +18,17 @@ __all__ = [
     "QUAT_CONVENTIONS",
     "STRAPDOWN_SCHEMES",
     "STRAPDOWN_SCHEME_ALIASES",
-    "AttitudeFilter",
+    "AccelRejection",
+    "FilterOptions",
+    "FilterState",
+    "GainRamp",
+    "MadgwickFilter",
+    "MadgwickGains",
+    "MagRejection",
+    "MahonyFilter",
+    "MahonyGains",
     "Preintegrator",
+    "RestDetection",
     "__version__",
     "allan_variance",
     "attitude_integrate",
@@ -165,38 +175,174 @@ def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...  # (M, C) variances, (M,) term counts
 
+# Attitude filters: option values (a field left out or None takes the Rust Default), the state
+# by field name, and one filter class per law.
+_Number = float | int | np.floating
+
 @final
-class AttitudeFilter:
+class GainRamp:
+    duration_s: float
+    factor: float
+    def __new__(cls, duration_s: _Number | None = None, factor: _Number | None = None) -> GainRamp: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class AccelRejection:
+    norm: float
+    angle_rad: float
+    recovery_s: float
+    def __new__(
+        cls, norm: _Number | None = None, angle_rad: _Number | None = None, recovery_s: _Number | None = None
+    ) -> AccelRejection: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class MagRejection:
+    norm_fraction: float
+    dip_rad: float
+    recovery_s: float
+    def __new__(
+        cls, norm_fraction: _Number | None = None, dip_rad: _Number | None = None, recovery_s: _Number | None = None
+    ) -> MagRejection: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class RestDetection:
+    gyro: float
+    accel: float
+    duration_s: float
+    tau_s: float
     def __new__(
         cls,
-        algorithm: str,
-        gains: list[float],
+        gyro: _Number | None = None,
+        accel: _Number | None = None,
+        duration_s: _Number | None = None,
+        tau_s: _Number | None = None,
+    ) -> RestDetection: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class MahonyGains:
+    kp: float
+    ki: float
+    def __new__(cls, kp: _Number | None = None, ki: _Number | None = None) -> MahonyGains: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class MadgwickGains:
+    beta: float
+    def __new__(cls, beta: _Number | None = None) -> MadgwickGains: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
+class FilterOptions:
+    WORLDS: list[str]
+    world: str
+    gravity: float
+    gain_ramp: GainRamp | None
+    acc_rejection: AccelRejection | None
+    mag_rejection: MagRejection | None
+    rest_detection: RestDetection | None
+    def __new__(
+        cls,
+        *,
         world: str,
-        gravity: float,
-        ramp: list[float],
-        accel_rejection: list[float] | None,
-        mag_rejection: list[float] | None,
-        rest: list[float] | None,
-    ) -> AttitudeFilter: ...
+        gravity: _Number,
+        gain_ramp: GainRamp | None,
+        acc_rejection: AccelRejection | None,
+        mag_rejection: MagRejection | None,
+        rest_detection: RestDetection | None,
+    ) -> FilterOptions: ...
     @staticmethod
-    def initial_state(q: list[float] | None = None) -> NDArray[np.float64]: ...
+    def default() -> FilterOptions: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, object]]: ...
+
+@disjoint_base
+class FilterState:
+    def __new__(
+        cls,
+        *,
+        quaternion: list[float],
+        gyro_bias: list[float],
+        initialized: bool,
+        time: float,
+        ramp_elapsed: float,
+        accel_rejected: float,
+        mag_rejected: float,
+        rest: float,
+        mag_norm: float,
+        mag_dip_sin: float,
+        mag_dip_cos: float,
+        extra: list[tuple[str, float]] | None = None,
+    ) -> Self: ...
+    @staticmethod
+    def _initial(q: list[float] | None = None) -> FilterState: ...
+    @staticmethod
+    def _from_legacy_values(values: list[float]) -> FilterState: ...
+    def _legacy_values(self) -> NDArray[np.float64]: ...
+    def _at_time(self, time: float) -> FilterState: ...
+    def fields(self) -> dict[str, Any]: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, object]]: ...
+    @property
+    def quaternion(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro_bias(self) -> NDArray[np.float64]: ...
+    @property
+    def initialized(self) -> bool: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def ramp_elapsed(self) -> float: ...
+    @property
+    def accel_rejected(self) -> float: ...
+    @property
+    def mag_rejected(self) -> float: ...
+    @property
+    def rest(self) -> float: ...
+    @property
+    def mag_norm(self) -> float: ...
+    @property
+    def mag_dip_sin(self) -> float: ...
+    @property
+    def mag_dip_cos(self) -> float: ...
+    @property
+    def extra(self) -> list[tuple[str, float]]: ...
+
+_Outputs = tuple[NDArray[np.float64], NDArray[np.float64], FilterState]
+
+@final
+class MahonyFilter:
+    def __new__(cls, gains: MahonyGains, options: FilterOptions) -> MahonyFilter: ...
+    def __getnewargs__(self) -> tuple[MahonyGains, FilterOptions]: ...
     def update(
-        self,
-        state: NDArray[np.float64],
-        gyro: list[float],
-        accel: list[float],
-        dt: float,
-        mag: list[float] | None = None,
-    ) -> NDArray[np.float64]: ...
+        self, state: FilterState, gyro: list[float], accel: list[float], dt: float, mag: list[float] | None = None
+    ) -> FilterState: ...
     def run(
         self,
         t: NDArray[np.float64],
         gyro: NDArray[np.float64],
         accel: NDArray[np.float64],
         mag: NDArray[np.float64] | None,
-        state: NDArray[np.float64],
+        state: FilterState,
         continued: bool,
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+    ) -> _Outputs: ...
+
+@final
+class MadgwickFilter:
+    def __new__(cls, gains: MadgwickGains, options: FilterOptions) -> MadgwickFilter: ...
+    def __getnewargs__(self) -> tuple[MadgwickGains, FilterOptions]: ...
+    def update(
+        self, state: FilterState, gyro: list[float], accel: list[float], dt: float, mag: list[float] | None = None
+    ) -> FilterState: ...
+    def run(
+        self,
+        t: NDArray[np.float64],
+        gyro: NDArray[np.float64],
+        accel: NDArray[np.float64],
+        mag: NDArray[np.float64] | None,
+        state: FilterState,
+        continued: bool,
+    ) -> _Outputs: ...
 
 @final
 class Preintegrator:

@@ -19,28 +19,27 @@ saturation             a clipped accelerometer sample (an axis at ±range, ``Imu
                        in 9D)
 =====================  ===========================================================================
 
-Equations, rejection rules, the gain ramp and measured test numbers: ``docs/filters.md``.
+Options are the core's value classes (``imukit._core``): :class:`GainRamp`, :class:`AccelRejection`,
+:class:`MagRejection`, :class:`RestDetection`, frozen, compared by value and picklable; a field left out
+(or None) takes the Rust ``Default``, the one place every default number is written. The filters'
+keyword defaults (gains, ``world``, ``gravity``, which options are on) are read from the core too.
+:class:`FilterState` is the core's state with named fields; it pickles and deep-copies exactly.
+
+Equations, rejection rules, the gain ramp, the ``Law`` seam and measured test numbers:
+``docs/filters.md``.
 """
 
 from __future__ import annotations
 
-import math
-from typing import NamedTuple
+import warnings
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import (
-    FloatArray,
-    as_float_array,
-    check_finite_rows,
-    choice,
-    real_scalar,
-    rotation_from_unit_quat,
-    vector3,
-)
+from imukit._arrays import FloatArray, as_float_array, real_scalar, rotation_from_unit_quat, vector3
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuData
 
@@ -55,94 +54,65 @@ __all__ = [
     "RestDetection",
 ]
 
-WORLDS = ("ENU", "NED")
+GainRamp = _core.GainRamp
+AccelRejection = _core.AccelRejection
+MagRejection = _core.MagRejection
+RestDetection = _core.RestDetection
+
+_OPTIONS = _core.FilterOptions.default()
+WORLDS: tuple[str, ...] = tuple(_core.FilterOptions.WORLDS)
 
 
-class GainRamp(NamedTuple):
-    """Start-up ramp: for ``elapsed < duration_s`` the gain is
-    ``nominal · (1 + (factor − 1)(1 − elapsed/duration_s))``, linear from ``factor × nominal`` to
-    nominal; rejection is off and Mahony's integral term frozen meanwhile. A recovery restarts it."""
+class FilterState(_core.FilterState):
+    """A saved filter state: immutable, so "copy" is just keeping the object; it pickles and
+    deep-copies exactly.
 
-    duration_s: float = 3.0
-    factor: float = 10.0
+    Fields by name: ``rotation`` (``R_wb``), ``quaternion`` (xyzw), ``gyro_bias`` [rad/s],
+    ``initialized``, ``time`` (the absolute timestamp ``imu.t`` of the last sample of a ``run``, or
+    the sum of the ``dt`` of ``update`` calls), the gate and rest clocks ``ramp_elapsed``,
+    ``accel_rejected``, ``mag_rejected``, ``rest`` [s], the magnetometer reference ``mag_norm``,
+    ``mag_dip_sin``, ``mag_dip_cos``, and ``extra``, the law's own fields (none for Mahony and
+    Madgwick). A state of one filter continues another (the law's own fields restart).
 
-
-class AccelRejection(NamedTuple):
-    """Skip the accelerometer correction when ``|‖a‖ − g| > norm`` [m/s²] or the angle between
-    measured and predicted up exceeds ``angle_rad``; after ``recovery_s`` seconds of
-    uninterrupted rejection, restart the :class:`GainRamp` (recovery). The defaults (4 m/s², 30°)
-    were tuned on BROAD's handheld motion (docs/filters.md); (1.0, 10°) suits slow, smooth motion."""
-
-    norm: float = 4.0
-    angle_rad: float = math.radians(30.0)
-    recovery_s: float = 5.0
-
-
-class MagRejection(NamedTuple):
-    """Skip the magnetometer correction when ``|‖m‖ − m₀| > norm_fraction · m₀`` or the dip angle
-    differs from the reference ``δ₀`` by more than ``dip_rad`` (``m₀``, ``δ₀`` learned at the first
-    magnetometer sample); after ``recovery_s`` seconds of rejection, re-learn them from the sample."""
-
-    norm_fraction: float = 0.1
-    dip_rad: float = math.radians(10.0)
-    recovery_s: float = 10.0
-
-
-class RestDetection(NamedTuple):
-    """At rest once ``‖ω‖ < gyro`` [rad/s] and ``|‖a‖ − g| < accel`` [m/s²] held ``duration_s``;
-    then ``b ← b + min(dt/tau_s, 1)(ω − b)``."""
-
-    gyro: float = 0.05
-    accel: float = 0.2
-    duration_s: float = 1.0
-    tau_s: float = 1.0
-
-
-class FilterState:
-    """A saved filter state: immutable, so "copy" is just keeping the object.
-
-    ``values`` is the ``(16,)`` float64 layout ``[qx, qy, qz, qw, bx, by, bz, initialized,
-    time, ramp_elapsed, accel_rejected_s, mag_rejected_s, rest_s, mag_norm_ref, sin δ₀, cos δ₀]``
-    (``time`` is the absolute timestamp ``imu.t`` of the last sample of a ``run``, or the sum of the
-    ``dt`` of ``update`` calls). Both filters share the layout.
+    Deprecated: ``FilterState(values)`` from the former ``(16,)`` layout and ``.values`` still work
+    (with a DeprecationWarning); keep the object, or pickle it, instead.
     """
 
-    __slots__ = ("values",)
-    values: FloatArray
+    __slots__ = ()
 
-    def __init__(self, values: ArrayLike) -> None:
+    def __new__(cls, values: ArrayLike | _core.FilterState | None = None, /, **fields: Any) -> FilterState:
+        if values is None and fields:
+            return super().__new__(cls, **fields)
+        if isinstance(values, _core.FilterState):
+            return super().__new__(cls, **values.fields())
+        if values is None:
+            raise ParameterError("expected the state's fields by name, or a FilterState", argument="state")
+        warnings.warn(
+            "FilterState(values) from the flat (16,) layout is deprecated: keep or pickle the state",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         v = np.array(as_float_array(values, "state"), dtype=np.float64)
         if v.shape != (16,):
-            raise ShapeError(f"state: expected shape (16,), got {v.shape}")
-        check_finite_rows(v, "state", "element")
-        v.setflags(write=False)
-        object.__setattr__(self, "values", v)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError("FilterState is immutable")
+            raise ShapeError(f"expected shape (16,), got {v.shape}", argument="state")
+        return super().__new__(cls, **_core.FilterState._from_legacy_values(v.tolist()).fields())
 
     def __repr__(self) -> str:
-        return f"FilterState(values={self.values.tolist()!r})"
+        q, b = self.quaternion.tolist(), self.gyro_bias.tolist()
+        return f"FilterState(quaternion={q!r}, gyro_bias={b!r}, time={self.time!r}, initialized={self.initialized!r})"
 
     @property
     def rotation(self) -> Rotation:
         """The attitude ``R_wb``."""
-        return Rotation.from_quat(self.values[:4])
+        return Rotation.from_quat(self.quaternion)
 
     @property
-    def gyro_bias(self) -> FloatArray:
-        """The gyro-bias estimate [rad/s]."""
-        return self.values[4:7].copy()
-
-    @property
-    def initialized(self) -> bool:
-        """Whether the attitude has been initialised."""
-        return bool(self.values[7] != 0.0)
-
-    @property
-    def time(self) -> float:
-        """Time of the last sample [s]."""
-        return float(self.values[8])
+    def values(self) -> FloatArray:
+        """Deprecated: the former flat ``(16,)`` layout (read-only)."""
+        warnings.warn("FilterState.values is deprecated: read the fields by name", DeprecationWarning, stacklevel=2)
+        v = self._legacy_values()
+        v.setflags(write=False)
+        return v
 
 
 class FilterResult(NamedTuple):
@@ -154,17 +124,16 @@ class FilterResult(NamedTuple):
     state: FilterState
 
 
-def _positive(x: float, name: str, *, zero: bool = False) -> float:
-    what = f"a {'non-negative' if zero else 'positive'} finite number"
-    return real_scalar(x, name, what=what, accept=lambda v: math.isfinite(v) and (v >= 0.0 if zero else v > 0.0))
+_Option = TypeVar("_Option", GainRamp, AccelRejection, MagRejection, RestDetection)
 
 
-def _numbers(option: tuple[float, ...] | None, name: str) -> list[float] | None:
-    """The fields of an options NamedTuple as floats (their ranges are checked in the core)."""
-    if option is None:
-        return None
-    fields = getattr(option, "_fields", [str(k) for k in range(len(option))])
-    return [real_scalar(v, f"{name}.{f}", what="a number", accept=lambda x: True) for f, v in zip(fields, option)]
+def _option(value: object, cls: type[_Option], name: str) -> _Option | None:
+    """``value`` as option ``cls`` (None: off); a plain tuple of its fields is accepted."""
+    if value is None or isinstance(value, cls):
+        return value
+    if isinstance(value, (tuple, list)):
+        return cls(*value)
+    raise ParameterError(f"expected a {cls.__name__} or None, got {value!r}", argument=name)
 
 
 def _check_mag_norms(mags: FloatArray) -> FloatArray:
@@ -175,7 +144,7 @@ def _check_mag_norms(mags: FloatArray) -> FloatArray:
     # NaN and inf themselves are the core's to report (naming the sample); here finite overflow.
     big = np.flatnonzero(np.isinf(norms) & np.isfinite(mags).all(axis=1))
     if big.size:
-        raise NonFiniteError(f"mag: sample {int(big[0])} is too large: its norm overflows float64")
+        raise NonFiniteError(f"sample {int(big[0])} is too large: its norm overflows float64", argument="mag")
     return mags
 
 
@@ -184,40 +153,48 @@ def _vec3(x: ArrayLike, name: str) -> list[float]:
 
 
 class _Filter:
-    """Common front of both filters: options, the state and the three ways of running."""
+    """Common front of every filter: the shared options, the state and the three ways of running.
+    A law's class sets its gains and calls :meth:`_setup` with its core filter class."""
 
-    _core_filter: _core.AttitudeFilter
+    _core_filter: Any
     _state: FilterState
-    world: str
 
-    def _setup(
+    def __init__(
         self,
-        algorithm: str,
-        gains: list[float],
-        world: str,
-        gravity: float,
-        gain_ramp: GainRamp | None,
-        acc_rejection: AccelRejection | None,
-        mag_rejection: MagRejection | None,
-        rest_detection: RestDetection | None,
+        *,
+        world: str = _OPTIONS.world,
+        gravity: float = _OPTIONS.gravity,
+        gain_ramp: GainRamp | None = _OPTIONS.gain_ramp,
+        acc_rejection: AccelRejection | None = _OPTIONS.acc_rejection,
+        mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
+        rest_detection: RestDetection | None = _OPTIONS.rest_detection,
     ) -> None:
-        self.world = choice(world, "world", WORLDS)
-        ramp = _numbers(gain_ramp, "gain_ramp") or [0.0, 1.0]
-        self._core_filter = _core.AttitudeFilter(
-            algorithm,
-            gains,
-            self.world,
-            float(gravity),
-            ramp,
-            _numbers(acc_rejection, "acc_rejection"),
-            _numbers(mag_rejection, "mag_rejection"),
-            _numbers(rest_detection, "rest_detection"),
+        self.options = _core.FilterOptions(
+            world=world,
+            gravity=gravity,
+            gain_ramp=_option(gain_ramp, GainRamp, "gain_ramp"),
+            acc_rejection=_option(acc_rejection, AccelRejection, "acc_rejection"),
+            mag_rejection=_option(mag_rejection, MagRejection, "mag_rejection"),
+            rest_detection=_option(rest_detection, RestDetection, "rest_detection"),
         )
+
+    def _setup(self, core_filter: Any) -> None:
+        self._core_filter = core_filter
         self.reset()
+
+    @property
+    def world(self) -> str:
+        """``"ENU"`` or ``"NED"``."""
+        return str(self.options.world)
+
+    @property
+    def gravity(self) -> float:
+        """Gravity magnitude [m/s²] of the rejection and rest tests."""
+        return float(self.options.gravity)
 
     def reset(self, initial: Rotation | None = None) -> None:
         """Forget the state; the next :meth:`update` initialises (or starts at ``initial``)."""
-        self._state = FilterState(self._core_filter.initial_state(_initial_quat(initial)))
+        self._state = FilterState(_core.FilterState._initial(_initial_quat(initial)))
 
     def get_state(self) -> FilterState:
         """The current streaming state (immutable; keep it to restore later)."""
@@ -226,21 +203,22 @@ class _Filter:
     def set_state(self, state: FilterState) -> None:
         """Restore a state from :meth:`get_state` or ``run(...).state``."""
         if not isinstance(state, FilterState):
-            raise ParameterError(f"state: expected a FilterState, got {type(state).__name__}")
+            raise ParameterError(f"expected a FilterState, got {type(state).__name__}", argument="state")
         self._state = state
 
     def update(self, gyro: ArrayLike, accel: ArrayLike, dt: float, mag: ArrayLike | None = None) -> Rotation:
         """One streaming sample (``dt`` [s] since the previous one; ignored on the first, which
         initialises); returns the current attitude ``R_wb``."""
-        values = self._core_filter.update(
-            self._state.values,
-            _vec3(gyro, "gyro"),
-            _vec3(accel, "accel"),
-            real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
-            None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist(),
+        self._state = FilterState(
+            self._core_filter.update(
+                self._state,
+                _vec3(gyro, "gyro"),
+                _vec3(accel, "accel"),
+                real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
+                None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist(),
+            )
         )
-        self._state = FilterState(values)
-        return rotation_from_unit_quat(values[:4].copy())
+        return rotation_from_unit_quat(self._state.quaternion)
 
     def run(
         self, imu: ImuData, *, mag: ArrayLike | None = None, initial: Rotation | FilterState | None = None
@@ -260,23 +238,21 @@ class _Filter:
             from it, the first sample being a step of ``imu.t[0] − state.time``.
         """
         if not isinstance(imu, ImuData):
-            raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+            raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         n = len(imu.t)
         mags = None
         if mag is not None:
             mags = np.ascontiguousarray(as_float_array(mag, "mag"))
             if mags.shape != (n, 3):
-                raise ShapeError(f"mag: expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}")
+                raise ShapeError(f"expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}", argument="mag")
             _check_mag_norms(mags)
         continued = isinstance(initial, FilterState)
         if isinstance(initial, FilterState):
-            start = initial.values.copy()
-            start[8] = initial.time - float(imu.t[0])  # the core's clock is imu.seconds
+            start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds
         else:
-            start = self._core_filter.initial_state(_initial_quat(initial))
+            start = _core.FilterState._initial(_initial_quat(initial))
         q, bias, final = self._core_filter.run(imu.seconds, imu.gyro, imu.accel, mags, start, continued)
-        final[8] = float(imu.t[-1])
-        return FilterResult(rotation_from_unit_quat(q), bias, FilterState(final))
+        return FilterResult(rotation_from_unit_quat(q), bias, FilterState(final._at_time(float(imu.t[-1]))))
 
 
 def _initial_quat(initial: Rotation | None) -> list[float] | None:
@@ -284,7 +260,13 @@ def _initial_quat(initial: Rotation | None) -> list[float] | None:
         return None
     if isinstance(initial, Rotation) and initial.single:
         return [float(v) for v in initial.as_quat()]
-    raise ParameterError(f"initial: expected a single scipy Rotation, a FilterState or None, got {initial!r}")
+    raise ParameterError(
+        f"expected a single scipy Rotation, a FilterState or None, got {initial!r}", argument="initial"
+    )
+
+
+_MAHONY = _core.MahonyGains()
+_MADGWICK = _core.MadgwickGains()
 
 
 class Mahony(_Filter):
@@ -298,7 +280,7 @@ class Mahony(_Filter):
     ki
         Integral gain [1/s²] of the gyro-bias estimate (default 0.01; 0 disables it).
     world
-        ``"ENU"`` or ``"NED"``.
+        ``"ENU"`` (default) or ``"NED"``.
     gravity
         Gravity magnitude [m/s²] for the rejection and rest tests (default 9.81).
     gain_ramp
@@ -307,32 +289,24 @@ class Mahony(_Filter):
         :class:`AccelRejection` / :class:`MagRejection` (defaults on), or None to use every sample.
     rest_detection
         :class:`RestDetection`, or None (default) for none.
+
+    Every default is the Rust core's (``imukit._core.MahonyGains()``, ``FilterOptions.default()``).
     """
 
-    def __init__(
-        self,
-        *,
-        kp: float = 0.5,
-        ki: float = 0.01,
-        world: str = "ENU",
-        gravity: float = 9.81,
-        gain_ramp: GainRamp | None = GainRamp(),  # noqa: B008 - immutable NamedTuple
-        acc_rejection: AccelRejection | None = AccelRejection(),  # noqa: B008
-        mag_rejection: MagRejection | None = MagRejection(),  # noqa: B008
-        rest_detection: RestDetection | None = None,
-    ) -> None:
-        self.kp = _positive(kp, "kp", zero=True)
-        self.ki = _positive(ki, "ki", zero=True)
-        self._setup(
-            "mahony",
-            [self.kp, self.ki],
-            world,
-            _positive(gravity, "gravity"),
-            gain_ramp,
-            acc_rejection,
-            mag_rejection,
-            rest_detection,
-        )
+    def __init__(self, *, kp: float = _MAHONY.kp, ki: float = _MAHONY.ki, **options: Any) -> None:
+        super().__init__(**options)
+        self.gains = _core.MahonyGains(kp, ki)
+        self._setup(_core.MahonyFilter(self.gains, self.options))
+
+    @property
+    def kp(self) -> float:
+        """Proportional gain [1/s]."""
+        return float(self.gains.kp)
+
+    @property
+    def ki(self) -> float:
+        """Integral gain [1/s²]."""
+        return float(self.gains.ki)
 
 
 class Madgwick(_Filter):
@@ -348,25 +322,12 @@ class Madgwick(_Filter):
         As for :class:`Mahony`.
     """
 
-    def __init__(
-        self,
-        *,
-        beta: float = 0.07,
-        world: str = "ENU",
-        gravity: float = 9.81,
-        gain_ramp: GainRamp | None = GainRamp(),  # noqa: B008 - immutable NamedTuple
-        acc_rejection: AccelRejection | None = AccelRejection(),  # noqa: B008
-        mag_rejection: MagRejection | None = MagRejection(),  # noqa: B008
-        rest_detection: RestDetection | None = None,
-    ) -> None:
-        self.beta = _positive(beta, "beta", zero=True)
-        self._setup(
-            "madgwick",
-            [self.beta, 0.0],
-            world,
-            _positive(gravity, "gravity"),
-            gain_ramp,
-            acc_rejection,
-            mag_rejection,
-            rest_detection,
-        )
+    def __init__(self, *, beta: float = _MADGWICK.beta, **options: Any) -> None:
+        super().__init__(**options)
+        self.gains = _core.MadgwickGains(beta)
+        self._setup(_core.MadgwickFilter(self.gains, self.options))
+
+    @property
+    def beta(self) -> float:
+        """``β`` [1/s]."""
+        return float(self.gains.beta)

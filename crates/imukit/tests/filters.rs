@@ -2,21 +2,31 @@
 //! inclination, 9D fully), streaming = batch, save/restore, errors naming the sample, no panics.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::filters::{Algorithm, Common, Filter, Inputs, Madgwick, Mahony, State, World};
+use imukit::filters::{Filter, Inputs, Law, Madgwick, Mahony, Options, State, World};
 use imukit::Error;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 const G: f64 = 9.81;
 
-fn filters(world: World) -> Vec<Filter> {
-    let common = Common {
+fn options(world: World) -> Options {
+    Options {
         world,
-        ..Common::default()
-    };
-    vec![
-        Filter::new(Algorithm::Mahony(Mahony::default()), common).unwrap(),
-        Filter::new(Algorithm::Madgwick(Madgwick::default()), common).unwrap(),
-    ]
+        ..Options::default()
+    }
+}
+
+/// Runs `$body` with `$f` bound to the Mahony, then the Madgwick filter in `$world`.
+macro_rules! for_each_filter {
+    ($world:expr, |$f:ident| $body:block) => {{
+        {
+            let $f = Filter::new(Mahony::default(), options($world)).unwrap();
+            $body
+        }
+        {
+            let $f = Filter::new(Madgwick::default(), options($world)).unwrap();
+            $body
+        }
+    }};
 }
 
 /// The 24 signed axis permutations with det +1.
@@ -46,20 +56,30 @@ fn readings(world: World, r_wb: &Matrix3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     (r_wb.transpose() * up, r_wb.transpose() * field)
 }
 
-fn run(f: &Filter, state: &mut State, n: usize, accel: Vector3<f64>, mag: Option<Vector3<f64>>) -> Vec<f64> {
+fn run<L: Law>(
+    f: &Filter<L>,
+    state: &mut State<L>,
+    n: usize,
+    accel: Vector3<f64>,
+    mag: Option<Vector3<f64>>,
+) -> Vec<[f64; 4]> {
     let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
-    let gyro = vec![0.0; 3 * n];
-    let a: Vec<f64> = (0..n).flat_map(|_| accel.iter().copied().collect::<Vec<_>>()).collect();
-    let m: Option<Vec<f64>> = mag.map(|m| (0..n).flat_map(|_| m.iter().copied().collect::<Vec<_>>()).collect());
+    let gyro = vec![[0.0; 3]; n];
+    let a = vec![accel.into(); n];
+    let m: Option<Vec<[f64; 3]>> = mag.map(|m| vec![m.into(); n]);
     let inputs = Inputs {
         t: &t,
         gyro: &gyro,
         accel: &a,
         mag: m.as_deref(),
     };
-    let (mut q, mut b) = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
+    let (mut q, mut b) = (vec![[0.0; 4]; n], vec![[0.0; 3]; n]);
     f.run(state, &inputs, false, &mut q, &mut b).unwrap();
     q
+}
+
+fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]))
 }
 
 #[test]
@@ -69,26 +89,24 @@ fn converges_at_24_attitudes_enu_and_ned() {
     let offset = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -0.25, 0.35));
     for world in [World::Enu, World::Ned] {
         let up_w = world.up();
-        for f in filters(world) {
+        for_each_filter!(world, |f| {
             for m in &rots {
                 let truth = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m));
                 let (a, mag) = readings(world, m);
                 // 6D from a wrong start: inclination only.
                 let mut s = State::at(offset * truth, Vector3::zeros(), 0.0);
                 let q = run(&f, &mut s, 2000, a, None);
-                let est =
-                    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[7999], q[7996], q[7997], q[7998]));
+                let est = quaternion(&q[1999]);
                 let inclination = (est.inverse() * up_w).angle(&(truth.inverse() * up_w));
                 assert!(
                     inclination < 1e-3,
                     "{world:?} {:?} 6D inclination {inclination}",
-                    f.algorithm()
+                    f.law()
                 );
                 // 9D: fully.
                 let mut s = State::at(offset * truth, Vector3::zeros(), 0.0);
                 let q = run(&f, &mut s, 2000, a, Some(mag));
-                let est =
-                    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[7999], q[7996], q[7997], q[7998]));
+                let est = quaternion(&q[1999]);
                 assert!(
                     est.angle_to(&truth) < 2e-3,
                     "{world:?} 9D error {}",
@@ -97,91 +115,99 @@ fn converges_at_24_attitudes_enu_and_ned() {
                 // Initialised from the sensors: exact at the first sample.
                 let mut s = State::default();
                 let q = run(&f, &mut s, 1, a, Some(mag));
-                let est = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
-                assert!(est.angle_to(&truth) < 1e-12);
+                assert!(quaternion(&q[0]).angle_to(&truth) < 1e-12);
             }
-        }
+        });
     }
 }
 
-fn moving(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+type Rows = Vec<[f64; 3]>;
+
+fn moving(n: usize) -> (Vec<f64>, Rows, Rows, Rows) {
     let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.005).collect();
-    let mut gyro = Vec::new();
-    let mut accel = Vec::new();
-    let mut mag = Vec::new();
-    for &tk in &t {
-        gyro.extend([0.3 * (1.1 * tk).sin(), 0.2 * (0.7 * tk).cos(), 0.5 * (1.3 * tk).sin()]);
-        accel.extend([
-            0.5 * (0.9 * tk).sin(),
-            0.4 * (0.3 * tk).cos(),
-            9.81 + 0.2 * (1.7 * tk).sin(),
-        ]);
-        mag.extend([20.0 * (0.2 * tk).cos(), 20.0 * (0.2 * tk).sin(), -40.0]);
-    }
+    let gyro = t
+        .iter()
+        .map(|tk| [0.3 * (1.1 * tk).sin(), 0.2 * (0.7 * tk).cos(), 0.5 * (1.3 * tk).sin()])
+        .collect();
+    let accel = t
+        .iter()
+        .map(|tk| {
+            [
+                0.5 * (0.9 * tk).sin(),
+                0.4 * (0.3 * tk).cos(),
+                9.81 + 0.2 * (1.7 * tk).sin(),
+            ]
+        })
+        .collect();
+    let mag = t
+        .iter()
+        .map(|tk| [20.0 * (0.2 * tk).cos(), 20.0 * (0.2 * tk).sin(), -40.0])
+        .collect();
     (t, gyro, accel, mag)
+}
+
+fn streaming_equals_batch<L: Law>(f: &Filter<L>, nine: bool) {
+    let n = 3000;
+    let (t, gyro, accel, mag) = moving(n);
+    let inputs = Inputs {
+        t: &t,
+        gyro: &gyro,
+        accel: &accel,
+        mag: nine.then_some(&mag[..]),
+    };
+    let (mut q, mut b) = (vec![[0.0; 4]; n], vec![[0.0; 3]; n]);
+    let mut batch_state = State::default();
+    f.run(&mut batch_state, &inputs, false, &mut q, &mut b).unwrap();
+
+    let v = |x: &Rows, k: usize| Vector3::from(x[k]);
+    let mut s = State::default();
+    let mut saved = None;
+    for k in 0..n {
+        let dt = if k == 0 { 0.0 } else { t[k] - t[k - 1] };
+        let m = nine.then(|| v(&mag, k));
+        f.update(&mut s, &v(&gyro, k), &v(&accel, k), m.as_ref(), dt).unwrap();
+        assert_eq!(s.common.q.coords.as_slice(), &q[k], "sample {k}");
+        if k == 1000 {
+            saved = Some(s);
+        }
+    }
+    // Restore at 1000 and resume: the same numbers.
+    let mut r = saved.unwrap();
+    for k in 1001..n {
+        let m = nine.then(|| v(&mag, k));
+        f.update(&mut r, &v(&gyro, k), &v(&accel, k), m.as_ref(), t[k] - t[k - 1])
+            .unwrap();
+    }
+    assert_eq!(r, s);
+    // A state rebuilt from its stored numbers is the same state, bit for bit.
+    assert_eq!(s.common.restored(s.common.q.coords.into()).unwrap(), s.common);
+    // Batch split in two, the second part continuing the first: the same numbers.
+    let cut = 1234;
+    let mut st = State::default();
+    let (mut q1, mut b1) = (vec![[0.0; 4]; cut], vec![[0.0; 3]; cut]);
+    let first = Inputs {
+        t: &t[..cut],
+        gyro: &gyro[..cut],
+        accel: &accel[..cut],
+        mag: nine.then_some(&mag[..cut]),
+    };
+    f.run(&mut st, &first, false, &mut q1, &mut b1).unwrap();
+    let rest = Inputs {
+        t: &t[cut..],
+        gyro: &gyro[cut..],
+        accel: &accel[cut..],
+        mag: nine.then_some(&mag[cut..]),
+    };
+    let (mut q2, mut b2) = (vec![[0.0; 4]; n - cut], vec![[0.0; 3]; n - cut]);
+    f.run(&mut st, &rest, true, &mut q2, &mut b2).unwrap();
+    q1.extend(q2);
+    assert_eq!(q1, q);
 }
 
 #[test]
 fn streaming_equals_batch_and_restore_resumes_identically() {
-    let n = 3000;
-    let (t, gyro, accel, mag) = moving(n);
-    for f in filters(World::Ned) {
-        for nine in [false, true] {
-            let inputs = Inputs {
-                t: &t,
-                gyro: &gyro,
-                accel: &accel,
-                mag: nine.then_some(&mag[..]),
-            };
-            let (mut q, mut b) = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
-            let mut batch_state = State::default();
-            f.run(&mut batch_state, &inputs, false, &mut q, &mut b).unwrap();
-
-            let v = |x: &[f64], k: usize| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
-            let mut s = State::default();
-            let mut saved = None;
-            for k in 0..n {
-                let dt = if k == 0 { 0.0 } else { t[k] - t[k - 1] };
-                let m = nine.then(|| v(&mag, k));
-                f.update(&mut s, &v(&gyro, k), &v(&accel, k), m.as_ref(), dt).unwrap();
-                assert_eq!(s.q.coords.as_slice(), &q[4 * k..4 * k + 4], "sample {k}");
-                if k == 1000 {
-                    saved = Some(s);
-                }
-            }
-            // Restore at 1000 and resume: the same numbers.
-            let mut r = saved.unwrap();
-            for k in 1001..n {
-                let m = nine.then(|| v(&mag, k));
-                f.update(&mut r, &v(&gyro, k), &v(&accel, k), m.as_ref(), t[k] - t[k - 1])
-                    .unwrap();
-            }
-            assert_eq!(r.q, s.q);
-            assert_eq!(r.bias, s.bias);
-            // The flat layout round-trips exactly.
-            assert_eq!(State::from_array(&s.to_array()).unwrap(), s);
-            // Batch split in two, the second part continuing the first: the same numbers.
-            let cut = 1234;
-            let mut st = State::default();
-            let (mut q1, mut b1) = (vec![0.0; 4 * cut], vec![0.0; 3 * cut]);
-            let first = Inputs {
-                t: &t[..cut],
-                gyro: &gyro[..3 * cut],
-                accel: &accel[..3 * cut],
-                mag: nine.then_some(&mag[..3 * cut]),
-            };
-            f.run(&mut st, &first, false, &mut q1, &mut b1).unwrap();
-            let rest = Inputs {
-                t: &t[cut..],
-                gyro: &gyro[3 * cut..],
-                accel: &accel[3 * cut..],
-                mag: nine.then_some(&mag[3 * cut..]),
-            };
-            let (mut q2, mut b2) = (vec![0.0; 4 * (n - cut)], vec![0.0; 3 * (n - cut)]);
-            f.run(&mut st, &rest, true, &mut q2, &mut b2).unwrap();
-            q1.extend(q2);
-            assert_eq!(q1, q);
-        }
+    for nine in [false, true] {
+        for_each_filter!(World::Ned, |f| { streaming_equals_batch(&f, nine) });
     }
 }
 
@@ -189,9 +215,9 @@ fn streaming_equals_batch_and_restore_resumes_identically() {
 fn errors_name_input_and_sample() {
     let n = 10;
     let (t, gyro, mut accel, mut mag) = moving(n);
-    let f = &filters(World::Enu)[0];
-    let mut out = (vec![0.0; 4 * n], vec![0.0; 3 * n]);
-    accel[3 * 6 + 2] = f64::NAN;
+    let f = Filter::new(Mahony::default(), options(World::Enu)).unwrap();
+    let mut out = (vec![[0.0; 4]; n], vec![[0.0; 3]; n]);
+    accel[6][2] = f64::NAN;
     let inputs = Inputs {
         t: &t,
         gyro: &gyro,
@@ -203,7 +229,7 @@ fn errors_name_input_and_sample() {
         .unwrap_err();
     assert_eq!(e, Error::NonFinite { index: 6 }.in_argument("accel"));
     let good = moving(n).2;
-    mag[3 * 9] = f64::INFINITY;
+    mag[9][0] = f64::INFINITY;
     let inputs = Inputs {
         t: &t,
         gyro: &gyro,
@@ -215,42 +241,43 @@ fn errors_name_input_and_sample() {
         .unwrap_err();
     assert_eq!(e, Error::NonFinite { index: 9 }.in_argument("mag"));
     let short = Inputs {
-        gyro: &gyro[..6],
+        gyro: &gyro[..2],
         ..inputs
     };
     let e = f
         .run(&mut State::default(), &short, false, &mut out.0, &mut out.1)
         .unwrap_err();
     assert!(matches!(e, Error::Argument { name: "gyro", .. }));
-    let bad = Common {
+    let bad = Options {
         gravity: -1.0,
-        ..Common::default()
+        ..Options::default()
     };
     assert!(matches!(
-        Filter::new(Algorithm::Mahony(Mahony::default()), bad),
+        Filter::new(Mahony::default(), bad),
         Err(Error::Parameter { name: "gravity", .. })
     ));
 }
 
-#[test]
-fn extreme_finite_input_does_not_panic() {
-    let f = filters(World::Enu);
+fn extreme_finite_input<L: Law>(filter: &Filter<L>) {
     let values = [0.0, 1e-300, -1e-300, 1e300, -1e300, f64::MAX, f64::MIN_POSITIVE, 3.0];
-    for filter in &f {
-        let mut s = State::default();
-        for (i, &x) in values.iter().enumerate() {
-            for &y in &values {
-                let v = Vector3::new(x, y, values[(i + 3) % values.len()]);
-                for r in [
-                    filter.update(&mut s, &v, &Vector3::new(y, x, 9.81), Some(&v), 0.01),
-                    filter.update(&mut s, &v, &v, None, 1e-3),
-                ] {
-                    if let Err(e) = r {
-                        assert!(matches!(e, Error::Overflow { .. }), "{e}");
-                        s = State::default(); // an overflowed state is reported, then discarded
-                    }
+    let mut s = State::default();
+    for (i, &x) in values.iter().enumerate() {
+        for &y in &values {
+            let v = Vector3::new(x, y, values[(i + 3) % values.len()]);
+            for r in [
+                filter.update(&mut s, &v, &Vector3::new(y, x, 9.81), Some(&v), 0.01),
+                filter.update(&mut s, &v, &v, None, 1e-3),
+            ] {
+                if let Err(e) = r {
+                    assert!(matches!(e, Error::Overflow { .. }), "{e}");
+                    s = State::default(); // an overflowed state is reported, then discarded
                 }
             }
         }
     }
+}
+
+#[test]
+fn extreme_finite_input_does_not_panic() {
+    for_each_filter!(World::Enu, |f| { extreme_finite_input(&f) });
 }

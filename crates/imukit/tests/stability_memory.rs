@@ -7,7 +7,7 @@
 mod stability_common;
 
 use imukit::attitude;
-use imukit::filters::{Algorithm, Common, Filter, Madgwick, Mahony, State};
+use imukit::filters::{Filter, Law, Madgwick, Mahony, Options, State};
 use imukit::imu::{Bias, NavState, Noise};
 use imukit::preint::{self, Preintegrator};
 use imukit::propagate::{self, Covariance, Outputs};
@@ -32,6 +32,23 @@ fn rss_kib() -> i64 {
     let status = std::fs::read_to_string("/proc/self/status").unwrap();
     let line = status.lines().find(|l| l.starts_with("VmRSS:")).unwrap();
     line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+/// [`growth`] of streaming `law`'s filter over 9D samples.
+fn filter_growth<L: Law>(label: &'static str, law: L) -> (&'static str, i64) {
+    let chunk = Chunk::new();
+    let filter = Filter::new(law, Options::default()).unwrap();
+    let mut state = State::default();
+    let mag = Vector3::new(0.2, 0.4, -0.3);
+    let grown = growth(label, |m| {
+        let s = chunk.samples(m);
+        for k in 0..m {
+            filter
+                .update(&mut state, &s.gyro_at(k), &s.accel_at(k), Some(&mag), 1e-3)
+                .unwrap();
+        }
+    });
+    (label, grown)
 }
 
 /// Runs `feed(intervals)` for a warm-up chunk, then for `long_steps()` more intervals; returns the
@@ -84,25 +101,8 @@ fn streaming_apis_do_not_grow_memory() {
         }),
     ));
 
-    for (label, algorithm) in [
-        ("mahony update 9D", Algorithm::Mahony(Mahony::default())),
-        ("madgwick update 9D", Algorithm::Madgwick(Madgwick::default())),
-    ] {
-        let filter = Filter::new(algorithm, Common::default()).unwrap();
-        let mut state = State::default();
-        let mag = Vector3::new(0.2, 0.4, -0.3);
-        results.push((
-            label,
-            growth(label, |m| {
-                let s = chunk.samples(m);
-                for k in 0..m {
-                    filter
-                        .update(&mut state, &s.gyro_at(k), &s.accel_at(k), Some(&mag), 1e-3)
-                        .unwrap();
-                }
-            }),
-        ));
-    }
+    results.push(filter_growth("mahony update 9D", Mahony::default()));
+    results.push(filter_growth("madgwick update 9D", Madgwick::default()));
 
     let mut q = UnitQuaternion::identity();
     let options = attitude::Options::default();

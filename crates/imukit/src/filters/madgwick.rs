@@ -11,6 +11,9 @@
 
 use nalgebra::Vector3;
 
+use super::{check, Law, Step};
+use crate::Result;
+
 /// Gain of the Madgwick filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Madgwick {
@@ -26,11 +29,34 @@ impl Default for Madgwick {
     }
 }
 
+impl Law for Madgwick {
+    type Extra = ();
+
+    fn validate(&self) -> Result<()> {
+        check("beta", self.beta, "finite and ≥ 0", |x| x >= 0.0)
+    }
+
+    /// `ω_c dt = 2β ρ g/‖g‖ dt`; the bias is left to rest detection.
+    #[inline(always)]
+    fn correct(&self, step: &Step<'_>, _: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
+        // The field's gradient is not heading-only (it also turns the estimate's tilt): without
+        // the gravity term it would tilt the estimate at the full 2β rate, so the magnetometer
+        // is used only together with an accepted accelerometer sample.
+        let mag_dir = if step.accel_dir.is_some() { step.mag_dir } else { None };
+        direction(
+            &step.north_pred,
+            &step.up_pred,
+            step.accel_dir.as_ref(),
+            mag_dir.as_ref(),
+        ) * (2.0 * self.beta * step.gain * step.dt)
+    }
+}
+
 /// Unit descent direction `Σ s × v̂` (body frame), or zero. `north_pred`, `up_pred`: the world
 /// north and up in body axes. The field reference `b = n_w ‖h_horizontal‖ + u_w h_up` seen from
 /// the body is `v̂_m = n_pred ‖h_horizontal‖ + u_pred h_up`, with `h_up = m̂·u_pred`.
 #[inline(always)]
-pub(crate) fn direction(
+fn direction(
     north_pred: &Vector3<f64>,
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,

@@ -11,6 +11,9 @@
 
 use nalgebra::Vector3;
 
+use super::{check, Law, Step};
+use crate::Result;
+
 /// Gains of the Mahony filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mahony {
@@ -28,13 +31,40 @@ impl Default for Mahony {
     }
 }
 
+impl Law for Mahony {
+    type Extra = ();
+
+    fn validate(&self) -> Result<()> {
+        check("kp", self.kp, "finite and ≥ 0", |x| x >= 0.0)?;
+        check("ki", self.ki, "finite and ≥ 0", |x| x >= 0.0)
+    }
+
+    /// `ω_c dt = k_P ρ ω_mes dt`, and `b̂ ← b̂ − k_I ω_mes dt`.
+    #[inline(always)]
+    fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
+        let e = error(
+            &step.north_pred,
+            &step.up_pred,
+            step.accel_dir.as_ref(),
+            step.mag_dir.as_ref(),
+        );
+        // The integral only learns while gravity is observed: the magnetometer alone measures
+        // heading about the estimated vertical, and integrating that (in body axes, while the
+        // body turns) into the bias would tilt the estimate.
+        if !step.ramping && step.accel_dir.is_some() {
+            *bias -= e * (self.ki * step.dt);
+        }
+        e * (self.kp * step.gain * step.dt)
+    }
+}
+
 /// `Σ v_i × v̂_i` for the accepted measurements (body frame). `north_pred`, `up_pred` are the
 /// world north and up in body axes (`R̂ᵀ n_w`, `R̂ᵀ u_w`).
 ///
 /// Magnetometer: with `h = R̂ m̂`, its east and north parts are `m̂·ê_pred`, `m̂·n_pred`
 /// (`ê = n × u`), and `ĥ_horizontal × n_w = u_w h_e / √(h_e² + h_n²)`; in body axes `u_pred h_e/…`.
 #[inline(always)]
-pub(crate) fn error(
+fn error(
     north_pred: &Vector3<f64>,
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,

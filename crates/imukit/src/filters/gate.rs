@@ -1,0 +1,166 @@
+//! The accept / reject / recover gate, written once and used for the accelerometer and the
+//! magnetometer.
+//!
+//! | step | rule |
+//! |---|---|
+//! | accept | during the gain ramp, with no rejection configured, or when the sample passes its test; the rejection clock restarts |
+//! | reject | otherwise: the rejection clock advances by `dt` and the sample is not used |
+//! | recover | once the clock reaches `recovery_s`: the clock restarts and the sample is used; the caller resets what the gate protects (the accelerometer restarts the gain ramp, the magnetometer re-learns its reference field) |
+//!
+//! Tests: accelerometer, `|‖a‖ − g| ≤ norm` and `∠(a, up_pred) ≤ angle_rad`; magnetometer,
+//! `|‖m‖ − m₀| ≤ norm_fraction · m₀` and `|δ − δ₀| ≤ dip_rad` against the reference `m₀`, `δ₀`
+//! learned from the first field sample.
+
+use nalgebra::Vector3;
+
+use super::options::{AccelRejection, MagRejection};
+use super::state::CommonState;
+
+/// What a gate decided about one sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Verdict {
+    Accept,
+    Reject,
+    Recover,
+}
+
+/// The gate proper: `rejected` is its clock [s], `recovery_s` None when no rejection is
+/// configured, `passes` the sample's test (only evaluated when it matters).
+#[inline(always)]
+fn decide(
+    rejected: &mut f64,
+    recovery_s: Option<f64>,
+    ramping: bool,
+    dt: f64,
+    passes: impl FnOnce() -> bool,
+) -> Verdict {
+    let Some(recovery_s) = recovery_s else {
+        *rejected = 0.0;
+        return Verdict::Accept;
+    };
+    if ramping || passes() {
+        *rejected = 0.0;
+        Verdict::Accept
+    } else {
+        *rejected += dt;
+        if *rejected >= recovery_s {
+            *rejected = 0.0;
+            Verdict::Recover
+        } else {
+            Verdict::Reject
+        }
+    }
+}
+
+/// Thresholds of both gates, with their cosines computed once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Gates {
+    accel: Option<AccelRejection>,
+    mag: Option<MagRejection>,
+    gravity: f64,
+    cos_angle: f64,
+    cos_dip: f64,
+}
+
+impl Gates {
+    pub(crate) fn new(accel: Option<AccelRejection>, mag: Option<MagRejection>, gravity: f64) -> Self {
+        Self {
+            accel,
+            mag,
+            gravity,
+            cos_angle: accel.map_or(-1.0, |r| r.angle_rad.cos()),
+            // cos is decreasing on [0, π], where |δ − δ₀| lies; a threshold beyond π rejects nothing.
+            cos_dip: mag.map_or(-1.0, |r| r.dip_rad.min(std::f64::consts::PI).cos()),
+        }
+    }
+
+    /// The unit accelerometer direction if the sample is used (`accel_norm` its norm; a zero
+    /// reading is never used). A recovery restarts the gain ramp.
+    #[inline(always)]
+    pub(crate) fn accelerometer(
+        &self,
+        s: &mut CommonState,
+        accel: &Vector3<f64>,
+        accel_norm: f64,
+        up_pred: &Vector3<f64>,
+        ramping: bool,
+        dt: f64,
+    ) -> Option<Vector3<f64>> {
+        // Written as `>` so that a NaN norm, like a zero one, is never used.
+        let usable = accel_norm > 1e-9;
+        if !usable {
+            return None;
+        }
+        let dir = accel * (1.0 / accel_norm);
+        let verdict = decide(
+            &mut s.accel_rejected,
+            self.accel.map(|r| r.recovery_s),
+            ramping,
+            dt,
+            || {
+                self.accel
+                    .is_some_and(|r| (accel_norm - self.gravity).abs() <= r.norm && dir.dot(up_pred) >= self.cos_angle)
+            },
+        );
+        match verdict {
+            Verdict::Accept => Some(dir),
+            Verdict::Reject => None,
+            Verdict::Recover => {
+                s.ramp_elapsed = 0.0;
+                Some(dir)
+            }
+        }
+    }
+
+    /// The unit field direction if the sample is used. The reference (norm, dip) is learned from
+    /// the first usable sample and re-learned on a recovery.
+    #[inline(always)]
+    pub(crate) fn magnetometer(
+        &self,
+        s: &mut CommonState,
+        mag: &Vector3<f64>,
+        up_pred: &Vector3<f64>,
+        ramping: bool,
+        dt: f64,
+    ) -> Option<Vector3<f64>> {
+        let norm = mag.norm();
+        let usable = norm > 0.0;
+        if !usable {
+            return None;
+        }
+        let (dip_sin, dip_cos) = dip(mag, norm, up_pred);
+        if s.mag_norm <= 0.0 {
+            learn(s, norm, dip_sin, dip_cos);
+        }
+        let (reference, ref_sin, ref_cos) = (s.mag_norm, s.mag_dip_sin, s.mag_dip_cos);
+        let verdict = decide(&mut s.mag_rejected, self.mag.map(|r| r.recovery_s), ramping, dt, || {
+            self.mag.is_some_and(|r| {
+                (norm - reference).abs() <= r.norm_fraction * reference
+                    && dip_cos * ref_cos + dip_sin * ref_sin >= self.cos_dip
+            })
+        });
+        match verdict {
+            Verdict::Accept => Some(mag * (1.0 / norm)),
+            Verdict::Reject => None,
+            Verdict::Recover => {
+                learn(s, norm, dip_sin, dip_cos);
+                Some(mag * (1.0 / norm))
+            }
+        }
+    }
+}
+
+/// Takes the field of this sample as the magnetometer's reference.
+#[inline(always)]
+pub(crate) fn learn(s: &mut CommonState, norm: f64, dip_sin: f64, dip_cos: f64) {
+    s.mag_norm = norm;
+    (s.mag_dip_sin, s.mag_dip_cos) = (dip_sin, dip_cos);
+}
+
+/// `(sin δ, cos δ)` of the dip angle δ of `m` (body) below the horizontal, given the body
+/// direction of up (δ ∈ [−π/2, π/2], so cos δ ≥ 0).
+#[inline]
+pub(crate) fn dip(m: &Vector3<f64>, m_norm: f64, up_b: &Vector3<f64>) -> (f64, f64) {
+    let s = (-(m.dot(up_b)) / m_norm).clamp(-1.0, 1.0);
+    (s, (1.0 - s * s).sqrt())
+}

@@ -1,0 +1,193 @@
+//! The options every law shares: the start-up gain ramp, the accelerometer and magnetometer
+//! gates ([`super::gate`]) and rest detection, each with its `Default` (the only place a default
+//! is written: the Python bindings read them from here). Field names carry their unit where it is
+//! not the quantity's SI unit by context (`_s`, `_rad`, `_fraction`); errors name an option as
+//! `<option>.<quantity>` (`acc_rejection.angle`), the spelling the messages have always had.
+
+use super::world::World;
+
+/// Start-up gain ramp: for `elapsed < duration_s` the correction gain is
+/// `nominal · (1 + (factor − 1)(1 − elapsed/duration_s))` (linear from `factor · nominal` down to
+/// `nominal`); rejection is suspended and Mahony's integral term frozen meanwhile. A recovery
+/// (see [`AccelRejection`]) restarts the ramp.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GainRamp {
+    /// Ramp length [s]; 0 disables the ramp.
+    pub duration_s: f64,
+    /// Gain multiplier at the start (≥ 1).
+    pub factor: f64,
+}
+
+impl Default for GainRamp {
+    fn default() -> Self {
+        Self {
+            duration_s: 3.0,
+            factor: 10.0,
+        }
+    }
+}
+
+/// Acceleration rejection: the accelerometer correction of a sample is skipped when
+/// `|‖a‖ − g| > norm` [m/s²] or the angle between the measured and the predicted gravity
+/// direction exceeds `angle_rad`. After `recovery_s` seconds of uninterrupted rejection the gain
+/// ramp is restarted (high gain, no rejection for the ramp's duration; with no ramp, the one
+/// sample is accepted) and the counter reset.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelRejection {
+    /// Threshold on `|‖a‖ − g|` [m/s²].
+    pub norm: f64,
+    /// Threshold on the angle between measured and predicted up [rad].
+    pub angle_rad: f64,
+    /// Continuous rejection time after which the filter recovers [s].
+    pub recovery_s: f64,
+}
+
+impl Default for AccelRejection {
+    /// 4 m/s², 30°, 5 s: tuned on BROAD's handheld motion (`docs/filters.md`).
+    fn default() -> Self {
+        Self {
+            norm: 4.0,
+            angle_rad: 30f64.to_radians(),
+            recovery_s: 5.0,
+        }
+    }
+}
+
+/// Magnetic rejection (9D): the magnetometer correction is skipped when
+/// `|‖m‖ − m₀| > norm_fraction · m₀` or `|δ − δ₀| > dip_rad` (tested as `cos(δ − δ₀) < cos(dip_rad)`,
+/// no inverse sine) with `m₀`, `δ₀` the field norm and dip angle learned at the first
+/// magnetometer sample (dip δ = angle of the field below the horizontal, measured with the current
+/// estimate). After `recovery_s` seconds of uninterrupted rejection the reference is re-learned
+/// from the current sample, which is then used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MagRejection {
+    /// Relative threshold on the field norm (fraction of `m₀`).
+    pub norm_fraction: f64,
+    /// Threshold on the dip-angle change [rad].
+    pub dip_rad: f64,
+    /// Continuous rejection time after which the reference is re-learned [s].
+    pub recovery_s: f64,
+}
+
+impl Default for MagRejection {
+    fn default() -> Self {
+        Self {
+            norm_fraction: 0.1,
+            dip_rad: 10f64.to_radians(),
+            recovery_s: 10.0,
+        }
+    }
+}
+
+/// Rest detection: the sensor is at rest once `‖ω‖ < gyro` [rad/s] and `|‖a‖ − g| < accel`
+/// [m/s²] have held for `duration_s` seconds; while at rest the bias estimate follows the raw gyro
+/// through a first-order low pass, `b ← b + min(dt/tau_s, 1)(ω − b)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RestDetection {
+    /// Gyro-norm threshold [rad/s].
+    pub gyro: f64,
+    /// Threshold on `|‖a‖ − g|` [m/s²].
+    pub accel: f64,
+    /// Time the thresholds must hold [s].
+    pub duration_s: f64,
+    /// Time constant of the bias low pass at rest [s].
+    pub tau_s: f64,
+}
+
+impl Default for RestDetection {
+    fn default() -> Self {
+        Self {
+            gyro: 0.05,
+            accel: 0.2,
+            duration_s: 1.0,
+            tau_s: 1.0,
+        }
+    }
+}
+
+/// Options shared by every law.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// World frame of the estimate.
+    pub world: World,
+    /// Gravity magnitude [m/s²] used by the rejection and rest tests (default: that of
+    /// [`crate::imu::GRAVITY`]).
+    pub gravity: f64,
+    /// Start-up gain ramp.
+    pub gain_ramp: GainRamp,
+    /// Acceleration rejection; None: every accelerometer sample is used.
+    pub acc_rejection: Option<AccelRejection>,
+    /// Magnetic rejection; None: every magnetometer sample is used.
+    pub mag_rejection: Option<MagRejection>,
+    /// Rest detection with bias update; None: off.
+    pub rest_detection: Option<RestDetection>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            world: World::Enu,
+            gravity: crate::imu::GRAVITY[2].abs(),
+            gain_ramp: GainRamp::default(),
+            acc_rejection: Some(AccelRejection::default()),
+            mag_rejection: Some(MagRejection::default()),
+            rest_detection: None,
+        }
+    }
+}
+
+impl Options {
+    /// Checks every option for its domain.
+    pub fn validate(&self) -> crate::Result<()> {
+        check("gravity", self.gravity, "a positive finite number", |x| x > 0.0)?;
+        let ramp = &self.gain_ramp;
+        check("gain_ramp.duration", ramp.duration_s, "finite and ≥ 0", |x| x >= 0.0)?;
+        check("gain_ramp.factor", ramp.factor, "finite and ≥ 1", |x| x >= 1.0)?;
+        if let Some(r) = self.acc_rejection {
+            check("acc_rejection.norm", r.norm, "finite and > 0", |x| x > 0.0)?;
+            check("acc_rejection.angle", r.angle_rad, "in (0, π]", |x| {
+                x > 0.0 && x <= std::f64::consts::PI
+            })?;
+            check("acc_rejection.recovery", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
+        }
+        if let Some(r) = self.mag_rejection {
+            check("mag_rejection.norm", r.norm_fraction, "finite and > 0", |x| x > 0.0)?;
+            check("mag_rejection.dip", r.dip_rad, "finite and > 0", |x| x > 0.0)?;
+            check("mag_rejection.recovery", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
+        }
+        if let Some(r) = self.rest_detection {
+            check("rest_detection.gyro", r.gyro, "finite and > 0", |x| x > 0.0)?;
+            check("rest_detection.accel", r.accel, "finite and > 0", |x| x > 0.0)?;
+            check("rest_detection.duration", r.duration_s, "finite and ≥ 0", |x| {
+                x >= 0.0
+            })?;
+            check("rest_detection.tau", r.tau_s, "finite and > 0", |x| x > 0.0)?;
+        }
+        Ok(())
+    }
+
+    /// The ramp multiplier at `elapsed` seconds since start (or recovery).
+    #[inline]
+    pub(crate) fn ramp_gain(&self, elapsed: f64) -> f64 {
+        let ramp = &self.gain_ramp;
+        if elapsed < ramp.duration_s {
+            1.0 + (ramp.factor - 1.0) * (1.0 - elapsed / ramp.duration_s)
+        } else {
+            1.0
+        }
+    }
+}
+
+/// `Ok` when `x` is finite and `ok(x)`, else a [`crate::Error::Parameter`] naming `name`: the one
+/// domain check of every option and gain.
+pub fn check(name: &'static str, x: f64, expected: &'static str, ok: impl Fn(f64) -> bool) -> crate::Result<()> {
+    if x.is_finite() && ok(x) {
+        Ok(())
+    } else {
+        Err(crate::Error::Parameter {
+            name,
+            expected,
+            got: format!("{x}"),
+        })
+    }
+}

@@ -1,0 +1,171 @@
+//! The state of a filter: [`CommonState`] (attitude, bias, clock, gate and rest counters: what the
+//! shared step owns) and the law's own [`Law::Extra`], together a plain `Copy` [`State`]: save by
+//! copying, restore by assigning.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::Law;
+
+/// The part of the state every law has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CommonState {
+    /// Attitude `q_wb` in the chosen world frame.
+    pub q: UnitQuaternion<f64>,
+    /// Gyro-bias estimate [rad/s], subtracted from the gyro.
+    pub bias: Vector3<f64>,
+    /// False until the first sample has initialised the attitude.
+    pub initialized: bool,
+    /// Time of the last sample [s] (batch: its timestamp; streaming: the sum of the `dt`s).
+    pub time: f64,
+    /// Seconds since start-up or the last recovery (drives the gain ramp).
+    pub ramp_elapsed: f64,
+    /// Seconds of uninterrupted accelerometer rejection.
+    pub accel_rejected: f64,
+    /// Seconds of uninterrupted magnetometer rejection.
+    pub mag_rejected: f64,
+    /// Seconds the rest thresholds have held.
+    pub rest: f64,
+    /// Reference field norm `m₀` (0: not learned yet).
+    pub mag_norm: f64,
+    /// `sin δ₀` of the reference dip angle.
+    pub mag_dip_sin: f64,
+    /// `cos δ₀` of the reference dip angle (≥ 0).
+    pub mag_dip_cos: f64,
+}
+
+impl Default for CommonState {
+    fn default() -> Self {
+        Self {
+            q: UnitQuaternion::identity(),
+            bias: Vector3::zeros(),
+            initialized: false,
+            time: 0.0,
+            ramp_elapsed: 0.0,
+            accel_rejected: 0.0,
+            mag_rejected: 0.0,
+            rest: 0.0,
+            mag_norm: 0.0,
+            mag_dip_sin: 0.0,
+            mag_dip_cos: 1.0,
+        }
+    }
+}
+
+impl CommonState {
+    /// A state already initialised at attitude `q` with bias `bias`, at `time`.
+    pub fn at(q: UnitQuaternion<f64>, bias: Vector3<f64>, time: f64) -> Self {
+        Self {
+            q,
+            bias,
+            initialized: true,
+            time,
+            ..Self::default()
+        }
+    }
+
+    /// Checks a state built from stored values: every number finite, and the quaternion `xyzw`
+    /// unit (one within 1e-12 of unit is kept bit for bit, so a saved state restores exactly;
+    /// another is normalised, a zero one refused). Errors name the argument `state`.
+    pub fn restored(mut self, xyzw: [f64; 4]) -> crate::Result<Self> {
+        let scalars = [
+            self.time,
+            self.ramp_elapsed,
+            self.accel_rejected,
+            self.mag_rejected,
+            self.rest,
+            self.mag_norm,
+            self.mag_dip_sin,
+            self.mag_dip_cos,
+        ];
+        let finite = xyzw
+            .iter()
+            .chain(self.bias.iter())
+            .chain(&scalars)
+            .all(|x| x.is_finite());
+        if !finite {
+            return Err(crate::Error::NonFinite { index: 0 }.in_argument("state"));
+        }
+        let raw = Quaternion::new(xyzw[3], xyzw[0], xyzw[1], xyzw[2]);
+        self.q = if (raw.norm_squared() - 1.0).abs() < 1e-12 {
+            UnitQuaternion::new_unchecked(raw)
+        } else {
+            crate::quat::normalize(&raw).map_err(|e| e.in_argument("state"))?
+        };
+        Ok(self)
+    }
+}
+
+/// The complete state of a filter with law `L`.
+pub struct State<L: Law> {
+    /// What every law has.
+    pub common: CommonState,
+    /// The law's own state.
+    pub extra: L::Extra,
+}
+
+impl<L: Law> State<L> {
+    /// A state already initialised at attitude `q` with bias `bias`, at `time` (the law's own
+    /// state at its default).
+    pub fn at(q: UnitQuaternion<f64>, bias: Vector3<f64>, time: f64) -> Self {
+        Self::from(CommonState::at(q, bias, time))
+    }
+}
+
+impl<L: Law> From<CommonState> for State<L> {
+    /// `common` with the law's own state at its default.
+    fn from(common: CommonState) -> Self {
+        Self {
+            common,
+            extra: L::Extra::default(),
+        }
+    }
+}
+
+// By hand: a derive would ask `L` itself (not only `L::Extra`) to be Copy, Default, ...
+impl<L: Law> Clone for State<L> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<L: Law> Copy for State<L> {}
+impl<L: Law> Default for State<L> {
+    fn default() -> Self {
+        Self::from(CommonState::default())
+    }
+}
+impl<L: Law> PartialEq for State<L> {
+    fn eq(&self, other: &Self) -> bool {
+        self.common == other.common && self.extra == other.extra
+    }
+}
+impl<L: Law> std::fmt::Debug for State<L> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("State")
+            .field("common", &self.common)
+            .field("extra", &self.extra)
+            .finish()
+    }
+}
+
+/// A law's own state as named numbers: how bindings show, store and restore it, exactly.
+pub trait Fields: Sized {
+    /// The names, in the order of [`Fields::values`].
+    const NAMES: &'static [&'static str];
+    /// The values, in the order of [`Fields::NAMES`].
+    fn values(&self) -> Vec<f64>;
+    /// Back from [`Fields::values`]; None when `values` has the wrong length.
+    fn from_values(values: &[f64]) -> Option<Self>;
+}
+
+/// No state of its own (Mahony, Madgwick: their bias is the common one).
+impl Fields for () {
+    const NAMES: &'static [&'static str] = &[];
+
+    fn values(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    fn from_values(values: &[f64]) -> Option<Self> {
+        values.is_empty().then_some(())
+    }
+}
