@@ -181,12 +181,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     },
 }
 
-# Owned by the filters branch, which makes FilterState a picklable pyclass: strict, so the merge
-# that fixes them turns these into failures until the marks are removed.
-XFAIL = {
-    "FilterState": "FilterState becomes a picklable pyclass on the filters branch",
-    "FilterResult": "holds a FilterState (the filters branch)",
-}
+XFAIL: dict[str, str] = {}
 
 
 def public_classes() -> dict[str, type]:
@@ -253,7 +248,14 @@ def _fields(x: Any) -> list[str]:
     if dataclasses.is_dataclass(x):
         return [f.name for f in dataclasses.fields(x)]
     slots = [s for cls in type(x).__mro__ for s in getattr(cls, "__slots__", ()) if s != "__weakref__"]
-    return slots + list(getattr(x, "__dict__", {}))
+    # Rust value classes (#[pyclass(get_all)]) expose their fields as getset descriptors.
+    native = [
+        n
+        for cls in type(x).__mro__
+        for n, v in vars(cls).items()
+        if inspect.isgetsetdescriptor(v) and not n.startswith("__")
+    ]
+    return slots + native + list(getattr(x, "__dict__", {}))
 
 
 def _cases() -> list[Any]:
