@@ -493,6 +493,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<preint_glue::PyPreintegrator>()?;
     m.add_class::<filters_glue::PyAttitudeFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
+    m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
+    m.add("PREINT_SCHEMES", preint_glue::SCHEMES)?;
+    m.add(
+        "DEFAULT_SATURATION_NOISE_FACTOR",
+        imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,
+    )?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;

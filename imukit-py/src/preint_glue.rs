@@ -3,7 +3,7 @@
 
 use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 use crate::{bias, noise_of, raise, to_py, SampleCopies};
@@ -14,15 +14,18 @@ pub(crate) struct PyPreintegrator {
     inner: preint::Preintegrator,
 }
 
+/// The canonical scheme names (`imukit.preint.SCHEMES`); `euler` still parses, as `lie_euler`.
+pub(crate) const SCHEMES: [&str; 2] = ["midpoint", "lie_euler"];
+
 fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
     match name {
-        "euler" => Ok(Scheme::Euler),
+        "lie_euler" | "euler" => Ok(Scheme::Euler),
         "midpoint" => Ok(Scheme::Midpoint),
         other => Err(raise(
             py,
             "ParameterError",
             "scheme",
-            format!("expected one of 'euler', 'midpoint', got {other:?}"),
+            format!("expected one of {SCHEMES:?}, got {other:?}"),
         )),
     }
 }
@@ -49,51 +52,21 @@ impl FlagCopies {
             accel: &self.accel,
         })
     }
-
-    /// Refuses flags whose count is not the number of samples, naming the flag array.
-    fn check(&self, py: Python<'_>, n: usize) -> PyResult<()> {
-        for (name, flags) in [("gyro_saturated", &self.gyro), ("accel_saturated", &self.accel)] {
-            if flags.len() != n {
-                return Err(raise(
-                    py,
-                    "ShapeError",
-                    name,
-                    format!("expected one flag per sample ({n}), got {}", flags.len()),
-                ));
-            }
-        }
-        Ok(())
-    }
 }
 
-fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(Vector3::from(v))
-    } else {
-        Err(raise(
+/// `e` raised under the Python argument `argument` that carried the core's input (`imu` for the
+/// core's `samples`, `other` for `next`) when it is a [`imukit::Error::Parameter`] (as "expected …,
+/// got …"), else as [`to_py`] does with `fallback`.
+fn as_argument(py: Python<'_>, argument: &str, fallback: &str, e: imukit::Error) -> PyErr {
+    match e {
+        imukit::Error::Parameter { expected, got, .. } => raise(
             py,
-            "NonFiniteError",
-            name,
-            format!("expected finite values, got {v:?}"),
-        ))
+            "ParameterError",
+            argument,
+            format!("expected {expected}, got {got}"),
+        ),
+        other => to_py(py, fallback, other),
     }
-}
-
-/// Whether every delta, covariance and Jacobian entry is finite: one streaming step with finite
-/// readings near f64's limits (or a subnormal step) can overflow them, and the core's streaming
-/// step leaves that check to its caller (its batch paths make it themselves).
-fn all_finite(p: &preint::Preintegrator) -> bool {
-    let (covariance, jacobian, combined) = (p.covariance(), p.bias_jacobian(), p.covariance_combined());
-    [
-        p.delta_rotation.as_slice(),
-        p.delta_velocity.as_slice(),
-        p.delta_position.as_slice(),
-        covariance.as_slice(),
-        jacobian.as_slice(),
-        combined.as_ref().map_or(&[][..], |c| c.as_slice()),
-    ]
-    .iter()
-    .all(|part| part.iter().all(|x| x.is_finite()))
 }
 
 /// Column-major nalgebra storage as a row-major `(r, c)` array.
@@ -125,25 +98,11 @@ impl PyPreintegrator {
 
     /// This preintegration followed by `next`, as one.
     fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
-        match self.inner.merge(&next.inner) {
-            Ok(inner) => Ok(PyPreintegrator { inner }),
-            Err(imukit::Error::Parameter { expected, got, .. }) => Err(raise(
-                py,
-                "ParameterError",
-                "other",
-                format!("expected {expected}, got {got}"),
-            )),
-            Err(e) => Err(to_py(py, "other", e)),
-        }
-    }
-
-    /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
-    fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        let Some(c) = self.inner.covariance_combined() else {
-            return Ok(None);
-        };
-        // Symmetric: column-major storage reads the same as row-major.
-        Ok(Some(PyArray1::from_slice(py, c.as_slice()).reshape([15, 15])?))
+        let inner = self
+            .inner
+            .merge(&next.inner)
+            .map_err(|e| as_argument(py, "other", "other", e))?;
+        Ok(PyPreintegrator { inner })
     }
 
     /// One interval of `dt` seconds: euler, `accel`, `gyro` held over it; midpoint, sampled at its
@@ -157,43 +116,13 @@ impl PyPreintegrator {
         gyro_saturated: bool,
         accel_saturated: bool,
     ) -> PyResult<()> {
-        let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
-        let starts = self.inner.scheme == Scheme::Midpoint && self.inner.last_sample().is_none();
-        if starts && dt != 0.0 {
-            return Err(raise(
-                py,
-                "ParameterError",
-                "dt",
-                format!("the first sample of a midpoint window has no interval before it: expected 0, got {dt}"),
-            ));
-        }
-        let positive = dt > 0.0 && dt.is_finite();
-        if !starts && !positive {
-            return Err(raise(
-                py,
-                "ParameterError",
-                "dt",
-                format!("expected a positive, finite step, got {dt}"),
-            ));
-        }
-        // On a copy: a step that overflows (dt or a reading near f64's limits) must leave the
-        // preintegration as it was, not poisoned with NaN.
-        let mut next = self.inner.clone();
         let clipped = Clipped {
             gyro: gyro_saturated,
             accel: accel_saturated,
         };
-        next.integrate_measurement_clipped(&a, &w, dt, clipped);
-        if !all_finite(&next) {
-            return Err(raise(
-                py,
-                "NonFiniteError",
-                "accel / gyro / dt",
-                format!("too large (or dt too small) to compute with: the step of {dt} s overflows"),
-            ));
-        }
-        self.inner = next;
-        Ok(())
+        self.inner
+            .try_integrate_measurement(&Vector3::from(accel), &Vector3::from(gyro), dt, clipped)
+            .map_err(|e| to_py(py, "accel / gyro / dt", e))
     }
 
     /// The N − 1 intervals of the samples (euler: sample k held over `[t_k, t_k+1)`; midpoint:
@@ -210,25 +139,13 @@ impl PyPreintegrator {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
         let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-        flags.check(py, t.len())?;
         let inner = &mut self.inner;
-        match py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref())) {
-            Err(imukit::Error::Parameter {
-                name: "samples",
-                expected,
-                got,
-            }) => Err(raise(
-                py,
-                "ParameterError",
-                "imu",
-                format!("expected {expected}, got {got}"),
-            )),
-            // The core refuses (adding nothing) finite samples that overflow the deltas or covariance.
-            other => other.map_err(|e| to_py(py, "imu / bias", e)),
-        }
+        py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref()))
+            .map_err(|e| as_argument(py, "imu", "imu / bias", e))
     }
 
-    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
+    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6), combined
+    /// covariance (15, 15) or None)`: everything `PreintegratedImu.snapshot` reads, in one call.
     #[allow(clippy::type_complexity)] // a plain tuple is the simplest thing to unpack in Python
     fn state<'py>(
         &self,
@@ -240,8 +157,13 @@ impl PyPreintegrator {
         f64,
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
+        Option<Bound<'py, PyArray2<f64>>>,
     )> {
         let p = &self.inner;
+        // Symmetric: column-major storage reads the same as row-major.
+        let combined = p
+            .covariance_combined()
+            .map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
         Ok((
             rows(py, p.delta_rotation.as_slice(), 3, 3)?,
             PyArray1::from_slice(py, p.delta_velocity.as_slice()),
@@ -249,6 +171,7 @@ impl PyPreintegrator {
             p.delta_t,
             rows(py, p.covariance().as_slice(), 9, 9)?,
             rows(py, p.bias_jacobian().as_slice(), 9, 6)?,
+            combined.transpose()?,
         ))
     }
 }
@@ -273,7 +196,6 @@ pub(crate) fn preint_windows(
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
     let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-    flags.check(py, t.len())?;
     let mask = flags.mask();
     let boundaries = crate::private_copy(py, &boundaries)?.readonly();
     let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
@@ -291,4 +213,84 @@ pub(crate) fn preint_windows(
         .map_err(|e| raise(py, "ParameterError", "threads", e))?
         .map_err(|e| to_py(py, "imu / bias", e))?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
+}
+
+/// The arrays of a `Preintegration` record: `(ΔR (M, 3, 3), Δv (M, 3), Δp (M, 3), Δt (M,),
+/// covariance (M, 9, 9), bias Jacobian (M, 9, 6), combined covariance (M, 15, 15) or None)`.
+pub(crate) type Record<'py> = (
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Option<Bound<'py, PyArray3<f64>>>,
+);
+
+/// Every window `[boundaries[m], boundaries[m + 1]]` preintegrated from a copy of the empty
+/// `template`, written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
+/// parallel on `threads` threads (0: all cores), GIL released.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
+pub(crate) fn preint_windows_record<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    gyro_saturated: PyReadonlyArray1<'py, bool>,
+    accel_saturated: PyReadonlyArray1<'py, bool>,
+    boundaries: PyReadonlyArray1<'py, f64>,
+    template: PyRef<'py, PyPreintegrator>,
+    threads: usize,
+) -> PyResult<Record<'py>> {
+    let template = template.inner.clone();
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
+    let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
+    let mask = flags.mask();
+    let boundaries = crate::private_copy(py, &boundaries)?.readonly();
+    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
+    let m = boundaries.len().saturating_sub(1);
+    let combined = template.covariance_combined().is_some();
+    let record: Record<'py> = (
+        PyArray3::zeros(py, [m, 3, 3], false),
+        PyArray2::zeros(py, [m, 3], false),
+        PyArray2::zeros(py, [m, 3], false),
+        PyArray1::zeros(py, [m], false),
+        PyArray3::zeros(py, [m, 9, 9], false),
+        PyArray3::zeros(py, [m, 9, 6], false),
+        combined.then(|| PyArray3::zeros(py, [m, 15, 15], false)),
+    );
+    {
+        let (mut r, mut v, mut p) = (record.0.readwrite(), record.1.readwrite(), record.2.readwrite());
+        let (mut dt, mut cov, mut jac) = (record.3.readwrite(), record.4.readwrite(), record.5.readwrite());
+        let mut c15 = record.6.as_ref().map(|c| c.readwrite());
+        let c15 = match c15.as_mut() {
+            Some(c) => Some(c.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0),
+            None => None,
+        };
+        let out = preint::WindowsOut {
+            delta_rotation: r.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            delta_velocity: v.as_slice_mut()?.as_chunks_mut().0,
+            delta_position: p.as_slice_mut()?.as_chunks_mut().0,
+            delta_t: dt.as_slice_mut()?,
+            covariance: cov.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            bias_jacobian: jac.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            covariance_combined: c15,
+        };
+        let run = || preint::preintegrate_windows_into(&samples, mask.as_ref(), boundaries, &template, out);
+        let result = py.detach(|| {
+            if threads == 0 {
+                return Ok(run());
+            }
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map(|pool| pool.install(run))
+        });
+        result
+            .map_err(|e| raise(py, "ParameterError", "threads", e))?
+            .map_err(|e| to_py(py, "imu / bias", e))?;
+    }
+    Ok(record)
 }

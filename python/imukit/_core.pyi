@@ -7,6 +7,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "DEFAULT_SATURATION_NOISE_FACTOR",
+    "PREINT_SCHEMES",
     "AttitudeFilter",
     "Preintegrator",
     "__version__",
@@ -17,6 +19,7 @@ __all__ = [
     "euler_rate_matrix_inv",
     "euler_to_matrix",
     "preint_windows",
+    "preint_windows_record",
     "quat_conjugate",
     "quat_exp",
     "quat_inverse",
@@ -124,12 +127,14 @@ class AttitudeFilter:
         continued: bool,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 
+DEFAULT_SATURATION_NOISE_FACTOR: float
+PREINT_SCHEMES: list[str]
+
 @final
 class Preintegrator:
     def __new__(
         cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str, saturation_noise_factor: float
     ) -> Preintegrator: ...
-    def covariance_combined(self) -> NDArray[np.float64] | None: ...
     def merge(self, next: Preintegrator) -> Preintegrator: ...
     def integrate_measurement(
         self, accel: list[float], gyro: list[float], dt: float, gyro_saturated: bool, accel_saturated: bool
@@ -145,7 +150,13 @@ class Preintegrator:
     def state(
         self,
     ) -> tuple[
-        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64], NDArray[np.float64]
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        float,
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64] | None,
     ]: ...
 
 def preint_windows(
@@ -158,6 +169,24 @@ def preint_windows(
     template: Preintegrator,
     threads: int,
 ) -> list[Preintegrator]: ...
+def preint_windows_record(
+    t: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+    gyro_saturated: NDArray[np.bool_],
+    accel_saturated: NDArray[np.bool_],
+    boundaries: NDArray[np.float64],
+    template: Preintegrator,
+    threads: int,
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+]: ...
 def sim_motion(
     kind: str, params: list[float], t: NDArray[np.float64], gravity: list[float]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...

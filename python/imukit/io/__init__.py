@@ -38,6 +38,7 @@ from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu,
 from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
 from imukit.io._kitti import read_kitti_poses
+from imukit.io._noise_model import find_noise_model
 from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 from imukit.io._rosbag import list_rosbag_topics, read_rosbag
 from imukit.io._tum import read_tum, write_tum
@@ -49,6 +50,7 @@ __all__ = [
     "ReadReport",
     "SkippedLine",
     "SkippedLinesWarning",
+    "find_noise_model",
     "list_rosbag_topics",
     "read_euroc",
     "read_euroc_groundtruth",

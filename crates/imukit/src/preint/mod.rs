@@ -47,7 +47,7 @@ use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use midpoint::MidpointStepMatrices;
-pub use windows::{preintegrate_windows, preintegrate_windows_clipped};
+pub use windows::{preintegrate_windows, preintegrate_windows_clipped, preintegrate_windows_into, WindowsOut};
 
 /// 9×9 covariance of `[δθ, δv, δp]`.
 pub type Covariance9 = SMatrix<f64, 9, 9>;
@@ -267,10 +267,59 @@ impl Preintegrator {
         Ok(self)
     }
 
+    /// Adds one interval of `dt` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]
+    /// (flagged by `clipped`), as [`Preintegrator::integrate_measurement_clipped`], after checking
+    /// them: finite readings (errors name `accel` or `gyro`); in the midpoint scheme the window's
+    /// first sample comes with `dt == 0` (it has no interval before it), every other step with a
+    /// positive, finite `dt` (errors name `dt`). Transactional: the step runs on a copy that is
+    /// committed only when every delta, covariance and Jacobian stayed finite (readings or a `dt`
+    /// near f64's limits overflow them: [`Error::Overflow`] under `accel / gyro / dt`); on any
+    /// error the preintegration is unchanged.
+    pub fn try_integrate_measurement(
+        &mut self,
+        accel: &Vector3<f64>,
+        gyro: &Vector3<f64>,
+        dt: f64,
+        clipped: Clipped,
+    ) -> Result<()> {
+        for (name, v) in [("accel", accel), ("gyro", gyro)] {
+            if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite { index }.in_argument(name));
+            }
+        }
+        let starts = self.scheme == Scheme::Midpoint && self.last_sample().is_none();
+        if starts && dt != 0.0 {
+            // Named as the rule, so that the message reads "dt: the first sample of a midpoint
+            // window must be …".
+            let rule = Error::Parameter {
+                name: "the first sample of a midpoint window",
+                expected: "given with dt = 0 (it has no interval before it)",
+                got: format!("dt = {dt}"),
+            };
+            return Err(rule.in_argument("dt"));
+        }
+        let positive = dt > 0.0 && dt.is_finite();
+        if !(starts || positive) {
+            return Err(Error::Parameter {
+                name: "dt",
+                expected: "a positive, finite step",
+                got: format!("{dt}"),
+            });
+        }
+        let mut next = self.clone();
+        next.integrate_measurement_clipped(accel, gyro, dt, clipped);
+        if !next.is_finite() {
+            return Err(Error::Overflow { index: 0 }.in_argument("accel / gyro / dt"));
+        }
+        *self = next;
+        Ok(())
+    }
+
     /// Adds one interval of `h` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]:
     /// in the euler scheme, held over the interval; in the midpoint scheme, sampled at its end (the
-    /// first call of a window records its first sample and ignores `h`). The caller validates
-    /// finiteness and `h > 0`.
+    /// first call of a window records its first sample and ignores `h`). Unchecked: the hot path
+    /// of the batch kernels, whose callers validated the samples;
+    /// [`Preintegrator::try_integrate_measurement`] checks and refuses transactionally.
     pub fn integrate_measurement(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
         self.integrate_measurement_clipped(accel, gyro, h, Clipped::NONE);
     }

@@ -1,0 +1,25 @@
+"""The Rust engine: one native call (``_core.preint_windows_record``) fills every array of the record."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from imukit import _core
+from imukit._engines._windows import Windows, record
+from imukit._preint_record import Preintegration, PreintParams
+from imukit.imu import ImuData
+
+
+def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int) -> Preintegration:
+    """Every window of ``windows`` in one call, in parallel on ``threads`` threads (0: all cores)."""
+    arrays = _core.preint_windows_record(
+        imu.seconds,
+        imu.gyro,
+        imu.accel,
+        imu.gyro_saturated,
+        imu.accel_saturated,
+        np.ascontiguousarray(windows.offsets),
+        params._template(),
+        threads,
+    )
+    return record(arrays, windows, params)
