@@ -4,7 +4,8 @@
 
 use arbitrary::Arbitrary;
 use imukit::propagate::{covariance_count, propagate, Covariance, Outputs};
-use imukit::strapdown::{integrate, Bias, NavState, Options, Scheme, StatesOut};
+use imukit::imu::{Bias, NavState};
+use imukit::strapdown::{integrate, Options, Scheme, StatesOut};
 use imukit_fuzz::{assert_finite, assert_unit, finite, noise, unit, vector, Series};
 use libfuzzer_sys::fuzz_target;
 
@@ -67,7 +68,7 @@ fuzz_target!(|input: Input| {
         position_velocity: &mut pv,
         rotation: &mut rot,
     });
-    if let (Ok(x), true) = (integrate(&a.samples(), &initial, &bias, &options, out), finite_input) {
+    if let (Ok(x), true) = (a.samples().and_then(|s| integrate(&s, &initial, &bias, &options, out)), finite_input) {
         assert_finite("strapdown position", x.position.as_slice());
         assert_finite("strapdown velocity", x.velocity.as_slice());
         assert_finite("strapdown rotation", x.rotation.coords.as_slice());
@@ -88,7 +89,7 @@ fuzz_target!(|input: Input| {
         covariances: &mut covariances,
         every,
     };
-    let result = propagate(&a.samples(), &initial, &p, &bias, &noise, &options, outputs);
+    let result = a.samples().and_then(|s| propagate(&s, &initial, &p, &bias, &noise, &options, outputs));
     if let (Ok((x, cov)), true) = (result, finite_input && finite(p.as_slice())) {
         assert_finite("propagate position", x.position.as_slice());
         assert_finite("propagate velocity", x.velocity.as_slice());

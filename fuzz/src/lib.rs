@@ -79,13 +79,9 @@ impl Series {
 }
 
 impl Arrays {
-    /// imukit's view of the arrays.
-    pub fn samples(&self) -> imukit::strapdown::Samples<'_> {
-        imukit::strapdown::Samples {
-            t: &self.t,
-            gyro: &self.gyro,
-            accel: &self.accel,
-        }
+    /// imukit's view of the arrays (an error for an empty series).
+    pub fn samples(&self) -> imukit::Result<imukit::imu::Samples<'_>> {
+        imukit::imu::Samples::new(&self.t, self.gyro.as_chunks().0, self.accel.as_chunks().0)
     }
 
     /// Whether every value is finite.
@@ -114,9 +110,9 @@ pub fn assert_unit(what: &str, q: &[f64]) {
 }
 
 /// Noise densities from `[gyro, accel, gyro walk, accel walk]`.
-pub fn noise(d: [f64; 4]) -> imukit::propagate::Noise {
+pub fn noise(d: [f64; 4]) -> imukit::imu::Noise {
     let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = d;
-    imukit::propagate::Noise {
+    imukit::imu::Noise {
         gyro_density,
         accel_density,
         gyro_random_walk,

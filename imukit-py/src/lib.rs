@@ -5,55 +5,21 @@
 
 use imukit::attitude::{self, Representation, Scheme};
 use imukit::batch::{self, Convention, Jacobian, ProductMatrix};
+use imukit::imu::{Bias, NavState, Noise, Samples};
 use imukit::{propagate, strapdown};
 
 mod allan_glue;
+mod errors;
 mod filters_glue;
 mod preint_glue;
 mod sim_glue;
+mod threads;
+pub(crate) use errors::{class_name, raise, to_py};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{
     PyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
-
-/// The `imukit._errors` class for an imukit error, so Python sees one hierarchy.
-pub(crate) fn class_name(e: &imukit::Error) -> &'static str {
-    use imukit::Error as E;
-    match e.root() {
-        E::RowLength { .. } | E::RowCount { .. } => "ShapeError",
-        E::NonFinite { .. } | E::Overflow { .. } => "NonFiniteError",
-        E::ZeroQuaternion { .. } => "InvalidQuaternionError",
-        E::NotRotation { .. } => "InvalidRotationError",
-        E::GimbalLock { .. } => "GimbalLockError",
-        E::NonIncreasingTime { .. } => "TimestampError",
-        E::Parameter { .. } | E::Unsupported { .. } => "ParameterError",
-        E::Argument { .. } => "ImukitError",
-    }
-}
-
-/// Raises `imukit.<class>("<name>: <message>")`.
-pub(crate) fn raise(py: Python<'_>, class: &str, name: &str, message: impl std::fmt::Display) -> PyErr {
-    let text = format!("{name}: {message}");
-    match py
-        .import("imukit._errors")
-        .and_then(|m| m.getattr(class))
-        .and_then(|c| c.call1((text,)))
-    {
-        Ok(value) => PyErr::from_value(value),
-        Err(import_failure) => import_failure,
-    }
-}
-
-/// Raises `e` under the argument it names (an `Argument` or a `Parameter` error), else under
-/// `fallback`, so that every message starts with the name of the input at fault.
-pub(crate) fn to_py(py: Python<'_>, fallback: &str, e: imukit::Error) -> PyErr {
-    match e {
-        imukit::Error::Argument { name, source } => raise(py, class_name(&source), name, source),
-        imukit::Error::Parameter { name, .. } => raise(py, "ParameterError", name, e),
-        other => raise(py, class_name(&other), fallback, other),
-    }
-}
 
 /// Runs `kernel` over the rows of `x` (shape `(n, width_in)`) into a new `(n, width_out)` array.
 fn run<'py>(
@@ -82,7 +48,8 @@ fn run<'py>(
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
-        py.detach(|| kernel(input, out_slice)).map_err(|e| to_py(py, name, e))?;
+        py.detach(|| threads::run_in_pool(None, || kernel(input, out_slice)))?
+            .map_err(|e| to_py(py, name, e))?;
     }
     Ok(out)
 }
@@ -106,6 +73,23 @@ pub(crate) fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
 ) -> PyResult<&'a [f64]> {
     x.as_slice()
         .map_err(|_| raise(py, "ShapeError", name, "expected a C-contiguous float64 array"))
+}
+
+/// The rows of a C-contiguous `(n, N)` array.
+pub(crate) fn rows<'a, 'py, const N: usize>(
+    py: Python<'py>,
+    name: &str,
+    x: &'a PyReadonlyArray2<'py, f64>,
+) -> PyResult<&'a [[f64; N]]> {
+    match contiguous(py, name, x)?.as_chunks::<N>() {
+        (rows, []) if x.shape()[1] == N => Ok(rows),
+        _ => Err(raise(
+            py,
+            "ShapeError",
+            name,
+            format!("expected shape (n, {N}), got {:?}", x.shape()),
+        )),
+    }
 }
 
 fn parse_convention(py: Python<'_>, convention: &str) -> PyResult<Convention> {
@@ -280,12 +264,14 @@ fn attitude_integrate<'py>(
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
         py.detach(|| {
-            let last = attitude::integrate(t, gyro, &initial, &options, (!final_only).then_some(&mut *out_slice))?;
-            if final_only {
-                out_slice.copy_from_slice(&[last.i, last.j, last.k, last.w]);
-            }
-            Ok(())
-        })
+            threads::run_in_pool(None, || {
+                let last = attitude::integrate(t, gyro, &initial, &options, (!final_only).then_some(&mut *out_slice))?;
+                if final_only {
+                    out_slice.copy_from_slice(&[last.i, last.j, last.k, last.w]);
+                }
+                Ok(())
+            })
+        })?
         .map_err(|e| to_py(py, name, e))?;
     }
     Ok(out)
@@ -306,9 +292,9 @@ fn parse_strapdown_scheme(py: Python<'_>, scheme: &str) -> PyResult<strapdown::S
 }
 
 /// `[p, v, q(xyzw)]` and `[b_g, b_a]` as the core's types.
-fn nav_state(initial: [f64; 10]) -> strapdown::NavState {
+fn nav_state(initial: [f64; 10]) -> NavState {
     let [px, py_, pz, vx, vy, vz, x, y, z, w] = initial;
-    strapdown::NavState {
+    NavState {
         position: Vector3::new(px, py_, pz),
         velocity: Vector3::new(vx, vy, vz),
         rotation: UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z)),
@@ -344,19 +330,17 @@ impl<'py> SampleCopies<'py> {
         })
     }
 
-    pub(crate) fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<strapdown::Samples<'s>> {
-        Ok(strapdown::Samples {
-            t: contiguous(py, "t", &self.t)?,
-            gyro: contiguous(py, "gyro", &self.gyro)?,
-            accel: contiguous(py, "accel", &self.accel)?,
-        })
+    pub(crate) fn samples<'s>(&'s self, py: Python<'py>) -> PyResult<Samples<'s>> {
+        let t = contiguous(py, "t", &self.t)?;
+        let (gyro, accel) = (rows(py, "gyro", &self.gyro)?, rows(py, "accel", &self.accel)?);
+        Samples::new(t, gyro, accel).map_err(|e| to_py(py, "imu", e))
     }
 }
 
 /// `[σ_g, σ_a, σ_bg, σ_ba]` as the core's noise densities.
-pub(crate) fn noise_of(values: [f64; 4]) -> propagate::Noise {
+pub(crate) fn noise_of(values: [f64; 4]) -> Noise {
     let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = values;
-    propagate::Noise {
+    Noise {
         gyro_density,
         accel_density,
         gyro_random_walk,
@@ -364,9 +348,9 @@ pub(crate) fn noise_of(values: [f64; 4]) -> propagate::Noise {
     }
 }
 
-pub(crate) fn bias(values: [f64; 6]) -> strapdown::Bias {
+pub(crate) fn bias(values: [f64; 6]) -> Bias {
     let [gx, gy, gz, ax, ay, az] = values;
-    strapdown::Bias {
+    Bias {
         gyro: Vector3::new(gx, gy, gz),
         accel: Vector3::new(ax, ay, az),
     }
@@ -396,7 +380,7 @@ fn strapdown_integrate<'py>(
     let options = strapdown_options(py, scheme, gravity)?;
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
-    let n = samples.t.len();
+    let n = samples.len();
     let (pv, rot) = (
         PyArray2::<f64>::zeros(py, [n, 6], false),
         PyArray2::<f64>::zeros(py, [n, 4], false),
@@ -443,7 +427,7 @@ fn strapdown_propagate<'py>(
     let p0 = propagate::Covariance::from_row_slice(contiguous(py, "covariance", &covariance)?);
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
-    let n = samples.t.len();
+    let n = samples.len();
     let (pv, rot) = (
         PyArray2::<f64>::zeros(py, [n, 6], false),
         PyArray2::<f64>::zeros(py, [n, 4], false),
@@ -494,7 +478,16 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyAttitudeFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
-    m.add("PREINT_SCHEMES", preint_glue::SCHEMES)?;
+    m.add(
+        "PREINT_SCHEMES",
+        <imukit::preint::Scheme as imukit::names::Named>::names(),
+    )?;
+    m.add(
+        "PREINT_SCHEME_ALIASES",
+        preint_glue::scheme_aliases()
+            .into_iter()
+            .collect::<std::collections::HashMap<_, _>>(),
+    )?;
     m.add(
         "DEFAULT_SATURATION_NOISE_FACTOR",
         imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,
@@ -502,6 +495,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
+    m.add_function(wrap_pyfunction!(threads::set_num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(threads::get_num_threads, m)?)?;
+    let [gx, gy, gz] = imukit::imu::GRAVITY;
+    m.add("GRAVITY", (gx, gy, gz))?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
 //! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
 
+use imukit::names::Named;
 use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
@@ -14,20 +15,13 @@ pub(crate) struct PyPreintegrator {
     inner: preint::Preintegrator,
 }
 
-/// The canonical scheme names (`imukit.preint.SCHEMES`); `euler` still parses, as `lie_euler`.
-pub(crate) const SCHEMES: [&str; 2] = ["midpoint", "lie_euler"];
+/// The deprecated scheme names and the canonical name each stands for (`_core.PREINT_SCHEME_ALIASES`).
+pub(crate) fn scheme_aliases() -> Vec<(&'static str, &'static str)> {
+    Scheme::ALIASES.iter().map(|(alias, s)| (*alias, s.name())).collect()
+}
 
 fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
-    match name {
-        "lie_euler" | "euler" => Ok(Scheme::Euler),
-        "midpoint" => Ok(Scheme::Midpoint),
-        other => Err(raise(
-            py,
-            "ParameterError",
-            "scheme",
-            format!("expected one of {SCHEMES:?}, got {other:?}"),
-        )),
-    }
+    name.parse().map_err(|e| to_py(py, "scheme", e))
 }
 
 /// Private copies of the per-sample saturation flags `(gyro, accel)`: the run releases the GIL.
@@ -178,7 +172,7 @@ impl PyPreintegrator {
 
 /// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, each starting from a copy
 /// of the empty `template` (scheme, bias, noise, saturation factor, bias walk), in parallel on
-/// `threads` threads (0: all cores), GIL released.
+/// `threads` threads (None: the process-wide pool, `imukit.set_num_threads`), GIL released.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
 pub(crate) fn preint_windows(
@@ -190,7 +184,7 @@ pub(crate) fn preint_windows(
     accel_saturated: PyReadonlyArray1<'_, bool>,
     boundaries: PyReadonlyArray1<'_, f64>,
     template: PyRef<'_, PyPreintegrator>,
-    threads: usize,
+    threads: Option<usize>,
 ) -> PyResult<Vec<PyPreintegrator>> {
     let template = template.inner.clone();
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
@@ -200,17 +194,8 @@ pub(crate) fn preint_windows(
     let boundaries = crate::private_copy(py, &boundaries)?.readonly();
     let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
     let run = || preint::preintegrate_windows_clipped(&samples, mask.as_ref(), boundaries, &template);
-    let windows = py.detach(|| {
-        if threads == 0 {
-            return Ok(run());
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map(|pool| pool.install(run))
-    });
-    let windows = windows
-        .map_err(|e| raise(py, "ParameterError", "threads", e))?
+    let windows = py
+        .detach(|| crate::threads::run_in_pool(threads, run))?
         .map_err(|e| to_py(py, "imu / bias", e))?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
 }
@@ -229,7 +214,7 @@ pub(crate) type Record<'py> = (
 
 /// Every window `[boundaries[m], boundaries[m + 1]]` preintegrated from a copy of the empty
 /// `template`, written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
-/// parallel on `threads` threads (0: all cores), GIL released.
+/// parallel on `threads` threads (None: the process-wide pool), GIL released.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
 pub(crate) fn preint_windows_record<'py>(
@@ -241,7 +226,7 @@ pub(crate) fn preint_windows_record<'py>(
     accel_saturated: PyReadonlyArray1<'py, bool>,
     boundaries: PyReadonlyArray1<'py, f64>,
     template: PyRef<'py, PyPreintegrator>,
-    threads: usize,
+    threads: Option<usize>,
 ) -> PyResult<Record<'py>> {
     let template = template.inner.clone();
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
@@ -279,17 +264,7 @@ pub(crate) fn preint_windows_record<'py>(
             covariance_combined: c15,
         };
         let run = || preint::preintegrate_windows_into(&samples, mask.as_ref(), boundaries, &template, out);
-        let result = py.detach(|| {
-            if threads == 0 {
-                return Ok(run());
-            }
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map(|pool| pool.install(run))
-        });
-        result
-            .map_err(|e| raise(py, "ParameterError", "threads", e))?
+        py.detach(|| crate::threads::run_in_pool(threads, run))?
             .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok(record)

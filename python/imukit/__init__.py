@@ -12,7 +12,7 @@ array([0., 1., 0.])
 
 from imukit import euler, filters, io, noise, quat, sim, so3
 from imukit import eval as eval  # the module imukit.eval (ATE / RPE / attitude errors); shadows the builtin here only
-from imukit._core import __version__
+from imukit._core import GRAVITY, __version__
 from imukit._errors import (
     DTypeError,
     FileFormatError,
@@ -38,8 +38,10 @@ from imukit.preint import (
 )
 from imukit.state import NavState, Trajectory
 from imukit.strapdown import integrate, propagate
+from imukit.threads import get_num_threads, set_num_threads
 
 __all__ = [
+    "GRAVITY",
     "DTypeError",
     "FileFormatError",
     "GimbalLockError",
@@ -64,6 +66,7 @@ __all__ = [
     "euler",
     "eval",
     "filters",
+    "get_num_threads",
     "integrate",
     "integrate_attitude",
     "io",
@@ -72,6 +75,7 @@ __all__ = [
     "preintegrate_windows",
     "propagate",
     "quat",
+    "set_num_threads",
     "sim",
     "so3",
 ]

@@ -8,7 +8,9 @@ from numpy.typing import NDArray
 
 __all__ = [
     "DEFAULT_SATURATION_NOISE_FACTOR",
+    "GRAVITY",
     "PREINT_SCHEMES",
+    "PREINT_SCHEME_ALIASES",
     "AttitudeFilter",
     "Preintegrator",
     "__version__",
@@ -18,6 +20,7 @@ __all__ = [
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
     "euler_to_matrix",
+    "get_num_threads",
     "preint_windows",
     "preint_windows_record",
     "quat_conjugate",
@@ -29,6 +32,7 @@ __all__ = [
     "quat_omega_matrix",
     "quat_product_matrix",
     "quat_rotate",
+    "set_num_threads",
     "sim_measure",
     "sim_motion",
     "so3_exp",
@@ -41,7 +45,12 @@ __all__ = [
 ]
 
 __version__: str
+# Default world-frame gravity [m/s²], z up: `imukit::imu::GRAVITY`, the one place it is written.
+GRAVITY: tuple[float, float, float]
 
+# The process-wide thread count of the parallel kernels (default: rayon's, one per core).
+def set_num_threads(n: int) -> None: ...
+def get_num_threads() -> int: ...
 def so3_hat(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_vee(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
 def so3_exp(x: NDArray[np.float64], name: str) -> NDArray[np.float64]: ...
@@ -129,6 +138,7 @@ class AttitudeFilter:
 
 DEFAULT_SATURATION_NOISE_FACTOR: float
 PREINT_SCHEMES: list[str]
+PREINT_SCHEME_ALIASES: dict[str, str]
 
 @final
 class Preintegrator:
@@ -167,7 +177,7 @@ def preint_windows(
     accel_saturated: NDArray[np.bool_],
     boundaries: NDArray[np.float64],
     template: Preintegrator,
-    threads: int,
+    threads: int | None,
 ) -> list[Preintegrator]: ...
 def preint_windows_record(
     t: NDArray[np.float64],
@@ -177,7 +187,7 @@ def preint_windows_record(
     accel_saturated: NDArray[np.bool_],
     boundaries: NDArray[np.float64],
     template: Preintegrator,
-    threads: int,
+    threads: int | None,
 ) -> tuple[
     NDArray[np.float64],
     NDArray[np.float64],

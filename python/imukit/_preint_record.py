@@ -29,13 +29,12 @@ from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuNoise
-from imukit.strapdown import _DEFAULT_GRAVITY
 
 __all__ = ["SCHEMES", "PreintParams", "Preintegration", "scheme_name"]
 
 SCHEMES: tuple[str, ...] = tuple(_core.PREINT_SCHEMES)
 """Canonical scheme names, in the core's order."""
-_ALIASES = {"euler": "lie_euler"}  # deprecated (issue 14): "euler" names forward Euler elsewhere
+_ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)  # deprecated names → canonical
 
 
 def scheme_name(scheme: str) -> str:
@@ -62,14 +61,14 @@ class PreintParams:
     """How to preintegrate: the options that :func:`imukit.preintegrate`,
     :func:`imukit.preintegrate_windows` and :class:`imukit.PreintegratedImu` take, as one value.
 
-    ``gravity`` defaults to ``imukit.strapdown``'s gravity, ``saturation_noise_factor`` to the
+    ``gravity`` defaults to the core's ``GRAVITY``, ``saturation_noise_factor`` to the
     core's ``DEFAULT_SATURATION_NOISE_FACTOR``; ``scheme`` is ``"midpoint"`` or ``"lie_euler"``
     (``"euler"``: deprecated alias).
     """
 
     noise: ImuNoise
     bias: ImuBias = dataclasses.field(default_factory=ImuBias)
-    gravity: tuple[float, float, float] = _DEFAULT_GRAVITY
+    gravity: tuple[float, float, float] = _core.GRAVITY
     scheme: str = "midpoint"
     combined: bool = False
     saturation_noise_factor: float = _core.DEFAULT_SATURATION_NOISE_FACTOR

@@ -50,7 +50,6 @@ from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
-from imukit.strapdown import _DEFAULT_GRAVITY
 
 __all__ = [
     "SCHEMES",
@@ -78,6 +77,7 @@ residual_jacobians = _preint_math.residual_jacobians
 
 _MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 _DEFAULT_FACTOR = _core.DEFAULT_SATURATION_NOISE_FACTOR
+_DEFAULT_GRAVITY = _core.GRAVITY
 
 
 def _params(
@@ -440,7 +440,7 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
 
 
 def _core_windows(
-    imu: ImuData, boundaries: ArrayLike, params: PreintParams, threads: int = 0
+    imu: ImuData, boundaries: ArrayLike, params: PreintParams, threads: int | None = None
 ) -> list[_core.Preintegrator]:
     b = np.ascontiguousarray(_windows(imu, boundaries).offsets)
     return _core.preint_windows(
@@ -448,12 +448,12 @@ def _core_windows(
     )
 
 
-def _threads(threads: object) -> int:
+def _threads(threads: object) -> int | None:
     if threads is not None and (
         isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= _MAX_THREADS
     ):
         raise ParameterError(f"threads: expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}")
-    return threads or 0
+    return threads
 
 
 @overload

@@ -30,7 +30,7 @@ from imukit.state import NavState, Trajectory
 __all__ = ["SCHEMES", "integrate", "propagate"]
 
 SCHEMES = ("euler", "midpoint", "rk4", "exp")
-_DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+_DEFAULT_GRAVITY = _core.GRAVITY
 
 
 def _common(

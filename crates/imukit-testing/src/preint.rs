@@ -3,8 +3,8 @@
 
 use nalgebra::{Matrix3, Rotation3, SVector, Vector3};
 
+use imukit::imu::Noise;
 use imukit::preint::{Preintegrator, Scheme};
-use imukit::propagate::Noise;
 use imukit::so3;
 
 /// Sample spacing [s].

@@ -2,11 +2,11 @@
 //! Jacobians (criterion reports elements/s): euler streamed on one core (the figure),
 //! euler as a batch (parallel chunks, all cores), euler with the 15×15 bias-walk covariance, and
 //! midpoint.
+#![allow(clippy::unwrap_used)] // a benchmark on fixed, valid inputs
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use imukit::imu::{Noise, Samples};
 use imukit::preint::{Preintegrator, Scheme};
-use imukit::propagate::Noise;
-use imukit::strapdown::Samples;
 use nalgebra::Vector3;
 use std::hint::black_box;
 
@@ -43,11 +43,7 @@ fn preint(c: &mut Criterion) {
     let t: Vec<f64> = (0..N).map(|k| k as f64 * 0.005).collect();
     let gyro: Vec<f64> = samples.iter().flat_map(|(_, w)| w.iter().copied()).collect();
     let accel: Vec<f64> = samples.iter().flat_map(|(a, _)| a.iter().copied()).collect();
-    let batch = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let batch = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     for (name, scheme, combined) in [
         ("euler_batch_parallel", Scheme::Euler, false),
         ("euler_combined", Scheme::Euler, true),

@@ -1,9 +1,11 @@
 //! Strapdown throughput on 10^6 samples: every state stored; and with the 15×15 error-state
 //! covariance propagated every sample and stored every 100 (criterion reports elements/s).
+#![allow(clippy::unwrap_used)] // a benchmark on fixed, valid inputs
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use imukit::propagate::{covariance_count, propagate, Covariance, Noise, Outputs};
-use imukit::strapdown::{integrate, Bias, NavState, Options, Samples, Scheme, StatesOut};
+use imukit::imu::{Bias, NavState, Noise, Samples};
+use imukit::propagate::{covariance_count, propagate, Covariance, Outputs};
+use imukit::strapdown::{integrate, Options, Scheme, StatesOut};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::hint::black_box;
 
@@ -30,11 +32,7 @@ fn inputs() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 
 fn strapdown(c: &mut Criterion) {
     let (t, gyro, accel) = inputs();
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let initial = NavState {
         position: Vector3::zeros(),
         velocity: Vector3::zeros(),

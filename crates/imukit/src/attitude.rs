@@ -61,29 +61,18 @@ pub enum Representation {
     Euler,
 }
 
-impl Scheme {
-    /// Name used by the bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Scheme::Euler => "euler",
-            Scheme::Exp => "exp",
-            Scheme::Midpoint => "midpoint",
-            Scheme::Rk4 => "rk4",
-            Scheme::Magnus => "magnus",
-        }
-    }
-}
+crate::named_enum!(
+    Scheme,
+    "scheme",
+    [Euler => "euler", Exp => "exp", Midpoint => "midpoint", Rk4 => "rk4", Magnus => "magnus"]
+);
+crate::named_enum!(
+    Representation,
+    "representation",
+    [Quaternion => "quaternion", Matrix => "matrix", Euler => "euler"]
+);
 
 impl Representation {
-    /// Name used by the bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Representation::Quaternion => "quaternion",
-            Representation::Matrix => "matrix",
-            Representation::Euler => "euler",
-        }
-    }
-
     /// The schemes this representation supports.
     pub fn schemes(self) -> &'static [Scheme] {
         match self {

@@ -159,6 +159,12 @@ pub enum Jacobian {
     LeftInv,
 }
 
+crate::named_enum!(
+    Jacobian,
+    "kind",
+    [Right => "right", RightInv => "right_inv", Left => "left", LeftInv => "left_inv"]
+);
+
 /// `(n, 3)` → `(n, 3, 3)`: one of the Jacobians of `Exp`.
 pub fn so3_jacobian(kind: Jacobian, input: &[f64], out: &mut [f64]) -> Result<()> {
     let f = match kind {
@@ -178,6 +184,8 @@ pub enum Convention {
     /// JPL, `i j = −k`.
     Jpl,
 }
+
+crate::named_enum!(Convention, "convention", [Hamilton => "hamilton", Jpl => "jpl"]);
 
 /// `(n, 8)` rows `[q, p]` → `(n, 4)`: `q ⊗ p` in the given convention.
 pub fn quat_multiply(convention: Convention, input: &[f64], out: &mut [f64]) -> Result<()> {
@@ -218,6 +226,8 @@ pub enum ProductMatrix {
     /// `R(p)`: `q ⊗ p = R(p) q`.
     Right,
 }
+
+crate::named_enum!(ProductMatrix, "side", [Left => "left", Right => "right"]);
 
 /// `(n, 4)` → `(n, 4, 4)`: left or right product matrix, `[x, y, z, w]` layout.
 pub fn quat_product_matrix(kind: ProductMatrix, convention: Convention, input: &[f64], out: &mut [f64]) -> Result<()> {

@@ -149,6 +149,37 @@ impl Error {
         }
     }
 
+    /// The input at fault: the outermost [`Error::Argument`] or [`Error::Parameter`] name, or
+    /// `None` when the error names no input (the caller knows which one it passed).
+    pub fn argument(&self) -> Option<&'static str> {
+        match self {
+            Error::Argument { name, .. } | Error::Parameter { name, .. } => Some(name),
+            _ => None,
+        }
+    }
+
+    /// The row or sample at fault, when the innermost error names one.
+    pub fn index(&self) -> Option<usize> {
+        match self.root() {
+            Error::NonFinite { index }
+            | Error::Overflow { index }
+            | Error::ZeroQuaternion { index, .. }
+            | Error::NotRotation { index, .. }
+            | Error::GimbalLock { index, .. }
+            | Error::NonIncreasingTime { index, .. } => Some(*index),
+            _ => None,
+        }
+    }
+
+    /// The text after the argument: what the wrapped error says for an [`Error::Argument`], the
+    /// whole message otherwise (a [`Error::Parameter`] message names its parameter itself).
+    pub fn message(&self) -> String {
+        match self {
+            Error::Argument { source, .. } => source.to_string(),
+            other => other.to_string(),
+        }
+    }
+
     /// The innermost error, past any [`Error::Argument`] wrappers.
     pub fn root(&self) -> &Error {
         match self {

@@ -6,7 +6,7 @@
 //! | error state δx (15) | `[δp, δv, δθ, δb_a, δb_g]` (Solà's order) |
 //! | perturbations | `p = p̂ + δp`, `v = v̂ + δv`, `R = R̂ Exp(δθ)` (right, local), `b = b̂ + δb` |
 //! | impulses i (12) | `[v_i, θ_i, a_i, ω_i]`: velocity, angle, accelerometer-bias and gyro-bias steps |
-//! | `Q_i` | `diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃` from continuous densities ([`Noise`]) |
+//! | `Q_i` | `diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃` from continuous densities ([`Noise`](crate::imu::Noise)) |
 //!
 //! The discrete step whose Jacobians are used is the first-order one, with impulses:
 //! `p⁺ = p + v h + ½(R â + g) h²`, `v⁺ = v + (R â + g) h + v_i`, `R⁺ = R Exp(ω̂ h + θ_i)`,
@@ -30,45 +30,13 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+use crate::imu::{Bias, NavState, Noise, Samples};
 use crate::mat3::{mul, mul_t};
-use crate::strapdown::{self, Bias, NavState, Options, Samples, StatesOut, Stepper};
+use crate::strapdown::{self, Options, StatesOut, Stepper};
 use crate::{so3, Error, Result};
 
 /// 15×15 error-state covariance, order `[δp, δv, δθ, δb_a, δb_g]`.
 pub type Covariance = SMatrix<f64, 15, 15>;
-
-/// Continuous-time noise densities (Kalibr convention).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Noise {
-    /// Gyro white noise σ_g [rad/s/√Hz].
-    pub gyro_density: f64,
-    /// Accelerometer white noise σ_a [m/s²/√Hz].
-    pub accel_density: f64,
-    /// Gyro bias random walk σ_bg [rad/s²/√Hz].
-    pub gyro_random_walk: f64,
-    /// Accelerometer bias random walk σ_ba [m/s³/√Hz].
-    pub accel_random_walk: f64,
-}
-
-impl Noise {
-    fn check(&self) -> Result<()> {
-        let all = [
-            self.gyro_density,
-            self.accel_density,
-            self.gyro_random_walk,
-            self.accel_random_walk,
-        ];
-        if all.iter().all(|v| v.is_finite() && *v >= 0.0) {
-            Ok(())
-        } else {
-            Err(Error::Parameter {
-                name: "noise",
-                expected: "finite, non-negative densities",
-                got: format!("{all:?}"),
-            })
-        }
-    }
-}
 
 /// The step Jacobians as dense matrices (the propagation itself uses their block structure).
 #[derive(Debug, Clone, PartialEq)]
@@ -238,7 +206,6 @@ pub fn propagate(
     options: &Options,
     outputs: Outputs<'_>,
 ) -> Result<(NavState, Covariance)> {
-    samples.check_shapes()?;
     noise.check()?;
     strapdown::check_parameters(initial, bias, options)?;
     let n = samples.t.len();

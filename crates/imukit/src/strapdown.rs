@@ -22,8 +22,9 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
+use crate::imu::{Bias, NavState, Samples};
 use crate::interp::{Cubic, StepInterpolator};
-use crate::{quat, so3, time, Error, Result};
+use crate::{imu, quat, so3, Error, Result};
 
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,133 +39,13 @@ pub enum Scheme {
     Exp,
 }
 
-impl Scheme {
-    /// Name used by the bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Scheme::Euler => "euler",
-            Scheme::Midpoint => "midpoint",
-            Scheme::Rk4 => "rk4",
-            Scheme::Exp => "exp",
-        }
-    }
-}
+crate::named_enum!(Scheme, "scheme", [Euler => "euler", Midpoint => "midpoint", Rk4 => "rk4", Exp => "exp"]);
 
 // Scheme tags for the const-generic step (an enum cannot be a const parameter on stable Rust).
 const EULER: u8 = 0;
 const MIDPOINT: u8 = 1;
 const RK4: u8 = 2;
 const EXP: u8 = 3;
-
-/// Position, velocity and attitude.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NavState {
-    /// Position in the world frame [m].
-    pub position: Vector3<f64>,
-    /// Velocity in the world frame [m/s].
-    pub velocity: Vector3<f64>,
-    /// Attitude `q_wb` (body to world).
-    pub rotation: UnitQuaternion<f64>,
-}
-
-/// Constant sensor biases subtracted from the samples.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Bias {
-    /// Gyro bias [rad/s].
-    pub gyro: Vector3<f64>,
-    /// Accelerometer bias [m/s²].
-    pub accel: Vector3<f64>,
-}
-
-/// The samples of one integration: times [s] (n), and flat `3n` gyro and accelerometer rows.
-#[derive(Debug, Clone, Copy)]
-pub struct Samples<'a> {
-    /// Timestamps [s], strictly increasing.
-    pub t: &'a [f64],
-    /// Body rates [rad/s], flat `3n`.
-    pub gyro: &'a [f64],
-    /// Specific force [m/s²], flat `3n`.
-    pub accel: &'a [f64],
-}
-
-impl Samples<'_> {
-    /// Checks lengths (values are checked during the run).
-    pub fn check_shapes(&self) -> Result<()> {
-        let n = self.t.len();
-        if n == 0 {
-            return Err(Error::Parameter {
-                name: "t",
-                expected: "at least one sample",
-                got: "0 samples".into(),
-            });
-        }
-        for (name, data) in [("gyro", self.gyro), ("accel", self.accel)] {
-            if data.len() != 3 * n {
-                return Err(Error::RowCount {
-                    input: n,
-                    output: data.len() / 3,
-                }
-                .in_argument(name));
-            }
-        }
-        Ok(())
-    }
-
-    /// Checks shapes and every value up front (for callers that must refuse bad input before
-    /// changing any state; the integrators check in their loops instead).
-    pub fn validate(&self) -> Result<()> {
-        self.check_shapes()?;
-        if !self.first_ok() || (0..self.t.len() - 1).any(|k| !self.step_ok(k)) {
-            return Err(self.value_error());
-        }
-        Ok(())
-    }
-
-    /// The precise error for samples that failed a fast in-loop check: first bad index.
-    pub fn value_error(&self) -> Error {
-        if let Err(e) = time::check_increasing(self.t) {
-            return e.in_argument("t");
-        }
-        for (name, data) in [("gyro", self.gyro), ("accel", self.accel)] {
-            if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-                return Error::NonFinite { index: i / 3 }.in_argument(name);
-            }
-        }
-        Error::Parameter {
-            name: "samples",
-            expected: "values that failed the in-loop check",
-            got: "none found on the second look".into(),
-        }
-    }
-
-    /// Whether step k (into sample k+1) is usable: positive finite dt, finite samples at k+1.
-    #[inline(always)]
-    pub fn step_ok(&self, k: usize) -> bool {
-        let h = self.t[k + 1] - self.t[k];
-        let (g, a) = (self.gyro_at(k + 1), self.accel_at(k + 1));
-        // x·0 is 0 for every finite x and NaN for ±inf and NaN; summing the products (not the
-        // values) cannot overflow: one branch for six values.
-        let zero = (g * 0.0).sum() + (a * 0.0).sum();
-        h > 0.0 && h <= f64::MAX && zero == 0.0
-    }
-
-    /// Whether sample 0 is usable.
-    pub fn first_ok(&self) -> bool {
-        self.t[0].is_finite() && self.gyro[..3].iter().chain(&self.accel[..3]).all(|v| v.is_finite())
-    }
-
-    /// Gyro sample k.
-    #[inline]
-    pub fn gyro_at(&self, k: usize) -> Vector3<f64> {
-        Vector3::new(self.gyro[3 * k], self.gyro[3 * k + 1], self.gyro[3 * k + 2])
-    }
-
-    /// Accelerometer sample k.
-    #[inline]
-    pub fn accel_at(&self, k: usize) -> Vector3<f64> {
-        Vector3::new(self.accel[3 * k], self.accel[3 * k + 1], self.accel[3 * k + 2])
-    }
-}
 
 /// Options of [`integrate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,7 +60,7 @@ impl Default for Options {
     fn default() -> Self {
         Self {
             scheme: Scheme::Midpoint,
-            gravity: Vector3::new(0.0, 0.0, -9.81),
+            gravity: imu::gravity(),
         }
     }
 }
@@ -241,8 +122,8 @@ impl<'a> Stepper<'a> {
             samples,
             bias,
             options,
-            mid_gyro: StepInterpolator::new(Cubic::new(samples.t, samples.gyro), [0.5]),
-            mid_accel: StepInterpolator::new(Cubic::new(samples.t, samples.accel), [0.5]),
+            mid_gyro: StepInterpolator::new(Cubic::new(samples.t, samples.gyro.as_flattened()), [0.5]),
+            mid_accel: StepInterpolator::new(Cubic::new(samples.t, samples.accel.as_flattened()), [0.5]),
         }
     }
 
@@ -385,7 +266,6 @@ pub fn integrate(
     options: &Options,
     mut out: Option<StatesOut<'_>>,
 ) -> Result<NavState> {
-    samples.check_shapes()?;
     let n = samples.t.len();
     if let Some(out) = out.as_ref() {
         out.check(n)?;

@@ -3,8 +3,8 @@
 //! strapdown integrator, and the covariance against a Monte Carlo.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use imukit::imu::Noise;
 use imukit::preint::{Preintegrator, Scheme};
-use imukit::propagate::Noise;
 use imukit_testing::preint::{chart, deltas, samples, Normal, H, N};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -71,7 +71,8 @@ fn corrected_converges_quadratically_to_reintegration() {
 fn deltas_equal_strapdown_from_rest_without_gravity() {
     // Δp, Δv are gravity-free and in the frame at i: integrating from identity, zero velocity,
     // with gravity switched off and the euler scheme gives the same numbers.
-    use imukit::strapdown::{integrate, Bias, NavState, Options, Samples, Scheme};
+    use imukit::imu::{Bias, NavState, Samples};
+    use imukit::strapdown::{integrate, Options, Scheme};
     use nalgebra::UnitQuaternion;
     let data = samples();
     let p = run(Vector3::zeros(), Vector3::zeros(), Noise::default(), &data);
@@ -94,11 +95,7 @@ fn deltas_equal_strapdown_from_rest_without_gravity() {
         scheme: Scheme::Euler,
         gravity: Vector3::zeros(),
     };
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let x = integrate(&samples, &x0, &Bias::default(), &options, None).unwrap();
     assert!((x.position - p.delta_position).amax() < 1e-12);
     assert!((x.velocity - p.delta_velocity).amax() < 1e-12);

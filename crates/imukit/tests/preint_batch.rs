@@ -3,8 +3,8 @@
 //! continue from the last sample or are refused.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use imukit::imu::Samples;
 use imukit::preint::{Preintegrator, Scheme, CHUNK};
-use imukit::strapdown::Samples;
 use imukit_testing::preint::NOISE;
 use nalgebra::Vector3;
 
@@ -32,11 +32,7 @@ fn stream(n: usize) -> Stream {
 
 impl Stream {
     fn samples(&self) -> Samples<'_> {
-        Samples {
-            t: &self.t,
-            gyro: &self.gyro,
-            accel: &self.accel,
-        }
+        Samples::new(&self.t, self.gyro.as_chunks().0, self.accel.as_chunks().0).unwrap()
     }
 }
 
@@ -108,10 +104,13 @@ fn midpoint_batches_continue_from_the_last_sample() {
     let s = data.samples();
     let mut whole = fresh(Scheme::Midpoint);
     whole.integrate_samples(&s).unwrap();
-    let part = |lo: usize, hi: usize| Samples {
-        t: &data.t[lo..hi],
-        gyro: &data.gyro[3 * lo..3 * hi],
-        accel: &data.accel[3 * lo..3 * hi],
+    let part = |lo: usize, hi: usize| {
+        Samples::new(
+            &data.t[lo..hi],
+            data.gyro[3 * lo..3 * hi].as_chunks().0,
+            data.accel[3 * lo..3 * hi].as_chunks().0,
+        )
+        .unwrap()
     };
     let mut two = fresh(Scheme::Midpoint);
     two.integrate_samples(&part(0, 101)).unwrap();

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use imukit::preint::{Clipped, Preintegrator, Scheme};
-use imukit::propagate::Noise;
+use imukit::imu::Noise;
 use imukit::Error;
 use nalgebra::Vector3;
 

@@ -4,8 +4,8 @@
 //! against Monte Carlo runs with per-sample noise, and merging.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use imukit::imu::Noise;
 use imukit::preint::{Preintegrator, Scheme};
-use imukit::propagate::Noise;
 use imukit_testing::preint::{chart, deltas, samples, Normal, H, N, NOISE};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -121,7 +121,8 @@ fn corrected_converges_quadratically_to_reintegration() {
 
 #[test]
 fn deltas_equal_strapdown_midpoint_without_gravity() {
-    use imukit::strapdown::{integrate, Bias, NavState, Options, Samples};
+    use imukit::imu::{Bias, NavState, Samples};
+    use imukit::strapdown::{integrate, Options};
     use nalgebra::UnitQuaternion;
     let data = samples();
     let bias = (Vector3::new(0.01, -0.02, 0.005), Vector3::new(0.1, 0.05, -0.2));
@@ -138,11 +139,7 @@ fn deltas_equal_strapdown_midpoint_without_gravity() {
         scheme: imukit::strapdown::Scheme::Midpoint,
         gravity: Vector3::zeros(),
     };
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let b = Bias {
         gyro: bias.0,
         accel: bias.1,

@@ -5,10 +5,10 @@
 //! changes (deltas always; covariance without flags or with factor 1).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use imukit::imu::Samples;
 use imukit::preint::{
     preintegrate_windows, preintegrate_windows_clipped, ClipMask, Clipped, Preintegrator, Scheme, CHUNK,
 };
-use imukit::strapdown::Samples;
 use imukit::Error;
 use imukit_testing::preint::{samples, H, NOISE};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -28,7 +28,7 @@ fn stream() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 }
 
 fn view<'a>(t: &'a [f64], gyro: &'a [f64], accel: &'a [f64]) -> Samples<'a> {
-    Samples { t, gyro, accel }
+    Samples::new(t, gyro.as_chunks().0, accel.as_chunks().0).unwrap()
 }
 
 fn template(scheme: Scheme) -> Preintegrator {

@@ -3,8 +3,8 @@
 //! equal one preintegration of that stream, and the result does not depend on the thread count.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use imukit::imu::Samples;
 use imukit::preint::{preintegrate_windows, Preintegrator, Scheme};
-use imukit::strapdown::Samples;
 use imukit_testing::preint::{samples, H, NOISE};
 use nalgebra::Vector3;
 
@@ -24,11 +24,7 @@ impl Stream {
         }
     }
     fn samples(&self) -> Samples<'_> {
-        Samples {
-            t: &self.t,
-            gyro: &self.gyro,
-            accel: &self.accel,
-        }
+        Samples::new(&self.t, self.gyro.as_chunks().0, self.accel.as_chunks().0).unwrap()
     }
     fn at(&self, k: usize) -> (f64, Vector3<f64>, Vector3<f64>) {
         let s = self.samples();

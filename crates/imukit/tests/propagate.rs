@@ -2,9 +2,10 @@
 //! block-structured covariance update against the dense product, and the closed-form Γ₂.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::propagate::{impulse_covariance, propagate, step_jacobians, Covariance, Noise, Outputs};
+use imukit::imu::{Bias, NavState, Noise, Samples};
+use imukit::propagate::{impulse_covariance, propagate, step_jacobians, Covariance, Outputs};
 use imukit::so3;
-use imukit::strapdown::{Bias, NavState, Options, Samples, Scheme};
+use imukit::strapdown::{Options, Scheme};
 use imukit_testing::numeric_jacobian;
 use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector3};
 
@@ -134,11 +135,7 @@ fn block_propagation_equals_the_dense_product() {
     let t = [0.0, h];
     let gyro = [wm.x, wm.y, wm.z, wm.x, wm.y, wm.z];
     let accel = [am.x, am.y, am.z, am.x, am.y, am.z];
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let bias = Bias {
         gyro: x.bg,
         accel: x.ba,

@@ -11,9 +11,10 @@ mod stability_common;
 
 use imukit::attitude::{self, Representation, Scheme};
 use imukit::filters::{Algorithm, Common, Filter, Inputs, Madgwick, Mahony, State};
+use imukit::imu::{Bias, NavState, Noise};
 use imukit::preint::{self, Preintegrator};
-use imukit::propagate::{self, Covariance, Noise, Outputs};
-use imukit::strapdown::{self, Bias, NavState};
+use imukit::propagate::{self, Covariance, Outputs};
+use imukit::strapdown;
 use nalgebra::{UnitQuaternion, Vector3};
 use stability_common::{attitude_steps, in_chunks, long_steps, orthonormality_error, psd_report, timed, Chunk, Worst};
 
@@ -55,7 +56,7 @@ fn attitude_norm_drift(scheme: Scheme) -> f64 {
             let s = chunk.samples(m);
             let store = calls.is_multiple_of(2).then(|| &mut out[..4 * (m + 1)]);
             let stored = store.is_some();
-            q = attitude::integrate(s.t, s.gyro, &q, &options, store).unwrap();
+            q = attitude::integrate(s.t(), s.gyro().as_flattened(), &q, &options, store).unwrap();
             if stored {
                 worst = out[..4 * (m + 1)].chunks_exact(4).map(norm_error).fold(worst, f64::max);
             }
@@ -112,7 +113,7 @@ fn attitude_matrix_drift(scheme: Scheme) -> f64 {
     timed(&format!("attitude matrix {}", scheme.name()), steps, || {
         in_chunks(steps, |m| {
             let s = chunk.samples(m);
-            r = attitude::integrate_rotation_matrix(s.t, s.gyro, &r, &options).unwrap();
+            r = attitude::integrate_rotation_matrix(s.t(), s.gyro().as_flattened(), &r, &options).unwrap();
             worst = worst.max(orthonormality_error(&r));
             done += m;
         })

@@ -53,19 +53,15 @@ fn rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
 /// sample, with nothing added; the windows report the sample ending the first bad window.
 #[test]
 fn preintegration_overflow_is_an_error_and_adds_nothing() {
+    use imukit::imu::Noise;
+    use imukit::imu::Samples;
     use imukit::preint::{preintegrate_windows, Preintegrator, Scheme};
-    use imukit::propagate::Noise;
-    use imukit::strapdown::Samples;
     use nalgebra::Vector3;
 
     let t = [0.0, 0.01, 0.02];
     let gyro = [0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3];
     let accel = [0.0, 0.0, 9.81, 0.0, 0.0, 9.81, 0.0, 0.0, 9.81];
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let huge = 1.6e212;
     for (noise, walk) in [
         (
@@ -109,18 +105,15 @@ fn preintegration_overflow_is_an_error_and_adds_nothing() {
 /// returned the zero quaternion; `integrate` and `propagate` returned it as `Ok`.
 #[test]
 fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
-    use imukit::propagate::{self, Covariance, Noise, Outputs};
-    use imukit::strapdown::{self, Bias, NavState, Samples, StatesOut};
+    use imukit::imu::{Bias, NavState, Noise, Samples};
+    use imukit::propagate::{self, Covariance, Outputs};
+    use imukit::strapdown::{self, StatesOut};
     use nalgebra::Vector3;
 
     let t = [0.0, 1.9789];
     let gyro = [0.0; 6];
     let accel = [0.0, 0.0, 9.81, 0.0, 0.0, 9.81];
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let initial = NavState {
         position: Vector3::zeros(),
         velocity: Vector3::zeros(),
@@ -179,19 +172,15 @@ fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
 /// bias (2.3e197 m/s²) merged into an infinite covariance and Jacobian behind an `Ok`.
 #[test]
 fn preintegration_merge_overflow_is_an_error() {
+    use imukit::imu::Noise;
+    use imukit::imu::Samples;
     use imukit::preint::Preintegrator;
-    use imukit::propagate::Noise;
-    use imukit::strapdown::Samples;
     use nalgebra::Vector3;
 
     let t = [0.0, 0.5];
     let gyro = [0.1, -0.2, 0.3, 0.1, -0.2, 0.3];
     let accel = [0.0; 6];
-    let samples = Samples {
-        t: &t,
-        gyro: &gyro,
-        accel: &accel,
-    };
+    let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let noise = Noise {
         gyro_density: 1e-3,
         accel_density: 1e-2,

@@ -28,7 +28,7 @@ __all__ = ["ENGINES", "Engine", "Windows"]
 class Engine(Protocol):
     """A preintegration engine (module docs)."""
 
-    def __call__(self, imu: ImuData, windows: Windows, params: PreintParams, threads: int) -> Preintegration: ...
+    def __call__(self, imu: ImuData, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration: ...
 
 
 ENGINES: dict[str, Engine] = {

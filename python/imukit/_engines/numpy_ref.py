@@ -183,7 +183,7 @@ def _window(imu: ImuData, lo: float, hi: float, params: PreintParams) -> _State:
     return state
 
 
-def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int) -> Preintegration:
+def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration:
     """Every window, one after another (``threads`` is ignored)."""
     edges = windows.offsets
     states = [_window(imu, float(lo), float(hi), params) for lo, hi in zip(edges[:-1], edges[1:], strict=True)]

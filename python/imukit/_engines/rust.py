@@ -10,8 +10,8 @@ from imukit._preint_record import Preintegration, PreintParams
 from imukit.imu import ImuData
 
 
-def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int) -> Preintegration:
-    """Every window of ``windows`` in one call, in parallel on ``threads`` threads (0: all cores)."""
+def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration:
+    """Every window of ``windows`` in one call, in parallel on ``threads`` threads (None: the process-wide pool)."""
     arrays = _core.preint_windows_record(
         imu.seconds,
         imu.gyro,

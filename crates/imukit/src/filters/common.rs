@@ -12,6 +12,8 @@ pub enum World {
     Ned,
 }
 
+crate::named_enum!(World, "world", [Enu => "ENU", Ned => "NED"]);
+
 impl World {
     /// The world "up" direction, which a resting accelerometer measures (specific force).
     #[inline]

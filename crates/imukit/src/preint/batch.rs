@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::{clipped_at, ClipMask, Preintegrator, Scheme};
 use crate::error::{Error, Result};
-use crate::strapdown::Samples;
+use crate::imu::Samples;
 
 /// Intervals per parallel chunk: long enough that a merge (a few dense 9×9 products) is noise.
 pub const CHUNK: usize = 1 << 15;

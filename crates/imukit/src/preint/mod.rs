@@ -41,8 +41,8 @@ mod windows;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::error::{Error, Result};
+use crate::imu::Noise;
 use crate::mat3::mul;
-use crate::propagate::Noise;
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
@@ -59,11 +59,15 @@ pub type Covariance15 = SMatrix<f64, 15, 15>;
 /// How the samples of an interval enter it (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scheme {
-    /// Forster's: sample k held over `[t_k, t_k+1)`, exact rotation steps.
+    /// Forster's: sample k held over `[t_k, t_k+1)`, exact rotation steps (named `lie_euler`).
     Euler,
     /// VINS-Mono's: averaged rates, specific forces rotated at both ends.
     Midpoint,
 }
+
+// `lie_euler`: R Exp(ω_k h) with v and p first order; "euler" names forward Euler on the ODE in
+// `attitude`, so it stays only as a deprecated alias here (one name per update rule).
+crate::named_enum!(Scheme, "scheme", [Midpoint => "midpoint", Euler => "lie_euler"], aliases ["euler" => Euler]);
 
 /// Default [`Preintegrator::saturation_noise_factor`]: OKVIS multiplies the white-noise densities
 /// by 100 on an interval with a saturated reading (`ImuError::propagation`, `sigma_g_c *= 100`;

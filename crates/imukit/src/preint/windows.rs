@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::{clipped_at, ClipMask, Clipped, Preintegrator, Scheme};
 use crate::error::{Error, Result};
-use crate::strapdown::Samples;
+use crate::imu::Samples;
 
 /// `template` (an empty preintegrator: scheme, bias, noise, bias walk) run over each window
 /// `[boundaries[m], boundaries[m + 1]]` of `samples`.

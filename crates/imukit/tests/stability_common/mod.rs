@@ -88,13 +88,14 @@ impl Chunk {
     }
 
     /// The first `steps + 1` samples (`steps` intervals).
-    pub fn samples(&self, steps: usize) -> imukit::strapdown::Samples<'_> {
+    pub fn samples(&self, steps: usize) -> imukit::imu::Samples<'_> {
         let n = steps.min(CHUNK_STEPS) + 1;
-        imukit::strapdown::Samples {
-            t: &self.t[..n],
-            gyro: &self.gyro[..3 * n],
-            accel: &self.accel[..3 * n],
-        }
+        imukit::imu::Samples::new(
+            &self.t[..n],
+            self.gyro[..3 * n].as_chunks().0,
+            self.accel[..3 * n].as_chunks().0,
+        )
+        .unwrap()
     }
 }
 

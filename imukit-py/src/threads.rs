@@ -1,0 +1,66 @@
+//! The rayon pools the kernels run in. A process-wide pool set by `imukit.set_num_threads(n)`
+//! (until then: rayon's global pool, one thread per core), and per-call pools for an explicit
+//! `threads=` argument. Pools are cached by size: building one spawns its threads, so a call
+//! with `threads=4` reuses the pool of the previous one instead of paying that every time.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use rayon::{ThreadPool, ThreadPoolBuilder};
+
+/// Pools by thread count.
+static POOLS: Mutex<Option<HashMap<usize, Arc<ThreadPool>>>> = Mutex::new(None);
+/// The size set by `set_num_threads`, or `None` for rayon's global pool.
+static PROCESS: Mutex<Option<usize>> = Mutex::new(None);
+
+/// A lock that survives a panic in another holder (the guarded data stays consistent: a map
+/// insert or a number store).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// The cached pool of `n` threads, built on first use.
+fn pool(n: usize) -> PyResult<Arc<ThreadPool>> {
+    let mut pools = lock(&POOLS);
+    let pools = pools.get_or_insert_with(HashMap::new);
+    if let Some(p) = pools.get(&n) {
+        return Ok(Arc::clone(p));
+    }
+    let built = ThreadPoolBuilder::new()
+        .num_threads(n)
+        .thread_name(|i| format!("imukit-{i}"))
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}")))?;
+    let built = Arc::new(built);
+    pools.insert(n, Arc::clone(&built));
+    Ok(built)
+}
+
+/// Runs `f` (which may use rayon) on `threads` threads when given, else in the process-wide
+/// pool. Call it with the GIL released.
+pub(crate) fn run_in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
+    match threads.or(*lock(&PROCESS)) {
+        Some(n) => Ok(pool(n)?.install(f)),
+        None => Ok(f()),
+    }
+}
+
+/// Sets the number of threads every parallel kernel uses from now on (`threads=` on a call
+/// overrides it). `n` ≥ 1, checked by `imukit.set_num_threads`.
+#[pyfunction]
+pub(crate) fn set_num_threads(py: Python<'_>, n: usize) -> PyResult<()> {
+    py.detach(|| pool(n))?;
+    *lock(&PROCESS) = Some(n);
+    Ok(())
+}
+
+/// The number of threads parallel kernels use when a call does not say.
+#[pyfunction]
+pub(crate) fn get_num_threads() -> usize {
+    match *lock(&PROCESS) {
+        Some(n) => n,
+        None => rayon::current_num_threads(),
+    }
+}
