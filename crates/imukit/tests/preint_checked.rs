@@ -3,8 +3,8 @@
 //! transactional: a refused step, an overflowing one included, leaves the state exactly as it was.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::preint::{Clipped, Preintegrator, Scheme};
 use imukit::imu::Noise;
+use imukit::preint::{Clipped, Preintegrator, Scheme};
 use imukit::Error;
 use nalgebra::Vector3;
 

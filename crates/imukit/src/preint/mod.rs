@@ -478,21 +478,4 @@ impl Preintegrator {
     pub fn bias_jacobian(&self) -> BiasJacobian {
         blocks::cross_matrix(&self.jac)
     }
-
-    /// First-order bias update: the deltas for biases `b̄ + (δb_g, δb_a)` without
-    /// re-integration, `ΔR Exp(∂ΔR/∂b_g δb_g)` (right-applied), `Δv + ∂Δv/∂b δb`, `Δp + ∂Δp/∂b δb`.
-    pub fn corrected(
-        &self,
-        bias_gyro: &Vector3<f64>,
-        bias_accel: &Vector3<f64>,
-    ) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
-        let dbg = bias_gyro - self.bias_gyro;
-        let dba = bias_accel - self.bias_accel;
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = &self.jac;
-        (
-            self.delta_rotation * so3::exp(&(jtg * dbg)).matrix(),
-            self.delta_velocity + jvg * dbg + jva * dba,
-            self.delta_position + jpg * dbg + jpa * dba,
-        )
-    }
 }
