@@ -90,6 +90,20 @@ impl PyPreintegrator {
         })
     }
 
+    /// The preintegrator of `words` (from `__reduce__`: the complete core state).
+    #[staticmethod]
+    fn from_state(py: Python<'_>, words: Vec<f64>) -> PyResult<Self> {
+        let inner = preint::Preintegrator::from_state_words(&words).map_err(|e| to_py(py, "words", e))?;
+        Ok(Self { inner })
+    }
+
+    /// Pickles (and `copy.deepcopy`s) as `Preintegrator.from_state(words)`: exact, every part of
+    /// the state included.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
+        let from_state = py.get_type::<Self>().getattr("from_state")?;
+        Ok((from_state, (self.inner.state_words(),)))
+    }
+
     /// This preintegration followed by `next`, as one.
     fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
         let inner = self

@@ -1,7 +1,7 @@
 # Stubs of the compiled module (checked by mypy.stubtest). Every function takes a C-contiguous
 # float64 array of shape (n, k), the argument name used in error messages, and options; it returns
 # a new (n, m) float64 array. Use the public modules (imukit.so3, imukit.quat, imukit.euler).
-from typing import final
+from typing import Any, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -145,6 +145,9 @@ class Preintegrator:
     def __new__(
         cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str, saturation_noise_factor: float
     ) -> Preintegrator: ...
+    @staticmethod
+    def from_state(words: list[float]) -> Preintegrator: ...
+    def __reduce__(self) -> tuple[Any, tuple[list[float]]]: ...
     def merge(self, next: Preintegrator) -> Preintegrator: ...
     def integrate_measurement(
         self, accel: list[float], gyro: list[float], dt: float, gyro_saturated: bool, accel_saturated: bool

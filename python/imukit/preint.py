@@ -148,10 +148,18 @@ class PreintegratedImu:
         # What was integrated, for the deprecated reintegrate(bias) only: reintegrate(imu, bias)
         # takes the samples explicitly.
         self._inputs: list[_Input] = []
+        self._replayable = True  # False for a copy from pickle: its log did not travel
+        self._started = False  # whether anything was integrated (the span's start is set)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # The core pickles its complete state. The replay log of the deprecated reintegrate(bias)
+        # does not travel: a copy has none and refuses that call (reintegrate(imu, bias) works).
+        return (_restore, (self.params, self._scheme, self._core, self._span))
 
     def _like(self, core: _core.Preintegrator, inputs: list[_Input], params: PreintParams) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
         out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
+        out._replayable, out._started = self._replayable, True
         out._snapshot, out._span = None, (math.nan, math.nan)
         return out
 
@@ -188,7 +196,8 @@ class PreintegratedImu:
     def _changed(self, start: float = math.nan, end: float = math.nan) -> None:
         """After an input: the snapshot is stale; the span starts with the first input's."""
         self._snapshot = None
-        self._span = (start if len(self._inputs) == 1 else self._span[0], end)
+        self._span = (self._span[0] if self._started else start, end)
+        self._started = True
 
     def integrate_measurement(
         self,
@@ -269,6 +278,8 @@ class PreintegratedImu:
             DeprecationWarning,
             stacklevel=2,
         )
+        if not self._replayable:
+            raise ParameterError("this copy does not hold its samples: use reintegrate(imu, bias)", argument="imu")
         return self._replay(imu)
 
     def _replay(self, bias: ImuBias) -> PreintegratedImu:
@@ -307,7 +318,9 @@ class PreintegratedImu:
         if self.params.gravity != other.params.gravity:
             raise ParameterError("other: expected the same gravity")
         params = self.params.replace(combined=False)
-        return self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
+        merged = self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
+        merged._replayable = self._replayable and other._replayable
+        return merged
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
         """The old ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian)`` tuple (test helpers read it)."""
@@ -385,6 +398,15 @@ class PreintegratedImu:
         through the first-order correction)."""
         jac = residual_jacobians(self.snapshot(), _states(state_i), _states(state_j), bias)
         return ResidualJacobians(*(j[0] for j in jac))
+
+
+def _restore(
+    params: PreintParams, scheme: str, core: _core.Preintegrator, span: tuple[float, float]
+) -> PreintegratedImu:
+    """A pickled :class:`PreintegratedImu` (its ``__reduce__``)."""
+    out = PreintegratedImu(params)
+    out._scheme, out._core, out._span, out._replayable, out._started = scheme, core, span, False, True
+    return out
 
 
 def _states(state: NavState) -> States:

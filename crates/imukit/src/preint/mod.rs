@@ -36,6 +36,7 @@ mod batch;
 mod blocks;
 mod merge;
 mod midpoint;
+mod state;
 mod windows;
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
