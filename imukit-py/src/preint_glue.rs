@@ -1,6 +1,7 @@
 //! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
 //! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
 
+use imukit::imu::Samples;
 use imukit::names::Named;
 use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
@@ -184,33 +185,55 @@ impl PyPreintegrator {
     }
 }
 
-/// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, each starting from a copy
-/// of the empty `template` (scheme, bias, noise, saturation factor, bias walk), in parallel on
-/// `threads` threads (None: the process-wide pool, `imukit.set_num_threads`), GIL released.
+/// The samples of an `imukit.ImuData`, read by attribute name.
+#[derive(FromPyObject)]
+pub(crate) struct ImuArrays<'py> {
+    #[pyo3(attribute("seconds"))]
+    t: PyReadonlyArray1<'py, f64>,
+    #[pyo3(attribute)]
+    gyro: PyReadonlyArray2<'py, f64>,
+    #[pyo3(attribute)]
+    accel: PyReadonlyArray2<'py, f64>,
+    #[pyo3(attribute)]
+    gyro_saturated: PyReadonlyArray1<'py, bool>,
+    #[pyo3(attribute)]
+    accel_saturated: PyReadonlyArray1<'py, bool>,
+}
+
+/// `kernel` over private copies of `imu` and `boundaries` (the run releases the GIL), on
+/// `threads` threads (None: the process-wide pool).
+fn run_windows<'py, R: Send>(
+    py: Python<'py>,
+    imu: &ImuArrays<'py>,
+    boundaries: &PyReadonlyArray1<'py, f64>,
+    threads: Option<usize>,
+    kernel: impl FnOnce(&Samples<'_>, Option<&ClipMask<'_>>, &[f64]) -> imukit::Result<R> + Send,
+) -> PyResult<R> {
+    let copies = SampleCopies::new(py, &imu.t, &imu.gyro, &imu.accel)?;
+    let samples = copies.samples(py)?;
+    let flags = FlagCopies::new(&imu.gyro_saturated, &imu.accel_saturated);
+    let mask = flags.mask();
+    let boundaries = crate::private_copy(py, boundaries)?.readonly();
+    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
+    py.detach(|| crate::threads::run_in_pool(threads, || kernel(&samples, mask.as_ref(), boundaries)))?
+        .map_err(|e| to_py(py, "imu / bias", e))
+}
+
+/// One preintegration per window `[boundaries[m], boundaries[m + 1]]` of the `ImuData` `imu`,
+/// each starting from a copy of the empty `template` (scheme, bias, noise, saturation factor, bias
+/// walk), in parallel on `threads` threads (None: the process-wide pool), GIL released.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
-pub(crate) fn preint_windows(
-    py: Python<'_>,
-    t: PyReadonlyArray1<'_, f64>,
-    gyro: PyReadonlyArray2<'_, f64>,
-    accel: PyReadonlyArray2<'_, f64>,
-    gyro_saturated: PyReadonlyArray1<'_, bool>,
-    accel_saturated: PyReadonlyArray1<'_, bool>,
-    boundaries: PyReadonlyArray1<'_, f64>,
-    template: PyRef<'_, PyPreintegrator>,
+pub(crate) fn preint_windows<'py>(
+    py: Python<'py>,
+    imu: ImuArrays<'py>,
+    boundaries: PyReadonlyArray1<'py, f64>,
+    template: PyRef<'py, PyPreintegrator>,
     threads: Option<usize>,
 ) -> PyResult<Vec<PyPreintegrator>> {
     let template = template.inner.clone();
-    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
-    let samples = copies.samples(py)?;
-    let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-    let mask = flags.mask();
-    let boundaries = crate::private_copy(py, &boundaries)?.readonly();
-    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
-    let run = || preint::preintegrate_windows_clipped(&samples, mask.as_ref(), boundaries, &template);
-    let windows = py
-        .detach(|| crate::threads::run_in_pool(threads, run))?
-        .map_err(|e| to_py(py, "imu / bias", e))?;
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
+        preint::preintegrate_windows_clipped(samples, mask, b, &template)
+    })?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
 }
 
@@ -230,26 +253,15 @@ pub(crate) type Record<'py> = (
 /// `template`, written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
 /// parallel on `threads` threads (None: the process-wide pool), GIL released.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
 pub(crate) fn preint_windows_record<'py>(
     py: Python<'py>,
-    t: PyReadonlyArray1<'py, f64>,
-    gyro: PyReadonlyArray2<'py, f64>,
-    accel: PyReadonlyArray2<'py, f64>,
-    gyro_saturated: PyReadonlyArray1<'py, bool>,
-    accel_saturated: PyReadonlyArray1<'py, bool>,
+    imu: ImuArrays<'py>,
     boundaries: PyReadonlyArray1<'py, f64>,
     template: PyRef<'py, PyPreintegrator>,
     threads: Option<usize>,
 ) -> PyResult<Record<'py>> {
     let template = template.inner.clone();
-    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
-    let samples = copies.samples(py)?;
-    let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-    let mask = flags.mask();
-    let boundaries = crate::private_copy(py, &boundaries)?.readonly();
-    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
-    let m = boundaries.len().saturating_sub(1);
+    let m = boundaries.as_array().len().saturating_sub(1);
     let combined = template.covariance_combined().is_some();
     let record: Record<'py> = (
         PyArray3::zeros(py, [m, 3, 3], false),
@@ -277,9 +289,9 @@ pub(crate) fn preint_windows_record<'py>(
             bias_jacobian: jac.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
             covariance_combined: c15,
         };
-        let run = || preint::preintegrate_windows_into(&samples, mask.as_ref(), boundaries, &template, out);
-        py.detach(|| crate::threads::run_in_pool(threads, run))?
-            .map_err(|e| to_py(py, "imu / bias", e))?;
+        run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
+            preint::preintegrate_windows_into(samples, mask, b, &template, out)
+        })?;
     }
     Ok(record)
 }

@@ -1,7 +1,7 @@
 # Stubs of the compiled module (checked by mypy.stubtest). Every function takes a C-contiguous
 # float64 array of shape (n, k), the argument name used in error messages, and options; it returns
 # a new (n, m) float64 array. Use the public modules (imukit.so3, imukit.quat, imukit.euler).
-from typing import Any, final
+from typing import Any, Protocol, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -136,6 +136,20 @@ class AttitudeFilter:
         continued: bool,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 
+class _ImuArrays(Protocol):
+    """What the preintegration windows read from an ``imukit.ImuData``, by attribute name."""
+
+    @property
+    def seconds(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro(self) -> NDArray[np.float64]: ...
+    @property
+    def accel(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro_saturated(self) -> NDArray[np.bool_]: ...
+    @property
+    def accel_saturated(self) -> NDArray[np.bool_]: ...
+
 DEFAULT_SATURATION_NOISE_FACTOR: float
 PREINT_SCHEMES: list[str]
 PREINT_SCHEME_ALIASES: dict[str, str]
@@ -173,21 +187,13 @@ class Preintegrator:
     ]: ...
 
 def preint_windows(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    accel: NDArray[np.float64],
-    gyro_saturated: NDArray[np.bool_],
-    accel_saturated: NDArray[np.bool_],
+    imu: _ImuArrays,
     boundaries: NDArray[np.float64],
     template: Preintegrator,
     threads: int | None,
 ) -> list[Preintegrator]: ...
 def preint_windows_record(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    accel: NDArray[np.float64],
-    gyro_saturated: NDArray[np.bool_],
-    accel_saturated: NDArray[np.bool_],
+    imu: _ImuArrays,
     boundaries: NDArray[np.float64],
     template: Preintegrator,
     threads: int | None,

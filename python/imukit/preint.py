@@ -465,9 +465,7 @@ def _core_windows(
     imu: ImuData, boundaries: ArrayLike, params: PreintParams, threads: int | None = None
 ) -> list[_core.Preintegrator]:
     b = np.ascontiguousarray(_windows(imu, boundaries).offsets)
-    return _core.preint_windows(
-        imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated, b, params._template(), threads
-    )
+    return _core.preint_windows(imu, b, params._template(), threads)
 
 
 def _threads(threads: object) -> int | None:

@@ -13,11 +13,7 @@ from imukit.imu import ImuData
 def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration:
     """Every window of ``windows`` in one call, in parallel on ``threads`` threads (None: the process-wide pool)."""
     arrays = _core.preint_windows_record(
-        imu.seconds,
-        imu.gyro,
-        imu.accel,
-        imu.gyro_saturated,
-        imu.accel_saturated,
+        imu,
         np.ascontiguousarray(windows.offsets),
         params._template(),
         threads,
