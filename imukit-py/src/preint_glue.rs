@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::{bias, noise_of, raise, to_py, SampleCopies};
+use crate::{raise, to_py, SampleCopies};
 
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
 #[pyclass(name = "Preintegrator", module = "imukit._core")]
@@ -49,6 +49,63 @@ impl FlagCopies {
     }
 }
 
+/// The noise densities of an `imukit.ImuNoise`, by attribute name.
+#[derive(FromPyObject)]
+struct NoiseFields {
+    #[pyo3(attribute)]
+    gyro_density: f64,
+    #[pyo3(attribute)]
+    accel_density: f64,
+    #[pyo3(attribute)]
+    gyro_random_walk: f64,
+    #[pyo3(attribute)]
+    accel_random_walk: f64,
+}
+
+/// The biases of an `imukit.ImuBias`, by attribute name.
+#[derive(FromPyObject)]
+struct BiasFields {
+    #[pyo3(attribute)]
+    gyro: [f64; 3],
+    #[pyo3(attribute)]
+    accel: [f64; 3],
+}
+
+/// The options of an `imukit.PreintParams`, by attribute name (gravity is Python's: the core's
+/// deltas are gravity-free).
+#[derive(FromPyObject)]
+pub(crate) struct Params {
+    #[pyo3(attribute)]
+    noise: NoiseFields,
+    #[pyo3(attribute)]
+    bias: BiasFields,
+    #[pyo3(attribute)]
+    scheme: String,
+    #[pyo3(attribute)]
+    combined: bool,
+    #[pyo3(attribute)]
+    saturation_noise_factor: f64,
+}
+
+impl Params {
+    /// The empty preintegrator these options describe.
+    fn template(&self, py: Python<'_>) -> PyResult<preint::Preintegrator> {
+        let n = &self.noise;
+        let noise = imukit::imu::Noise {
+            gyro_density: n.gyro_density,
+            accel_density: n.accel_density,
+            gyro_random_walk: n.gyro_random_walk,
+            accel_random_walk: n.accel_random_walk,
+        };
+        let (gyro, accel) = (Vector3::from(self.bias.gyro), Vector3::from(self.bias.accel));
+        let inner = preint::Preintegrator::new(gyro, accel, noise)
+            .with_scheme(scheme_of(py, &self.scheme)?)
+            .with_saturation_noise_factor(self.saturation_noise_factor)
+            .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
+        Ok(if self.combined { inner.with_bias_walk() } else { inner })
+    }
+}
+
 /// `e` raised under the Python argument `argument` that carried the core's input (`imu` for the
 /// core's `samples`, `other` for `next`) when it is a [`imukit::Error::Parameter`] (as "expected …,
 /// got …"), else as [`to_py`] does with `fallback`.
@@ -72,22 +129,11 @@ fn rows<'py>(py: Python<'py>, m: &[f64], r: usize, c: usize) -> PyResult<Bound<'
 
 #[pymethods]
 impl PyPreintegrator {
+    /// An empty preintegrator with the options of `params` (an `imukit.PreintParams`).
     #[new]
-    fn new(
-        py: Python<'_>,
-        bias_values: [f64; 6],
-        noise: [f64; 4],
-        combined: bool,
-        scheme: &str,
-        saturation_noise_factor: f64,
-    ) -> PyResult<Self> {
-        let b = bias(bias_values);
-        let inner = preint::Preintegrator::new(b.gyro, b.accel, noise_of(noise))
-            .with_scheme(scheme_of(py, scheme)?)
-            .with_saturation_noise_factor(saturation_noise_factor)
-            .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
+    fn new(py: Python<'_>, params: Params) -> PyResult<Self> {
         Ok(Self {
-            inner: if combined { inner.with_bias_walk() } else { inner },
+            inner: params.template(py)?,
         })
     }
 
@@ -249,18 +295,18 @@ pub(crate) type Record<'py> = (
     Option<Bound<'py, PyArray3<f64>>>,
 );
 
-/// Every window `[boundaries[m], boundaries[m + 1]]` preintegrated from a copy of the empty
-/// `template`, written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
+/// Every window `[boundaries[m], boundaries[m + 1]]` preintegrated with the options `params` (an
+/// `imukit.PreintParams`), written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
 /// parallel on `threads` threads (None: the process-wide pool), GIL released.
 #[pyfunction]
 pub(crate) fn preint_windows_record<'py>(
     py: Python<'py>,
     imu: ImuArrays<'py>,
     boundaries: PyReadonlyArray1<'py, f64>,
-    template: PyRef<'py, PyPreintegrator>,
+    params: Params,
     threads: Option<usize>,
 ) -> PyResult<Record<'py>> {
-    let template = template.inner.clone();
+    let template = params.template(py)?;
     let m = boundaries.as_array().len().saturating_sub(1);
     let combined = template.covariance_combined().is_some();
     let record: Record<'py> = (

@@ -150,15 +150,43 @@ class _ImuArrays(Protocol):
     @property
     def accel_saturated(self) -> NDArray[np.bool_]: ...
 
+class _NoiseFields(Protocol):
+    @property
+    def gyro_density(self) -> float: ...
+    @property
+    def accel_density(self) -> float: ...
+    @property
+    def gyro_random_walk(self) -> float: ...
+    @property
+    def accel_random_walk(self) -> float: ...
+
+class _BiasFields(Protocol):
+    @property
+    def gyro(self) -> NDArray[np.float64]: ...
+    @property
+    def accel(self) -> NDArray[np.float64]: ...
+
+class _PreintFields(Protocol):
+    """What the core reads from an ``imukit.PreintParams``, by attribute name."""
+
+    @property
+    def noise(self) -> _NoiseFields: ...
+    @property
+    def bias(self) -> _BiasFields: ...
+    @property
+    def scheme(self) -> str: ...
+    @property
+    def combined(self) -> bool: ...
+    @property
+    def saturation_noise_factor(self) -> float: ...
+
 DEFAULT_SATURATION_NOISE_FACTOR: float
 PREINT_SCHEMES: list[str]
 PREINT_SCHEME_ALIASES: dict[str, str]
 
 @final
 class Preintegrator:
-    def __new__(
-        cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str, saturation_noise_factor: float
-    ) -> Preintegrator: ...
+    def __new__(cls, params: _PreintFields) -> Preintegrator: ...
     @staticmethod
     def from_state(words: list[float]) -> Preintegrator: ...
     def __reduce__(self) -> tuple[Any, tuple[list[float]]]: ...
@@ -195,7 +223,7 @@ def preint_windows(
 def preint_windows_record(
     imu: _ImuArrays,
     boundaries: NDArray[np.float64],
-    template: Preintegrator,
+    params: _PreintFields,
     threads: int | None,
 ) -> tuple[
     NDArray[np.float64],

@@ -116,16 +116,8 @@ class PreintParams:
         return dataclasses.replace(self, **changes)
 
     def _template(self) -> _core.Preintegrator:
-        """An empty core preintegrator with these options."""
-        b = self.bias
-        noise = self.noise
-        return _core.Preintegrator(
-            [*b.gyro, *b.accel],
-            [noise.gyro_density, noise.accel_density, noise.gyro_random_walk, noise.accel_random_walk],
-            self.combined,
-            self.scheme,
-            self.saturation_noise_factor,
-        )
+        """An empty core preintegrator with these options (the glue reads them by name)."""
+        return _core.Preintegrator(self)
 
 
 def _params(

@@ -1,4 +1,5 @@
-"""The Rust engine: one native call (``_core.preint_windows_record``) fills every array of the record."""
+"""The Rust engine: one native call (``_core.preint_windows_record``, reading the samples and the
+options by attribute name) fills every array of the record."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ def preintegrate_windows(imu: ImuData, windows: Windows, params: PreintParams, t
     arrays = _core.preint_windows_record(
         imu,
         np.ascontiguousarray(windows.offsets),
-        params._template(),
+        params,
         threads,
     )
     return record(arrays, windows, params)
