@@ -192,6 +192,18 @@ class Preintegration:
             array.flags.writeable = False
             object.__setattr__(self, name, array)
 
+    @classmethod
+    def _owning(cls, **fields: Any) -> Preintegration:
+        """A record that takes fresh arrays the caller built for it (an engine's output, a core
+        snapshot) as they are: made read-only, neither copied nor checked."""
+        out = object.__new__(cls)
+        for f in dataclasses.fields(cls):
+            value = fields.get(f.name)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            object.__setattr__(out, f.name, value)
+        return out
+
     def __len__(self) -> int:
         return int(self.delta_t.shape[0])
 

@@ -246,17 +246,17 @@ class PreintegratedImu:
         to :meth:`integrate` (NaN after :meth:`integrate_measurement` or :meth:`merge`)."""
         if self._snapshot is None:
             r, v, p, dt, cov, jac, combined = self._core.state()
-            self._snapshot = Preintegration(
-                r[None],
-                v[None],
-                p[None],
-                np.array([dt]),
-                cov[None],
-                jac[None],
-                None if combined is None else combined[None],
-                np.array([self._span[0]]),
-                np.array([self._span[1]]),
-                self.params,
+            self._snapshot = Preintegration._owning(
+                delta_rotation=r[None],
+                delta_velocity=v[None],
+                delta_position=p[None],
+                delta_t=np.array([dt]),
+                covariance=cov[None],
+                bias_jacobian=jac[None],
+                covariance_combined=None if combined is None else combined[None],
+                t_start=np.array([self._span[0]]),
+                t_end=np.array([self._span[1]]),
+                params=self.params,
             )
         return self._snapshot
 

@@ -25,17 +25,18 @@ def record(arrays: tuple[Any, ...], windows: Windows, params: PreintParams) -> P
     """The record of ``arrays`` ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian, combined or None)``."""
     ns = windows.t_ns
     r, v, p, dt, cov, jac, combined = arrays
-    return Preintegration(
-        r,
-        v,
-        p,
-        dt,
-        cov,
-        jac,
-        combined,
-        t_start=windows.t[:-1],
-        t_end=windows.t[1:],
+    t = np.array(windows.t, dtype=np.float64)  # a copy: the edges may be the caller's array
+    return Preintegration._owning(
+        delta_rotation=r,
+        delta_velocity=v,
+        delta_position=p,
+        delta_t=dt,
+        covariance=cov,
+        bias_jacobian=jac,
+        covariance_combined=combined,
+        t_start=t[:-1],
+        t_end=t[1:],
         params=params,
-        t_start_ns=None if ns is None else ns[:-1],
-        t_end_ns=None if ns is None else ns[1:],
+        t_start_ns=None if ns is None else np.array(ns[:-1]),
+        t_end_ns=None if ns is None else np.array(ns[1:]),
     )
