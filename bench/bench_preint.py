@@ -11,13 +11,19 @@ GTSAM has no batch fast path from Python: the C++ ``integrateMeasurements(accs, 
 loop over matrix columns) is not wrapped in gtsam 4.3.0, so per-sample calls are the only way in.
 
 Usage: ``python bench/bench_preint.py [--n 1000000] [--loop-n 20000] [--gtsam-n 100000]
-[--repeats 7] [--windows 10000]``; medians per sample. Compare with ``cargo bench -p imukit --bench preint`` for the
-Rust figure.
+[--repeats 7] [--windows 10000]``; medians per sample. ``--record-vs-list`` times only the windows
+result, old against new, alternated (a noisy shared machine): the deprecated list of
+``PreintegratedImu`` (one core handle per window) read into arrays property by property as the CLI
+did, the list alone, and the one ``Preintegration`` record filled by one native call. Compare with
+``cargo bench -p imukit --bench preint`` for the Rust figure.
 """
 
 from __future__ import annotations
 
 import argparse
+import time
+import warnings
+from collections.abc import Callable
 
 import numpy as np
 
@@ -37,11 +43,15 @@ def main() -> None:
     parser.add_argument("--gtsam-n", type=int, default=100_000)
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--windows", type=int, default=10_000)
+    parser.add_argument("--record-vs-list", action="store_true", help="only the windows result, old vs new")
     args = parser.parse_args()
 
     t, gyro, accel = synthetic_imu(args.n)
     imu = ik.ImuData(t, gyro, accel)
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+    if args.record_vs_list:
+        record_vs_list(imu, noise, imu.t[:: max(1, args.n // args.windows)], args.repeats)
+        return
 
     def stream(m: int) -> ik.PreintegratedImu:
         pim = ik.PreintegratedImu(noise=noise, scheme="euler")
@@ -117,6 +127,42 @@ def main() -> None:
         for name in ("preintegrate, 1 core", "preintegrate (all cores)"):
             ratio = dict(rows)[name] / manifold_loop
             print(f"imukit {name} / GTSAM manifold loop = {ratio:.3f} (imukit {1 / ratio:.1f}x faster)")
+
+
+def record_vs_list(imu: ik.ImuData, noise: ik.ImuNoise, bounds: np.ndarray, repeats: int) -> None:
+    """Old (list of handles, then 7 property reads per window) vs new (one record), alternated."""
+    params = ik.PreintParams(noise, scheme="lie_euler")
+
+    def as_arrays(pims: list[ik.PreintegratedImu]) -> list[np.ndarray]:
+        return [
+            np.array([p.delta_rotation.as_matrix() for p in pims]),
+            np.array([p.delta_velocity for p in pims]),
+            np.array([p.delta_position for p in pims]),
+            np.array([p.delta_t for p in pims]),
+            np.array([p.covariance for p in pims]),
+            np.array([p.bias_jacobian for p in pims]),
+        ]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        cases: dict[str, Callable[[], object]] = {
+            "list + arrays (old CLI)": lambda: as_arrays(
+                ik.preintegrate_windows(imu, bounds, noise=noise, scheme="euler")
+            ),
+            "list of handles only": lambda: ik.preintegrate_windows(imu, bounds, noise=noise, scheme="euler"),
+            "Preintegration record": lambda: ik.preintegrate_windows(imu, bounds, params),
+        }
+        times: dict[str, list[float]] = {name: [] for name in cases}
+        for f in cases.values():
+            f()  # warm-up
+        for _ in range(repeats):
+            for name, f in cases.items():
+                start = time.perf_counter()
+                f()
+                times[name].append(time.perf_counter() - start)
+    print(f"{len(bounds) - 1:,} windows over {len(imu):,} samples, medians of {repeats} alternated runs")
+    for name, ts in times.items():
+        print(f"{name:28s} {np.median(ts) * 1e3:9.2f} ms  ({np.median(ts) / (len(bounds) - 1) * 1e6:.2f} us/window)")
 
 
 if __name__ == "__main__":

@@ -455,6 +455,23 @@ def _preintegrate_windows(rng: np.random.Generator) -> Any:
 
 
 @entry(
+    "PreintParams and Preintegration",
+    ("PreintParams", "PreintParams.replace", "PreintegratedImu.snapshot", "Preintegration"),
+    _PREINT_ARGS,
+)
+def _preint_params(rng: np.random.Generator) -> Any:
+    scheme = ("midpoint", "lie_euler")[int(rng.integers(2))]
+
+    def call(v: dict[str, Any]) -> Any:
+        params = ik.PreintParams(v["noise"], bias_of(v), v["gravity"], scheme).replace(combined=True)
+        s = ik.preintegrate(imu_of(v), params).snapshot()
+        fields = (s.delta_rotation, s.delta_velocity, s.delta_position, s.delta_t, s.covariance, s.bias_jacobian)
+        return ik.Preintegration(*fields, s.covariance_combined, s.t_start, s.t_end, params)
+
+    return _preint_values(rng), call
+
+
+@entry(
     "PreintegratedImu.integrate_measurement",
     ("PreintegratedImu.integrate_measurement",),
     {"m_accel": Arg("array", names=("accel",)), "m_gyro": Arg("array", names=("gyro",)), "dt": Arg("scalar")},

@@ -31,9 +31,6 @@ fn check(what: &str, p: &Preintegrator) {
     if let Some(c) = p.covariance_combined() {
         assert_finite(what, c.as_slice());
     }
-    // Called for panics only: `corrected` returns no Result, and J δb overflows for a bias change
-    // as large as the fuzzer's (2e195 m/s² found it); the Python side checks J δb and raises.
-    let _ = p.corrected(&(p.bias_gyro * 1.01), &(p.bias_accel * 0.99));
 }
 
 fuzz_target!(|input: Input| {

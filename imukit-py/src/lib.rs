@@ -70,6 +70,21 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyMahonyFilter>()?;
     m.add_class::<filters_glue::PyMadgwickFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
+    m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
+    m.add(
+        "PREINT_SCHEMES",
+        <imukit::preint::Scheme as imukit::names::Named>::names(),
+    )?;
+    m.add(
+        "PREINT_SCHEME_ALIASES",
+        preint_glue::scheme_aliases()
+            .into_iter()
+            .collect::<std::collections::HashMap<_, _>>(),
+    )?;
+    m.add(
+        "DEFAULT_SATURATION_NOISE_FACTOR",
+        imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,
+    )?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;

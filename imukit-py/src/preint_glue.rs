@@ -1,12 +1,14 @@
 //! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
 //! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
 
+use imukit::imu::Samples;
+use imukit::names::Named;
 use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::{bias, noise_of, raise, to_py, SampleCopies};
+use crate::{raise, to_py, SampleCopies};
 
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
 #[pyclass(name = "Preintegrator", module = "imukit._core")]
@@ -14,17 +16,13 @@ pub(crate) struct PyPreintegrator {
     inner: preint::Preintegrator,
 }
 
+/// The deprecated scheme names and the canonical name each stands for (`_core.PREINT_SCHEME_ALIASES`).
+pub(crate) fn scheme_aliases() -> Vec<(&'static str, &'static str)> {
+    Scheme::ALIASES.iter().map(|(alias, s)| (*alias, s.name())).collect()
+}
+
 fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
-    match name {
-        "euler" => Ok(Scheme::Euler),
-        "midpoint" => Ok(Scheme::Midpoint),
-        other => Err(raise(
-            py,
-            "ParameterError",
-            "scheme",
-            format!("expected one of 'euler', 'midpoint', got {other:?}"),
-        )),
-    }
+    name.parse().map_err(|e| to_py(py, "scheme", e))
 }
 
 /// Private copies of the per-sample saturation flags `(gyro, accel)`: the run releases the GIL.
@@ -49,51 +47,78 @@ impl FlagCopies {
             accel: &self.accel,
         })
     }
+}
 
-    /// Refuses flags whose count is not the number of samples, naming the flag array.
-    fn check(&self, py: Python<'_>, n: usize) -> PyResult<()> {
-        for (name, flags) in [("gyro_saturated", &self.gyro), ("accel_saturated", &self.accel)] {
-            if flags.len() != n {
-                return Err(raise(
-                    py,
-                    "ShapeError",
-                    name,
-                    format!("expected one flag per sample ({n}), got {}", flags.len()),
-                ));
-            }
-        }
-        Ok(())
+/// The noise densities of an `imukit.ImuNoise`, by attribute name.
+#[derive(FromPyObject)]
+struct NoiseFields {
+    #[pyo3(attribute)]
+    gyro_density: f64,
+    #[pyo3(attribute)]
+    accel_density: f64,
+    #[pyo3(attribute)]
+    gyro_random_walk: f64,
+    #[pyo3(attribute)]
+    accel_random_walk: f64,
+}
+
+/// The biases of an `imukit.ImuBias`, by attribute name.
+#[derive(FromPyObject)]
+struct BiasFields {
+    #[pyo3(attribute)]
+    gyro: [f64; 3],
+    #[pyo3(attribute)]
+    accel: [f64; 3],
+}
+
+/// The options of an `imukit.PreintParams`, by attribute name (gravity is Python's: the core's
+/// deltas are gravity-free).
+#[derive(FromPyObject)]
+pub(crate) struct Params {
+    #[pyo3(attribute)]
+    noise: NoiseFields,
+    #[pyo3(attribute)]
+    bias: BiasFields,
+    #[pyo3(attribute)]
+    scheme: String,
+    #[pyo3(attribute)]
+    combined: bool,
+    #[pyo3(attribute)]
+    saturation_noise_factor: f64,
+}
+
+impl Params {
+    /// The empty preintegrator these options describe.
+    fn template(&self, py: Python<'_>) -> PyResult<preint::Preintegrator> {
+        let n = &self.noise;
+        let noise = imukit::imu::Noise {
+            gyro_density: n.gyro_density,
+            accel_density: n.accel_density,
+            gyro_random_walk: n.gyro_random_walk,
+            accel_random_walk: n.accel_random_walk,
+        };
+        let (gyro, accel) = (Vector3::from(self.bias.gyro), Vector3::from(self.bias.accel));
+        let inner = preint::Preintegrator::new(gyro, accel, noise)
+            .with_scheme(scheme_of(py, &self.scheme)?)
+            .with_saturation_noise_factor(self.saturation_noise_factor)
+            .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
+        Ok(if self.combined { inner.with_bias_walk() } else { inner })
     }
 }
 
-fn finite3(py: Python<'_>, name: &str, v: [f64; 3]) -> PyResult<Vector3<f64>> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(Vector3::from(v))
-    } else {
-        Err(raise(
+/// `e` raised under the Python argument `argument` that carried the core's input (`imu` for the
+/// core's `samples`, `other` for `next`) when it is a [`imukit::Error::Parameter`] (as "expected …,
+/// got …"), else as [`to_py`] does with `fallback`.
+fn as_argument(py: Python<'_>, argument: &str, fallback: &str, e: imukit::Error) -> PyErr {
+    match e {
+        imukit::Error::Parameter { expected, got, .. } => raise(
             py,
-            "NonFiniteError",
-            name,
-            format!("expected finite values, got {v:?}"),
-        ))
+            "ParameterError",
+            argument,
+            format!("expected {expected}, got {got}"),
+        ),
+        other => to_py(py, fallback, other),
     }
-}
-
-/// Whether every delta, covariance and Jacobian entry is finite: one streaming step with finite
-/// readings near f64's limits (or a subnormal step) can overflow them, and the core's streaming
-/// step leaves that check to its caller (its batch paths make it themselves).
-fn all_finite(p: &preint::Preintegrator) -> bool {
-    let (covariance, jacobian, combined) = (p.covariance(), p.bias_jacobian(), p.covariance_combined());
-    [
-        p.delta_rotation.as_slice(),
-        p.delta_velocity.as_slice(),
-        p.delta_position.as_slice(),
-        covariance.as_slice(),
-        jacobian.as_slice(),
-        combined.as_ref().map_or(&[][..], |c| c.as_slice()),
-    ]
-    .iter()
-    .all(|part| part.iter().all(|x| x.is_finite()))
 }
 
 /// Column-major nalgebra storage as a row-major `(r, c)` array.
@@ -104,46 +129,35 @@ fn rows<'py>(py: Python<'py>, m: &[f64], r: usize, c: usize) -> PyResult<Bound<'
 
 #[pymethods]
 impl PyPreintegrator {
+    /// An empty preintegrator with the options of `params` (an `imukit.PreintParams`).
     #[new]
-    fn new(
-        py: Python<'_>,
-        bias_values: [f64; 6],
-        noise: [f64; 4],
-        combined: bool,
-        scheme: &str,
-        saturation_noise_factor: f64,
-    ) -> PyResult<Self> {
-        let b = bias(bias_values);
-        let inner = preint::Preintegrator::new(b.gyro, b.accel, noise_of(noise))
-            .with_scheme(scheme_of(py, scheme)?)
-            .with_saturation_noise_factor(saturation_noise_factor)
-            .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
+    fn new(py: Python<'_>, params: Params) -> PyResult<Self> {
         Ok(Self {
-            inner: if combined { inner.with_bias_walk() } else { inner },
+            inner: params.template(py)?,
         })
+    }
+
+    /// The preintegrator of `words` (from `__reduce__`: the complete core state).
+    #[staticmethod]
+    fn from_state(py: Python<'_>, words: Vec<f64>) -> PyResult<Self> {
+        let inner = preint::Preintegrator::from_state_words(&words).map_err(|e| to_py(py, "words", e))?;
+        Ok(Self { inner })
+    }
+
+    /// Pickles (and `copy.deepcopy`s) as `Preintegrator.from_state(words)`: exact, every part of
+    /// the state included.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
+        let from_state = py.get_type::<Self>().getattr("from_state")?;
+        Ok((from_state, (self.inner.state_words(),)))
     }
 
     /// This preintegration followed by `next`, as one.
     fn merge(&self, py: Python<'_>, next: PyRef<'_, PyPreintegrator>) -> PyResult<PyPreintegrator> {
-        match self.inner.merge(&next.inner) {
-            Ok(inner) => Ok(PyPreintegrator { inner }),
-            Err(imukit::Error::Parameter { expected, got, .. }) => Err(raise(
-                py,
-                "ParameterError",
-                "other",
-                format!("expected {expected}, got {got}"),
-            )),
-            Err(e) => Err(to_py(py, "other", e)),
-        }
-    }
-
-    /// The 15×15 combined covariance `[δθ, δv, δp, δb_g, δb_a]`, or None when not tracked.
-    fn covariance_combined<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        let Some(c) = self.inner.covariance_combined() else {
-            return Ok(None);
-        };
-        // Symmetric: column-major storage reads the same as row-major.
-        Ok(Some(PyArray1::from_slice(py, c.as_slice()).reshape([15, 15])?))
+        let inner = self
+            .inner
+            .merge(&next.inner)
+            .map_err(|e| as_argument(py, "other", "other", e))?;
+        Ok(PyPreintegrator { inner })
     }
 
     /// One interval of `dt` seconds: euler, `accel`, `gyro` held over it; midpoint, sampled at its
@@ -157,43 +171,13 @@ impl PyPreintegrator {
         gyro_saturated: bool,
         accel_saturated: bool,
     ) -> PyResult<()> {
-        let (a, w) = (finite3(py, "accel", accel)?, finite3(py, "gyro", gyro)?);
-        let starts = self.inner.scheme == Scheme::Midpoint && self.inner.last_sample().is_none();
-        if starts && dt != 0.0 {
-            return Err(raise(
-                py,
-                "ParameterError",
-                "dt",
-                format!("the first sample of a midpoint window has no interval before it: expected 0, got {dt}"),
-            ));
-        }
-        let positive = dt > 0.0 && dt.is_finite();
-        if !starts && !positive {
-            return Err(raise(
-                py,
-                "ParameterError",
-                "dt",
-                format!("expected a positive, finite step, got {dt}"),
-            ));
-        }
-        // On a copy: a step that overflows (dt or a reading near f64's limits) must leave the
-        // preintegration as it was, not poisoned with NaN.
-        let mut next = self.inner.clone();
         let clipped = Clipped {
             gyro: gyro_saturated,
             accel: accel_saturated,
         };
-        next.integrate_measurement_clipped(&a, &w, dt, clipped);
-        if !all_finite(&next) {
-            return Err(raise(
-                py,
-                "NonFiniteError",
-                "accel / gyro / dt",
-                format!("too large (or dt too small) to compute with: the step of {dt} s overflows"),
-            ));
-        }
-        self.inner = next;
-        Ok(())
+        self.inner
+            .try_integrate_measurement(&Vector3::from(accel), &Vector3::from(gyro), dt, clipped)
+            .map_err(|e| to_py(py, "accel / gyro / dt", e))
     }
 
     /// The N − 1 intervals of the samples (euler: sample k held over `[t_k, t_k+1)`; midpoint:
@@ -210,25 +194,13 @@ impl PyPreintegrator {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
         let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-        flags.check(py, t.len())?;
         let inner = &mut self.inner;
-        match py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref())) {
-            Err(imukit::Error::Parameter {
-                name: "samples",
-                expected,
-                got,
-            }) => Err(raise(
-                py,
-                "ParameterError",
-                "imu",
-                format!("expected {expected}, got {got}"),
-            )),
-            // The core refuses (adding nothing) finite samples that overflow the deltas or covariance.
-            other => other.map_err(|e| to_py(py, "imu / bias", e)),
-        }
+        py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref()))
+            .map_err(|e| as_argument(py, "imu", "imu / bias", e))
     }
 
-    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6))`.
+    /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6), combined
+    /// covariance (15, 15) or None)`: everything `PreintegratedImu.snapshot` reads, in one call.
     #[allow(clippy::type_complexity)] // a plain tuple is the simplest thing to unpack in Python
     fn state<'py>(
         &self,
@@ -240,8 +212,13 @@ impl PyPreintegrator {
         f64,
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
+        Option<Bound<'py, PyArray2<f64>>>,
     )> {
         let p = &self.inner;
+        // Symmetric: column-major storage reads the same as row-major.
+        let combined = p
+            .covariance_combined()
+            .map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
         Ok((
             rows(py, p.delta_rotation.as_slice(), 3, 3)?,
             PyArray1::from_slice(py, p.delta_velocity.as_slice()),
@@ -249,46 +226,118 @@ impl PyPreintegrator {
             p.delta_t,
             rows(py, p.covariance().as_slice(), 9, 9)?,
             rows(py, p.bias_jacobian().as_slice(), 9, 6)?,
+            combined.transpose()?,
         ))
     }
 }
 
-/// One preintegration per window `[boundaries[m], boundaries[m + 1]]`, each starting from a copy
-/// of the empty `template` (scheme, bias, noise, saturation factor, bias walk), in parallel on
-/// `threads` threads (0: all cores), GIL released.
+/// The samples of an `imukit.ImuData`, read by attribute name.
+#[derive(FromPyObject)]
+pub(crate) struct ImuArrays<'py> {
+    #[pyo3(attribute("seconds"))]
+    t: PyReadonlyArray1<'py, f64>,
+    #[pyo3(attribute)]
+    gyro: PyReadonlyArray2<'py, f64>,
+    #[pyo3(attribute)]
+    accel: PyReadonlyArray2<'py, f64>,
+    #[pyo3(attribute)]
+    gyro_saturated: PyReadonlyArray1<'py, bool>,
+    #[pyo3(attribute)]
+    accel_saturated: PyReadonlyArray1<'py, bool>,
+}
+
+/// `kernel` over private copies of `imu` and `boundaries` (the run releases the GIL), on
+/// `threads` threads (None: the process-wide pool).
+fn run_windows<'py, R: Send>(
+    py: Python<'py>,
+    imu: &ImuArrays<'py>,
+    boundaries: &PyReadonlyArray1<'py, f64>,
+    threads: Option<usize>,
+    kernel: impl FnOnce(&Samples<'_>, Option<&ClipMask<'_>>, &[f64]) -> imukit::Result<R> + Send,
+) -> PyResult<R> {
+    let copies = SampleCopies::new(py, &imu.t, &imu.gyro, &imu.accel)?;
+    let samples = copies.samples(py)?;
+    let flags = FlagCopies::new(&imu.gyro_saturated, &imu.accel_saturated);
+    let mask = flags.mask();
+    let boundaries = crate::private_copy(py, boundaries)?.readonly();
+    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
+    py.detach(|| crate::threads::run_in_pool(threads, || kernel(&samples, mask.as_ref(), boundaries)))?
+        .map_err(|e| to_py(py, "imu / bias", e))
+}
+
+/// One preintegration per window `[boundaries[m], boundaries[m + 1]]` of the `ImuData` `imu`,
+/// each starting from a copy of the empty `template` (scheme, bias, noise, saturation factor, bias
+/// walk), in parallel on `threads` threads (None: the process-wide pool), GIL released.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)] // the samples, their flags, the boundaries and the run's options
-pub(crate) fn preint_windows(
-    py: Python<'_>,
-    t: PyReadonlyArray1<'_, f64>,
-    gyro: PyReadonlyArray2<'_, f64>,
-    accel: PyReadonlyArray2<'_, f64>,
-    gyro_saturated: PyReadonlyArray1<'_, bool>,
-    accel_saturated: PyReadonlyArray1<'_, bool>,
-    boundaries: PyReadonlyArray1<'_, f64>,
-    template: PyRef<'_, PyPreintegrator>,
-    threads: usize,
+pub(crate) fn preint_windows<'py>(
+    py: Python<'py>,
+    imu: ImuArrays<'py>,
+    boundaries: PyReadonlyArray1<'py, f64>,
+    template: PyRef<'py, PyPreintegrator>,
+    threads: Option<usize>,
 ) -> PyResult<Vec<PyPreintegrator>> {
     let template = template.inner.clone();
-    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
-    let samples = copies.samples(py)?;
-    let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
-    flags.check(py, t.len())?;
-    let mask = flags.mask();
-    let boundaries = crate::private_copy(py, &boundaries)?.readonly();
-    let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
-    let run = || preint::preintegrate_windows_clipped(&samples, mask.as_ref(), boundaries, &template);
-    let windows = py.detach(|| {
-        if threads == 0 {
-            return Ok(run());
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map(|pool| pool.install(run))
-    });
-    let windows = windows
-        .map_err(|e| raise(py, "ParameterError", "threads", e))?
-        .map_err(|e| to_py(py, "imu / bias", e))?;
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
+        preint::preintegrate_windows_clipped(samples, mask, b, &template)
+    })?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
+}
+
+/// The arrays of a `Preintegration` record: `(ΔR (M, 3, 3), Δv (M, 3), Δp (M, 3), Δt (M,),
+/// covariance (M, 9, 9), bias Jacobian (M, 9, 6), combined covariance (M, 15, 15) or None)`.
+pub(crate) type Record<'py> = (
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Option<Bound<'py, PyArray3<f64>>>,
+);
+
+/// Every window `[boundaries[m], boundaries[m + 1]]` preintegrated with the options `params` (an
+/// `imukit.PreintParams`), written into fresh arrays in one call (`imukit.preint.Preintegration`'s fields), in
+/// parallel on `threads` threads (None: the process-wide pool), GIL released.
+#[pyfunction]
+pub(crate) fn preint_windows_record<'py>(
+    py: Python<'py>,
+    imu: ImuArrays<'py>,
+    boundaries: PyReadonlyArray1<'py, f64>,
+    params: Params,
+    threads: Option<usize>,
+) -> PyResult<Record<'py>> {
+    let template = params.template(py)?;
+    let m = boundaries.as_array().len().saturating_sub(1);
+    let combined = template.covariance_combined().is_some();
+    let record: Record<'py> = (
+        PyArray3::zeros(py, [m, 3, 3], false),
+        PyArray2::zeros(py, [m, 3], false),
+        PyArray2::zeros(py, [m, 3], false),
+        PyArray1::zeros(py, [m], false),
+        PyArray3::zeros(py, [m, 9, 9], false),
+        PyArray3::zeros(py, [m, 9, 6], false),
+        combined.then(|| PyArray3::zeros(py, [m, 15, 15], false)),
+    );
+    {
+        let (mut r, mut v, mut p) = (record.0.readwrite(), record.1.readwrite(), record.2.readwrite());
+        let (mut dt, mut cov, mut jac) = (record.3.readwrite(), record.4.readwrite(), record.5.readwrite());
+        let mut c15 = record.6.as_ref().map(|c| c.readwrite());
+        let c15 = match c15.as_mut() {
+            Some(c) => Some(c.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0),
+            None => None,
+        };
+        let out = preint::WindowsOut {
+            delta_rotation: r.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            delta_velocity: v.as_slice_mut()?.as_chunks_mut().0,
+            delta_position: p.as_slice_mut()?.as_chunks_mut().0,
+            delta_t: dt.as_slice_mut()?,
+            covariance: cov.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            bias_jacobian: jac.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
+            covariance_combined: c15,
+        };
+        run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
+            preint::preintegrate_windows_into(samples, mask, b, &template, out)
+        })?;
+    }
+    Ok(record)
 }

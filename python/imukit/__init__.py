@@ -28,7 +28,14 @@ from imukit._errors import (
 )
 from imukit.attitude import integrate_attitude
 from imukit.imu import ImuBias, ImuData, ImuNoise
-from imukit.preint import PreintegratedImu, ResidualJacobians, preintegrate, preintegrate_windows
+from imukit.preint import (
+    PreintegratedImu,
+    Preintegration,
+    PreintParams,
+    ResidualJacobians,
+    preintegrate,
+    preintegrate_windows,
+)
 from imukit.state import NavState, Trajectory
 from imukit.strapdown import integrate, propagate
 from imukit.threads import get_num_threads, set_num_threads
@@ -48,7 +55,9 @@ __all__ = [
     "NavState",
     "NonFiniteError",
     "ParameterError",
+    "PreintParams",
     "PreintegratedImu",
+    "Preintegration",
     "ResidualJacobians",
     "ShapeError",
     "TimestampError",

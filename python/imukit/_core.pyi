@@ -14,7 +14,10 @@ __all__ = [
     "ATTITUDE_REPRESENTATIONS",
     "ATTITUDE_SCHEMES",
     "ATTITUDE_SCHEME_ALIASES",
+    "DEFAULT_SATURATION_NOISE_FACTOR",
     "GRAVITY",
+    "PREINT_SCHEMES",
+    "PREINT_SCHEME_ALIASES",
     "QUAT_CONVENTIONS",
     "STRAPDOWN_SCHEMES",
     "STRAPDOWN_SCHEME_ALIASES",
@@ -38,6 +41,7 @@ __all__ = [
     "euler_to_matrix",
     "get_num_threads",
     "preint_windows",
+    "preint_windows_record",
     "quat_conjugate",
     "quat_exp",
     "quat_inverse",
@@ -344,12 +348,60 @@ class MadgwickFilter:
         continued: bool,
     ) -> _Outputs: ...
 
+class _ImuArrays(Protocol):
+    """What the preintegration windows read from an ``imukit.ImuData``, by attribute name."""
+
+    @property
+    def seconds(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro(self) -> NDArray[np.float64]: ...
+    @property
+    def accel(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro_saturated(self) -> NDArray[np.bool_]: ...
+    @property
+    def accel_saturated(self) -> NDArray[np.bool_]: ...
+
+class _NoiseFields(Protocol):
+    @property
+    def gyro_density(self) -> float: ...
+    @property
+    def accel_density(self) -> float: ...
+    @property
+    def gyro_random_walk(self) -> float: ...
+    @property
+    def accel_random_walk(self) -> float: ...
+
+class _BiasFields(Protocol):
+    @property
+    def gyro(self) -> NDArray[np.float64]: ...
+    @property
+    def accel(self) -> NDArray[np.float64]: ...
+
+class _PreintFields(Protocol):
+    """What the core reads from an ``imukit.PreintParams``, by attribute name."""
+
+    @property
+    def noise(self) -> _NoiseFields: ...
+    @property
+    def bias(self) -> _BiasFields: ...
+    @property
+    def scheme(self) -> str: ...
+    @property
+    def combined(self) -> bool: ...
+    @property
+    def saturation_noise_factor(self) -> float: ...
+
+DEFAULT_SATURATION_NOISE_FACTOR: float
+PREINT_SCHEMES: list[str]
+PREINT_SCHEME_ALIASES: dict[str, str]
+
 @final
 class Preintegrator:
-    def __new__(
-        cls, bias_values: list[float], noise: list[float], combined: bool, scheme: str, saturation_noise_factor: float
-    ) -> Preintegrator: ...
-    def covariance_combined(self) -> NDArray[np.float64] | None: ...
+    def __new__(cls, params: _PreintFields) -> Preintegrator: ...
+    @staticmethod
+    def from_state(words: list[float]) -> Preintegrator: ...
+    def __reduce__(self) -> tuple[Any, tuple[list[float]]]: ...
     def merge(self, next: Preintegrator) -> Preintegrator: ...
     def integrate_measurement(
         self, accel: list[float], gyro: list[float], dt: float, gyro_saturated: bool, accel_saturated: bool
@@ -365,19 +417,35 @@ class Preintegrator:
     def state(
         self,
     ) -> tuple[
-        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64], NDArray[np.float64]
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        float,
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64] | None,
     ]: ...
 
 def preint_windows(
-    t: NDArray[np.float64],
-    gyro: NDArray[np.float64],
-    accel: NDArray[np.float64],
-    gyro_saturated: NDArray[np.bool_],
-    accel_saturated: NDArray[np.bool_],
+    imu: _ImuArrays,
     boundaries: NDArray[np.float64],
     template: Preintegrator,
-    threads: int,
+    threads: int | None,
 ) -> list[Preintegrator]: ...
+def preint_windows_record(
+    imu: _ImuArrays,
+    boundaries: NDArray[np.float64],
+    params: _PreintFields,
+    threads: int | None,
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+]: ...
 def sim_motion(
     kind: Literal["static", "constant_twist", "helix", "figure_eight", "vio_ellipse"],
     trajectory: Static | ConstantTwist | Helix | FigureEight | VioEllipse,

@@ -4,8 +4,16 @@
 deltas                 ``ΔR_ij`` (scipy ``Rotation``), ``Δv_ij``, ``Δp_ij`` in the body frame at i,
                        gravity-free; ``Δt_ij``
 schemes                ``"midpoint"`` (default; VINS-Mono: averaged rates, specific forces rotated
-                       at both ends of each interval), ``"euler"`` (Forster et al. T-RO 2017 and
-                       GTSAM: sample k held over ``[t_k, t_k+1)``, exact rotation steps)
+                       at both ends of each interval), ``"lie_euler"`` (Forster et al. T-RO 2017 and
+                       GTSAM: sample k held over ``[t_k, t_k+1)``, exact rotation steps; the old
+                       name ``"euler"`` is a deprecated alias); names: :data:`SCHEMES`
+options                :class:`PreintParams` (one frozen value; the keyword options of every
+                       function here build one)
+results                :class:`Preintegration`: M windows as arrays with a leading window
+                       dimension, from ``preintegrate_windows(imu, boundaries, params)`` (one native
+                       call) or ``PreintegratedImu.snapshot()``; batched ``predict``, ``residual``,
+                       ``residual_jacobians``, ``corrected`` and ``reintegrate`` over it
+engines                ``engine="rust"`` (default) or ``"numpy_ref"`` (:mod:`imukit._engines`)
 covariance             9×9 of ``[δθ, δv, δp]``, right perturbation ``ΔR = ΔR̂ Exp(δθ)``
 bias Jacobian          9×6, rows ``[θ, v, p]``, columns ``[b_g, b_a]``
 prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``, ``p_j = p_i + v_i Δt + ½ g Δt² + R_i Δp``
@@ -27,44 +35,70 @@ model of each scheme: ``docs/preintegration.md`` and the module docs of ``crates
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+import warnings
+from typing import Any, NamedTuple, overload
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from imukit import _core, so3
-from imukit._arrays import FloatArray, as_float_array, choice, real_scalar, seconds_from_ns, vector3
-from imukit._errors import NonFiniteError, ParameterError, ShapeError
+from imukit import _core, _preint_math
+from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from_ns
+from imukit._engines import ENGINES, Windows
+from imukit._errors import ParameterError, ShapeError
+from imukit._preint_math import Deltas, ResidualJacobians, States
+from imukit._preint_record import SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
 
-__all__ = ["PreintegratedImu", "ResidualJacobians", "preintegrate", "preintegrate_windows"]
+__all__ = [
+    "SCHEMES",
+    "Deltas",
+    "PreintParams",
+    "PreintegratedImu",
+    "Preintegration",
+    "ResidualJacobians",
+    "States",
+    "concatenate",
+    "corrected",
+    "predict",
+    "preintegrate",
+    "preintegrate_windows",
+    "regular_boundaries",
+    "reintegrate",
+    "residual",
+    "residual_jacobians",
+]
 
-_SCHEMES = ("midpoint", "euler")
+corrected = _preint_math.corrected
+predict = _preint_math.predict
+residual = _preint_math.residual
+residual_jacobians = _preint_math.residual_jacobians
+
 _MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
+_DEFAULT_FACTOR = _core.DEFAULT_SATURATION_NOISE_FACTOR
+_DEFAULT_GRAVITY = _core.GRAVITY
 
 
-def _flag(value: object, name: str) -> bool:
-    """``value`` as a bool, else :class:`ParameterError` naming ``name`` (1 or "yes" are mistakes)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name}: expected a bool, got {value!r}")
-    return bool(value)
-
-
-class ResidualJacobians(NamedTuple):
-    """Jacobians of :meth:`PreintegratedImu.residual`, rows ``[θ, v, p]``."""
-
-    state_i: FloatArray
-    """9×9, columns ``[δp_i, δv_i, δθ_i]``."""
-    state_j: FloatArray
-    """9×9, columns ``[δp_j, δv_j, δθ_j]``."""
-    bias: FloatArray
-    """9×6, columns ``[δb_g, δb_a]``."""
+def _params(
+    params: PreintParams | None,
+    noise: ImuNoise | None,
+    bias: ImuBias | None,
+    gravity: ArrayLike,
+    scheme: str,
+    combined: bool,
+    saturation_noise_factor: float,
+) -> PreintParams:
+    """``params``, or the one the keyword options describe."""
+    if params is not None:
+        if not isinstance(params, PreintParams):
+            raise ParameterError(f"params: expected an imukit.PreintParams, got {type(params).__name__}")
+        return params
+    return PreintParams(noise, bias, gravity, scheme, combined, saturation_noise_factor)  # type: ignore[arg-type]
 
 
 class _Measurement(NamedTuple):
-    """One :meth:`PreintegratedImu.integrate_measurement` call, kept for :meth:`reintegrate`."""
+    """One :meth:`PreintegratedImu.integrate_measurement` call, for the deprecated ``reintegrate(bias)``."""
 
     accel: FloatArray
     gyro: FloatArray
@@ -74,71 +108,96 @@ class _Measurement(NamedTuple):
 
 
 class _Window(NamedTuple):
-    """A window cut from ``imu`` by :func:`preintegrate_windows`, kept for :meth:`reintegrate`."""
+    """A window of the deprecated list form of :func:`preintegrate_windows`, for ``reintegrate(bias)``."""
 
     imu: ImuData
-    lo: float
-    hi: float
+    lo: Any
+    hi: Any
+
+
+_Input = ImuData | _Window | _Measurement
 
 
 class PreintegratedImu:
-    """Preintegrated IMU measurements between two keyframes i and j; see the module docs.
+    """Preintegrated IMU measurements between two keyframes i and j, a GTSAM-style streaming
+    accumulator; see the module docs.
 
-    Build it with :func:`preintegrate` or :func:`preintegrate_windows`, or empty and then feed it
-    with :meth:`integrate_measurement` (one sample, GTSAM / VINS-Mono style) or :meth:`integrate`
-    (a batch of samples).
+    Build it with :func:`preintegrate`, or empty (``PreintegratedImu(params)`` or the keyword
+    options) and then feed it with :meth:`integrate_measurement` (one sample, GTSAM / VINS-Mono
+    style) or :meth:`integrate` (a batch of samples). :meth:`snapshot` is its state as a
+    :class:`Preintegration` record (M = 1), read in one call; the properties read that snapshot.
     """
 
     def __init__(
         self,
+        params: PreintParams | None = None,
         *,
-        noise: ImuNoise,
+        noise: ImuNoise | None = None,
         bias: ImuBias | None = None,
-        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        gravity: ArrayLike = _DEFAULT_GRAVITY,
         scheme: str = "midpoint",
         combined: bool = False,
-        saturation_noise_factor: float = 100.0,
+        saturation_noise_factor: float = _DEFAULT_FACTOR,
     ) -> None:
-        if not isinstance(noise, ImuNoise):
-            raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
-        if bias is not None and not isinstance(bias, ImuBias):
-            raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
-        self.bias = bias or ImuBias()
-        self.noise = noise
-        self.gravity = vector3(gravity, "gravity")
-        self.scheme = choice(scheme, "scheme", _SCHEMES)
-        self.combined = bool(combined)
-        self.saturation_noise_factor = real_scalar(
-            saturation_noise_factor,
-            "saturation_noise_factor",
-            what="a finite factor ≥ 1",
-            accept=lambda x: math.isfinite(x) and x >= 1.0,
-        )
-        self._core = _core.Preintegrator(
-            self._bias_values(), self._noise_values(), self.combined, scheme, self.saturation_noise_factor
-        )
-        # What was integrated, in order, so that reintegrate() can replay it with another bias.
-        self._inputs: list[ImuData | _Window | _Measurement] = []
+        self.params = _params(params, noise, bias, gravity, scheme, combined, saturation_noise_factor)
+        # The name as given: "euler" stays "euler" for code that compares it.
+        self._scheme = self.params.scheme if params is not None else scheme
+        self._core = self.params._template()
+        self._snapshot: Preintegration | None = None
+        self._span = (math.nan, math.nan)
+        # What was integrated, for the deprecated reintegrate(bias) only: reintegrate(imu, bias)
+        # takes the samples explicitly.
+        self._inputs: list[_Input] = []
+        self._replayable = True  # False for a copy from pickle: its log did not travel
+        self._started = False  # whether anything was integrated (the span's start is set)
 
-    def _bias_values(self) -> list[float]:
-        return [*self.bias.gyro, *self.bias.accel]
+    def __reduce__(self) -> tuple[Any, ...]:
+        # The core pickles its complete state. The replay log of the deprecated reintegrate(bias)
+        # does not travel: a copy has none and refuses that call (reintegrate(imu, bias) works).
+        return (_restore, (self.params, self._scheme, self._core, self._span))
 
-    def _noise_values(self) -> list[float]:
-        n = self.noise
-        return [n.gyro_density, n.accel_density, n.gyro_random_walk, n.accel_random_walk]
-
-    def _like(self, core: _core.Preintegrator, inputs: list[ImuData | _Window | _Measurement]) -> PreintegratedImu:
+    def _like(self, core: _core.Preintegrator, inputs: list[_Input], params: PreintParams) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
-        out.bias, out.noise, out.gravity, out.scheme, out.combined, out.saturation_noise_factor = (
-            self.bias,
-            self.noise,
-            self.gravity,
-            self.scheme,
-            self.combined,
-            self.saturation_noise_factor,
-        )
-        out._core, out._inputs = core, inputs
+        out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
+        out._replayable, out._started = self._replayable, True
+        out._snapshot, out._span = None, (math.nan, math.nan)
         return out
+
+    @property
+    def noise(self) -> ImuNoise:
+        """The noise densities."""
+        return self.params.noise
+
+    @property
+    def bias(self) -> ImuBias:
+        """The bias the samples were integrated with."""
+        return self.params.bias
+
+    @property
+    def gravity(self) -> FloatArray:
+        """Gravity (3,) [m/s²] of :meth:`predict` and :meth:`residual`."""
+        return np.array(self.params.gravity)
+
+    @property
+    def scheme(self) -> str:
+        """The scheme, as named when built."""
+        return self._scheme
+
+    @property
+    def combined(self) -> bool:
+        """Whether the 15×15 ``covariance_combined`` is tracked."""
+        return self.params.combined
+
+    @property
+    def saturation_noise_factor(self) -> float:
+        """Multiplier of a clipped sample's white-noise densities."""
+        return self.params.saturation_noise_factor
+
+    def _changed(self, start: float = math.nan, end: float = math.nan) -> None:
+        """After an input: the snapshot is stale; the span starts with the first input's."""
+        self._snapshot = None
+        self._span = (self._span[0] if self._started else start, end)
+        self._started = True
 
     def integrate_measurement(
         self,
@@ -151,45 +210,90 @@ class PreintegratedImu:
     ) -> None:
         """Add one sample, ``accel`` [m/s²] and ``gyro`` [rad/s].
 
-        ``"euler"``: the sample is held over the next ``dt`` seconds (GTSAM's
+        ``"lie_euler"``: the sample is held over the next ``dt`` seconds (GTSAM's
         ``integrateMeasurement``). ``"midpoint"``: the sample was taken ``dt`` seconds after the
         previous one (VINS-Mono's ``push_back``); the window's first sample comes with ``dt=0``.
         ``gyro_saturated`` / ``accel_saturated`` mark a sensor clipped at its range: its white-noise
-        density is multiplied by ``saturation_noise_factor`` for this sample (module docs).
+        density is multiplied by ``saturation_noise_factor`` for this sample (module docs). The core
+        checks the values (finite readings, the dt rules) and refuses a step that would overflow,
+        leaving the preintegration as it was.
         """
-        a, w = vector3(accel, "accel"), vector3(gyro, "gyro")
+        a, w = as_float_array(accel, "accel"), as_float_array(gyro, "gyro")
+        for v, name in ((a, "accel"), (w, "gyro")):
+            if v.shape != (3,):
+                raise ShapeError(f"expected shape (3,), got {v.shape}", argument=name)
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
-        flags = [_flag(gyro_saturated, "gyro_saturated"), _flag(accel_saturated, "accel_saturated")]
+        flags = (_flag(gyro_saturated, "gyro_saturated"), _flag(accel_saturated, "accel_saturated"))
         self._core.integrate_measurement([*a], [*w], step, *flags)
         self._inputs.append(_Measurement(a, w, step, *flags))
+        self._changed()
 
     def integrate(self, imu: ImuData) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
-        share their boundary sample). Long euler batches (over 65,536 intervals, without
+        share their boundary sample). Long lie_euler batches (over 65,536 intervals, without
         ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
         rounding (1e-12 relative) and independent of the core count."""
         if not isinstance(imu, ImuData):
             raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
         self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated)
         self._inputs.append(imu)
+        self._changed(float(imu.t[0]), float(imu.t[-1]))
 
-    def reintegrate(self, bias: ImuBias) -> PreintegratedImu:
-        """A new preintegration of the same samples with ``bias``: exact, where :meth:`corrected` is
-        first order. Its error grows with the square of the bias change; VINS-Mono re-integrates when
-        the change exceeds 0.01 rad/s (gyro) or 0.1 m/s² (accelerometer), a sensible default
-        threshold for 200 Hz windows of about 0.5 s.
+    def snapshot(self) -> Preintegration:
+        """The preintegration as a :class:`Preintegration` record (M = 1), read from the core in one
+        call and kept until the next sample; ``t_start``/``t_end`` are those of the samples given
+        to :meth:`integrate` (NaN after :meth:`integrate_measurement` or :meth:`merge`)."""
+        if self._snapshot is None:
+            r, v, p, dt, cov, jac, combined = self._core.state()
+            self._snapshot = Preintegration._owning(
+                delta_rotation=r[None],
+                delta_velocity=v[None],
+                delta_position=p[None],
+                delta_t=np.array([dt]),
+                covariance=cov[None],
+                bias_jacobian=jac[None],
+                covariance_combined=None if combined is None else combined[None],
+                t_start=np.array([self._span[0]]),
+                t_end=np.array([self._span[1]]),
+                params=self.params,
+            )
+        return self._snapshot
+
+    def reintegrate(self, imu: ImuData | ImuBias, bias: ImuBias | None = None) -> PreintegratedImu:
+        """``reintegrate(imu, bias)``: a new preintegration of the samples ``imu`` with ``bias`` (the
+        same options otherwise): exact, where :meth:`corrected` is first order. Its error grows
+        with the square of the bias change; VINS-Mono re-integrates when the change exceeds
+        0.01 rad/s (gyro) or 0.1 m/s² (accelerometer), a sensible default threshold for 200 Hz
+        windows of about 0.5 s.
+
+        ``reintegrate(bias)`` (deprecated) replays what was integrated, from a log this object keeps.
         """
+        if isinstance(imu, ImuData):
+            if not isinstance(bias, ImuBias):
+                raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+            return preintegrate(imu, self.params.replace(bias=bias))
+        warnings.warn(
+            "reintegrate(bias) is deprecated: pass the samples, reintegrate(imu, bias)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        if not self._replayable:
+            raise ParameterError("this copy does not hold its samples: use reintegrate(imu, bias)", argument="imu")
+        return self._replay(imu)
+
+    def _replay(self, bias: ImuBias) -> PreintegratedImu:
+        params = self.params.replace(bias=bias)
 
         def empty() -> PreintegratedImu:
-            return _empty(self.noise, bias, self.gravity, self.scheme, self.combined, self.saturation_noise_factor)
+            return self._like(params._template(), [], params)
 
         out = empty()
         for item in self._inputs:
             if isinstance(item, _Window):
                 # A window starts from an empty preintegration; after a merge it may follow other
                 # inputs, so it is preintegrated on its own and merged on, as merge() did.
-                (piece,) = _windows(item.imu, [item.lo, item.hi], empty(), threads=0)
+                (piece,) = _core_windows(item.imu, [item.lo, item.hi], params)
                 out._core = out._core.merge(piece) if out._inputs else piece
                 out._inputs.append(item)
             elif isinstance(item, ImuData):
@@ -211,98 +315,80 @@ class PreintegratedImu:
         walk is not merged: the result has no ``covariance_combined``."""
         if not isinstance(other, PreintegratedImu):
             raise ParameterError(f"other: expected an imukit.PreintegratedImu, got {type(other).__name__}")
-        if not np.array_equal(self.gravity, other.gravity):
+        if self.params.gravity != other.params.gravity:
             raise ParameterError("other: expected the same gravity")
-        merged = self._like(self._core.merge(other._core), self._inputs + other._inputs)
-        merged.combined = False
+        params = self.params.replace(combined=False)
+        merged = self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
+        merged._replayable = self._replayable and other._replayable
         return merged
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
-        return self._core.state()
+        """The old ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian)`` tuple (test helpers read it)."""
+        s = self.snapshot()
+        return (
+            s.delta_rotation[0],
+            s.delta_velocity[0],
+            s.delta_position[0],
+            float(s.delta_t[0]),
+            s.covariance[0],
+            s.bias_jacobian[0],
+        )
 
     @property
     def delta_rotation(self) -> Rotation:
         """``ΔR_ij``."""
-        return Rotation.from_matrix(self._state()[0])
+        return Rotation.from_matrix(self.snapshot().delta_rotation[0])
 
     @property
     def delta_velocity(self) -> FloatArray:
         """``Δv_ij`` [m/s], gravity-free, frame i."""
-        return self._state()[1]
+        return np.array(self.snapshot().delta_velocity[0])  # a fresh array, as before the snapshot
 
     @property
     def delta_position(self) -> FloatArray:
         """``Δp_ij`` [m], gravity-free, frame i."""
-        return self._state()[2]
+        return np.array(self.snapshot().delta_position[0])  # a fresh array, as before the snapshot
 
     @property
     def delta_t(self) -> float:
         """``Δt_ij`` [s]."""
-        return self._state()[3]
+        return float(self.snapshot().delta_t[0])
 
     @property
     def covariance(self) -> FloatArray:
         """9×9 covariance of ``[δθ, δv, δp]``."""
-        return self._state()[4]
+        return np.array(self.snapshot().covariance[0])  # a fresh array, as before the snapshot
 
     @property
     def covariance_combined(self) -> FloatArray | None:
         """15×15 covariance of ``[δθ, δv, δp, δb_g, δb_a]`` including the bias random walk between i
         and j (``ImuNoise`` random-walk densities); None unless built with ``combined=True``."""
-        return self._core.covariance_combined()
+        c = self.snapshot().covariance_combined
+        return None if c is None else c[0].copy()
 
     @property
     def bias_jacobian(self) -> FloatArray:
         """9×6 ``∂(θ, v, p)/∂(b_g, b_a)``."""
-        return self._state()[5]
-
-    def _bias_change(self, bias: ImuBias) -> FloatArray:
-        if not isinstance(bias, ImuBias):
-            raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
-        return np.concatenate([bias.gyro - self.bias.gyro, bias.accel - self.bias.accel])
+        return np.array(self.snapshot().bias_jacobian[0])  # a fresh array, as before the snapshot
 
     def corrected(self, bias: ImuBias) -> tuple[Rotation, FloatArray, FloatArray]:
         """Deltas for ``bias`` to first order, without re-integration (rotation right-applied):
         ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb`` with ``δb = bias − integration bias``."""
-        r, v, p, _, _, jac = self._state()
-        d = jac @ self._bias_change(bias)
-        if not (np.isfinite(d).all() and np.isfinite(np.linalg.norm(d))):
-            raise NonFiniteError(f"bias: too far from the integration bias to correct for: J δb = {d.tolist()}")
-        return Rotation.from_matrix(r) * Rotation.from_rotvec(d[0:3]), v + d[3:6], p + d[6:9]
-
-    def _deltas(self, bias: ImuBias | None) -> tuple[Rotation, FloatArray, FloatArray, float]:
-        """``(ΔR, Δv, Δp, Δt)``, corrected to ``bias`` when given, from one read of the core state."""
-        if bias is not None:
-            return (*self.corrected(bias), self.delta_t)
-        r, v, p, dt, _, _ = self._state()
-        return Rotation.from_matrix(r), v, p, dt
+        if not isinstance(bias, ImuBias):
+            raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+        r, v, p = corrected(self.snapshot(), bias)
+        return Rotation.from_matrix(r[0]), v[0], p[0]
 
     def predict(self, state_i: NavState, bias: ImuBias | None = None) -> NavState:
         """The state at j from the state at i (deltas corrected to ``bias`` when given)."""
-        dr, dv, dp, dt = self._deltas(bias)
-        g, r_i = self.gravity, state_i.rotation
-        return NavState(
-            state_i.position + state_i.velocity * dt + 0.5 * g * dt * dt + r_i.apply(dp),
-            state_i.velocity + g * dt + r_i.apply(dv),
-            r_i * dr,
-        )
-
-    def _residual_parts(
-        self, state_i: NavState, state_j: NavState, bias: ImuBias | None
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """The residual and the world-frame differences it rotates: ``(r, u_v, u_p, E)``."""
-        dr, dv, dp, dt = self._deltas(bias)
-        g, r_i = self.gravity, state_i.rotation
-        u_v = state_j.velocity - state_i.velocity - g * dt
-        u_p = state_j.position - state_i.position - state_i.velocity * dt - 0.5 * g * dt * dt
-        e = dr.inv() * r_i.inv() * state_j.rotation
-        r = np.concatenate([e.as_rotvec(), r_i.inv().apply(u_v) - dv, r_i.inv().apply(u_p) - dp])
-        return r, u_v, u_p, e.as_matrix()
+        p, v, r = predict(self.snapshot(), _states(state_i), bias)
+        return NavState(p[0], v[0], Rotation.from_matrix(r[0]))
 
     def residual(self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None) -> FloatArray:
         """``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``,
         the deltas corrected to ``bias`` when given (9,)."""
-        return self._residual_parts(state_i, state_j, bias)[0]
+        out: FloatArray = residual(self.snapshot(), _states(state_i), _states(state_j), bias)[0]
+        return out
 
     def residual_jacobians(
         self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None
@@ -310,36 +396,45 @@ class PreintegratedImu:
         """Jacobians of :meth:`residual` (Forster et al. 2017, eqs. 44–45, in imukit's charts):
         w.r.t. state i and j (columns ``[δp, δv, δθ]``, ``R Exp(δθ)``) and the bias (``[δb_g, δb_a]``,
         through the first-order correction)."""
-        r, u_v, u_p, e = self._residual_parts(state_i, state_j, bias)
-        jac = self.bias_jacobian
-        ri_t = state_i.rotation.inv().as_matrix()
-        jr_inv = so3.right_jacobian_inv(r[0:3])
-        dbg = np.zeros(3) if bias is None else self._bias_change(bias)[0:3]
-        d_i, d_j, d_b = np.zeros((9, 9)), np.zeros((9, 9)), np.zeros((9, 6))
-        # θ: E Exp(δθ_j) on the right; R_i Exp(δθ_i) enters as E Exp(−R_jᵀ R_i δθ_i).
-        rj_t_ri = state_j.rotation.inv().as_matrix() @ state_i.rotation.as_matrix()
-        d_i[0:3, 6:9] = -jr_inv @ rj_t_ri
-        d_j[0:3, 6:9] = jr_inv
-        d_b[0:3, 0:3] = -jr_inv @ e.T @ so3.right_jacobian(jac[0:3, 0:3] @ dbg) @ jac[0:3, 0:3]
-        # v, p: R_iᵀ u with R_i Exp(δθ_i) gives +[R_iᵀ u]× δθ_i.
-        d_i[3:6, 3:6], d_i[3:6, 6:9] = -ri_t, so3.hat(ri_t @ u_v)
-        d_j[3:6, 3:6] = ri_t
-        d_i[6:9, 0:3], d_i[6:9, 3:6], d_i[6:9, 6:9] = -ri_t, -ri_t * self.delta_t, so3.hat(ri_t @ u_p)
-        d_j[6:9, 0:3] = ri_t
-        d_b[3:9] = -jac[3:9]
-        return ResidualJacobians(d_i, d_j, d_b)
+        jac = residual_jacobians(self.snapshot(), _states(state_i), _states(state_j), bias)
+        return ResidualJacobians(*(j[0] for j in jac))
 
 
-def _empty(
-    noise: ImuNoise,
-    bias: ImuBias | None,
-    gravity: ArrayLike,
-    scheme: str,
-    combined: bool,
-    saturation_noise_factor: float,
+def _restore(
+    params: PreintParams, scheme: str, core: _core.Preintegrator, span: tuple[float, float]
 ) -> PreintegratedImu:
-    """An empty :class:`PreintegratedImu` with the options of :func:`preintegrate`."""
-    return PreintegratedImu(
+    """A pickled :class:`PreintegratedImu` (its ``__reduce__``)."""
+    out = PreintegratedImu(params)
+    out._scheme, out._core, out._span, out._replayable, out._started = scheme, core, span, False, True
+    return out
+
+
+def _states(state: NavState) -> States:
+    return States(state.position[None], state.velocity[None], state.rotation.as_matrix()[None])
+
+
+def preintegrate(
+    imu: ImuData,
+    params: PreintParams | None = None,
+    *,
+    noise: ImuNoise | None = None,
+    bias: ImuBias | None = None,
+    gravity: ArrayLike = _DEFAULT_GRAVITY,
+    scheme: str = "midpoint",
+    combined: bool = False,
+    saturation_noise_factor: float = _DEFAULT_FACTOR,
+) -> PreintegratedImu:
+    """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
+
+    Options: ``params``, or the same as keywords. ``combined=True`` also tracks the 15×15
+    covariance with the bias random walk (``covariance_combined``), at about twice the cost per
+    sample. Samples that ``imu`` flags as clipped (``gyro_saturated`` / ``accel_saturated``, from
+    its ``gyro_range`` / ``accel_range``) have that sensor's white-noise density multiplied by
+    ``saturation_noise_factor`` (finite, ≥ 1; 1 ignores the flags); see the module docs for which
+    intervals that covers.
+    """
+    pim = PreintegratedImu(
+        params,
         noise=noise,
         bias=bias,
         gravity=gravity,
@@ -347,86 +442,165 @@ def _empty(
         combined=combined,
         saturation_noise_factor=saturation_noise_factor,
     )
-
-
-def preintegrate(
-    imu: ImuData,
-    *,
-    noise: ImuNoise,
-    bias: ImuBias | None = None,
-    gravity: ArrayLike = (0.0, 0.0, -9.81),
-    scheme: str = "midpoint",
-    combined: bool = False,
-    saturation_noise_factor: float = 100.0,
-) -> PreintegratedImu:
-    """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
-
-    ``combined=True`` also tracks the 15×15 covariance with the bias random walk
-    (``covariance_combined``), at about twice the cost per sample. Samples that ``imu`` flags as
-    clipped (``gyro_saturated`` / ``accel_saturated``, from its ``gyro_range`` / ``accel_range``)
-    have that sensor's white-noise density multiplied by ``saturation_noise_factor`` (finite, ≥ 1;
-    1 ignores the flags); see the module docs for which intervals that covers.
-    """
-    pim = _empty(noise, bias, gravity, scheme, combined, saturation_noise_factor)
     pim.integrate(imu)
     return pim
 
 
-def _seconds_of(imu: ImuData, boundaries: ArrayLike) -> FloatArray:
-    """Boundary times on ``imu.seconds``' axis: same units as ``imu.t`` (integer ns or float s)."""
+def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
+    """The edges on ``imu.seconds``' axis and as the record's times (``boundaries`` on ``imu.t``'s
+    clock: integer ns for integer stamps, else float seconds)."""
+    if not isinstance(imu, ImuData):
+        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
     raw = np.asarray(boundaries)
     if raw.ndim != 1:
         raise ShapeError(f"boundaries: expected shape (M,), got {raw.shape}")
     if raw.dtype.kind in "iu" and imu.t_ns is not None:
-        return seconds_from_ns(raw.astype(np.int64) - imu.t_ns[0])
-    seconds: FloatArray = as_float_array(raw, "boundaries") - imu.t[0]
-    return seconds
+        ns = raw.astype(np.int64)
+        return Windows(seconds_from_ns(ns - imu.t_ns[0]), ns / 1e9, ns)
+    t = as_float_array(raw, "boundaries")
+    return Windows(t - imu.t[0], t, None)
 
 
-def _windows(imu: ImuData, boundaries: ArrayLike, like: PreintegratedImu, *, threads: int) -> list[_core.Preintegrator]:
-    b = np.ascontiguousarray(_seconds_of(imu, boundaries))
-    return _core.preint_windows(
-        imu.seconds,
-        imu.gyro,
-        imu.accel,
-        imu.gyro_saturated,
-        imu.accel_saturated,
-        b,
-        like._core,
-        threads,
-    )
+def _core_windows(
+    imu: ImuData, boundaries: ArrayLike, params: PreintParams, threads: int | None = None
+) -> list[_core.Preintegrator]:
+    b = np.ascontiguousarray(_windows(imu, boundaries).offsets)
+    return _core.preint_windows(imu, b, params._template(), threads)
 
 
-def preintegrate_windows(
-    imu: ImuData,
-    boundaries: ArrayLike,
-    *,
-    noise: ImuNoise,
-    bias: ImuBias | None = None,
-    gravity: ArrayLike = (0.0, 0.0, -9.81),
-    scheme: str = "midpoint",
-    combined: bool = False,
-    saturation_noise_factor: float = 100.0,
-    threads: int | None = None,
-) -> list[PreintegratedImu]:
-    """One :class:`PreintegratedImu` per window ``[boundaries[m], boundaries[m+1]]`` (M times → M − 1
-    windows), in one call, the windows in parallel on ``threads`` threads (default: all cores), GIL
-    released.
-
-    ``boundaries`` (M,) are times on ``imu.t``'s clock (integer ns for integer stamps), strictly
-    increasing, within the samples' span. A boundary between two samples is a point of the scheme's
-    signal model: the held sample in ``"euler"`` (as ``integrateMeasurement(a_k, ω_k, b − t_k)``),
-    the linear interpolation of its neighbours in ``"midpoint"``; consecutive windows share it.
-    Clipped samples inflate the noise as in :func:`preintegrate` (``saturation_noise_factor``), so
-    a window holding one has a larger covariance; the other windows are unchanged.
-    """
-    like = _empty(noise, bias, gravity, scheme, combined, saturation_noise_factor)
-    if not isinstance(imu, ImuData):
-        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+def _threads(threads: object) -> int | None:
     if threads is not None and (
         isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= _MAX_THREADS
     ):
         raise ParameterError(f"threads: expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}")
-    cores = _windows(imu, boundaries, like, threads=threads or 0)
-    b = np.asarray(boundaries)
-    return [like._like(core, [_Window(imu, b[m], b[m + 1])]) for m, core in enumerate(cores)]
+    return threads
+
+
+@overload
+def preintegrate_windows(
+    imu: ImuData,
+    boundaries: ArrayLike,
+    params: None = ...,
+    *,
+    noise: ImuNoise,
+    bias: ImuBias | None = ...,
+    gravity: ArrayLike = ...,
+    scheme: str = ...,
+    combined: bool = ...,
+    saturation_noise_factor: float = ...,
+    threads: int | None = ...,
+) -> list[PreintegratedImu]: ...
+@overload
+def preintegrate_windows(
+    imu: ImuData, boundaries: ArrayLike, params: PreintParams, *, engine: str = ..., threads: int | None = ...
+) -> Preintegration: ...
+def preintegrate_windows(
+    imu: ImuData,
+    boundaries: ArrayLike,
+    params: PreintParams | None = None,
+    *,
+    engine: str = "rust",
+    noise: ImuNoise | None = None,
+    bias: ImuBias | None = None,
+    gravity: ArrayLike = _DEFAULT_GRAVITY,
+    scheme: str = "midpoint",
+    combined: bool = False,
+    saturation_noise_factor: float = _DEFAULT_FACTOR,
+    threads: int | None = None,
+) -> Preintegration | list[PreintegratedImu]:
+    """Every window ``[boundaries[m], boundaries[m+1]]`` (M + 1 times → M windows) preintegrated
+    with ``params``, as one :class:`Preintegration` record, filled by one native call (``engine=
+    "rust"``), the windows in parallel on ``threads`` threads (default: all cores), GIL released.
+
+    ``boundaries`` (M + 1,) are times on ``imu.t``'s clock (integer ns for integer stamps; the
+    record then carries them exactly as ``t_start_ns``/``t_end_ns``), strictly increasing, within
+    the samples' span. A boundary between two samples is a point of the scheme's signal model: the
+    held sample in ``"lie_euler"`` (as ``integrateMeasurement(a_k, ω_k, b − t_k)``), the linear
+    interpolation of its neighbours in ``"midpoint"``; consecutive windows share it. Clipped
+    samples inflate the noise as in :func:`preintegrate`, so a window holding one has a larger
+    covariance; the other windows are unchanged. ``engine``: a name of :data:`imukit._engines.ENGINES`.
+
+    Deprecated form: without ``params``, the keyword options (``noise=`` …) give the old result, a
+    list of :class:`PreintegratedImu` (one per window; they merge and ``reintegrate(bias)``).
+    """
+    n = _threads(threads)
+    if params is None:
+        warnings.warn(
+            "preintegrate_windows(imu, boundaries, noise=...) returning a list is deprecated: pass a "
+            "PreintParams, preintegrate_windows(imu, boundaries, params), for one Preintegration record",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        p = _params(None, noise, bias, gravity, scheme, combined, saturation_noise_factor)
+        like = PreintegratedImu(p)
+        like._scheme = scheme
+        cores = _core_windows(imu, boundaries, p, n)
+        b = np.asarray(boundaries)
+        return [like._like(core, [_Window(imu, b[m], b[m + 1])], p) for m, core in enumerate(cores)]
+    params = _params(params, None, None, gravity, scheme, combined, saturation_noise_factor)
+    if engine not in ENGINES:
+        raise ParameterError(f"engine: expected one of {tuple(ENGINES)}, got {engine!r}")
+    return ENGINES[engine](imu, _windows(imu, boundaries), params, n)
+
+
+def reintegrate(preintegration: Preintegration, imu: ImuData, bias: ImuBias, *, engine: str = "rust") -> Preintegration:
+    """The windows of ``preintegration`` preintegrated again from the samples ``imu`` with ``bias``
+    (the same options otherwise): exact, where :func:`corrected` is first order."""
+    if not isinstance(preintegration, Preintegration):
+        raise ParameterError(f"preintegration: expected an imukit.Preintegration, got {type(preintegration).__name__}")
+    if not isinstance(bias, ImuBias):
+        raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+    start: NDArray[Any] = preintegration.t_start
+    end: NDArray[Any] = preintegration.t_end
+    if preintegration.t_start_ns is not None and preintegration.t_end_ns is not None and imu.t_ns is not None:
+        start, end = preintegration.t_start_ns, preintegration.t_end_ns
+    params = preintegration.params.replace(bias=bias)
+    if np.array_equal(start[1:], end[:-1]):
+        return preintegrate_windows(imu, np.append(start, end[-1:]), params, engine=engine)
+    pieces = [preintegrate_windows(imu, [a, b], params, engine=engine) for a, b in zip(start, end, strict=True)]
+    return concatenate(pieces)
+
+
+def concatenate(records: list[Preintegration]) -> Preintegration:
+    """One record of the windows of ``records``, in order (they share their params)."""
+    first = records[0]
+    fields: dict[str, Any] = {}
+    for name in (
+        "delta_rotation",
+        "delta_velocity",
+        "delta_position",
+        "delta_t",
+        "covariance",
+        "bias_jacobian",
+        "covariance_combined",
+        "t_start",
+        "t_end",
+        "t_start_ns",
+        "t_end_ns",
+    ):
+        parts = [getattr(r, name) for r in records]
+        fields[name] = None if parts[0] is None else np.concatenate(parts)
+    return Preintegration(params=first.params, **fields)
+
+
+def regular_boundaries(imu: ImuData, period: float) -> NDArray[Any]:
+    """Window edges on ``imu.t``'s clock every ``period`` seconds from the first sample, the last
+    one at or before the last sample: integer ns for ns stamps (the period rounded to a whole ns,
+    the count by integer division: exact), else float seconds (the count lowered while rounding puts
+    the last edge past the last sample). At least one window: a longer period is a
+    :class:`ParameterError` naming ``period``."""
+    if not isinstance(imu, ImuData):
+        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+    window_s = real_scalar(period, "period", what="a positive, finite period [s]", accept=lambda x: 0 < x < math.inf)
+    if imu.t_ns is not None:
+        step = max(round(window_s * 1e9), 1)
+        count = int(imu.t_ns[-1] - imu.t_ns[0]) // step
+    else:
+        count = int(np.floor(imu.duration / window_s))
+        while count > 0 and imu.t[0] + count * window_s > imu.t[-1]:
+            count -= 1
+    if count < 1:
+        raise ParameterError(f"{window_s} s is longer than the recording ({imu.duration:.6g} s)", argument="period")
+    if imu.t_ns is not None:
+        return np.asarray(imu.t_ns[0] + np.arange(count + 1, dtype=np.int64) * step, dtype=np.int64)
+    return np.asarray(imu.t[0] + np.arange(count + 1) * window_s)

@@ -60,6 +60,25 @@ pub fn deltas(p: &Preintegrator) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
     (p.delta_rotation, p.delta_velocity, p.delta_position)
 }
 
+/// The first-order bias correction of `p`'s deltas to `(bias_gyro, bias_accel)` (`ΔR Exp(J_θ δb_g)`,
+/// `Δv + J_v δb`, `Δp + J_p δb`), the oracle of the quadratic-convergence tests. The library's one
+/// implementation is Python's batched `imukit.preint.corrected`; this one is written from the same
+/// formula, on the public bias Jacobian.
+pub fn corrected(
+    p: &Preintegrator,
+    bias_gyro: &Vector3<f64>,
+    bias_accel: &Vector3<f64>,
+) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+    let (dbg, dba) = (bias_gyro - p.bias_gyro, bias_accel - p.bias_accel);
+    let d = p.bias_jacobian() * SVector::<f64, 6>::new(dbg.x, dbg.y, dbg.z, dba.x, dba.y, dba.z);
+    let theta: Vector3<f64> = d.fixed_rows::<3>(0).into();
+    (
+        p.delta_rotation * so3::exp(&theta).matrix(),
+        p.delta_velocity + d.fixed_rows::<3>(3),
+        p.delta_position + d.fixed_rows::<3>(6),
+    )
+}
+
 /// `[θ, v, p]` of `x` relative to `base`: `Log(ΔR_baseᵀ ΔR_x)`, `Δv_x − Δv_base`, `Δp_x − Δp_base`.
 pub fn chart(base: &Preintegrator, x: (Matrix3<f64>, Vector3<f64>, Vector3<f64>)) -> SVector<f64, 9> {
     let mut d = SVector::<f64, 9>::zeros();

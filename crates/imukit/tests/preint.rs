@@ -5,7 +5,7 @@
 
 use imukit::imu::Noise;
 use imukit::preint::{Preintegrator, Scheme};
-use imukit_testing::preint::{chart, deltas, samples, Normal, H, N};
+use imukit_testing::preint::{chart, corrected, deltas, samples, Normal, H, N};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 fn run(bg: Vector3<f64>, ba: Vector3<f64>, noise: Noise, data: &[(Vector3<f64>, Vector3<f64>)]) -> Preintegrator {
@@ -57,7 +57,7 @@ fn corrected_converges_quadratically_to_reintegration() {
     let gap = |s: f64| {
         let (bg, ba) = (direction_g * s, direction_a * s);
         let exact = run(bg, ba, Noise::default(), &data);
-        chart(&exact, base.corrected(&bg, &ba)).norm()
+        chart(&exact, corrected(&base, &bg, &ba)).norm()
     };
     let (g1, g2) = (gap(1e-2), gap(5e-3));
     let ratio = g1 / g2;

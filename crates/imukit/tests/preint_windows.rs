@@ -157,3 +157,71 @@ fn bad_boundaries_are_refused_with_their_name() {
     let e = preintegrate_windows(&bad.samples(), &[0.3, 0.5], &template).unwrap_err();
     assert!(e.to_string().contains("gyro"), "{e}");
 }
+
+#[test]
+fn the_record_kernel_writes_the_windows_row_major_bit_for_bit() {
+    use imukit::preint::{preintegrate_windows_into, WindowsOut};
+    let stream = Stream::new();
+    let s = stream.samples();
+    let b = [
+        stream.t[3] + 0.4 * H,
+        stream.t[40],
+        stream.t[90] + 0.7 * H,
+        stream.t[150],
+    ];
+    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+        let t = template(scheme).with_bias_walk();
+        let states = preintegrate_windows(&s, &b, &t).unwrap();
+        let m = b.len() - 1;
+        let (mut r, mut v, mut p, mut dt) = (
+            vec![[[0.0; 3]; 3]; m],
+            vec![[0.0; 3]; m],
+            vec![[0.0; 3]; m],
+            vec![0.0; m],
+        );
+        let (mut cov, mut jac, mut c15) = (vec![[[0.0; 9]; 9]; m], vec![[[0.0; 6]; 9]; m], vec![[[0.0; 15]; 15]; m]);
+        let out = WindowsOut {
+            delta_rotation: &mut r,
+            delta_velocity: &mut v,
+            delta_position: &mut p,
+            delta_t: &mut dt,
+            covariance: &mut cov,
+            bias_jacobian: &mut jac,
+            covariance_combined: Some(&mut c15),
+        };
+        preintegrate_windows_into(&s, None, &b, &t, out).unwrap();
+        for (k, w) in states.iter().enumerate() {
+            assert_eq!(r[k], rows_of(&w.delta_rotation));
+            assert_eq!(v[k], <[f64; 3]>::from(w.delta_velocity));
+            assert_eq!(p[k], <[f64; 3]>::from(w.delta_position));
+            assert_eq!(dt[k], w.delta_t);
+            assert_eq!(cov[k], rows_of(&w.covariance()));
+            assert_eq!(jac[k], rows_of(&w.bias_jacobian()));
+            assert_eq!(c15[k], rows_of(&w.covariance_combined().unwrap()));
+        }
+        // A buffer of the wrong length is refused, not indexed past.
+        let mut short = vec![0.0; m - 1];
+        let out = WindowsOut {
+            delta_rotation: &mut r,
+            delta_velocity: &mut v,
+            delta_position: &mut p,
+            delta_t: &mut short,
+            covariance: &mut cov,
+            bias_jacobian: &mut jac,
+            covariance_combined: None,
+        };
+        let err = preintegrate_windows_into(&s, None, &b, &t, out).unwrap_err();
+        assert_eq!(
+            err,
+            imukit::Error::RowCount {
+                input: m,
+                output: m - 1
+            }
+        );
+    }
+}
+
+/// A matrix as its rows.
+fn rows_of<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -> [[f64; C]; R] {
+    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+}

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import warnings
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
+from imukit._errors import ParameterError
 from imukit.cli._common import (
     CliError,
     add_input_options,
@@ -21,9 +24,9 @@ from imukit.cli._common import (
     wrote,
 )
 from imukit.imu import ImuData, ImuNoise
-from imukit.io import read_euroc_sensor, read_kalibr_imu
-from imukit.io._euroc import euroc_extrinsics
-from imukit.preint import PreintegratedImu, preintegrate_windows
+from imukit.io import find_noise_model
+from imukit.io._noise_model import NoNoiseModelError
+from imukit.preint import Preintegration, PreintParams, concatenate, preintegrate_windows, regular_boundaries
 
 WINDOWS_PER_CALL = 2_000  # a progress step; each window is computed alone, so the split changes nothing
 
@@ -91,63 +94,52 @@ def add(commands: Any) -> argparse.ArgumentParser:
 
 
 def noise_for(path: str, noise_yaml: str | None) -> ImuNoise:
-    """``--noise``, else the EuRoC ``imu0/sensor.yaml`` that goes with PATH
-    (:func:`imukit.io.read_euroc_sensor`), else an error."""
-    if noise_yaml is not None:
-        return read_kalibr_imu(noise_yaml).noise
-    sensor = read_euroc_sensor(path)
-    if sensor is None:
-        raise CliError(f"--noise: {path} has no imu0/sensor.yaml; give the noise model as a Kalibr imu.yaml")
-    t_bs = euroc_extrinsics(sensor)
-    if t_bs is not None and not np.array_equal(t_bs, np.eye(4)):
-        note("the sensor.yaml's T_BS is not the identity; it is not applied: the body frame is the IMU's")
-    return sensor.noise
+    """:func:`imukit.io.find_noise_model`, its ``T_BS`` warning as a note, its absence as --noise."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            noise = find_noise_model(path, noise_yaml)
+        except NoNoiseModelError as e:
+            raise CliError(f"--noise: {e.message}") from None
+    for w in caught:
+        note(str(w.message))
+    return noise
 
 
 def boundaries(imu: ImuData, window_s: float) -> NDArray[Any]:
-    """Window edges on ``imu.t``'s clock, every ``window_s`` from the first sample, the last one at
-    or before the last sample: integer ns for ns stamps (the window rounded to a whole ns, the count
-    by integer division: exact), else float seconds (the count lowered while rounding puts the last
-    edge past the last sample)."""
-    if imu.t_ns is not None:
-        step = max(round(window_s * 1e9), 1)
-        count = int(imu.t_ns[-1] - imu.t_ns[0]) // step
-    else:
-        count = int(np.floor(imu.duration / window_s))
-        while count > 0 and imu.t[0] + count * window_s > imu.t[-1]:
-            count -= 1
-    if count < 1:
-        raise CliError(f"--window: {window_s} s is longer than the recording ({imu.duration:.6g} s)")
-    if imu.t_ns is not None:
-        return np.asarray(imu.t_ns[0] + np.arange(count + 1, dtype=np.int64) * step, dtype=np.int64)
-    return np.asarray(imu.t[0] + np.arange(count + 1) * window_s)
+    """:func:`imukit.preint.regular_boundaries`, a window longer than the recording as --window."""
+    try:
+        return regular_boundaries(imu, window_s)
+    except ParameterError as e:
+        raise CliError(f"--window: {e.message}") from None
 
 
-def windows(imu: ImuData, edges: NDArray[Any], noise: ImuNoise, scheme: str) -> list[PreintegratedImu]:
+def windows(imu: ImuData, edges: NDArray[Any], noise: ImuNoise, scheme: str) -> Preintegration:
     """:func:`imukit.preintegrate_windows` in calls of ``WINDOWS_PER_CALL`` windows, with a progress bar."""
-    result: list[PreintegratedImu] = []
+    params = PreintParams(noise, scheme=scheme)
+    pieces: list[Preintegration] = []
     with progress("preintegrating", len(edges) - 1) as advance:
         for a, b in chunks(len(edges) - 1, WINDOWS_PER_CALL):
-            result += preintegrate_windows(imu, edges[a : b + 1], noise=noise, scheme=scheme)
+            pieces.append(preintegrate_windows(imu, edges[a : b + 1], params))
             advance(b - a)
-    return result
+    return concatenate(pieces)
 
 
-def arrays(imu: ImuData, edges: NDArray[Any], pims: list[PreintegratedImu]) -> dict[str, NDArray[Any]]:
+def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
     """The windows as named arrays (what the ``.npz`` holds); ``t_start_ns``, ``t_end_ns`` (int64,
     exact) when the stamps are ns."""
-    seconds = edges / 1e9 if imu.t_ns is not None else edges
-    exact = {} if imu.t_ns is None else {"t_start_ns": edges[:-1], "t_end_ns": edges[1:]}
+    start, end = record.t_start_ns, record.t_end_ns
+    exact = {} if start is None or end is None else {"t_start_ns": start, "t_end_ns": end}
     return {
         **exact,
-        "t_start": np.asarray(seconds[:-1], dtype=np.float64),
-        "t_end": np.asarray(seconds[1:], dtype=np.float64),
-        "delta_t": np.array([p.delta_t for p in pims]),
-        "dR_xyzw": np.array([p.delta_rotation.as_quat() for p in pims]),
-        "dv": np.array([p.delta_velocity for p in pims]),
-        "dp": np.array([p.delta_position for p in pims]),
-        "covariance": np.array([p.covariance for p in pims]),
-        "bias_jacobian": np.array([p.bias_jacobian for p in pims]),
+        "t_start": record.t_start,
+        "t_end": record.t_end,
+        "delta_t": record.delta_t,
+        "dR_xyzw": Rotation.from_matrix(record.delta_rotation).as_quat(),
+        "dv": record.delta_velocity,
+        "dp": record.delta_position,
+        "covariance": record.covariance,
+        "bias_jacobian": record.bias_jacobian,
     }
 
 
@@ -156,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     imu, _ = read_imu(args)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
-    table = arrays(imu, edges, windows(imu, edges, noise, args.scheme))
+    table = arrays(windows(imu, edges, noise, args.scheme))
     dp = np.linalg.norm(table["dp"], axis=1)
     largest = int(np.argmax(dp))
     out.print(

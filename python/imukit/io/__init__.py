@@ -44,6 +44,7 @@ from imukit.io._gaps import GAP_FACTOR, Gap, find_gaps
 from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
 from imukit.io._kitti import read_kitti_poses
+from imukit.io._noise_model import find_noise_model
 from imukit.io._registry import Registration, formats, listing, register_format, unregister_format
 from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 from imukit.io._rosbag import list_rosbag_topics, read_rosbag
@@ -62,6 +63,7 @@ __all__ = [
     "SkippedLine",
     "SkippedLinesWarning",
     "find_gaps",
+    "find_noise_model",
     "formats",
     "list_rosbag_topics",
     "listing",

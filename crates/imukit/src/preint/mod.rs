@@ -36,6 +36,7 @@ mod batch;
 mod blocks;
 mod merge;
 mod midpoint;
+mod state;
 mod windows;
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -47,7 +48,7 @@ use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use midpoint::MidpointStepMatrices;
-pub use windows::{preintegrate_windows, preintegrate_windows_clipped};
+pub use windows::{preintegrate_windows, preintegrate_windows_clipped, preintegrate_windows_into, WindowsOut};
 
 /// 9×9 covariance of `[δθ, δv, δp]`.
 pub type Covariance9 = SMatrix<f64, 9, 9>;
@@ -59,13 +60,15 @@ pub type Covariance15 = SMatrix<f64, 15, 15>;
 /// How the samples of an interval enter it (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scheme {
-    /// Forster's: sample k held over `[t_k, t_k+1)`, exact rotation steps.
+    /// Forster's: sample k held over `[t_k, t_k+1)`, exact rotation steps (named `lie_euler`).
     Euler,
     /// VINS-Mono's: averaged rates, specific forces rotated at both ends.
     Midpoint,
 }
 
-crate::named_enum!(Scheme, "scheme", [Euler => "euler", Midpoint => "midpoint"]);
+// `lie_euler`: R Exp(ω_k h) with v and p first order; "euler" names forward Euler on the ODE in
+// `attitude`, so it stays only as a deprecated alias here (one name per update rule).
+crate::named_enum!(Scheme, "scheme", [Midpoint => "midpoint", Euler => "lie_euler"], aliases ["euler" => Euler]);
 
 /// Default [`Preintegrator::saturation_noise_factor`]: OKVIS multiplies the white-noise densities
 /// by 100 on an interval with a saturated reading (`ImuError::propagation`, `sigma_g_c *= 100`;
@@ -269,10 +272,59 @@ impl Preintegrator {
         Ok(self)
     }
 
+    /// Adds one interval of `dt` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]
+    /// (flagged by `clipped`), as [`Preintegrator::integrate_measurement_clipped`], after checking
+    /// them: finite readings (errors name `accel` or `gyro`); in the midpoint scheme the window's
+    /// first sample comes with `dt == 0` (it has no interval before it), every other step with a
+    /// positive, finite `dt` (errors name `dt`). Transactional: the step runs on a copy that is
+    /// committed only when every delta, covariance and Jacobian stayed finite (readings or a `dt`
+    /// near f64's limits overflow them: [`Error::Overflow`] under `accel / gyro / dt`); on any
+    /// error the preintegration is unchanged.
+    pub fn try_integrate_measurement(
+        &mut self,
+        accel: &Vector3<f64>,
+        gyro: &Vector3<f64>,
+        dt: f64,
+        clipped: Clipped,
+    ) -> Result<()> {
+        for (name, v) in [("accel", accel), ("gyro", gyro)] {
+            if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite { index }.in_argument(name));
+            }
+        }
+        let starts = self.scheme == Scheme::Midpoint && self.last_sample().is_none();
+        if starts && dt != 0.0 {
+            // Named as the rule, so that the message reads "dt: the first sample of a midpoint
+            // window must be …".
+            let rule = Error::Parameter {
+                name: "the first sample of a midpoint window",
+                expected: "given with dt = 0 (it has no interval before it)",
+                got: format!("dt = {dt}"),
+            };
+            return Err(rule.in_argument("dt"));
+        }
+        let positive = dt > 0.0 && dt.is_finite();
+        if !(starts || positive) {
+            return Err(Error::Parameter {
+                name: "dt",
+                expected: "a positive, finite step",
+                got: format!("{dt}"),
+            });
+        }
+        let mut next = self.clone();
+        next.integrate_measurement_clipped(accel, gyro, dt, clipped);
+        if !next.is_finite() {
+            return Err(Error::Overflow { index: 0 }.in_argument("accel / gyro / dt"));
+        }
+        *self = next;
+        Ok(())
+    }
+
     /// Adds one interval of `h` seconds with the measurements `accel` [m/s²] and `gyro` [rad/s]:
     /// in the euler scheme, held over the interval; in the midpoint scheme, sampled at its end (the
-    /// first call of a window records its first sample and ignores `h`). The caller validates
-    /// finiteness and `h > 0`.
+    /// first call of a window records its first sample and ignores `h`). Unchecked: the hot path
+    /// of the batch kernels, whose callers validated the samples;
+    /// [`Preintegrator::try_integrate_measurement`] checks and refuses transactionally.
     pub fn integrate_measurement(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) {
         self.integrate_measurement_clipped(accel, gyro, h, Clipped::NONE);
     }
@@ -426,22 +478,5 @@ impl Preintegrator {
     /// The bias Jacobian `∂(θ, v, p)/∂(b_g, b_a)`.
     pub fn bias_jacobian(&self) -> BiasJacobian {
         blocks::cross_matrix(&self.jac)
-    }
-
-    /// First-order bias update: the deltas for biases `b̄ + (δb_g, δb_a)` without
-    /// re-integration, `ΔR Exp(∂ΔR/∂b_g δb_g)` (right-applied), `Δv + ∂Δv/∂b δb`, `Δp + ∂Δp/∂b δb`.
-    pub fn corrected(
-        &self,
-        bias_gyro: &Vector3<f64>,
-        bias_accel: &Vector3<f64>,
-    ) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
-        let dbg = bias_gyro - self.bias_gyro;
-        let dba = bias_accel - self.bias_accel;
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = &self.jac;
-        (
-            self.delta_rotation * so3::exp(&(jtg * dbg)).matrix(),
-            self.delta_velocity + jvg * dbg + jva * dba,
-            self.delta_position + jpg * dbg + jpa * dba,
-        )
     }
 }

@@ -35,23 +35,132 @@ pub fn preintegrate_windows_clipped(
     boundaries: &[f64],
     template: &Preintegrator,
 ) -> Result<Vec<Preintegrator>> {
+    check_inputs(samples, clipped, boundaries)?;
+    let windows: Vec<Preintegrator> = boundaries
+        .par_windows(2)
+        .map(|w| window(samples, clipped, w[0], w[1], template))
+        .collect();
+    check_windows(samples, boundaries, 0, &windows)?;
+    Ok(windows)
+}
+
+/// The buffers that [`preintegrate_windows_into`] fills: one row per window (M = boundaries − 1),
+/// matrices row-major. `covariance_combined` is filled when given (the template must then track
+/// the bias walk).
+#[derive(Debug)]
+pub struct WindowsOut<'a> {
+    /// `ΔR` (M, 3, 3).
+    pub delta_rotation: &'a mut [[[f64; 3]; 3]],
+    /// `Δv` (M, 3) [m/s].
+    pub delta_velocity: &'a mut [[f64; 3]],
+    /// `Δp` (M, 3) [m].
+    pub delta_position: &'a mut [[f64; 3]],
+    /// `Δt` (M,) [s].
+    pub delta_t: &'a mut [f64],
+    /// Covariance of `[δθ, δv, δp]` (M, 9, 9).
+    pub covariance: &'a mut [[[f64; 9]; 9]],
+    /// Bias Jacobian, rows `[θ, v, p]`, columns `[b_g, b_a]` (M, 9, 6).
+    pub bias_jacobian: &'a mut [[[f64; 6]; 9]],
+    /// Covariance of `[δθ, δv, δp, δb_g, δb_a]` (M, 15, 15), when wanted.
+    pub covariance_combined: Option<&'a mut [[[f64; 15]; 15]]>,
+}
+
+/// Windows computed at once before they are written out: bounds the memory of the states (a few
+/// kB each) while leaving every core enough windows to share.
+const WINDOWS_PER_BLOCK: usize = 4096;
+
+/// [`preintegrate_windows_clipped`] written into `out` (one row per window) instead of returned as
+/// states: the kernel behind one call for a whole record of windows. On an error the rows of
+/// `out` are unspecified.
+pub fn preintegrate_windows_into(
+    samples: &Samples<'_>,
+    clipped: Option<&ClipMask<'_>>,
+    boundaries: &[f64],
+    template: &Preintegrator,
+    out: WindowsOut<'_>,
+) -> Result<()> {
+    check_inputs(samples, clipped, boundaries)?;
+    let m = boundaries.len() - 1;
+    let lengths = [
+        out.delta_rotation.len(),
+        out.delta_velocity.len(),
+        out.delta_position.len(),
+        out.delta_t.len(),
+        out.covariance.len(),
+        out.bias_jacobian.len(),
+        out.covariance_combined.as_ref().map_or(m, |c| c.len()),
+    ];
+    if let Some(&output) = lengths.iter().find(|&&len| len != m) {
+        return Err(Error::RowCount { input: m, output });
+    }
+    if out.covariance_combined.is_some() && template.covariance_combined().is_none() {
+        return Err(Error::Parameter {
+            name: "template",
+            expected: "a preintegrator tracking the bias walk for a combined covariance",
+            got: "one without".to_string(),
+        });
+    }
+    let WindowsOut {
+        delta_rotation,
+        delta_velocity,
+        delta_position,
+        delta_t,
+        covariance,
+        bias_jacobian,
+        mut covariance_combined,
+    } = out;
+    for first in (0..m).step_by(WINDOWS_PER_BLOCK) {
+        let edges = &boundaries[first..(first + WINDOWS_PER_BLOCK + 1).min(m + 1)];
+        let windows: Vec<Preintegrator> = edges
+            .par_windows(2)
+            .map(|w| window(samples, clipped, w[0], w[1], template))
+            .collect();
+        check_windows(samples, boundaries, first, &windows)?;
+        for (k, p) in windows.iter().enumerate() {
+            let row = first + k;
+            write_rows(&mut delta_rotation[row], &p.delta_rotation);
+            delta_velocity[row] = p.delta_velocity.into();
+            delta_position[row] = p.delta_position.into();
+            delta_t[row] = p.delta_t;
+            write_rows(&mut covariance[row], &p.covariance());
+            write_rows(&mut bias_jacobian[row], &p.bias_jacobian());
+            if let (Some(rows), Some(c)) = (covariance_combined.as_deref_mut(), p.covariance_combined()) {
+                write_rows(&mut rows[row], &c);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A matrix into row-major rows.
+fn write_rows<const R: usize, const C: usize>(rows: &mut [[f64; C]; R], m: &nalgebra::SMatrix<f64, R, C>) {
+    for (r, row) in rows.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = m[(r, c)];
+        }
+    }
+}
+
+fn check_inputs(samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, boundaries: &[f64]) -> Result<()> {
     samples.validate()?;
     let n = samples.t.len();
     if let Some(mask) = clipped {
         mask.check(n)?;
     }
-    check_boundaries(boundaries, samples.t[0], samples.t[n - 1])?;
-    let windows: Vec<Preintegrator> = boundaries
-        .par_windows(2)
-        .map(|w| window(samples, clipped, w[0], w[1], template))
-        .collect();
-    // Finite samples can still overflow a window (a noise density of 1e200, squared): name the
-    // sample that ends the first such window.
-    if let Some(m) = windows.iter().position(|w| !w.is_finite()) {
-        let end = samples.t.partition_point(|&x| x < boundaries[m + 1]);
-        return Err(Error::Overflow { index: end.min(n - 1) });
+    check_boundaries(boundaries, samples.t[0], samples.t[n - 1])
+}
+
+/// Finite samples can still overflow a window (a noise density of 1e200, squared): names the
+/// sample that ends the first such window (`windows` start at window `first`).
+fn check_windows(samples: &Samples<'_>, boundaries: &[f64], first: usize, windows: &[Preintegrator]) -> Result<()> {
+    match windows.iter().position(|w| !w.is_finite()) {
+        None => Ok(()),
+        Some(k) => {
+            let n = samples.t.len();
+            let end = samples.t.partition_point(|&x| x < boundaries[first + k + 1]);
+            Err(Error::Overflow { index: end.min(n - 1) })
+        }
     }
-    Ok(windows)
 }
 
 fn check_boundaries(b: &[f64], first: f64, last: f64) -> Result<()> {

@@ -1,0 +1,176 @@
+//! The complete state of a [`Preintegrator`] as a flat list of numbers, and back: what a copy in
+//! another process (Python's pickle, a checkpoint) needs to continue exactly where this one is,
+//! including the parts that are not public (covariance blocks, Jacobian, bias walk, the midpoint
+//! scheme's end samples and their noise correlations, the projection counter).
+//!
+//! Layout (all f64; matrices column-major): scheme (0 lie_euler, 1 midpoint), b_g (3), b_a (3),
+//! noise (4: densities, random walks), saturation factor, ΔR (9), Δv (3), Δp (3), Δt, covariance
+//! blocks (6 × 9), Jacobian (54), bias walk (flag, cross 54, var_g, var_a), first and last
+//! midpoint samples (each: flag, accel 3, gyro 3, var flag, var 2, scale 2), start and end cross
+//! covariances (54 each), intervals since the last projection.
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::blocks::{Cross, ZERO_CROSS};
+use super::midpoint::Sample;
+use super::{BiasWalk, Preintegrator, Scheme};
+use crate::error::{Error, Result};
+use crate::imu::Noise;
+
+/// Appends numbers to the flat state.
+struct Writer(Vec<f64>);
+
+impl Writer {
+    fn all(&mut self, x: &[f64]) {
+        self.0.extend_from_slice(x);
+    }
+    fn cross(&mut self, c: &Cross) {
+        for m in c.iter().flatten() {
+            self.all(m.as_slice());
+        }
+    }
+    fn flag(&mut self, b: bool) {
+        self.0.push(if b { 1.0 } else { 0.0 });
+    }
+    fn sample(&mut self, s: &Option<Sample>) {
+        self.flag(s.is_some());
+        let s = s.unwrap_or(Sample {
+            accel: Vector3::zeros(),
+            gyro: Vector3::zeros(),
+            var: None,
+            scale: [1.0; 2],
+        });
+        self.all(s.accel.as_slice());
+        self.all(s.gyro.as_slice());
+        self.flag(s.var.is_some());
+        self.all(&s.var.unwrap_or([0.0; 2]));
+        self.all(&s.scale);
+    }
+}
+
+/// Reads numbers from the flat state in order.
+struct Reader<'a>(&'a [f64]);
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> Result<[f64; N]> {
+        let Some((head, rest)) = self.0.split_first_chunk::<N>() else {
+            return Err(Error::RowCount {
+                input: N,
+                output: self.0.len(),
+            });
+        };
+        self.0 = rest;
+        Ok(*head)
+    }
+    fn one(&mut self) -> Result<f64> {
+        Ok(self.take::<1>()?[0])
+    }
+    fn flag(&mut self) -> Result<bool> {
+        Ok(self.one()? != 0.0)
+    }
+    fn vector(&mut self) -> Result<Vector3<f64>> {
+        Ok(Vector3::from(self.take::<3>()?))
+    }
+    fn matrix(&mut self) -> Result<Matrix3<f64>> {
+        Ok(Matrix3::from_column_slice(&self.take::<9>()?))
+    }
+    fn cross(&mut self) -> Result<Cross> {
+        let mut c = ZERO_CROSS;
+        for m in c.iter_mut().flatten() {
+            *m = self.matrix()?;
+        }
+        Ok(c)
+    }
+    fn sample(&mut self) -> Result<Option<Sample>> {
+        let present = self.flag()?;
+        let (accel, gyro) = (self.vector()?, self.vector()?);
+        let has_var = self.flag()?;
+        let (var, scale) = (self.take::<2>()?, self.take::<2>()?);
+        Ok(present.then_some(Sample {
+            accel,
+            gyro,
+            var: has_var.then_some(var),
+            scale,
+        }))
+    }
+}
+
+impl Preintegrator {
+    /// The complete state as a flat list (module docs); [`Preintegrator::from_state_words`] reads
+    /// it back into an equal preintegrator.
+    pub fn state_words(&self) -> Vec<f64> {
+        let mut w = Writer(Vec::with_capacity(512));
+        w.flag(self.scheme == Scheme::Midpoint);
+        w.all(self.bias_gyro.as_slice());
+        w.all(self.bias_accel.as_slice());
+        let n = &self.noise;
+        w.all(&[n.gyro_density, n.accel_density, n.gyro_random_walk, n.accel_random_walk]);
+        w.all(&[self.saturation_noise_factor]);
+        w.all(self.delta_rotation.as_slice());
+        w.all(self.delta_velocity.as_slice());
+        w.all(self.delta_position.as_slice());
+        w.all(&[self.delta_t]);
+        for m in &self.covariance {
+            w.all(m.as_slice());
+        }
+        w.cross(&self.jac);
+        w.flag(self.bias_walk.is_some());
+        let walk = self.bias_walk.clone().unwrap_or(BiasWalk {
+            cross: ZERO_CROSS,
+            var_gyro: 0.0,
+            var_accel: 0.0,
+        });
+        w.cross(&walk.cross);
+        w.all(&[walk.var_gyro, walk.var_accel]);
+        w.sample(&self.ends.first);
+        w.sample(&self.ends.last);
+        w.cross(&self.ends.start_cross);
+        w.cross(&self.ends.end_cross);
+        w.all(&[f64::from(self.since_projection)]);
+        w.0
+    }
+
+    /// The preintegrator whose [`Preintegrator::state_words`] are `words`; a list of another
+    /// length is an [`Error::RowCount`] (the values are taken as they are: they come from
+    /// `state_words`).
+    pub fn from_state_words(words: &[f64]) -> Result<Self> {
+        let mut r = Reader(words);
+        let scheme = if r.flag()? { Scheme::Midpoint } else { Scheme::Euler };
+        let (bias_gyro, bias_accel) = (r.vector()?, r.vector()?);
+        let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = r.take::<4>()?;
+        let noise = Noise {
+            gyro_density,
+            accel_density,
+            gyro_random_walk,
+            accel_random_walk,
+        };
+        let mut p = Preintegrator::new(bias_gyro, bias_accel, noise).with_scheme(scheme);
+        p.saturation_noise_factor = r.one()?;
+        p.delta_rotation = r.matrix()?;
+        (p.delta_velocity, p.delta_position) = (r.vector()?, r.vector()?);
+        p.delta_t = r.one()?;
+        for m in p.covariance.iter_mut() {
+            *m = r.matrix()?;
+        }
+        p.jac = r.cross()?;
+        let walk = r.flag()?;
+        let cross = r.cross()?;
+        let [var_gyro, var_accel] = r.take::<2>()?;
+        p.bias_walk = walk.then_some(BiasWalk {
+            cross,
+            var_gyro,
+            var_accel,
+        });
+        (p.ends.first, p.ends.last) = (r.sample()?, r.sample()?);
+        (p.ends.start_cross, p.ends.end_cross) = (r.cross()?, r.cross()?);
+        // A count below PROJECT_EVERY (16): exact in f64, and saturating on anything else.
+        p.since_projection = r.one()? as u32;
+        if !r.0.is_empty() {
+            return Err(Error::RowCount {
+                input: words.len() - r.0.len(),
+                output: words.len(),
+            });
+        }
+        Ok(p)
+    }
+}

@@ -1,0 +1,42 @@
+"""The windows an engine preintegrates, and the record it returns them in."""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray
+from imukit._preint_record import Preintegration, PreintParams
+
+
+class Windows(NamedTuple):
+    """Window edges (M + 1,): ``offsets`` on ``imu.seconds``' axis (what the engines integrate
+    over), ``t`` float seconds on ``imu.t``'s clock and ``t_ns`` exact int64 ns (or None), which
+    the record carries as ``t_start``/``t_end``."""
+
+    offsets: FloatArray
+    t: FloatArray
+    t_ns: NDArray[np.int64] | None
+
+
+def record(arrays: tuple[Any, ...], windows: Windows, params: PreintParams) -> Preintegration:
+    """The record of ``arrays`` ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian, combined or None)``."""
+    ns = windows.t_ns
+    r, v, p, dt, cov, jac, combined = arrays
+    t = np.array(windows.t, dtype=np.float64)  # a copy: the edges may be the caller's array
+    return Preintegration._owning(
+        delta_rotation=r,
+        delta_velocity=v,
+        delta_position=p,
+        delta_t=dt,
+        covariance=cov,
+        bias_jacobian=jac,
+        covariance_combined=combined,
+        t_start=t[:-1],
+        t_end=t[1:],
+        params=params,
+        t_start_ns=None if ns is None else np.array(ns[:-1]),
+        t_end_ns=None if ns is None else np.array(ns[1:]),
+    )
