@@ -148,18 +148,18 @@ class PreintegratedImu:
         # What was integrated, for the deprecated reintegrate(bias) only: reintegrate(imu, bias)
         # takes the samples explicitly.
         self._inputs: list[_Input] = []
-        self._replayable = True  # False for a copy from pickle: its log did not travel
         self._started = False  # whether anything was integrated (the span's start is set)
 
     def __reduce__(self) -> tuple[Any, ...]:
-        # The core pickles its complete state. The replay log of the deprecated reintegrate(bias)
-        # does not travel: a copy has none and refuses that call (reintegrate(imu, bias) works).
-        return (_restore, (self.params, self._scheme, self._core, self._span))
+        # The core pickles its complete state; the replay log of the deprecated reintegrate(bias)
+        # travels too (its samples are data), so a copy behaves as the original in every call.
+        state = (self._span, self._inputs, self._started, self._snapshot)
+        return (_restore, (self.params, self._scheme, self._core, *state))
 
     def _like(self, core: _core.Preintegrator, inputs: list[_Input], params: PreintParams) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
         out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
-        out._replayable, out._started = self._replayable, True
+        out._started = True
         out._snapshot, out._span = None, (math.nan, math.nan)
         return out
 
@@ -278,8 +278,6 @@ class PreintegratedImu:
             DeprecationWarning,
             stacklevel=2,
         )
-        if not self._replayable:
-            raise ParameterError("this copy does not hold its samples: use reintegrate(imu, bias)", argument="imu")
         return self._replay(imu)
 
     def _replay(self, bias: ImuBias) -> PreintegratedImu:
@@ -319,7 +317,6 @@ class PreintegratedImu:
             raise ParameterError("other: expected the same gravity")
         params = self.params.replace(combined=False)
         merged = self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
-        merged._replayable = self._replayable and other._replayable
         return merged
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
@@ -401,11 +398,18 @@ class PreintegratedImu:
 
 
 def _restore(
-    params: PreintParams, scheme: str, core: _core.Preintegrator, span: tuple[float, float]
+    params: PreintParams,
+    scheme: str,
+    core: _core.Preintegrator,
+    span: tuple[float, float],
+    inputs: list[_Input],
+    started: bool,
+    snapshot: Preintegration | None,
 ) -> PreintegratedImu:
     """A pickled :class:`PreintegratedImu` (its ``__reduce__``)."""
     out = PreintegratedImu(params)
-    out._scheme, out._core, out._span, out._replayable, out._started = scheme, core, span, False, True
+    out._scheme, out._core, out._span, out._inputs = scheme, core, span, inputs
+    out._started, out._snapshot = started, snapshot
     return out
 
 
