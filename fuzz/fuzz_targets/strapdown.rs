@@ -65,8 +65,8 @@ fuzz_target!(|input: Input| {
 
     let (mut pv, mut rot) = (vec![0.0; 6 * n], vec![0.0; 4 * n]);
     let out = input.store.then(|| StatesOut {
-        position_velocity: &mut pv,
-        rotation: &mut rot,
+        position_velocity: pv.as_chunks_mut().0,
+        rotation: rot.as_chunks_mut().0,
     });
     if let (Ok(x), true) = (a.samples().and_then(|s| integrate(&s, &initial, &bias, &options, out)), finite_input) {
         assert_finite("strapdown position", x.position.as_slice());
@@ -83,8 +83,8 @@ fuzz_target!(|input: Input| {
     let mut covariances = vec![0.0; 225 * covariance_count(n, every)];
     let outputs = Outputs {
         states: input.store.then(|| StatesOut {
-            position_velocity: &mut pv,
-            rotation: &mut rot,
+            position_velocity: pv.as_chunks_mut().0,
+            rotation: rot.as_chunks_mut().0,
         }),
         covariances: &mut covariances,
         every,

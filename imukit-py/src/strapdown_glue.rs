@@ -53,8 +53,8 @@ pub(crate) fn strapdown_integrate<'py>(
     {
         let (mut pv_guard, mut rot_guard) = (pv.readwrite(), rot.readwrite());
         let out = StatesOut {
-            position_velocity: pv_guard.as_slice_mut()?,
-            rotation: rot_guard.as_slice_mut()?,
+            position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
+            rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
         };
         py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out)))
             .map_err(|e| to_py(py, "imu / bias", e))?;
@@ -96,8 +96,8 @@ pub(crate) fn strapdown_propagate<'py>(
         let (mut pv_guard, mut rot_guard, mut c_guard) = (pv.readwrite(), rot.readwrite(), covariances.readwrite());
         let outputs = propagate::Outputs {
             states: Some(StatesOut {
-                position_velocity: pv_guard.as_slice_mut()?,
-                rotation: rot_guard.as_slice_mut()?,
+                position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
+                rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
             }),
             covariances: c_guard.as_slice_mut()?,
             every,

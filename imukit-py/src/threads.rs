@@ -41,7 +41,10 @@ fn pool(n: usize) -> PyResult<Arc<ThreadPool>> {
 /// Runs `f` (which may use rayon) on `threads` threads when given, else in the process-wide
 /// pool. Call it with the GIL released.
 pub(crate) fn run_in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
-    match threads.or(*lock(&PROCESS)) {
+    // A statement of its own: the lock is released before the kernel runs, so that calls from
+    // several Python threads run at once.
+    let size = threads.or(*lock(&PROCESS));
+    match size {
         Some(n) => Ok(pool(n)?.install(f)),
         None => Ok(f()),
     }

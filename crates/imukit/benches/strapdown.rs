@@ -50,8 +50,8 @@ fn strapdown(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("integrate", scheme.name()), &options, |b, options| {
             b.iter(|| {
                 let out = StatesOut {
-                    position_velocity: &mut pv,
-                    rotation: &mut rot,
+                    position_velocity: pv.as_chunks_mut().0,
+                    rotation: rot.as_chunks_mut().0,
                 };
                 integrate(black_box(&samples), &initial, &Bias::default(), options, Some(out))
             })
@@ -69,8 +69,8 @@ fn strapdown(c: &mut Criterion) {
         b.iter(|| {
             let outputs = Outputs {
                 states: Some(StatesOut {
-                    position_velocity: &mut pv,
-                    rotation: &mut rot,
+                    position_velocity: pv.as_chunks_mut().0,
+                    rotation: rot.as_chunks_mut().0,
                 }),
                 covariances: &mut covariances,
                 every: 100,

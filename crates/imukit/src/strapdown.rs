@@ -75,40 +75,32 @@ impl Default for Options {
 /// `(n, 4)` array that scipy can own while the `(n, 6)` positions and velocities stay read-only.
 #[derive(Debug)]
 pub struct StatesOut<'a> {
-    /// `6n` values: rows `[p, v]`.
-    pub position_velocity: &'a mut [f64],
-    /// `4n` values: rows `q` (`[x, y, z, w]`).
-    pub rotation: &'a mut [f64],
+    /// `n` rows `[p, v]`.
+    pub position_velocity: &'a mut [[f64; 6]],
+    /// `n` rows `q` (`[x, y, z, w]`).
+    pub rotation: &'a mut [[f64; 4]],
 }
 
 impl StatesOut<'_> {
     pub(crate) fn check(&self, n: usize) -> Result<()> {
-        for (name, len, width) in [
-            ("states", self.position_velocity.len(), 6),
-            ("states", self.rotation.len(), 4),
-        ] {
-            if len != width * n {
-                return Err(Error::RowCount {
-                    input: n,
-                    output: len / width,
-                }
-                .in_argument(name));
+        for len in [self.position_velocity.len(), self.rotation.len()] {
+            if len != n {
+                return Err(Error::RowCount { input: n, output: len }.in_argument("states"));
             }
         }
         Ok(())
     }
 
     pub(crate) fn store(&mut self, k: usize, x: &NavState) {
-        let q = x.rotation.coords;
-        self.position_velocity[6 * k..6 * k + 3].copy_from_slice(x.position.as_slice());
-        self.position_velocity[6 * k + 3..6 * k + 6].copy_from_slice(x.velocity.as_slice());
-        self.rotation[4 * k..4 * k + 4].copy_from_slice(&[q.x, q.y, q.z, q.w]);
+        let (p, v, q) = (x.position, x.velocity, x.rotation.coords);
+        self.position_velocity[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
+        self.rotation[k] = [q.x, q.y, q.z, q.w];
     }
 
     /// The first stored state with a non-finite value.
     fn first_non_finite(&self) -> Option<usize> {
-        let pv = self.position_velocity.chunks_exact(6);
-        pv.zip(self.rotation.chunks_exact(4))
+        let pv = self.position_velocity.iter();
+        pv.zip(self.rotation.iter())
             .position(|(a, b)| a.iter().any(|v| !v.is_finite()) || !crate::quat::is_unit_coords(b))
     }
 }

@@ -129,7 +129,7 @@ fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     };
     let last = strapdown::integrate(&samples, &initial, &bias, &options, None);
     assert!(matches!(last, Err(Error::Overflow { index: 1 })), "{last:?}");
-    let (mut pv, mut rot) = ([0.0; 12], [0.0; 8]);
+    let (mut pv, mut rot) = ([[0.0; 6]; 2], [[0.0; 4]; 2]);
     let states = StatesOut {
         position_velocity: &mut pv,
         rotation: &mut rot,

@@ -28,7 +28,7 @@ from imukit.cli._initial import (
     levelled_at_rest,
     trim_to_truth,
 )
-from imukit.strapdown import SCHEMES, integrate
+from imukit.strapdown import SCHEME_ALIASES, SCHEMES, integrate
 
 MAX_DT = 0.02  # [s] longest ground-truth interval the ATE interpolates across (imukit.eval.ape's default)
 
@@ -38,8 +38,8 @@ reckoning: no correction, so the error grows with time; see docs/strapdown.md).
 
 Reads: PATH in any format imukit detects (an EuRoC folder, a ROS bag, ...; `imukit --help`).
 Frames and units: body = the IMU frame; world z up, gravity (0, 0, -9.81) m/s^2; positions in m.
-Schemes: euler (order 1), midpoint (order 2, VINS-Mono's), rk4 (order 4), exp (exact while the
-samples are held over a step; order 1 on smooth motion).
+Schemes: lie_euler (order 1; the old name euler still works), midpoint (order 2, VINS-Mono's),
+rk4 (order 4), exp (exact while the samples are held over a step; order 1 on smooth motion).
 
 The initial state:
   - with ground truth in PATH: the truth's position, velocity and attitude interpolated at the
@@ -71,7 +71,12 @@ def add(commands: Any) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, CSV, bag, ...)")
-    p.add_argument("--scheme", choices=SCHEMES, default="midpoint", help="integration scheme (default: %(default)s)")
+    p.add_argument(
+        "--scheme",
+        choices=(*SCHEMES, *SCHEME_ALIASES),  # the deprecated names keep working (with a warning)
+        default="midpoint",
+        help="integration scheme (default: %(default)s)",
+    )
     p.add_argument(
         "--bias-from-groundtruth", action="store_true", help="subtract the ground truth's biases at the start"
     )

@@ -59,14 +59,20 @@ fn horner<const N: usize>(x: f64, c: &[f64; N]) -> f64 {
     acc
 }
 
+/// The Taylor series `c` (in θ²) below `switch`, else the closed form.
+#[inline(always)]
+fn taylor_below<const N: usize>(theta: f64, switch: f64, c: &[f64; N], closed: impl FnOnce() -> f64) -> f64 {
+    if theta < switch {
+        horner(theta * theta, c)
+    } else {
+        closed()
+    }
+}
+
 /// `sin θ / θ` (series below θ = 0.5, first omitted term < 5e-17).
 #[inline]
 pub fn sinc(theta: f64) -> f64 {
-    if theta < 0.5 {
-        horner(theta * theta, &SINC)
-    } else {
-        theta.sin() / theta
-    }
+    taylor_below(theta, 0.5, &SINC, || theta.sin() / theta)
 }
 
 /// `(sin θ/θ, (1 − cos θ)/θ²)`, the Rodrigues coefficients of `Exp(φ) = I + a [φ]× + b [φ]×²`.
@@ -120,11 +126,7 @@ pub fn theta_minus_sin_over_cube(theta: f64) -> f64 {
         -1.0 / 362_880.0,
         1.0 / 39_916_800.0,
     ];
-    if theta < 0.2 {
-        horner(theta * theta, &C)
-    } else {
-        (theta - theta.sin()) / (theta * theta * theta)
-    }
+    taylor_below(theta, 0.2, &C, || (theta - theta.sin()) / (theta * theta * theta))
 }
 
 /// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ² = Σ (−1)ᵏ θ²ᵏ/(2k+4)!`.
@@ -137,11 +139,9 @@ pub fn cos_remainder(theta: f64) -> f64 {
         -1.0 / 3_628_800.0,
         1.0 / 479_001_600.0,
     ];
-    if theta < 0.2 {
-        horner(theta * theta, &C)
-    } else {
+    taylor_below(theta, 0.2, &C, || {
         (0.5 - one_minus_cos_over_sq(theta)) / (theta * theta)
-    }
+    })
 }
 
 /// `(1 − (θ/2) cot(θ/2))/θ²`, equal to `1/θ² − (1 + cos θ)/(2 θ sin θ)` but finite at θ = π.
@@ -155,12 +155,10 @@ pub fn inv_jacobian_coefficient(theta: f64) -> f64 {
         1.0 / 1_209_600.0,
         1.0 / 47_900_160.0,
     ];
-    if theta < 0.2 {
-        horner(theta * theta, &C)
-    } else {
+    taylor_below(theta, 0.2, &C, || {
         let half = 0.5 * theta;
         (1.0 - half * half.cos() / half.sin()) / (theta * theta)
-    }
+    })
 }
 
 #[cfg(test)]
