@@ -30,9 +30,9 @@ def as_float_array(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float64 array, refusing dtypes that are not real numbers."""
     arr = np.asarray(x)
     if arr.dtype.kind not in "fiub":
-        raise DTypeError(f"{name}: expected real numbers, got an array of dtype {arr.dtype}")
+        raise DTypeError(f"expected real numbers, got an array of dtype {arr.dtype}", argument=name)
     if arr.dtype.kind == "b":
-        raise DTypeError(f"{name}: expected real numbers, got booleans")
+        raise DTypeError("expected real numbers, got booleans", argument=name)
     return arr.astype(np.float64, copy=False)
 
 
@@ -40,7 +40,7 @@ def vector3(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as one finite float64 3-vector; :class:`ShapeError` / :class:`NonFiniteError` naming ``name``."""
     v = as_float_array(x, name)
     if v.shape != (3,):
-        raise ShapeError(f"{name}: expected shape (3,), got {v.shape}")
+        raise ShapeError(f"expected shape (3,), got {v.shape}", argument=name)
     check_finite_rows(v, name, "element")
     return v
 
@@ -59,7 +59,7 @@ def real_scalar(value: object, name: str, *, what: str, accept: Callable[[float]
         except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond float64
             pass
     if math.isnan(x) or not accept(x):
-        raise ParameterError(f"{name}: expected {what}, got {value!r}")
+        raise ParameterError(f"expected {what}, got {value!r}", argument=name)
     return x
 
 
@@ -70,7 +70,7 @@ def _shape_text(tail: tuple[int, ...]) -> str:
 def check_tail(arr: FloatArray, name: str, tail: tuple[int, ...]) -> None:
     """Raise :class:`ShapeError` unless ``arr.shape`` ends with ``tail``."""
     if arr.ndim < len(tail) or arr.shape[arr.ndim - len(tail) :] != tail:
-        raise ShapeError(f"{name}: expected shape {_shape_text(tail)}, got {arr.shape}")
+        raise ShapeError(f"expected shape {_shape_text(tail)}, got {arr.shape}", argument=name)
 
 
 def batched(
@@ -124,7 +124,7 @@ def matrix4_out(m: FloatArray, scalar_first: bool) -> FloatArray:
 def choice(value: str, name: str, allowed: tuple[str, ...]) -> str:
     """Validate a string option."""
     if value not in allowed:
-        raise ParameterError(f"{name}: expected one of {allowed}, got {value!r}")
+        raise ParameterError(f"expected one of {allowed}, got {value!r}", argument=name)
     return value
 
 
@@ -175,7 +175,9 @@ def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str =
     """
     if t_ns is None:
         if t is None:
-            raise ParameterError(f"{name}: expected (N,) float seconds; {name} may be None only when t_ns is given")
+            raise ParameterError(
+                f"expected (N,) float seconds; {name} may be None only when t_ns is given", argument=name
+            )
         raw = _stamp_array(t, name)
         if raw.dtype.kind in "iu":
             stamps = nanoseconds(raw, name)
@@ -189,13 +191,16 @@ def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str =
         return Stamps(seconds_from_ns(stamps), stamps)
     seconds = float_seconds(t, name)
     if stamps.shape != seconds.shape:
-        raise ShapeError(f"t_ns: expected shape (N,) with N = len({name}) = {len(seconds)}, got {stamps.shape}")
+        raise ShapeError(
+            f"expected shape (N,) with N = len({name}) = {len(seconds)}, got {stamps.shape}", argument="t_ns"
+        )
     off = np.abs(seconds - seconds_from_ns(stamps))
     if off.max() > _T_NS_TOLERANCE_S:
         k = int(np.argmax(off))
         raise TimestampError(
-            f"t_ns: sample {k} is {stamps[k]} ns but {name}[{k}] = {float(seconds[k])!r} s "
-            f"(off by {off[k]:.3g} s; {name} must be t_ns / 1e9, not relative seconds)"
+            f"sample {k} is {stamps[k]} ns but {name}[{k}] = {float(seconds[k])!r} s "
+            f"(off by {off[k]:.3g} s; {name} must be t_ns / 1e9, not relative seconds)",
+            argument="t_ns",
         )
     return Stamps(seconds, stamps)
 
@@ -203,7 +208,7 @@ def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str =
 def _stamp_array(x: ArrayLike, name: str) -> NDArray[Any]:
     raw = np.asarray(x)
     if raw.ndim != 1 or len(raw) == 0:
-        raise ShapeError(f"{name}: expected shape (N,) with N ≥ 1, got {raw.shape}")
+        raise ShapeError(f"expected shape (N,) with N ≥ 1, got {raw.shape}", argument=name)
     return raw
 
 
@@ -247,12 +252,13 @@ def int64_stamps(raw: NDArray[Any], name: str) -> NDArray[np.int64]:
     """Integer nanosecond stamps as int64: strictly increasing, within int64, and spanning less than
     2⁶³ ns (292 years), so that every offset from the first stamp is an int64 too."""
     if raw.dtype.kind == "u" and len(raw) and raw.max() > np.iinfo(np.int64).max:
-        raise ParameterError(f"{name}: integer nanoseconds exceed the int64 range (max {raw.max()})")
+        raise ParameterError(f"integer nanoseconds exceed the int64 range (max {raw.max()})", argument=name)
     stamps = raw.astype(np.int64)
     check_increasing(stamps, name, "ns")
     if len(stamps) and int(stamps[-1]) - int(stamps[0]) > np.iinfo(np.int64).max:
         raise TimestampError(
-            f"{name}: the stamps span {int(stamps[-1]) - int(stamps[0])} ns, more than int64 can hold (292 years)"
+            f"the stamps span {int(stamps[-1]) - int(stamps[0])} ns, more than int64 can hold (292 years)",
+            argument=name,
         )
     return stamps
 
@@ -283,7 +289,7 @@ def check_finite_rows(arr: FloatArray, name: str, what: str = "sample") -> None:
     bad = ~np.isfinite(arr)
     if bad.any():
         k = int(np.argmax(bad.reshape(len(arr), -1).any(axis=1)))
-        raise NonFiniteError(f"{name}: non-finite value at {what} {k}: {arr[k].tolist()}")
+        raise NonFiniteError(f"non-finite value at {what} {k}: {arr[k].tolist()}", argument=name)
 
 
 def check_increasing(t: NDArray[np.int64] | FloatArray, name: str, unit: str) -> None:
@@ -295,7 +301,9 @@ def check_increasing(t: NDArray[np.int64] | FloatArray, name: str, unit: str) ->
     if bad.size:
         k = int(bad[0])
         step = int(t[k + 1]) - int(t[k]) if t.dtype.kind in "iu" else float(t[k + 1]) - float(t[k])
-        raise TimestampError(f"{name}: time must increase strictly: step into sample {k + 1} has dt = {step} {unit}")
+        raise TimestampError(
+            f"time must increase strictly: step into sample {k + 1} has dt = {step} {unit}", argument=name
+        )
 
 
 def readonly_array(
@@ -307,6 +315,6 @@ def readonly_array(
     """
     arr = as_float_array(x, name)
     if arr.shape != shape:
-        raise ShapeError(f"{name}: expected shape {shape_text}, got {arr.shape}")
+        raise ShapeError(f"expected shape {shape_text}, got {arr.shape}", argument=name)
     check_finite_rows(arr, name, what)
     return readonly_copy(arr)

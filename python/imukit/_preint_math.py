@@ -72,7 +72,7 @@ def _mv(m: FloatArray, v: FloatArray) -> FloatArray:
 def bias_change(pre: Preintegration, bias: ImuBias) -> FloatArray:
     """``δb = bias − integration bias`` (6,), ``[δb_g, δb_a]``."""
     if not isinstance(bias, ImuBias):
-        raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+        raise ParameterError(f"expected an imukit.ImuBias, got {type(bias).__name__}", argument="bias")
     b = pre.params.bias
     return np.concatenate([bias.gyro - b.gyro, bias.accel - b.accel])
 
@@ -84,7 +84,7 @@ def corrected(pre: Preintegration, bias: ImuBias | None = None) -> Deltas:
         return Deltas(pre.delta_rotation, pre.delta_velocity, pre.delta_position)
     d = pre.bias_jacobian @ bias_change(pre, bias)
     if not (np.isfinite(d).all() and np.isfinite(np.linalg.norm(d, axis=-1)).all()):
-        raise NonFiniteError(f"bias: too far from the integration bias to correct for: J δb = {d.tolist()}")
+        raise NonFiniteError(f"too far from the integration bias to correct for: J δb = {d.tolist()}", argument="bias")
     return Deltas(
         pre.delta_rotation @ so3.exp(d[:, 0:3]), pre.delta_velocity + d[:, 3:6], pre.delta_position + d[:, 6:9]
     )

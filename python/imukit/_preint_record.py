@@ -52,7 +52,7 @@ def scheme_name(scheme: str) -> str:
 def _flag(value: object, name: str) -> bool:
     """``value`` as a bool, else :class:`ParameterError` naming ``name`` (1 or "yes" are mistakes)."""
     if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name}: expected a bool, got {value!r}")
+        raise ParameterError(f"expected a bool, got {value!r}", argument=name)
     return bool(value)
 
 
@@ -75,10 +75,10 @@ class PreintParams:
 
     def __post_init__(self) -> None:
         if not isinstance(self.noise, ImuNoise):
-            raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(self.noise).__name__}")
+            raise ParameterError(f"expected an imukit.ImuNoise, got {type(self.noise).__name__}", argument="noise")
         bias = ImuBias() if self.bias is None else self.bias
         if not isinstance(bias, ImuBias):
-            raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
+            raise ParameterError(f"expected an imukit.ImuBias or None, got {type(bias).__name__}", argument="bias")
         factor = real_scalar(
             self.saturation_noise_factor,
             "saturation_noise_factor",
@@ -179,7 +179,9 @@ class Preintegration:
 
     def __post_init__(self) -> None:
         if not isinstance(self.params, PreintParams):
-            raise ParameterError(f"params: expected an imukit.PreintParams, got {type(self.params).__name__}")
+            raise ParameterError(
+                f"expected an imukit.PreintParams, got {type(self.params).__name__}", argument="params"
+            )
         m = np.shape(self.delta_t)[0] if np.ndim(self.delta_t) == 1 else -1
         for name, tail in _SHAPES.items():
             value = getattr(self, name)

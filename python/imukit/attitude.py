@@ -87,13 +87,13 @@ def integrate_attitude(
     rates = as_float_array(gyro, "gyro")
     check_tail(rates, "gyro", (3,))
     if rates.shape != (len(seconds), 3):
-        raise ShapeError(f"gyro: expected shape (N, 3) with N = len(t) = {len(seconds)}, got {rates.shape}")
+        raise ShapeError(f"expected shape (N, 3) with N = len(t) = {len(seconds)}, got {rates.shape}", argument="gyro")
     if initial is None:
         start = np.array([0.0, 0.0, 0.0, 1.0])
     elif isinstance(initial, Rotation) and initial.single:
         start = initial.as_quat()
     else:
-        raise ParameterError(f"initial: expected a single scipy Rotation or None, got {initial!r}")
+        raise ParameterError(f"expected a single scipy Rotation or None, got {initial!r}", argument="initial")
     tolerance = real_scalar(
         gimbal_tolerance_rad,
         "gimbal_tolerance_rad",

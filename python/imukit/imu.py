@@ -111,7 +111,9 @@ class ImuData(Frozen):
                 k = int(over[0])
                 ns = stamps.t_ns
                 step = f"{steps[k]:.12g} s" if ns is None else f"{int(ns[k + 1] - ns[k])} ns"
-                raise TimestampError(f"t: gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s")
+                raise TimestampError(
+                    f"gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s", argument="t"
+                )
         # t may be the caller's array; t_ns and seconds are fresh.
         self._set(readonly_copy(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *_ranges(gyro_range, accel_range))
 
@@ -159,7 +161,7 @@ class ImuData(Frozen):
     def rate_hz(self) -> float:
         """Median sample rate ``median(1 / dt)`` [Hz]; needs at least 2 samples."""
         if len(self) < 2:
-            raise ShapeError("rate_hz: a single sample has no rate")
+            raise ShapeError("a single sample has no rate", argument="rate_hz")
         return float(np.median(1.0 / self.dt))
 
     @property
@@ -176,7 +178,9 @@ class ImuData(Frozen):
             raise TypeError(f"ImuData indices must be slices, got {type(index).__name__}")
         start, stop, step = index.indices(len(self))
         if step <= 0 or len(range(start, stop, step)) == 0:
-            raise ShapeError(f"index: ImuData slices need a positive step and at least 1 sample, got {index}")
+            raise ShapeError(
+                f"ImuData slices need a positive step and at least 1 sample, got {index}", argument="index"
+            )
         t = self.t if self.t_ns is None else self.t_ns
         ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}
         return ImuData(t[index], self.gyro[index], self.accel[index], **ranges)

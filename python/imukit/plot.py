@@ -35,7 +35,7 @@ def _figure(name: str, rows: int = 1, height: float = 5.0) -> tuple[Any, list[An
         from matplotlib.figure import Figure
     except ImportError as e:
         raise MissingDependencyError(
-            f'{name}: needs matplotlib, which is not installed (pip install "imukit[plot]")'
+            'needs matplotlib, which is not installed (pip install "imukit[plot]")', argument=name
         ) from e
     fig = Figure(figsize=(7.5, height), dpi=120, layout="constrained")
     FigureCanvasAgg(fig)
@@ -51,7 +51,7 @@ def _save(fig: Any, path: str | os.PathLike[str]) -> Any:
 def _positions(value: Trajectory | ArrayLike, name: str) -> np.ndarray:
     p = value.position if isinstance(value, Trajectory) else as_float_array(value, name)
     if p.ndim != 2 or p.shape[1] != 3:
-        raise ShapeError(f"{name}: expected a Trajectory or (N, 3) positions [m], got shape {p.shape}")
+        raise ShapeError(f"expected a Trajectory or (N, 3) positions [m], got shape {p.shape}", argument=name)
     return np.asarray(p)
 
 
@@ -65,7 +65,7 @@ def trajectory_top_view(
     """Top view (world x east / y north, metres, equal scales) of each estimate, labelled by its key,
     and the truth as a black line; start marked with a circle. Written as a PNG to ``path``."""
     if not estimates and truth is None:
-        raise ParameterError("estimates: expected at least one trajectory to draw")
+        raise ParameterError("expected at least one trajectory to draw", argument="estimates")
     fig, (ax,) = _figure("trajectory_top_view", height=6.0)
     if truth is not None:
         p = _positions(truth, "truth")
@@ -95,7 +95,7 @@ def attitude_error_plot(
     :class:`imukit.eval.AttitudeError`, labelled by its key (samples without truth left blank)."""
     time = as_float_array(t, "t")
     if not errors:
-        raise ParameterError("errors: expected at least one AttitudeError to draw")
+        raise ParameterError("expected at least one AttitudeError to draw", argument="errors")
     fig, axes = _figure("attitude_error_plot", rows=3, height=7.0)
     for label, error in errors.items():
         if len(error.total) != len(time):
@@ -127,7 +127,7 @@ def convergence_plot(
     with dashed guides of slope ``orders`` (error ∝ hᵖ) fanning out from the largest step."""
     h = as_float_array(step_sizes, "step_sizes")
     if h.ndim != 1 or len(h) < 2:
-        raise ShapeError(f"step_sizes: expected (M,) with M ≥ 2, got shape {h.shape}")
+        raise ShapeError(f"expected (M,) with M ≥ 2, got shape {h.shape}", argument="step_sizes")
     fig, (ax,) = _figure("convergence_plot")
     finite: list[float] = []
     for label, values in errors.items():

@@ -92,7 +92,7 @@ def _params(
     """``params``, or the one the keyword options describe."""
     if params is not None:
         if not isinstance(params, PreintParams):
-            raise ParameterError(f"params: expected an imukit.PreintParams, got {type(params).__name__}")
+            raise ParameterError(f"expected an imukit.PreintParams, got {type(params).__name__}", argument="params")
         return params
     return PreintParams(noise, bias, gravity, scheme, combined, saturation_noise_factor)  # type: ignore[arg-type]
 
@@ -235,7 +235,7 @@ class PreintegratedImu:
         ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
         rounding (1e-12 relative) and independent of the core count."""
         if not isinstance(imu, ImuData):
-            raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+            raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated)
         self._inputs.append(imu)
         self._changed(float(imu.t[0]), float(imu.t[-1]))
@@ -271,7 +271,7 @@ class PreintegratedImu:
         """
         if isinstance(imu, ImuData):
             if not isinstance(bias, ImuBias):
-                raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+                raise ParameterError(f"expected an imukit.ImuBias, got {type(bias).__name__}", argument="bias")
             return preintegrate(imu, self.params.replace(bias=bias))
         warnings.warn(
             "reintegrate(bias) is deprecated: pass the samples, reintegrate(imu, bias)",
@@ -312,9 +312,9 @@ class PreintegratedImu:
         gravity; in the midpoint scheme ``other`` starts with this one's last sample. The bias random
         walk is not merged: the result has no ``covariance_combined``."""
         if not isinstance(other, PreintegratedImu):
-            raise ParameterError(f"other: expected an imukit.PreintegratedImu, got {type(other).__name__}")
+            raise ParameterError(f"expected an imukit.PreintegratedImu, got {type(other).__name__}", argument="other")
         if self.params.gravity != other.params.gravity:
-            raise ParameterError("other: expected the same gravity")
+            raise ParameterError("expected the same gravity", argument="other")
         params = self.params.replace(combined=False)
         merged = self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
         return merged
@@ -372,7 +372,7 @@ class PreintegratedImu:
         """Deltas for ``bias`` to first order, without re-integration (rotation right-applied):
         ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb`` with ``δb = bias − integration bias``."""
         if not isinstance(bias, ImuBias):
-            raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+            raise ParameterError(f"expected an imukit.ImuBias, got {type(bias).__name__}", argument="bias")
         r, v, p = corrected(self.snapshot(), bias)
         return Rotation.from_matrix(r[0]), v[0], p[0]
 
@@ -454,10 +454,10 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
     """The edges on ``imu.seconds``' axis and as the record's times (``boundaries`` on ``imu.t``'s
     clock: integer ns for integer stamps, else float seconds)."""
     if not isinstance(imu, ImuData):
-        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+        raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
     raw = np.asarray(boundaries)
     if raw.ndim != 1:
-        raise ShapeError(f"boundaries: expected shape (M,), got {raw.shape}")
+        raise ShapeError(f"expected shape (M,), got {raw.shape}", argument="boundaries")
     if raw.dtype.kind in "iu" and imu.t_ns is not None:
         ns = raw.astype(np.int64)
         return Windows(seconds_from_ns(ns - imu.t_ns[0]), ns / 1e9, ns)
@@ -476,7 +476,7 @@ def _threads(threads: object) -> int | None:
     if threads is not None and (
         isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= _MAX_THREADS
     ):
-        raise ParameterError(f"threads: expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}")
+        raise ParameterError(f"expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}", argument="threads")
     return threads
 
 
@@ -543,7 +543,7 @@ def preintegrate_windows(
         return [like._like(core, [_Window(imu, b[m], b[m + 1])], p) for m, core in enumerate(cores)]
     params = _params(params, None, None, gravity, scheme, combined, saturation_noise_factor)
     if engine not in ENGINES:
-        raise ParameterError(f"engine: expected one of {tuple(ENGINES)}, got {engine!r}")
+        raise ParameterError(f"expected one of {tuple(ENGINES)}, got {engine!r}", argument="engine")
     return ENGINES[engine](imu, _windows(imu, boundaries), params, n)
 
 
@@ -551,9 +551,11 @@ def reintegrate(preintegration: Preintegration, imu: ImuData, bias: ImuBias, *, 
     """The windows of ``preintegration`` preintegrated again from the samples ``imu`` with ``bias``
     (the same options otherwise): exact, where :func:`corrected` is first order."""
     if not isinstance(preintegration, Preintegration):
-        raise ParameterError(f"preintegration: expected an imukit.Preintegration, got {type(preintegration).__name__}")
+        raise ParameterError(
+            f"expected an imukit.Preintegration, got {type(preintegration).__name__}", argument="preintegration"
+        )
     if not isinstance(bias, ImuBias):
-        raise ParameterError(f"bias: expected an imukit.ImuBias, got {type(bias).__name__}")
+        raise ParameterError(f"expected an imukit.ImuBias, got {type(bias).__name__}", argument="bias")
     start: NDArray[Any] = preintegration.t_start
     end: NDArray[Any] = preintegration.t_end
     if preintegration.t_start_ns is not None and preintegration.t_end_ns is not None and imu.t_ns is not None:
@@ -594,7 +596,7 @@ def regular_boundaries(imu: ImuData, period: float) -> NDArray[Any]:
     the last edge past the last sample). At least one window: a longer period is a
     :class:`ParameterError` naming ``period``."""
     if not isinstance(imu, ImuData):
-        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+        raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
     window_s = real_scalar(period, "period", what="a positive, finite period [s]", accept=lambda x: 0 < x < math.inf)
     if imu.t_ns is not None:
         step = max(round(window_s * 1e9), 1)

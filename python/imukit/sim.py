@@ -62,7 +62,7 @@ def _finite(value: object, name: str) -> float:
 
 def _single(r: Rotation, name: str) -> Rotation:
     if not (isinstance(r, Rotation) and r.single):
-        raise ParameterError(f"{name}: expected a single scipy Rotation, got {r!r}")
+        raise ParameterError(f"expected a single scipy Rotation, got {r!r}", argument=name)
     return r
 
 
@@ -168,14 +168,16 @@ class Waypoints:
     ) -> None:
         t = as_float_array(times, "times")
         if t.ndim != 1 or len(t) < 2 or not np.all(np.diff(t) > 0):
-            raise ParameterError(f"times: expected (M,) strictly increasing seconds, M ≥ 2, got {t!r}")
+            raise ParameterError(f"expected (M,) strictly increasing seconds, M ≥ 2, got {t!r}", argument="times")
         check_finite_rows(t, "times")
         p = as_float_array(positions, "positions")
         if p.shape != (len(t), 3):
-            raise ShapeError(f"positions: expected shape (M, 3) with M = len(times) = {len(t)}, got {p.shape}")
+            raise ShapeError(
+                f"expected shape (M, 3) with M = len(times) = {len(t)}, got {p.shape}", argument="positions"
+            )
         check_finite_rows(p, "positions")
         if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
-            raise ShapeError(f"rotations: expected a scipy Rotation of length M = len(times) = {len(t)}")
+            raise ShapeError(f"expected a scipy Rotation of length M = len(times) = {len(t)}", argument="rotations")
         self.times = t
         self._position = CubicSpline(t, p, bc_type=bc_type)
         self._rotation = RotationSpline(t, rotations)
@@ -183,8 +185,8 @@ class Waypoints:
     def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
         if t[0] < self.times[0] or t[-1] > self.times[-1]:
             raise ParameterError(
-                f"duration: the waypoints span [{self.times[0]}, {self.times[-1]}] s, "
-                f"the simulation [{t[0]}, {t[-1]}] s"
+                f"the waypoints span [{self.times[0]}, {self.times[-1]}] s, the simulation [{t[0]}, {t[-1]}] s",
+                argument="duration",
             )
         try:
             rot = self._rotation(t)
@@ -249,7 +251,7 @@ class SensorErrors:
             )
         matrix = as_float_array(self.matrix, "matrix")
         if matrix.shape != (3, 3):
-            raise ShapeError(f"matrix: expected shape (3, 3), got {matrix.shape}")
+            raise ShapeError(f"expected shape (3, 3), got {matrix.shape}", argument="matrix")
         check_finite_rows(matrix, "matrix", "row")
 
     @classmethod
@@ -259,7 +261,7 @@ class SensorErrors:
         s = vector3(scale, "scale")
         m = as_float_array(misalignment, "misalignment")
         if m.shape != (3, 3) or np.any(np.diag(m) != 0.0):
-            raise ShapeError(f"misalignment: expected a (3, 3) matrix with a zero diagonal, got {m!r}")
+            raise ShapeError(f"expected a (3, 3) matrix with a zero diagonal, got {m!r}", argument="misalignment")
         check_finite_rows(m, "misalignment", "row")
         return cls(matrix=(np.eye(3) + np.diag(s)) @ (np.eye(3) + m), **kwargs)
 
@@ -308,7 +310,7 @@ def simulate(
     )
     begin = _finite(start, "start")
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**64:
-        raise ParameterError(f"seed: expected an int in [0, 2**64), got {seed!r}")
+        raise ParameterError(f"expected an int in [0, 2**64), got {seed!r}", argument="seed")
     for name, value, kind, shown in (
         ("gyro_errors", gyro_errors, SensorErrors, "imukit.sim.SensorErrors"),
         ("accel_errors", accel_errors, SensorErrors, "imukit.sim.SensorErrors"),
@@ -316,18 +318,22 @@ def simulate(
         ("bias", bias, ImuBias, "imukit.ImuBias"),
     ):
         if value is not None and not isinstance(value, kind):
-            raise ParameterError(f"{name}: expected an {shown} or None, got {type(value).__name__}")
+            raise ParameterError(f"expected an {shown} or None, got {type(value).__name__}", argument=name)
     g = vector3(gravity, "gravity")
     n = math.floor(span * rate_hz + 1e-9) + 1
     if n > _MAX_SAMPLES:
-        raise ParameterError(f"duration: {duration!r} s at {rate_hz!r} Hz is {n} samples, more than {_MAX_SAMPLES}")
+        raise ParameterError(
+            f"{duration!r} s at {rate_hz!r} Hz is {n} samples, more than {_MAX_SAMPLES}", argument="duration"
+        )
     t = begin + np.arange(n) / rate_hz
     if not np.all(t[1:] > t[:-1]):
-        raise ParameterError(f"start: {start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show")
+        raise ParameterError(
+            f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
+        )
     truth = trajectory._truth(t, g)
     if not all(np.isfinite(a).all() for a in truth):
         names = " / ".join(_parameter_names(trajectory))
-        raise NonFiniteError(f"{names}: the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s")
+        raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
     position, velocity, quat, gyro, accel = truth
     n = len(t)
     bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))

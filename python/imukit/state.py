@@ -54,7 +54,7 @@ class NavState(Frozen):
 
     def __init__(self, position: ArrayLike, velocity: ArrayLike, rotation: Rotation) -> None:
         if not (isinstance(rotation, Rotation) and rotation.single):
-            raise ParameterError(f"rotation: expected a single scipy Rotation, got {rotation!r}")
+            raise ParameterError(f"expected a single scipy Rotation, got {rotation!r}", argument="rotation")
         p = readonly_array(position, "position", (3,), "(3,)", "element")
         self._set(p, readonly_array(velocity, "velocity", (3,), "(3,)", "element"), rotation)
 
@@ -150,18 +150,20 @@ class Trajectory(Frozen):
                 else repr(rotation)
             )
             length = f" of length {len(rotation)}" if isinstance(rotation, Rotation) and not rotation.single else ""
-            raise ShapeError(f"rotation: expected a scipy Rotation of length N = len(t) = {n}, got {got}{length}")
+            raise ShapeError(
+                f"expected a scipy Rotation of length N = len(t) = {n}, got {got}{length}", argument="rotation"
+            )
         # A copy: the caller's Rotation could be modified in place (Rotation.__setitem__).
         rotation_ = rotation_from_unit_quat(rotation.as_quat())
         if (covariance is None) != (covariance_t is None):
-            raise ParameterError("covariance: give covariance and covariance_t together, or neither")
+            raise ParameterError("give covariance and covariance_t together, or neither", argument="covariance")
         cov = cov_t = None
         if covariance is not None and covariance_t is not None:
             cov_t = readonly_copy(float_seconds(covariance_t, "covariance_t"))
             m = len(cov_t)
             cov = readonly_array(covariance, "covariance", (m, 15, 15), f"(M, 15, 15) with M = len(covariance_t) = {m}")
         if (gyro_bias is None) != (accel_bias is None):
-            raise ParameterError("gyro_bias: give gyro_bias and accel_bias together, or neither")
+            raise ParameterError("give gyro_bias and accel_bias together, or neither", argument="gyro_bias")
         biases = [
             None if b is None else readonly_array(b, name, (n, 3), rows)
             for name, b in (("gyro_bias", gyro_bias), ("accel_bias", accel_bias))
@@ -195,13 +197,13 @@ class Trajectory(Frozen):
     def state(self, k: int) -> NavState:
         """The :class:`NavState` at sample ``k`` (negative counts from the end); needs a velocity."""
         if self.velocity is None:
-            raise ParameterError("k: this trajectory has no velocity, so it has no NavState")
+            raise ParameterError("this trajectory has no velocity, so it has no NavState", argument="k")
         try:
             k = operator.index(k)
         except TypeError:
-            raise ParameterError(f"k: expected an integer sample index, got {k!r}") from None
+            raise ParameterError(f"expected an integer sample index, got {k!r}", argument="k") from None
         if isinstance(k, bool):
-            raise ParameterError(f"k: expected an integer sample index, got {k!r}")
+            raise ParameterError(f"expected an integer sample index, got {k!r}", argument="k")
         n = len(self)
         if not -n <= k < n:
             raise IndexError(f"k: sample {k} out of range for a trajectory of {n} samples")

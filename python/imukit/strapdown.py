@@ -40,11 +40,11 @@ def _common(
     imu: ImuData, initial: NavState, bias: ImuBias | None, gravity: ArrayLike, scheme: str
 ) -> tuple[ImuBias, list[float], str]:
     if not isinstance(imu, ImuData):
-        raise ParameterError(f"imu: expected an imukit.ImuData, got {type(imu).__name__}")
+        raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
     if not isinstance(initial, NavState):
-        raise ParameterError(f"initial: expected an imukit.NavState, got {type(initial).__name__}")
+        raise ParameterError(f"expected an imukit.NavState, got {type(initial).__name__}", argument="initial")
     if bias is not None and not isinstance(bias, ImuBias):
-        raise ParameterError(f"bias: expected an imukit.ImuBias or None, got {type(bias).__name__}")
+        raise ParameterError(f"expected an imukit.ImuBias or None, got {type(bias).__name__}", argument="bias")
     scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES, depth=2)
     g = vector3(gravity, "gravity")
     return bias or ImuBias(), [float(v) for v in g], scheme
@@ -118,17 +118,19 @@ def propagate(
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     if not isinstance(noise, ImuNoise):
-        raise ParameterError(f"noise: expected an imukit.ImuNoise, got {type(noise).__name__}")
+        raise ParameterError(f"expected an imukit.ImuNoise, got {type(noise).__name__}", argument="noise")
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
     if p0.shape != (15, 15):
-        raise ShapeError(f"covariance: expected shape (15, 15), got {p0.shape}")
+        raise ShapeError(f"expected shape (15, 15), got {p0.shape}", argument="covariance")
     check_finite_rows(p0, "covariance", "row")
     try:
         every = operator.index(covariance_every)
     except TypeError:
-        raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}") from None
+        raise ParameterError(
+            f"expected an integer ≥ 1, got {covariance_every!r}", argument="covariance_every"
+        ) from None
     if every < 1 or isinstance(covariance_every, bool):
-        raise ParameterError(f"covariance_every: expected an integer ≥ 1, got {covariance_every!r}")
+        raise ParameterError(f"expected an integer ≥ 1, got {covariance_every!r}", argument="covariance_every")
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
     pv, quaternions, covs = _core.strapdown_propagate(

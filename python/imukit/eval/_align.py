@@ -118,7 +118,9 @@ def _umeyama(xc: FloatArray, yc: FloatArray, mean_x: FloatArray, mean_y: FloatAr
     n = len(xc)
     method = "sim3" if with_scale else "se3"
     if n < 3:
-        raise ParameterError(f"estimate: {method} alignment needs at least 3 non-collinear positions, got {n}")
+        raise ParameterError(
+            f"{method} alignment needs at least 3 non-collinear positions, got {n}", argument="estimate"
+        )
     u, d, vt = np.linalg.svd(yc.T @ xc / n)
     if not d[1] > _DEGENERATE * d[0]:
         raise ParameterError(

@@ -73,7 +73,7 @@ class AttitudeError(NamedTuple):
         use = self.mask if mask is None else self.mask & _bool_mask(mask, "mask", len(self.total))
         count = int(use.sum())
         if count == 0:
-            raise ParameterError("mask: no sample with a reference is selected; the RMSE is undefined")
+            raise ParameterError("no sample with a reference is selected; the RMSE is undefined", argument="mask")
         scale = np.degrees(1.0) if degrees else 1.0
 
         def rms(e: FloatArray) -> float:
@@ -88,9 +88,9 @@ def _bool_mask(mask: ArrayLike, name: str, n: int) -> NDArray[np.bool_]:
         if arr.dtype.kind in "iu" and arr.size and np.isin(arr, (0, 1)).all():
             arr = arr.astype(bool)  # MATLAB files store logical masks as uint8 0/1
         else:
-            raise DTypeError(f"{name}: expected a boolean array, got dtype {arr.dtype}")
+            raise DTypeError(f"expected a boolean array, got dtype {arr.dtype}", argument=name)
     if arr.shape != (n,):
-        raise ShapeError(f"{name}: expected shape (N,) with N = {n}, got {arr.shape}")
+        raise ShapeError(f"expected shape (N,) with N = {n}, got {arr.shape}", argument=name)
     return arr
 
 
@@ -100,16 +100,16 @@ def _quats(q: Rotation | ArrayLike, name: str, scalar_first: bool) -> FloatArray
         return np.asarray(q.as_quat(), dtype=np.float64)
     arr = as_float_array(q, name)
     if arr.ndim not in (1, 2) or arr.shape[-1] != 4:
-        raise ShapeError(f"{name}: expected shape (N, 4) or (4,), got {arr.shape}")
+        raise ShapeError(f"expected shape (N, 4) or (4,), got {arr.shape}", argument=name)
     if scalar_first:
         arr = arr[..., [1, 2, 3, 0]]
     if np.isinf(arr).any():
-        raise NonFiniteError(f"{name}: holds ±inf")
+        raise NonFiniteError("holds ±inf", argument=name)
     norm = np.linalg.norm(arr, axis=-1, keepdims=True)
     zero = (norm == 0).ravel()
     if zero.any():
         k = int(np.argmax(zero))
-        raise InvalidQuaternionError(f"{name}: zero-norm quaternion at sample {k}, which is no rotation")
+        raise InvalidQuaternionError(f"zero-norm quaternion at sample {k}, which is no rotation", argument=name)
     return np.asarray(arr / norm, dtype=np.float64)
 
 
@@ -188,12 +188,14 @@ def attitude_error(
     """
     choice(world, "world", _WORLDS)
     if not isinstance(align_heading, (bool, np.bool_)):
-        raise ParameterError(f"align_heading: expected a bool, got {align_heading!r}")
+        raise ParameterError(f"expected a bool, got {align_heading!r}", argument="align_heading")
     q_est = _quats(estimate, "estimate", scalar_first)
     q_true = _quats(truth, "truth", scalar_first)
     if np.isnan(q_est).any():
         k = int(np.argmax(np.isnan(q_est).reshape(-1, 4).any(axis=1)))
-        raise NonFiniteError(f"estimate: NaN at sample {k} (the estimate must be finite; only truth may miss rows)")
+        raise NonFiniteError(
+            f"NaN at sample {k} (the estimate must be finite; only truth may miss rows)", argument="estimate"
+        )
     if q_est.ndim == 2 and q_true.ndim == 2 and len(q_est) != len(q_true):
         raise ShapeError(f"estimate / truth: lengths differ: {len(q_est)} vs {len(q_true)}")
     q_est_2d = np.atleast_2d(q_est)
@@ -208,7 +210,9 @@ def attitude_error(
     if align_heading:
         _, _, psi = _split(q_err)
         if not use.any():
-            raise ParameterError("mask: no sample with a reference is selected; cannot estimate the heading offset")
+            raise ParameterError(
+                "no sample with a reference is selected; cannot estimate the heading offset", argument="mask"
+            )
         offset = float(np.arctan2(np.sin(psi[use]).sum(), np.cos(psi[use]).sum()))
         # q_truth ⊗ (q_z(δ) ⊗ q_est)⁻¹ = q_err ⊗ q_z(−δ): heading ψ − δ, same tilt angle.
         half = -0.5 * offset

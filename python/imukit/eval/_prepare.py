@@ -33,9 +33,10 @@ def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt:
     kept = len(pair.estimate)
     if method in ("se3", "sim3") and kept < 3 and pair.n_dropped:
         raise ParameterError(
-            f"{culprit(offset, pair.n_outside_span, pair.n_in_gaps)}: {method} alignment needs at least 3 paired "
+            f"{method} alignment needs at least 3 paired "
             f"samples, but only {kept} of {len(pair.mask)} estimate samples could be paired with the reference "
-            f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than max_dt = {max_dt:g} s)"
+            f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than max_dt = {max_dt:g} s)",
+            argument=culprit(offset, pair.n_outside_span, pair.n_in_gaps),
         )
     alignment = align(pair.estimate, pair.reference, method=method)
     estimate_out = alignment.apply(pair.estimate)

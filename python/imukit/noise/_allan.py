@@ -48,35 +48,37 @@ def _rate(rate: object) -> float:
 def _cluster_sizes(taus: ArrayLike | None, rate: float, n: int) -> list[int]:
     if taus is None:
         if n < 4:
-            raise ShapeError(f"x: the default τ grid (m = 1, 2, 4, … ≤ N/4) needs N ≥ 4 samples, got {n}")
+            raise ShapeError(f"the default τ grid (m = 1, 2, 4, … ≤ N/4) needs N ≥ 4 samples, got {n}", argument="x")
         return [1 << j for j in range((n // 4).bit_length())]
     t = as_float_array(taus, "taus")
     if t.ndim != 1 or t.size == 0:
-        raise ShapeError(f"taus: expected a non-empty (M,) array of seconds, got shape {t.shape}")
+        raise ShapeError(f"expected a non-empty (M,) array of seconds, got shape {t.shape}", argument="taus")
     bad = np.flatnonzero(~(np.isfinite(t) & (t > 0.0)))
     if bad.size:
         k = int(bad[0])
-        raise ParameterError(f"taus: expected positive, finite seconds, got taus[{k}] = {float(t[k])!r}")
+        raise ParameterError(f"expected positive, finite seconds, got taus[{k}] = {float(t[k])!r}", argument="taus")
     m = t * rate
     whole = np.rint(m)
     small = np.flatnonzero(whole < 1)
     if small.size:
         k = int(small[0])
         raise ParameterError(
-            f"taus: taus[{k}] = {float(t[k])!r} s is shorter than one sample (1/rate = {1.0 / rate!r} s)"
+            f"taus[{k}] = {float(t[k])!r} s is shorter than one sample (1/rate = {1.0 / rate!r} s)", argument="taus"
         )
     off = np.flatnonzero(np.abs(m - whole) > 1e-9 * np.maximum(whole, 1.0))
     if off.size:
         k = int(off[0])
         raise ParameterError(
-            f"taus: every τ must be a whole multiple of 1/rate = {1.0 / rate!r} s; "
-            f"taus[{k}] = {float(t[k])!r} s is {float(m[k])!r} samples"
+            f"every τ must be a whole multiple of 1/rate = {1.0 / rate!r} s; "
+            f"taus[{k}] = {float(t[k])!r} s is {float(m[k])!r} samples",
+            argument="taus",
         )
     big = np.flatnonzero(2.0 * whole > n)
     if big.size:
         k = int(big[0])
         raise ParameterError(
-            f"taus: taus[{k}] = {float(t[k])!r} s is m = {int(whole[k])} samples; two clusters need 2m ≤ N = {n}"
+            f"taus[{k}] = {float(t[k])!r} s is m = {int(whole[k])} samples; two clusters need 2m ≤ N = {n}",
+            argument="taus",
         )
     return [int(v) for v in whole]
 
@@ -119,13 +121,13 @@ def allan_deviation(
     """
     arr = as_float_array(x, "x")
     if arr.ndim not in (1, 2):
-        raise ShapeError(f"x: expected shape (N,) or (N, C), got {arr.shape}")
+        raise ShapeError(f"expected shape (N,) or (N, C), got {arr.shape}", argument="x")
     data = np.ascontiguousarray(arr if arr.ndim == 2 else arr[:, None])
     if data.shape[1] == 0:
-        raise ShapeError(f"x: expected shape (N, C) with C ≥ 1, got {arr.shape}")
+        raise ShapeError(f"expected shape (N, C) with C ≥ 1, got {arr.shape}", argument="x")
     n = data.shape[0]
     if n < 2:
-        raise ShapeError(f"x: expected at least 2 samples, got {n}")
+        raise ShapeError(f"expected at least 2 samples, got {n}", argument="x")
     f = _rate(rate)
     m = _cluster_sizes(taus, f, n)
     variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping))

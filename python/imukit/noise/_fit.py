@@ -116,14 +116,16 @@ class AllanFit:
         t = as_float_array(taus, "taus").reshape(-1)
         bad = np.flatnonzero(~(np.isfinite(t) & (t > 0.0)))
         if bad.size:
-            raise ParameterError(f"taus: expected positive, finite seconds, got {float(t[bad[0]])!r} at index {bad[0]}")
+            raise ParameterError(
+                f"expected positive, finite seconds, got {float(t[bad[0]])!r} at index {bad[0]}", argument="taus"
+            )
         theta = np.array([self.noise_density, self.bias_instability, self.random_walk]) ** 2
         with np.errstate(over="ignore", invalid="ignore"):  # 1/τ of a subnormal τ; a term whose θ is 0 is 0
             terms = np.where(theta > 0.0, np.sqrt(_design(t) * theta), 0.0)
         bad = np.flatnonzero(~np.isfinite(terms).all(axis=1))
         if bad.size:
             k = int(bad[0])
-            raise NonFiniteError(f"taus: the model overflows float64 at τ = {float(t[k])!r} s (index {k})")
+            raise NonFiniteError(f"the model overflows float64 at τ = {float(t[k])!r} s (index {k})", argument="taus")
         return np.asarray(terms, dtype=np.float64)
 
     def __str__(self) -> str:
@@ -190,29 +192,32 @@ def fit_allan(
     """
     allan = _checked(allan)
     if sensor is not None and sensor not in _SENSORS:
-        raise ParameterError(f"sensor: expected one of {_SENSORS} or None, got {sensor!r}")
+        raise ParameterError(f"expected one of {_SENSORS} or None, got {sensor!r}", argument="sensor")
     if not (isinstance(confidence, (float, int)) and 0.0 < confidence < 1.0):
-        raise ParameterError(f"confidence: expected a number in (0, 1), got {confidence!r}")
+        raise ParameterError(f"expected a number in (0, 1), got {confidence!r}", argument="confidence")
     dev = np.asarray(allan.deviation, dtype=np.float64)
     columns = dev.reshape(len(allan.taus), -1)
     if axis is not None:
         if not isinstance(axis, (int, np.integer)) or not -columns.shape[1] <= axis < columns.shape[1]:
-            raise ParameterError(f"axis: expected None or a column index below {columns.shape[1]}, got {axis!r}")
+            raise ParameterError(
+                f"expected None or a column index below {columns.shape[1]}, got {axis!r}", argument="axis"
+            )
         columns = columns[:, [int(axis)]]
     lo = 0.0 if tau_min is None else _bound(tau_min, "tau_min")
     hi = math.inf if tau_max is None else _bound(tau_max, "tau_max")
     keep = (allan.taus >= lo) & (allan.taus <= hi)
     if np.count_nonzero(keep) < 4:
         raise ParameterError(
-            f"allan: fitting 3 parameters needs at least 4 τ values, got {np.count_nonzero(keep)} "
-            f"in [tau_min, tau_max] = [{lo}, {hi}] s"
+            f"fitting 3 parameters needs at least 4 τ values, got {np.count_nonzero(keep)} "
+            f"in [tau_min, tau_max] = [{lo}, {hi}] s",
+            argument="allan",
         )
     sub = allan._replace(taus=allan.taus[keep], deviation=columns[keep], clusters=np.asarray(allan.clusters)[keep])
     taus = sub.taus
     a_one = _design(taus)
     k = columns.shape[1]
     if not np.any(sub.deviation > 0.0):
-        raise ParameterError("allan: the Allan variance is 0 at every τ (a constant signal): nothing to fit")
+        raise ParameterError("the Allan variance is 0 at every τ (a constant signal): nothing to fit", argument="allan")
     # Fitted in units of the largest deviation, so that the weights (which go as σ⁻⁴) neither
     # overflow nor underflow: θ = (N², B², K²) scales back by scale², its covariance by scale⁴.
     scale = float(np.max(sub.deviation))
@@ -246,7 +251,7 @@ def fit_allan(
         cov = cov * scale**2 * scale**2
     if not np.isfinite(cov).all():
         raise NonFiniteError(
-            f"allan.deviation: values up to {scale!r} make the covariance of (N², B², K²) overflow float64"
+            f"values up to {scale!r} make the covariance of (N², B², K²) overflow float64", argument="allan.deviation"
         )
     return AllanFit(
         noise_density=n_,
@@ -268,31 +273,35 @@ def _checked(allan: object) -> AllanDeviation:
     """``allan`` with float64 ``taus`` (M,) > 0 and ``deviation`` (M,) or (M, C) ≥ 0 whose squares are
     finite, and ``clusters`` (M,) ≥ 1: a record built by hand is checked as allan_deviation's input is."""
     if not isinstance(allan, AllanDeviation):
-        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+        raise ParameterError(
+            f"expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}", argument="allan"
+        )
     taus = as_float_array(allan.taus, "allan.taus")
     if taus.ndim != 1 or not (np.isfinite(taus).all() and (taus > 0).all()):
-        raise ParameterError(f"allan.taus: expected (M,) positive, finite seconds, got {allan.taus!r}")
+        raise ParameterError(f"expected (M,) positive, finite seconds, got {allan.taus!r}", argument="allan.taus")
     rate = _number(allan.rate, "allan.rate", positive=True, what="a positive, finite sample rate in Hz")
     samples = allan.samples
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
-        raise ParameterError(f"allan.samples: expected an integer N ≥ 2, got {samples!r}")
+        raise ParameterError(f"expected an integer N ≥ 2, got {samples!r}", argument="allan.samples")
     m = np.rint(taus * rate)
     if not ((m >= 1) & (2 * m <= samples)).all():
         raise ParameterError(
-            f"allan.taus: expected τ = m / rate with 1 ≤ m ≤ N/2 = {samples // 2} samples, got {allan.taus!r}"
+            f"expected τ = m / rate with 1 ≤ m ≤ N/2 = {samples // 2} samples, got {allan.taus!r}",
+            argument="allan.taus",
         )
     dev = as_float_array(allan.deviation, "allan.deviation")
     if dev.ndim not in (1, 2) or len(dev) != len(taus):
         raise ShapeError(
-            f"allan.deviation: expected shape (M,) or (M, C) with M = len(taus) = {len(taus)}, got {dev.shape}"
+            f"expected shape (M,) or (M, C) with M = len(taus) = {len(taus)}, got {dev.shape}",
+            argument="allan.deviation",
         )
     with np.errstate(over="ignore"):
         squares_finite = np.isfinite(dev * dev).all()
     if not (squares_finite and (dev >= 0).all()):
-        raise NonFiniteError("allan.deviation: expected non-negative values whose squares are finite")
+        raise NonFiniteError("expected non-negative values whose squares are finite", argument="allan.deviation")
     clusters = np.asarray(allan.clusters)
     if clusters.shape != taus.shape or clusters.dtype.kind not in "iu" or not (clusters >= 1).all():
-        raise ParameterError(f"allan.clusters: expected (M,) integers ≥ 1, got {allan.clusters!r}")
+        raise ParameterError(f"expected (M,) integers ≥ 1, got {allan.clusters!r}", argument="allan.clusters")
     return allan._replace(taus=taus, deviation=dev)
 
 
@@ -406,9 +415,9 @@ def to_imu_noise(*, gyro: AllanFit, accel: AllanFit) -> ImuNoise:
     """
     for name, fit in (("gyro", gyro), ("accel", accel)):
         if not isinstance(fit, AllanFit):
-            raise ParameterError(f"{name}: expected an AllanFit, got {type(fit).__name__}")
+            raise ParameterError(f"expected an AllanFit, got {type(fit).__name__}", argument=name)
         if fit.sensor != name:
-            raise ParameterError(f"{name}: expected a fit made with sensor={name!r}, got sensor={fit.sensor!r}")
+            raise ParameterError(f"expected a fit made with sensor={name!r}, got sensor={fit.sensor!r}", argument=name)
     return ImuNoise(
         gyro_density=gyro.noise_density,
         accel_density=accel.noise_density,

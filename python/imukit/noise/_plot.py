@@ -31,13 +31,16 @@ def plot_allan(
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError as e:
+        # No argument is at fault: the function names itself in the text.
         raise MissingDependencyError(
             "plot_allan: needs matplotlib, which is not installed (pip install matplotlib)"
         ) from e
     if not isinstance(allan, AllanDeviation):
-        raise ParameterError(f"allan: expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}")
+        raise ParameterError(
+            f"expected the AllanDeviation of allan_deviation(), got {type(allan).__name__}", argument="allan"
+        )
     if fit is not None and not isinstance(fit, AllanFit):
-        raise ParameterError(f"fit: expected an AllanFit or None, got {type(fit).__name__}")
+        raise ParameterError(f"expected an AllanFit or None, got {type(fit).__name__}", argument="fit")
     unit, density, walk = _UNITS[fit.sensor if fit is not None else None]
     fig = Figure(figsize=(7.0, 5.0), dpi=120)
     FigureCanvasAgg(fig)
