@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit.cli._common import CliError, note
 from imukit.cli._truth import truth_at
-from imukit.imu import ImuBias, ImuData
+from imukit.imu import GRAVITY, ImuBias, ImuData
 from imukit.state import NavState, Trajectory
 
 
@@ -45,6 +45,7 @@ def from_truth(truth: Trajectory, imu: ImuData, *, max_dt: float) -> tuple[NavSt
 STATIC_GYRO_STD = 0.1  # [rad/s] standard deviation of any gyro axis
 STATIC_ACCEL_RMS = 0.5  # [m/s^2] RMS of |accel| - 9.81 (rotor vibration at rest: ~0.16 on EuRoC)
 STATIC_MEAN_RATE = 0.3  # [rad/s] norm of the mean rate
+_G = float(np.linalg.norm(GRAVITY))
 
 
 def levelled_at_rest(imu: ImuData, static_seconds: float) -> NavState:
@@ -56,11 +57,11 @@ def levelled_at_rest(imu: ImuData, static_seconds: float) -> NavState:
         raise CliError(f"--static-seconds: {static_seconds} s holds fewer than 2 IMU samples")
     accel, gyro = imu.accel[window], imu.gyro[window]
     spread = float(gyro.std(axis=0).max())
-    shake = float(np.sqrt(np.mean((np.linalg.norm(accel, axis=1) - 9.81) ** 2)))
+    shake = float(np.sqrt(np.mean((np.linalg.norm(accel, axis=1) - _G) ** 2)))
     spin = float(np.linalg.norm(gyro.mean(axis=0)))
     signs = [
         f"gyro std {spread:.3f} rad/s > {STATIC_GYRO_STD:g}" if spread > STATIC_GYRO_STD else "",
-        f"RMS of |accel| - 9.81 {shake:.3f} m/s^2 > {STATIC_ACCEL_RMS:g}" if shake > STATIC_ACCEL_RMS else "",
+        f"RMS of |accel| - {_G:g} {shake:.3f} m/s^2 > {STATIC_ACCEL_RMS:g}" if shake > STATIC_ACCEL_RMS else "",
         f"mean rate {spin:.3f} rad/s > {STATIC_MEAN_RATE:g}" if spin > STATIC_MEAN_RATE else "",
     ]
     if any(signs):
