@@ -184,24 +184,3 @@ impl From<NavStateFields> for NavState {
         }
     }
 }
-
-/// `[σ_g, σ_a, σ_bg, σ_ba]` as the core's noise densities (positional; for bindings not yet on
-/// [`NoiseFields`]).
-pub(crate) fn noise_of(values: [f64; 4]) -> Noise {
-    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = values;
-    Noise {
-        gyro_density,
-        accel_density,
-        gyro_random_walk,
-        accel_random_walk,
-    }
-}
-
-/// `[b_g, b_a]` as the core's biases (positional; for bindings not yet on [`BiasFields`]).
-pub(crate) fn bias(values: [f64; 6]) -> Bias {
-    let [gx, gy, gz, ax, ay, az] = values;
-    Bias {
-        gyro: Vector3::new(gx, gy, gz),
-        accel: Vector3::new(ax, ay, az),
-    }
-}
