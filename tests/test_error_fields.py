@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import inspect
 import warnings
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -72,3 +74,33 @@ def test_the_defaults_do_not_warn() -> None:
 def test_gravity_default_is_the_core_constant() -> None:
     for fn in (ik.integrate, ik.propagate):
         assert inspect.signature(fn).parameters["gravity"].default == _core.GRAVITY == (0.0, 0.0, -9.81)
+
+
+def _imu() -> ik.ImuData:
+    t = np.arange(50) * 0.01
+    return ik.ImuData(t, np.tile([0.1, -0.2, 0.3], (50, 1)), np.tile([0.0, 0.0, 9.81], (50, 1)))
+
+
+NOISE = ik.ImuNoise(1e-3, 1e-2, 1e-4, 1e-3)
+REST = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+DEPRECATED: dict[str, Callable[[Path], object]] = {
+    "preintegrate(scheme='euler')": lambda tmp: ik.preintegrate(_imu(), noise=NOISE, scheme="euler"),
+    "PreintegratedImu(scheme='euler')": lambda tmp: ik.PreintegratedImu(noise=NOISE, scheme="euler"),
+    "preintegrate_windows(noise=...)": lambda tmp: ik.preintegrate_windows(_imu(), [0.0, 0.2, 0.4], noise=NOISE),
+    "reintegrate(bias)": lambda tmp: ik.preintegrate(_imu(), noise=NOISE).reintegrate(ik.ImuBias()),
+    "integrate(scheme='euler')": lambda tmp: ik.integrate(_imu(), initial=REST, scheme="euler"),
+    "integrate_attitude(scheme='midpoint')": lambda tmp: ik.integrate_attitude(
+        _imu().t, _imu().gyro, scheme="midpoint"
+    ),
+    "FilterState.values": lambda tmp: ik.filters.Mahony().run(_imu()).state.values,
+    "Trajectory.write_tum": lambda tmp: ik.integrate(_imu(), initial=REST).write_tum(tmp / "t.tum"),
+}
+
+
+@pytest.mark.parametrize("name", list(DEPRECATED))
+def test_every_deprecation_points_at_the_users_line(name: str, tmp_path: Path) -> None:
+    """However deep in imukit the check sits, the warning names this file (imukit's own calls of a
+    deprecated name would name an imukit file, and pyproject makes those an error)."""
+    with pytest.warns(DeprecationWarning) as record:
+        DEPRECATED[name](tmp_path)
+    assert [w.filename for w in record if issubclass(w.category, DeprecationWarning)] == [__file__]

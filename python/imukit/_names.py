@@ -7,30 +7,20 @@ and turns a deprecated alias into its canonical name with a ``DeprecationWarning
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 
+from imukit._deprecation import deprecated
 from imukit._errors import ParameterError
 
 __all__ = ["canonical"]
 
 
-def canonical(
-    value: object, argument: str, names: tuple[str, ...], aliases: Mapping[str, str] | None = None, *, depth: int = 1
-) -> str:
-    """``value`` as a name for the core: a str, with a deprecated alias replaced (and warned about).
-
-    ``depth``: how many imukit frames lie between the caller's code and this call (the warning
-    points at the caller's line).
-    """
+def canonical(value: object, argument: str, names: tuple[str, ...], aliases: Mapping[str, str] | None = None) -> str:
+    """``value`` as a name for the core: a str, with a deprecated alias replaced (and warned about)."""
     if not isinstance(value, str):
         raise ParameterError(f"expected one of {names}, got {value!r}", argument=argument)
     new = (aliases or {}).get(value)
     if new is None:
         return value
-    warnings.warn(
-        f"{argument}={value!r} is deprecated, use {argument}={new!r} (the same update rule)",
-        DeprecationWarning,
-        stacklevel=2 + depth,
-    )
+    deprecated(f"{argument}={value!r} is deprecated, use {argument}={new!r} (the same update rule)")
     return new

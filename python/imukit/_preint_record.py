@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from typing import Any
 
 import numpy as np
@@ -27,6 +26,7 @@ from numpy.typing import NDArray
 
 from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
+from imukit._deprecation import deprecated
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuNoise
 
@@ -40,11 +40,7 @@ _ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)  # deprecated names
 def scheme_name(scheme: str) -> str:
     """The canonical name of ``scheme``; a deprecated alias warns (:class:`DeprecationWarning`)."""
     if isinstance(scheme, str) and scheme in _ALIASES:
-        warnings.warn(
-            f"scheme {scheme!r} is deprecated: use {_ALIASES[scheme]!r} (the same update rule)",
-            DeprecationWarning,
-            stacklevel=3,
-        )
+        deprecated(f"scheme {scheme!r} is deprecated: use {_ALIASES[scheme]!r} (the same update rule)")
         return _ALIASES[scheme]
     return choice(scheme, "scheme", SCHEMES)
 

@@ -31,7 +31,6 @@ Equations, rejection rules, the gain ramp, the ``Law`` seam and measured test nu
 
 from __future__ import annotations
 
-import warnings
 from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
@@ -40,6 +39,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, real_scalar, rotation_from_unit_quat, vector3
+from imukit._deprecation import deprecated
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuData
 
@@ -87,11 +87,7 @@ class FilterState(_core.FilterState):
             return super().__new__(cls, **values.fields())
         if values is None:
             raise ParameterError("expected the state's fields by name, or a FilterState", argument="state")
-        warnings.warn(
-            "FilterState(values) from the flat (16,) layout is deprecated: keep or pickle the state",
-            DeprecationWarning,
-            stacklevel=2,
-        )
+        deprecated("FilterState(values) from the flat (16,) layout is deprecated: keep or pickle the state")
         v = np.array(as_float_array(values, "state"), dtype=np.float64)
         if v.shape != (16,):
             raise ShapeError(f"expected shape (16,), got {v.shape}", argument="state")
@@ -109,7 +105,7 @@ class FilterState(_core.FilterState):
     @property
     def values(self) -> FloatArray:
         """Deprecated: the former flat ``(16,)`` layout (read-only)."""
-        warnings.warn("FilterState.values is deprecated: read the fields by name", DeprecationWarning, stacklevel=2)
+        deprecated("FilterState.values is deprecated: read the fields by name")
         v = self._legacy_values()
         v.setflags(write=False)
         return v

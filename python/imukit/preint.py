@@ -35,7 +35,6 @@ model of each scheme: ``docs/preintegration.md`` and the module docs of ``crates
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any, NamedTuple, overload
 
 import numpy as np
@@ -44,6 +43,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit import _core, _preint_math
 from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from_ns
+from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
 from imukit._preint_math import Deltas, ResidualJacobians, States
@@ -273,11 +273,7 @@ class PreintegratedImu:
             if not isinstance(bias, ImuBias):
                 raise ParameterError(f"expected an imukit.ImuBias, got {type(bias).__name__}", argument="bias")
             return preintegrate(imu, self.params.replace(bias=bias))
-        warnings.warn(
-            "reintegrate(bias) is deprecated: pass the samples, reintegrate(imu, bias)",
-            DeprecationWarning,
-            stacklevel=2,
-        )
+        deprecated("reintegrate(bias) is deprecated: pass the samples, reintegrate(imu, bias)")
         return self._replay(imu)
 
     def _replay(self, bias: ImuBias) -> PreintegratedImu:
@@ -529,11 +525,9 @@ def preintegrate_windows(
     """
     n = _threads(threads)
     if params is None:
-        warnings.warn(
+        deprecated(
             "preintegrate_windows(imu, boundaries, noise=...) returning a list is deprecated: pass a "
-            "PreintParams, preintegrate_windows(imu, boundaries, params), for one Preintegration record",
-            DeprecationWarning,
-            stacklevel=2,
+            "PreintParams, preintegrate_windows(imu, boundaries, params), for one Preintegration record"
         )
         p = _params(None, noise, bias, gravity, scheme, combined, saturation_noise_factor)
         like = PreintegratedImu(p)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import operator
 import os
-import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,6 +33,7 @@ from imukit._arrays import (
     rotation_from_unit_quat,
     too_fine_for_ns,
 )
+from imukit._deprecation import deprecated
 from imukit._errors import DTypeError, ParameterError, ShapeError
 from imukit._frozen import Frozen
 
@@ -215,11 +215,7 @@ class Trajectory(Frozen):
         A trajectory is data and the file formats live in :mod:`imukit.io`; this alias stays for
         existing code and warns with :class:`DeprecationWarning`.
         """
-        warnings.warn(
-            "Trajectory.write_tum(path) is deprecated; use imukit.io.write_tum(trajectory, path)",
-            DeprecationWarning,
-            stacklevel=2,
-        )
+        deprecated("Trajectory.write_tum(path) is deprecated; use imukit.io.write_tum(trajectory, path)")
         # imported here: imukit.io imports this module (readers build Trajectory objects).
         from imukit.io import write_tum
 

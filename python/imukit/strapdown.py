@@ -45,7 +45,7 @@ def _common(
         raise ParameterError(f"expected an imukit.NavState, got {type(initial).__name__}", argument="initial")
     if bias is not None and not isinstance(bias, ImuBias):
         raise ParameterError(f"expected an imukit.ImuBias or None, got {type(bias).__name__}", argument="bias")
-    scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES, depth=2)
+    scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES)
     g = vector3(gravity, "gravity")
     return bias or ImuBias(), [float(v) for v in g], scheme
 
