@@ -71,16 +71,16 @@ fn gyro_only_law_is_pure_gyro_integration() {
     // The filter's step to sample k uses ω_k; attitude's zero-order hold from sample k uses ω_k:
     // shift the rates by one sample.
     let (t, gyro, _, _) = samples();
-    let held: Vec<f64> = gyro[1..].iter().flatten().copied().chain([0.0; 3]).collect();
+    let held: Vec<[f64; 3]> = gyro[1..].iter().copied().chain([[0.0; 3]]).collect();
     let options = attitude::Options {
         scheme: Scheme::Exp,
         representation: Representation::Quaternion,
         ..attitude::Options::default()
     };
-    let mut reference = vec![0.0; 4 * N];
+    let mut reference = vec![[0.0; 4]; N];
     attitude::integrate(&t, &held, &initial, &options, Some(&mut reference)).unwrap();
     let mut worst = 0.0_f64;
-    for (k, (ours, theirs)) in q.iter().zip(reference.chunks_exact(4)).enumerate() {
+    for (k, (ours, theirs)) in q.iter().zip(&reference).enumerate() {
         let a = UnitQuaternion::from_quaternion(Quaternion::new(ours[3], ours[0], ours[1], ours[2]));
         let b = UnitQuaternion::from_quaternion(Quaternion::new(theirs[3], theirs[0], theirs[1], theirs[2]));
         let angle = a.angle_to(&b);
