@@ -112,7 +112,7 @@ pub(crate) fn add_names<T: Named>(m: &Bound<'_, PyModule>, names: &str, aliases:
 }
 
 /// `imukit.ImuNoise` by field name.
-#[derive(FromPyObject)]
+#[derive(FromPyObject, Clone, Copy)]
 pub(crate) struct NoiseFields {
     #[pyo3(attribute)]
     gyro_density: f64,
@@ -136,7 +136,7 @@ impl From<NoiseFields> for Noise {
 }
 
 /// `imukit.ImuBias` by field name.
-#[derive(FromPyObject)]
+#[derive(FromPyObject, Clone, Copy)]
 pub(crate) struct BiasFields {
     #[pyo3(attribute)]
     gyro: [f64; 3],
@@ -182,26 +182,5 @@ impl From<NavStateFields> for NavState {
             velocity: Vector3::from(s.velocity),
             rotation: unit_quaternion(s.rotation),
         }
-    }
-}
-
-/// `[σ_g, σ_a, σ_bg, σ_ba]` as the core's noise densities (positional; for bindings not yet on
-/// [`NoiseFields`]).
-pub(crate) fn noise_of(values: [f64; 4]) -> Noise {
-    let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = values;
-    Noise {
-        gyro_density,
-        accel_density,
-        gyro_random_walk,
-        accel_random_walk,
-    }
-}
-
-/// `[b_g, b_a]` as the core's biases (positional; for bindings not yet on [`BiasFields`]).
-pub(crate) fn bias(values: [f64; 6]) -> Bias {
-    let [gx, gy, gz, ax, ay, az] = values;
-    Bias {
-        gyro: Vector3::new(gx, gy, gz),
-        accel: Vector3::new(ax, ay, az),
     }
 }

@@ -17,7 +17,7 @@ mod strapdown_glue;
 mod threads;
 
 // The helpers the domain files import from the crate root.
-pub(crate) use convert::{bias, contiguous, noise_of, private_copy, SampleCopies};
+pub(crate) use convert::{contiguous, private_copy, SampleCopies};
 pub(crate) use errors::{class_name, raise, to_py};
 
 use imukit::{attitude, ffi, strapdown};
@@ -71,16 +71,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyMadgwickFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
-    m.add(
-        "PREINT_SCHEMES",
-        <imukit::preint::Scheme as imukit::names::Named>::names(),
-    )?;
-    m.add(
-        "PREINT_SCHEME_ALIASES",
-        preint_glue::scheme_aliases()
-            .into_iter()
-            .collect::<std::collections::HashMap<_, _>>(),
-    )?;
+    convert::add_names::<imukit::preint::Scheme>(m, "PREINT_SCHEMES", Some("PREINT_SCHEME_ALIASES"))?;
     m.add(
         "DEFAULT_SATURATION_NOISE_FACTOR",
         imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,

@@ -393,7 +393,7 @@ class _PreintFields(Protocol):
     def saturation_noise_factor(self) -> float: ...
 
 DEFAULT_SATURATION_NOISE_FACTOR: float
-PREINT_SCHEMES: list[str]
+PREINT_SCHEMES: tuple[str, ...]
 PREINT_SCHEME_ALIASES: dict[str, str]
 
 @final
