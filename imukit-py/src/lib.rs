@@ -58,6 +58,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::add_names::<attitude::Representation>(m, "ATTITUDE_REPRESENTATIONS", None)?;
     convert::add_names::<strapdown::Scheme>(m, "STRAPDOWN_SCHEMES", Some("STRAPDOWN_SCHEME_ALIASES"))?;
     convert::add_names::<ffi::Convention>(m, "QUAT_CONVENTIONS", None)?;
+    convert::add_names::<imukit::filters::World>(m, "FILTER_WORLDS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
     m.add_class::<filters_glue::PyGainRamp>()?;
     m.add_class::<filters_glue::PyAccelRejection>()?;
