@@ -24,6 +24,7 @@ from imukit.cli._common import (
 )
 from imukit.eval import attitude_error
 from imukit.filters import FilterResult, FilterState, Madgwick, Mahony
+from imukit.io import write_tum
 from imukit.state import Trajectory
 
 METHODS = {"mahony": Mahony, "madgwick": Madgwick}
@@ -145,4 +146,4 @@ def _write(target: Any, data: AttitudeInput, result: FilterResult) -> None:
         return
     zeros = np.zeros((len(imu), 3))
     t = None if imu.t_ns is not None else imu.t
-    Trajectory(t, zeros, None, result.rotation, t_ns=imu.t_ns).write_tum(target)
+    write_tum(Trajectory(t, zeros, None, result.rotation, t_ns=imu.t_ns), target)
