@@ -47,12 +47,13 @@ from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
 from imukit._preint_math import Deltas, ResidualJacobians, States
-from imukit._preint_record import SCHEMES, Preintegration, PreintParams, _flag
+from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
 
 __all__ = [
     "SCHEMES",
+    "SCHEME_ALIASES",
     "Deltas",
     "PreintParams",
     "PreintegratedImu",
