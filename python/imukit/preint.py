@@ -79,6 +79,7 @@ residual_jacobians = _preint_math.residual_jacobians
 _MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 _DEFAULT_FACTOR = _core.DEFAULT_SATURATION_NOISE_FACTOR
 _DEFAULT_GRAVITY = _core.GRAVITY
+_DEFAULT_SCHEME = PreintParams.scheme
 
 
 def _params(
@@ -136,7 +137,7 @@ class PreintegratedImu:
         noise: ImuNoise | None = None,
         bias: ImuBias | None = None,
         gravity: ArrayLike = _DEFAULT_GRAVITY,
-        scheme: str = "midpoint",
+        scheme: str = _DEFAULT_SCHEME,
         combined: bool = False,
         saturation_noise_factor: float = _DEFAULT_FACTOR,
     ) -> None:
@@ -425,7 +426,7 @@ def preintegrate(
     noise: ImuNoise | None = None,
     bias: ImuBias | None = None,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
-    scheme: str = "midpoint",
+    scheme: str = _DEFAULT_SCHEME,
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
 ) -> PreintegratedImu:
@@ -508,7 +509,7 @@ def preintegrate_windows(
     noise: ImuNoise | None = None,
     bias: ImuBias | None = None,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
-    scheme: str = "midpoint",
+    scheme: str = _DEFAULT_SCHEME,
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
     threads: int | None = None,
