@@ -70,7 +70,7 @@ def test_strapdown_and_attitude_rows_are_the_library_calls(demo: tuple[Path, dic
 def test_preintegration_rows_are_the_library_calls(demo: tuple[Path, dict, float]) -> None:
     _, rows, _ = demo
     imu, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=200.0, duration=60.0, noise=NOISE, seed=1)
-    for scheme in ("euler", "midpoint"):
+    for scheme in ("lie_euler", "midpoint"):
         pims = ik.preintegrate_windows(imu, np.arange(121) * 0.5, noise=NOISE, scheme=scheme)
         misses = [
             np.linalg.norm(p.predict(truth.state(100 * m)).position - truth.position[100 * (m + 1)])

@@ -166,7 +166,7 @@ def test_reintegrate_takes_the_samples() -> None:
 
 def test_scheme_names_come_from_the_core_and_euler_is_a_deprecated_alias() -> None:
     assert ik.preint.SCHEMES == tuple(_core.PREINT_SCHEMES) == ("midpoint", "lie_euler")
-    with pytest.warns(DeprecationWarning, match="'euler' is deprecated: use 'lie_euler'"):
+    with pytest.warns(DeprecationWarning, match="scheme='euler' is deprecated, use scheme='lie_euler'"):
         params = PreintParams(NOISE, scheme="euler")
     assert params.scheme == "lie_euler"
     assert PreintParams(NOISE).saturation_noise_factor == _core.DEFAULT_SATURATION_NOISE_FACTOR

@@ -30,7 +30,8 @@ from imukit.cli._common import err, out
 from imukit.eval import attitude_error
 from imukit.imu import ImuNoise
 from imukit.plot import attitude_error_plot, convergence_plot, trajectory_top_view
-from imukit.preint import preintegrate_windows
+from imukit.preint import SCHEMES as PREINT_SCHEMES
+from imukit.preint import Preintegration, PreintParams, States, predict, preintegrate_windows
 from imukit.strapdown import SCHEMES as STRAPDOWN_SCHEMES
 from imukit.strapdown import integrate
 
@@ -85,13 +86,18 @@ def figure_eight(rows: list[Row], folder: Path) -> None:
         rms = attitude_error(r, truth.rotation).rmse(degrees=True).total
         rows.append(Row(data, f"attitude {scheme}", "total attitude RMSE", rms, "deg", seconds))
     edges = np.arange(0.0, DURATION_S + 1e-9, WINDOW_S)
-    for scheme in ("euler", "midpoint"):
-        pims, seconds = _timed(partial(preintegrate_windows, imu, edges, noise=NOISE, scheme=scheme))
+    for scheme in PREINT_SCHEMES:
+        params = PreintParams(NOISE, scheme=scheme)
+
+        def windows(p: PreintParams = params) -> Preintegration:
+            return preintegrate_windows(imu, edges, p)
+
+        rec, seconds = _timed(windows)
         k = np.rint(edges * RATE_HZ).astype(int)
-        misses = [
-            np.linalg.norm(p.predict(truth.state(int(i))).position - truth.position[j])
-            for p, i, j in zip(pims, k[:-1], k[1:])
-        ]
+        i, j = k[:-1], k[1:]
+        # simulate() always gives velocities (Trajectory types them as optional)
+        starts = States(truth.position[i], np.asarray(truth.velocity)[i], truth.rotation[i].as_matrix())
+        misses = np.linalg.norm(predict(rec, starts).position - truth.position[j], axis=1)
         rms = float(np.sqrt(np.mean(np.square(misses))))
         rows.append(
             Row(data, f"preintegration {scheme}", f"RMS position miss per {WINDOW_S:g} s window", rms, "m", seconds)

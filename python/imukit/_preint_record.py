@@ -26,22 +26,22 @@ from numpy.typing import NDArray
 
 from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
-from imukit._deprecation import deprecated
 from imukit._errors import ParameterError, ShapeError
+from imukit._names import canonical
 from imukit.imu import ImuBias, ImuNoise
 
-__all__ = ["SCHEMES", "PreintParams", "Preintegration", "scheme_name"]
+__all__ = ["SCHEMES", "SCHEME_ALIASES", "PreintParams", "Preintegration", "scheme_name"]
 
 SCHEMES: tuple[str, ...] = tuple(_core.PREINT_SCHEMES)
 """Canonical scheme names, in the core's order."""
-_ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)  # deprecated names → canonical
+SCHEME_ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)
+"""Deprecated scheme names → canonical (they still work, with a :class:`DeprecationWarning`)."""
 
 
 def scheme_name(scheme: str) -> str:
     """The canonical name of ``scheme``; a deprecated alias warns (:class:`DeprecationWarning`)."""
-    if isinstance(scheme, str) and scheme in _ALIASES:
-        deprecated(f"scheme {scheme!r} is deprecated: use {_ALIASES[scheme]!r} (the same update rule)")
-        return _ALIASES[scheme]
+    if isinstance(scheme, str) and scheme in SCHEME_ALIASES:
+        return canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES)
     return choice(scheme, "scheme", SCHEMES)
 
 
