@@ -46,6 +46,9 @@ def test_scheme_lists_come_from_the_core_and_old_names_warn_but_give_the_same_re
     assert ik.strapdown.SCHEMES == _core.STRAPDOWN_SCHEMES == ("lie_euler", "midpoint", "rk4", "exp")
     assert ik.attitude.SCHEME_ALIASES == {"midpoint": "rk2"}
     assert ik.strapdown.SCHEME_ALIASES == {"euler": "lie_euler"}
+    assert ik.preint.SCHEMES == _core.PREINT_SCHEMES == ("midpoint", "lie_euler")
+    assert ik.preint.SCHEME_ALIASES == {"euler": "lie_euler"}
+    assert ik.filters.WORLDS == _core.FILTER_WORLDS == ("ENU", "NED")
     t = np.arange(20) * 0.01
     gyro = np.random.default_rng(3).normal(size=(20, 3))
     with pytest.warns(DeprecationWarning, match="scheme='midpoint' is deprecated, use scheme='rk2'") as record:

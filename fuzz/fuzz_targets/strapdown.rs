@@ -80,7 +80,7 @@ fuzz_target!(|input: Input| {
     }
 
     let every = usize::from(input.every);
-    let mut covariances = vec![0.0; 225 * covariance_count(n, every)];
+    let mut covariances = vec![[0.0; 225]; covariance_count(n, every)];
     let outputs = Outputs {
         states: input.store.then(|| StatesOut {
             position_velocity: pv.as_chunks_mut().0,
@@ -96,7 +96,7 @@ fuzz_target!(|input: Input| {
         assert_finite("propagate rotation", x.rotation.coords.as_slice());
         assert_unit("propagate rotation", x.rotation.coords.as_slice());
         assert_finite("propagate covariance", cov.as_slice());
-        assert_finite("propagate covariances", &covariances);
+        assert_finite("propagate covariances", covariances.as_flattened());
         assert_eq!(cov, cov.transpose(), "propagate: covariance not symmetric");
     }
 });

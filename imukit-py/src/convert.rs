@@ -12,7 +12,7 @@ use imukit::names::Named;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{PyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyString, PyTuple};
 
 use crate::{raise, to_py};
 
@@ -86,6 +86,8 @@ impl<'py> SampleCopies<'py> {
 
 /// A string argument parsed as the core enum `T`; an unknown name raises `ParameterError` for
 /// the argument `T::ARGUMENT`, listing the names.
+/// Back in Python it is the canonical name (a `#[pyclass]` field of this type reads as a `str`).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Name<T>(pub(crate) T);
 
 impl<'a, 'py, T: Named> FromPyObject<'a, 'py> for Name<T> {
@@ -94,6 +96,16 @@ impl<'a, 'py, T: Named> FromPyObject<'a, 'py> for Name<T> {
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
         let text: String = obj.extract()?;
         text.parse::<T>().map(Name).map_err(|e| to_py(obj.py(), T::ARGUMENT, e))
+    }
+}
+
+impl<'py, T: Named> IntoPyObject<'py> for Name<T> {
+    type Target = PyString;
+    type Output = Bound<'py, PyString>;
+    type Error = std::convert::Infallible;
+
+    fn into_pyobject(self, py: Python<'py>) -> Result<Self::Output, Self::Error> {
+        Ok(PyString::new(py, self.0.name()))
     }
 }
 
@@ -112,7 +124,7 @@ pub(crate) fn add_names<T: Named>(m: &Bound<'_, PyModule>, names: &str, aliases:
 }
 
 /// `imukit.ImuNoise` by field name.
-#[derive(FromPyObject)]
+#[derive(FromPyObject, Clone, Copy)]
 pub(crate) struct NoiseFields {
     #[pyo3(attribute)]
     gyro_density: f64,
@@ -136,7 +148,7 @@ impl From<NoiseFields> for Noise {
 }
 
 /// `imukit.ImuBias` by field name.
-#[derive(FromPyObject)]
+#[derive(FromPyObject, Clone, Copy)]
 pub(crate) struct BiasFields {
     #[pyo3(attribute)]
     gyro: [f64; 3],

@@ -16,12 +16,12 @@ use imukit::filters::{
     AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
     RestDetection, State, World,
 };
-use imukit::names::Named;
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::convert::Name;
 use crate::{contiguous, private_copy, raise, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
@@ -127,7 +127,7 @@ value_class!(
 #[pyclass(name = "FilterOptions", module = "imukit._core", frozen, get_all, eq, from_py_object)]
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PyFilterOptions {
-    world: String,
+    world: Name<World>,
     gravity: f64,
     gain_ramp: Option<PyGainRamp>,
     acc_rejection: Option<PyAccelRejection>,
@@ -141,27 +141,15 @@ impl PyFilterOptions {
     #[pyo3(signature = (*, world, gravity, gain_ramp, acc_rejection, mag_rejection, rest_detection))]
     fn new(
         py: Python<'_>,
-        world: &Bound<'_, PyAny>,
+        world: Name<World>,
         gravity: &Bound<'_, PyAny>,
         gain_ramp: Option<PyGainRamp>,
         acc_rejection: Option<PyAccelRejection>,
         mag_rejection: Option<PyMagRejection>,
         rest_detection: Option<PyRestDetection>,
     ) -> PyResult<Self> {
-        let world: World = world
-            .extract::<String>()
-            .map_err(|_| {
-                raise(
-                    py,
-                    "ParameterError",
-                    "world",
-                    format!("expected 'ENU' or 'NED', got {}", repr(world)),
-                )
-            })?
-            .parse()
-            .map_err(|e| to_py(py, "world", e))?;
         Ok(Self {
-            world: world.name().to_owned(),
+            world,
             gravity: real(py, "gravity", Some(gravity), f64::NAN)?,
             gain_ramp,
             acc_rejection,
@@ -175,7 +163,7 @@ impl PyFilterOptions {
     fn default() -> Self {
         let o = Options::default();
         Self {
-            world: o.world.name().to_owned(),
+            world: Name(o.world),
             gravity: o.gravity,
             gain_ramp: Some(o.gain_ramp.into()),
             acc_rejection: o.acc_rejection.map(Into::into),
@@ -184,16 +172,9 @@ impl PyFilterOptions {
         }
     }
 
-    /// The world frames, by name.
-    #[classattr]
-    #[allow(non_snake_case)] // a Python class constant
-    fn WORLDS() -> Vec<&'static str> {
-        World::names()
-    }
-
     fn __getnewargs_ex__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {
         let kwargs = PyDict::new(py);
-        kwargs.set_item("world", &self.world)?;
+        kwargs.set_item("world", self.world)?;
         kwargs.set_item("gravity", self.gravity)?;
         kwargs.set_item("gain_ramp", self.gain_ramp)?;
         kwargs.set_item("acc_rejection", self.acc_rejection)?;
@@ -206,11 +187,7 @@ impl PyFilterOptions {
 impl PyFilterOptions {
     fn options(&self) -> Options {
         Options {
-            world: if self.world == World::Ned.name() {
-                World::Ned
-            } else {
-                World::Enu
-            },
+            world: self.world.0,
             gravity: self.gravity,
             // No ramp: zero length (its factor then never applies).
             gain_ramp: self.gain_ramp.map_or(

@@ -58,6 +58,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::add_names::<attitude::Representation>(m, "ATTITUDE_REPRESENTATIONS", None)?;
     convert::add_names::<strapdown::Scheme>(m, "STRAPDOWN_SCHEMES", Some("STRAPDOWN_SCHEME_ALIASES"))?;
     convert::add_names::<ffi::Convention>(m, "QUAT_CONVENTIONS", None)?;
+    convert::add_names::<imukit::filters::World>(m, "FILTER_WORLDS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
     m.add_class::<filters_glue::PyGainRamp>()?;
     m.add_class::<filters_glue::PyAccelRejection>()?;
@@ -71,16 +72,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyMadgwickFilter>()?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
-    m.add(
-        "PREINT_SCHEMES",
-        <imukit::preint::Scheme as imukit::names::Named>::names(),
-    )?;
-    m.add(
-        "PREINT_SCHEME_ALIASES",
-        preint_glue::scheme_aliases()
-            .into_iter()
-            .collect::<std::collections::HashMap<_, _>>(),
-    )?;
+    convert::add_names::<imukit::preint::Scheme>(m, "PREINT_SCHEMES", Some("PREINT_SCHEME_ALIASES"))?;
     m.add(
         "DEFAULT_SATURATION_NOISE_FACTOR",
         imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,

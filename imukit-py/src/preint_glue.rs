@@ -1,28 +1,19 @@
 //! Preintegration bindings: the streaming `Preintegrator` state and keyframe windows, wrapped by
 //! `imukit.PreintegratedImu` and `imukit.preintegrate_windows`.
 
-use imukit::imu::Samples;
-use imukit::names::Named;
+use imukit::imu::{Bias, Samples};
 use imukit::preint::{self, ClipMask, Clipped, Scheme};
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
+use crate::convert::{BiasFields, Name, NoiseFields};
 use crate::{raise, to_py, SampleCopies};
 
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
 #[pyclass(name = "Preintegrator", module = "imukit._core")]
 pub(crate) struct PyPreintegrator {
     inner: preint::Preintegrator,
-}
-
-/// The deprecated scheme names and the canonical name each stands for (`_core.PREINT_SCHEME_ALIASES`).
-pub(crate) fn scheme_aliases() -> Vec<(&'static str, &'static str)> {
-    Scheme::ALIASES.iter().map(|(alias, s)| (*alias, s.name())).collect()
-}
-
-fn scheme_of(py: Python<'_>, name: &str) -> PyResult<Scheme> {
-    name.parse().map_err(|e| to_py(py, "scheme", e))
 }
 
 /// Private copies of the per-sample saturation flags `(gyro, accel)`: the run releases the GIL.
@@ -49,28 +40,6 @@ impl FlagCopies {
     }
 }
 
-/// The noise densities of an `imukit.ImuNoise`, by attribute name.
-#[derive(FromPyObject)]
-struct NoiseFields {
-    #[pyo3(attribute)]
-    gyro_density: f64,
-    #[pyo3(attribute)]
-    accel_density: f64,
-    #[pyo3(attribute)]
-    gyro_random_walk: f64,
-    #[pyo3(attribute)]
-    accel_random_walk: f64,
-}
-
-/// The biases of an `imukit.ImuBias`, by attribute name.
-#[derive(FromPyObject)]
-struct BiasFields {
-    #[pyo3(attribute)]
-    gyro: [f64; 3],
-    #[pyo3(attribute)]
-    accel: [f64; 3],
-}
-
 /// The options of an `imukit.PreintParams`, by attribute name (gravity is Python's: the core's
 /// deltas are gravity-free).
 #[derive(FromPyObject)]
@@ -80,7 +49,7 @@ pub(crate) struct Params {
     #[pyo3(attribute)]
     bias: BiasFields,
     #[pyo3(attribute)]
-    scheme: String,
+    scheme: Name<Scheme>,
     #[pyo3(attribute)]
     combined: bool,
     #[pyo3(attribute)]
@@ -90,16 +59,9 @@ pub(crate) struct Params {
 impl Params {
     /// The empty preintegrator these options describe.
     fn template(&self, py: Python<'_>) -> PyResult<preint::Preintegrator> {
-        let n = &self.noise;
-        let noise = imukit::imu::Noise {
-            gyro_density: n.gyro_density,
-            accel_density: n.accel_density,
-            gyro_random_walk: n.gyro_random_walk,
-            accel_random_walk: n.accel_random_walk,
-        };
-        let (gyro, accel) = (Vector3::from(self.bias.gyro), Vector3::from(self.bias.accel));
-        let inner = preint::Preintegrator::new(gyro, accel, noise)
-            .with_scheme(scheme_of(py, &self.scheme)?)
+        let bias = Bias::from(self.bias);
+        let inner = preint::Preintegrator::new(bias.gyro, bias.accel, self.noise.into())
+            .with_scheme(self.scheme.0)
             .with_saturation_noise_factor(self.saturation_noise_factor)
             .map_err(|e| to_py(py, "saturation_noise_factor", e))?;
         Ok(if self.combined { inner.with_bias_walk() } else { inner })

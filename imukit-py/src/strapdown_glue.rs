@@ -99,7 +99,7 @@ pub(crate) fn strapdown_propagate<'py>(
                 position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
                 rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
             }),
-            covariances: c_guard.as_slice_mut()?,
+            covariances: c_guard.as_slice_mut()?.as_chunks_mut().0,
             every,
         };
         py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))

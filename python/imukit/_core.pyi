@@ -15,6 +15,7 @@ __all__ = [
     "ATTITUDE_SCHEMES",
     "ATTITUDE_SCHEME_ALIASES",
     "DEFAULT_SATURATION_NOISE_FACTOR",
+    "FILTER_WORLDS",
     "GRAVITY",
     "PREINT_SCHEMES",
     "PREINT_SCHEME_ALIASES",
@@ -110,6 +111,7 @@ ATTITUDE_REPRESENTATIONS: tuple[str, ...]
 STRAPDOWN_SCHEMES: tuple[str, ...]
 STRAPDOWN_SCHEME_ALIASES: dict[str, str]
 QUAT_CONVENTIONS: tuple[str, ...]
+FILTER_WORLDS: tuple[str, ...]
 
 # The process-wide thread count of the parallel kernels (default: rayon's, one per core). Every
 # kernel below that takes `threads` runs on that many threads, None: on this process-wide count.
@@ -251,7 +253,6 @@ class MadgwickGains:
 
 @final
 class FilterOptions:
-    WORLDS: list[str]
     world: str
     gravity: float
     gain_ramp: GainRamp | None
@@ -404,7 +405,7 @@ class _PreintFields(Protocol):
     def saturation_noise_factor(self) -> float: ...
 
 DEFAULT_SATURATION_NOISE_FACTOR: float
-PREINT_SCHEMES: list[str]
+PREINT_SCHEMES: tuple[str, ...]
 PREINT_SCHEME_ALIASES: dict[str, str]
 
 @final

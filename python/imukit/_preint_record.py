@@ -30,22 +30,23 @@ from imukit._arrays import FloatArray, choice, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuBias, ImuNoise
 
-__all__ = ["SCHEMES", "PreintParams", "Preintegration", "scheme_name"]
+__all__ = ["SCHEMES", "SCHEME_ALIASES", "PreintParams", "Preintegration", "scheme_name"]
 
 SCHEMES: tuple[str, ...] = tuple(_core.PREINT_SCHEMES)
 """Canonical scheme names, in the core's order."""
-_ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)  # deprecated names → canonical
+SCHEME_ALIASES: dict[str, str] = dict(_core.PREINT_SCHEME_ALIASES)
+"""Deprecated scheme names → canonical (they still work, with a :class:`DeprecationWarning`)."""
 
 
 def scheme_name(scheme: str) -> str:
     """The canonical name of ``scheme``; a deprecated alias warns (:class:`DeprecationWarning`)."""
-    if isinstance(scheme, str) and scheme in _ALIASES:
+    if isinstance(scheme, str) and scheme in SCHEME_ALIASES:
         warnings.warn(
-            f"scheme {scheme!r} is deprecated: use {_ALIASES[scheme]!r} (the same update rule)",
+            f"scheme {scheme!r} is deprecated: use {SCHEME_ALIASES[scheme]!r} (the same update rule)",
             DeprecationWarning,
             stacklevel=3,
         )
-        return _ALIASES[scheme]
+        return SCHEME_ALIASES[scheme]
     return choice(scheme, "scheme", SCHEMES)
 
 

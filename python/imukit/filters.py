@@ -60,7 +60,7 @@ MagRejection = _core.MagRejection
 RestDetection = _core.RestDetection
 
 _OPTIONS = _core.FilterOptions.default()
-WORLDS: tuple[str, ...] = tuple(_core.FilterOptions.WORLDS)
+WORLDS: tuple[str, ...] = _core.FILTER_WORLDS
 
 
 class FilterState(_core.FilterState):
@@ -169,6 +169,8 @@ class _Filter:
         mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
         rest_detection: RestDetection | None = _OPTIONS.rest_detection,
     ) -> None:
+        if not isinstance(world, str):  # the core checks the name
+            raise ParameterError(f"expected one of {WORLDS}, got {world!r}", argument="world")
         self.options = _core.FilterOptions(
             world=world,
             gravity=gravity,

@@ -47,12 +47,13 @@ from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
 from imukit._preint_math import Deltas, ResidualJacobians, States
-from imukit._preint_record import SCHEMES, Preintegration, PreintParams, _flag
+from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
 
 __all__ = [
     "SCHEMES",
+    "SCHEME_ALIASES",
     "Deltas",
     "PreintParams",
     "PreintegratedImu",
@@ -78,6 +79,7 @@ residual_jacobians = _preint_math.residual_jacobians
 _MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 _DEFAULT_FACTOR = _core.DEFAULT_SATURATION_NOISE_FACTOR
 _DEFAULT_GRAVITY = _core.GRAVITY
+_DEFAULT_SCHEME = PreintParams.scheme
 
 
 def _params(
@@ -135,7 +137,7 @@ class PreintegratedImu:
         noise: ImuNoise | None = None,
         bias: ImuBias | None = None,
         gravity: ArrayLike = _DEFAULT_GRAVITY,
-        scheme: str = "midpoint",
+        scheme: str = _DEFAULT_SCHEME,
         combined: bool = False,
         saturation_noise_factor: float = _DEFAULT_FACTOR,
     ) -> None:
@@ -424,7 +426,7 @@ def preintegrate(
     noise: ImuNoise | None = None,
     bias: ImuBias | None = None,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
-    scheme: str = "midpoint",
+    scheme: str = _DEFAULT_SCHEME,
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
 ) -> PreintegratedImu:
@@ -507,7 +509,7 @@ def preintegrate_windows(
     noise: ImuNoise | None = None,
     bias: ImuBias | None = None,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
-    scheme: str = "midpoint",
+    scheme: str = _DEFAULT_SCHEME,
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
     threads: int | None = None,

@@ -64,7 +64,7 @@ fn strapdown(c: &mut Criterion) {
         accel_random_walk: 3e-3,
     };
     let p0 = Covariance::identity() * 1e-4;
-    let mut covariances = vec![0.0; 225 * covariance_count(N, 100)];
+    let mut covariances = vec![[0.0; 225]; covariance_count(N, 100)];
     group.bench_function("propagate_cov_every_100/midpoint", |b| {
         b.iter(|| {
             let outputs = Outputs {

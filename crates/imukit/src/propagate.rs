@@ -111,7 +111,7 @@ fn to_blocks(c: &Covariance) -> Blocks {
     std::array::from_fn(|i| std::array::from_fn(|j| c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()))
 }
 
-fn write_blocks(b: &Blocks, out: &mut [f64]) {
+fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
     // Row-major 15×15.
     for (i, row) in b.iter().enumerate() {
         for (j, block) in row.iter().enumerate() {
@@ -181,8 +181,9 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
 pub struct Outputs<'a> {
     /// Every state, or `None`.
     pub states: Option<StatesOut<'a>>,
-    /// Covariances (row-major 15×15) at samples `0, every, 2·every, …` and the last sample.
-    pub covariances: &'a mut [f64],
+    /// Covariances (one row-major 15×15 per row) at samples `0, every, 2·every, …` and the last
+    /// sample.
+    pub covariances: &'a mut [[f64; 225]],
     /// Stride of the stored covariances (≥ 1).
     pub every: usize,
 }
@@ -221,10 +222,10 @@ pub fn propagate(
             got: "0".into(),
         });
     }
-    if covariances.len() != 225 * covariance_count(n, every) {
+    if covariances.len() != covariance_count(n, every) {
         let e = Error::RowCount {
             input: covariance_count(n, every),
-            output: covariances.len() / 225,
+            output: covariances.len(),
         };
         return Err(e.in_argument("covariances"));
     }
@@ -243,7 +244,7 @@ pub fn propagate(
     let mut p = to_blocks(covariance);
     let mut stored = 0;
     let mut store_cov = |p: &Blocks, stored: &mut usize| {
-        write_blocks(p, &mut covariances[225 * *stored..225 * (*stored + 1)]);
+        write_blocks(p, &mut covariances[*stored]);
         *stored += 1;
     };
     if let Some(out) = states.as_mut() {

@@ -222,7 +222,7 @@ fn strapdown_run(scheme: strapdown::Scheme) {
         rotation: UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3),
     };
     let mut p = Covariance::identity() * 1e-4;
-    let mut covariances = vec![0.0; 225 * 2];
+    let mut covariances = vec![[0.0; 225]; 2];
     let (mut worst, mut norm) = (Worst::default(), 0.0_f64);
     let label = format!("strapdown {}", scheme.name());
     timed(&label, steps, || {

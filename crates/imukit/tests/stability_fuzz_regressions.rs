@@ -136,7 +136,7 @@ fn strapdown_rk4_norm_overflow_is_an_error_not_a_zero_quaternion() {
     };
     let stored = strapdown::integrate(&samples, &initial, &bias, &options, Some(states));
     assert!(matches!(stored, Err(Error::Overflow { index: 1 })), "{stored:?}");
-    let mut covariances = [0.0; 225 * 2];
+    let mut covariances = [[0.0; 225]; 2];
     let outputs = Outputs {
         states: None,
         covariances: &mut covariances,

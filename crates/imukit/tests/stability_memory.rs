@@ -120,7 +120,7 @@ fn streaming_apis_do_not_grow_memory() {
         rotation: UnitQuaternion::identity(),
     };
     let mut cov = Covariance::zeros();
-    let mut store = vec![0.0; 225 * 2];
+    let mut store = vec![[0.0; 225]; 2];
     results.push((
         "strapdown propagate",
         growth("strapdown propagate", |m| {

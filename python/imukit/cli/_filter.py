@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from imukit import _core
 from imukit._arrays import FloatArray
 from imukit.cli._attitude_input import AttitudeInput, read_attitude_input
 from imukit.cli._common import (
@@ -23,10 +24,12 @@ from imukit.cli._common import (
     wrote,
 )
 from imukit.eval import attitude_error
-from imukit.filters import FilterResult, FilterState, Madgwick, Mahony
+from imukit.filters import WORLDS, FilterResult, FilterState, Madgwick, Mahony
+from imukit.io import write_tum
 from imukit.state import Trajectory
 
 METHODS = {"mahony": Mahony, "madgwick": Madgwick}
+_DEFAULTS = _core.FilterOptions.default()  # the core's Options::default(), as the filters use
 CHUNK = 50_000  # samples per native call: a progress step, state carried across (FilterState)
 
 DESCRIPTION = """\
@@ -62,7 +65,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, bag, BROAD .mat, ...)")
     p.add_argument("--method", choices=sorted(METHODS), default="mahony", help="the filter (default: %(default)s)")
     p.add_argument("--mag", action="store_true", help="use the magnetometer (9D); the input must have one")
-    p.add_argument("--world", choices=("ENU", "NED"), default="ENU", help="world frame (default: %(default)s)")
+    p.add_argument("--world", choices=WORLDS, default=_DEFAULTS.world, help="world frame (default: %(default)s)")
     p.add_argument(
         "--max-dt",
         type=positive,
@@ -145,4 +148,4 @@ def _write(target: Any, data: AttitudeInput, result: FilterResult) -> None:
         return
     zeros = np.zeros((len(imu), 3))
     t = None if imu.t_ns is not None else imu.t
-    Trajectory(t, zeros, None, result.rotation, t_ns=imu.t_ns).write_tum(target)
+    write_tum(Trajectory(t, zeros, None, result.rotation, t_ns=imu.t_ns), target)

@@ -28,6 +28,7 @@ from imukit.cli._initial import (
     levelled_at_rest,
     trim_to_truth,
 )
+from imukit.io import write_tum
 from imukit.strapdown import SCHEME_ALIASES, SCHEMES, integrate
 
 MAX_DT = 0.02  # [s] longest ground-truth interval the ATE interpolates across (imukit.eval.ape's default)
@@ -117,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     if truth is not None:
         _report_errors(trajectory, truth)
     if tum is not None:
-        trajectory.write_tum(tum)
+        write_tum(trajectory, tum)
         wrote("trajectory (TUM)", tum)
     if png is not None:
         from imukit.plot import trajectory_top_view

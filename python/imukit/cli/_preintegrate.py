@@ -26,7 +26,15 @@ from imukit.cli._common import (
 from imukit.imu import ImuData, ImuNoise
 from imukit.io import find_noise_model
 from imukit.io._noise_model import NoNoiseModelError
-from imukit.preint import Preintegration, PreintParams, concatenate, preintegrate_windows, regular_boundaries
+from imukit.preint import (
+    SCHEME_ALIASES,
+    SCHEMES,
+    Preintegration,
+    PreintParams,
+    concatenate,
+    preintegrate_windows,
+    regular_boundaries,
+)
 
 WINDOWS_PER_CALL = 2_000  # a progress step; each window is computed alone, so the split changes nothing
 
@@ -85,7 +93,12 @@ def add(commands: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, CSV, bag, ...)")
     p.add_argument("--window", type=positive, required=True, metavar="S", help="window length [s]")
-    p.add_argument("--scheme", choices=("euler", "midpoint"), default="midpoint", help="(default: %(default)s)")
+    p.add_argument(
+        "--scheme",
+        choices=(*SCHEMES, *SCHEME_ALIASES),  # the deprecated names keep working (with a warning)
+        default=PreintParams.scheme,
+        help="(default: %(default)s)",
+    )
     p.add_argument("--noise", metavar="YAML", help="Kalibr imu.yaml with the noise densities")
     p.add_argument("--out", metavar="FILE", help="write the windows to this .csv or .npz file")
     add_input_options(p)
