@@ -113,7 +113,47 @@ _ENTRIES: dict[str, Callable[..., Any]] = {
     ).as_quat(),
     "noise.allan_deviation": lambda rows, **kw: ik.noise.allan_deviation(_data("vec3", rows), 100.0, **kw).deviation,
     "sim.simulate": lambda rows, **kw: _simulated(rows, **kw),
+    "preintegrate": lambda rows, **kw: _preintegrated(rows, **kw),
+    "PreintegratedImu.integrate": lambda rows, **kw: _integrated(rows, **kw),
+    "preintegrate_windows": lambda rows, **kw: _windows(rows, **kw),
+    "reintegrate": lambda rows, **kw: _reintegrated(rows, **kw),
 }
+_PARAMS = ik.PreintParams(noise=ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3), scheme="lie_euler")
+
+
+@functools.cache
+def _imu(rows: int) -> ik.ImuData:
+    # Over 2 × 32,768 intervals: a lie_euler batch without combined runs as parallel chunks.
+    accel = np.array([0.0, 0.0, 9.81]) + _data("vec3", rows)
+    return ik.ImuData(np.arange(rows) * 0.005, _data("vec3", rows), accel)
+
+
+def _deltas(pim: ik.PreintegratedImu) -> list[np.ndarray]:
+    s = pim.snapshot()
+    return [s.delta_rotation, s.delta_velocity, s.delta_position, s.covariance, s.bias_jacobian]
+
+
+def _preintegrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    return _deltas(ik.preintegrate(_imu(rows), _PARAMS, **kw))
+
+
+def _integrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    pim = ik.PreintegratedImu(_PARAMS)
+    pim.integrate(_imu(rows), **kw)
+    return _deltas(pim)
+
+
+def _windows(rows: int, **kw: Any) -> list[np.ndarray]:
+    imu = _imu(rows)
+    r = ik.preintegrate_windows(imu, np.linspace(imu.t[0], imu.t[-1], 5), _PARAMS, **kw)
+    return [r.delta_rotation, r.delta_velocity, r.delta_position, r.covariance, r.bias_jacobian]
+
+
+def _reintegrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    imu = _imu(rows)
+    record = ik.preintegrate_windows(imu, np.linspace(imu.t[0], imu.t[-1], 5), _PARAMS)
+    r = ik.preint.reintegrate(record, imu, ik.ImuBias([0.01, 0.0, 0.0], [0.0, 0.1, 0.0]), **kw)
+    return [r.delta_rotation, r.delta_velocity, r.delta_position, r.covariance, r.bias_jacobian]
 
 
 def _simulated(rows: int, **kw: Any) -> list[np.ndarray]:
@@ -153,7 +193,8 @@ def test_a_bad_threads_is_a_parameter_error_naming_threads(name: str, bad: objec
 
 def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> None:
     batch = [getattr(m, n) for m in (ik.so3, ik.quat, ik.euler) for n in m.__all__]
-    for fn in (*batch, ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate):
+    others = (ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate, ik.preintegrate)
+    for fn in (*batch, *others, ik.PreintegratedImu.integrate, ik.preintegrate_windows, ik.preint.reintegrate):
         threads = inspect.signature(fn).parameters["threads"]
         assert (threads.kind, threads.default) == (inspect.Parameter.KEYWORD_ONLY, None), fn.__qualname__
     assert len([n for n in _ENTRIES if n.startswith(("so3.", "quat.", "euler."))]) == len(batch)

@@ -11,7 +11,7 @@ Every public function that reaches a parallel kernel takes the keyword-only ``th
 of threads for that call, an int in [1, MAX_THREADS]; None (the default) uses the setting of
 ``set_num_threads``. They are the so3 / quat / euler batch functions, ``integrate_attitude``, ``noise.allan_deviation``,
 ``sim.simulate``, ``preintegrate``, ``PreintegratedImu.integrate``, ``preintegrate_windows`` and
-``reintegrate``.
+``preint.reintegrate``.
 """
 
 from __future__ import annotations
