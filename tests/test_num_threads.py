@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import functools
+import inspect
 import threading
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
 from imukit import _core
@@ -65,3 +70,131 @@ def test_set_num_threads_from_several_threads_at_once_leaves_a_valid_count() -> 
 def test_gravity_is_the_core_constant() -> None:
     assert _core.GRAVITY == (0.0, 0.0, -9.81)
     assert ik.GRAVITY is _core.GRAVITY
+
+
+# ----------------------------------------------------------------------------- threads= per call
+# Each entry runs one public entry point on an input of `rows` rows: with ROWS it takes the kernel's
+# parallel path (ffi row maps from 8192 rows; attitude's exp / magnus chunks of 4096 samples; the
+# simulator's motion chunks of 4096 rows and sensor chunks of 65,536 samples; the Allan variance's
+# tasks per cluster size and its 65,536-value check chunks).
+ROWS = 70_000
+SMALL = 8
+
+
+@functools.cache
+def _data(kind: str, rows: int) -> np.ndarray:
+    rng = np.random.default_rng(7)
+    if kind == "matrix":
+        return Rotation.random(rows, rng=rng).as_matrix()
+    width = {"vec3": 3, "quat": 4}[kind]
+    return 0.5 * rng.standard_normal((rows, width))
+
+
+def _batch(fn: Callable[..., Any], *kinds: str) -> Callable[..., Any]:
+    return lambda rows, **kw: fn(*(_data(k, rows) for k in kinds), **kw)
+
+
+_ENTRIES: dict[str, Callable[..., Any]] = {
+    **{f"so3.{n}": _batch(getattr(ik.so3, n), "vec3") for n in ik.so3.__all__ if n not in ("vee", "log")},
+    "so3.vee": _batch(ik.so3.vee, "matrix"),
+    "so3.log": _batch(ik.so3.log, "matrix"),
+    **{f"quat.{n}": _batch(getattr(ik.quat, n), "quat") for n in ("conjugate", "inverse", "normalize", "log")},
+    **{f"quat.{n}": _batch(getattr(ik.quat, n), "quat") for n in ("left_matrix", "right_matrix")},
+    "quat.multiply": _batch(ik.quat.multiply, "quat", "quat"),
+    "quat.rotate": _batch(ik.quat.rotate, "quat", "vec3"),
+    "quat.omega_matrix": _batch(ik.quat.omega_matrix, "vec3"),
+    "quat.exp": _batch(ik.quat.exp, "vec3"),
+    "euler.to_rotation": lambda rows, **kw: ik.euler.to_rotation(_data("vec3", rows), **kw).as_matrix(),
+    "euler.from_rotation": _batch(ik.euler.from_rotation, "matrix"),
+    "euler.rate_matrix": _batch(ik.euler.rate_matrix, "vec3"),
+    "euler.rate_matrix_inv": _batch(ik.euler.rate_matrix_inv, "vec3"),
+    "integrate_attitude": lambda rows, **kw: ik.integrate_attitude(
+        np.arange(rows) * 0.01, _data("vec3", rows), scheme="magnus", **kw
+    ).as_quat(),
+    "noise.allan_deviation": lambda rows, **kw: ik.noise.allan_deviation(_data("vec3", rows), 100.0, **kw).deviation,
+    "sim.simulate": lambda rows, **kw: _simulated(rows, **kw),
+    "preintegrate": lambda rows, **kw: _preintegrated(rows, **kw),
+    "PreintegratedImu.integrate": lambda rows, **kw: _integrated(rows, **kw),
+    "preintegrate_windows": lambda rows, **kw: _windows(rows, **kw),
+    "reintegrate": lambda rows, **kw: _reintegrated(rows, **kw),
+}
+_PARAMS = ik.PreintParams(noise=ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3), scheme="lie_euler")
+
+
+@functools.cache
+def _imu(rows: int) -> ik.ImuData:
+    # Over 2 × 32,768 intervals: a lie_euler batch without combined runs as parallel chunks.
+    accel = np.array([0.0, 0.0, 9.81]) + _data("vec3", rows)
+    return ik.ImuData(np.arange(rows) * 0.005, _data("vec3", rows), accel)
+
+
+def _deltas(pim: ik.PreintegratedImu) -> list[np.ndarray]:
+    s = pim.snapshot()
+    return [s.delta_rotation, s.delta_velocity, s.delta_position, s.covariance, s.bias_jacobian]
+
+
+def _preintegrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    return _deltas(ik.preintegrate(_imu(rows), _PARAMS, **kw))
+
+
+def _integrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    pim = ik.PreintegratedImu(_PARAMS)
+    pim.integrate(_imu(rows), **kw)
+    return _deltas(pim)
+
+
+def _windows(rows: int, **kw: Any) -> list[np.ndarray]:
+    imu = _imu(rows)
+    r = ik.preintegrate_windows(imu, np.linspace(imu.t[0], imu.t[-1], 5), _PARAMS, **kw)
+    return [r.delta_rotation, r.delta_velocity, r.delta_position, r.covariance, r.bias_jacobian]
+
+
+def _reintegrated(rows: int, **kw: Any) -> list[np.ndarray]:
+    imu = _imu(rows)
+    record = ik.preintegrate_windows(imu, np.linspace(imu.t[0], imu.t[-1], 5), _PARAMS)
+    r = ik.preint.reintegrate(record, imu, ik.ImuBias([0.01, 0.0, 0.0], [0.0, 0.1, 0.0]), **kw)
+    return [r.delta_rotation, r.delta_velocity, r.delta_position, r.covariance, r.bias_jacobian]
+
+
+def _simulated(rows: int, **kw: Any) -> list[np.ndarray]:
+    noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+    imu, truth = ik.sim.simulate(ik.sim.Helix(), rate=100.0, duration=(rows - 1) / 100.0, noise=noise, seed=3, **kw)
+    return [imu.gyro, imu.accel, truth.position, truth.velocity, truth.rotation.as_quat(), truth.gyro_bias]
+
+
+def _arrays(result: Any) -> list[np.ndarray]:
+    return [np.asarray(a) for a in result] if isinstance(result, list) else [np.asarray(result)]
+
+
+def _assert_identical(a: Any, b: Any) -> None:
+    for x, y in zip(_arrays(a), _arrays(b), strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.usefixtures("restore_threads")
+@pytest.mark.parametrize("name", sorted(_ENTRIES))
+def test_threads_do_not_change_a_result_and_none_is_the_process_setting(name: str) -> None:
+    call = _ENTRIES[name]
+    one = call(ROWS, threads=1)
+    _assert_identical(call(ROWS, threads=3), one)
+    _assert_identical(call(ROWS), one)
+    ik.set_num_threads(1)
+    _assert_identical(call(ROWS), one)
+    _assert_identical(call(ROWS, threads=None), one)
+
+
+@pytest.mark.parametrize("bad", [0, -1, 2.5, "2", True, 10**30])
+@pytest.mark.parametrize("name", sorted(_ENTRIES))
+def test_a_bad_threads_is_a_parameter_error_naming_threads(name: str, bad: object) -> None:
+    with pytest.raises(ik.ParameterError, match=r"^threads: expected an int in \[1, 4096\]") as info:
+        _ENTRIES[name](SMALL, threads=bad)
+    assert info.value.argument == "threads"
+
+
+def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> None:
+    batch = [getattr(m, n) for m in (ik.so3, ik.quat, ik.euler) for n in m.__all__]
+    others = (ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate, ik.preintegrate)
+    for fn in (*batch, *others, ik.PreintegratedImu.integrate, ik.preintegrate_windows, ik.preint.reintegrate):
+        threads = inspect.signature(fn).parameters["threads"]
+        assert (threads.kind, threads.default) == (inspect.Parameter.KEYWORD_ONLY, None), fn.__qualname__
+    assert len([n for n in _ENTRIES if n.startswith(("so3.", "quat.", "euler."))]) == len(batch)

@@ -227,9 +227,9 @@ def test_public_api_passes_the_callers_buffer_to_the_glue(monkeypatch: pytest.Mo
     phi = np.random.default_rng(7).standard_normal((100, 3))
     original = _core.so3_exp
 
-    def spy(x: np.ndarray, name: str) -> Any:
+    def spy(x: np.ndarray, name: str, **threads: Any) -> Any:
         seen.append(np.shares_memory(x, phi))
-        return original(x, name)
+        return original(x, name, **threads)
 
     monkeypatch.setattr(_core, "so3_exp", spy)
     ik.so3.exp(phi)

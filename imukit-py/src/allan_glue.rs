@@ -4,14 +4,16 @@ use imukit::allan::{self, Estimator};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::{contiguous, private_copy, raise, to_py};
+use crate::{contiguous, private_copy, raise, threads, to_py};
 
 /// `(M, C)` variances and `(M,)` term counts.
 type VarianceAndTerms<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<i64>>);
 
 /// `(M, C)` Allan variances and `(M,)` term counts of the `(N, C)` rate samples `y` at `rate`
-/// Hz for the cluster sizes `clusters` (`τ = m / rate`).
+/// Hz for the cluster sizes `clusters` (`τ = m / rate`), on `threads` threads (None: the
+/// process-wide pool).
 #[pyfunction]
+#[pyo3(signature = (y, name, rate, clusters, overlapping, threads=None))]
 pub(crate) fn allan_variance<'py>(
     py: Python<'py>,
     y: PyReadonlyArray2<'py, f64>,
@@ -19,6 +21,7 @@ pub(crate) fn allan_variance<'py>(
     rate: f64,
     clusters: Vec<usize>,
     overlapping: bool,
+    threads: Option<usize>,
 ) -> PyResult<VarianceAndTerms<'py>> {
     let columns = y.shape()[1];
     let copy = private_copy(py, &y)?.readonly();
@@ -29,7 +32,11 @@ pub(crate) fn allan_variance<'py>(
         Estimator::NonOverlapping
     };
     let result = py
-        .detach(|| allan::allan_variance(samples, columns, rate, &clusters, estimator))
+        .detach(|| {
+            threads::run_in_pool(threads, || {
+                allan::allan_variance(samples, columns, rate, &clusters, estimator)
+            })
+        })?
         .map_err(|e| match e {
             imukit::Error::Parameter {
                 name: param,

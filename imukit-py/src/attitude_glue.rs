@@ -7,8 +7,10 @@ use pyo3::prelude::*;
 use crate::convert::{contiguous, private_copy, rows, unit_quaternion, Name};
 use crate::{threads, to_py};
 
-/// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`.
+/// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`; on `threads` threads (None: the
+/// process-wide pool).
 #[pyfunction]
+#[pyo3(signature = (t, gyro, initial, scheme, representation, gimbal_tolerance, final_only, threads=None))]
 #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate_attitude
 pub(crate) fn attitude_integrate<'py>(
     py: Python<'py>,
@@ -19,6 +21,7 @@ pub(crate) fn attitude_integrate<'py>(
     representation: Name<Representation>,
     gimbal_tolerance: f64,
     final_only: bool,
+    threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let options = attitude::Options {
         scheme: scheme.0,
@@ -36,7 +39,7 @@ pub(crate) fn attitude_integrate<'py>(
         let out_slice = guard.as_slice_mut()?;
         let store = (!final_only).then_some(out_slice.as_chunks_mut::<4>().0);
         let last =
-            py.detach(|| threads::run_in_pool(None, || attitude::integrate(t, gyro, &initial, &options, store)))?;
+            py.detach(|| threads::run_in_pool(threads, || attitude::integrate(t, gyro, &initial, &options, store)))?;
         // Errors that name no argument (gimbal lock, overflow) are about the rates.
         let last = last.map_err(|e| to_py(py, "gyro", e))?;
         if final_only {

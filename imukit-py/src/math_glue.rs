@@ -1,5 +1,6 @@
 //! so3, quat and euler: row maps from `(n, k)` float64 arrays to new `(n, m)` arrays over the
-//! core's [`imukit::ffi`] kernels, GIL released, in the process-wide thread pool.
+//! core's [`imukit::ffi`] kernels, GIL released, on `threads` threads (None: the process-wide
+//! pool).
 
 use imukit::ffi::{self, Convention, Jacobian, ProductMatrix};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -15,6 +16,7 @@ fn run<'py>(
     name: &str,
     width_in: usize,
     width_out: usize,
+    threads: Option<usize>,
     kernel: impl FnOnce(&[f64], &mut [f64]) -> imukit::Result<()> + Send,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let shape = x.shape();
@@ -29,23 +31,25 @@ fn run<'py>(
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
-        py.detach(|| threads::run_in_pool(None, || kernel(input, out_slice)))?
+        py.detach(|| threads::run_in_pool(threads, || kernel(input, out_slice)))?
             .map_err(|e| to_py(py, name, e))?;
     }
     Ok(out)
 }
 
-/// A `#[pyfunction] name(x, name, options…)` running `kernel` from `(n, in)` to `(n, out)`.
+/// A `#[pyfunction] name(x, name, options…, threads=None)` running `kernel` from `(n, in)` to `(n, out)`.
 macro_rules! kernel {
     ($func:ident, $width_in:expr, $width_out:expr, $kernel:expr $(, $arg:ident: $ty:ty)*) => {
         #[pyfunction]
+        #[pyo3(signature = (x, name, $($arg,)* threads=None))]
         pub(crate) fn $func<'py>(
             py: Python<'py>,
             x: PyReadonlyArray2<'py, f64>,
             name: &str,
-            $($arg: $ty),*
+            $($arg: $ty,)*
+            threads: Option<usize>,
         ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-            run(py, x, name, $width_in, $width_out, $kernel)
+            run(py, x, name, $width_in, $width_out, threads, $kernel)
         }
     };
 }

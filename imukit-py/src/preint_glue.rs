@@ -143,7 +143,10 @@ impl PyPreintegrator {
     }
 
     /// The N − 1 intervals of the samples (euler: sample k held over `[t_k, t_k+1)`; midpoint:
-    /// between samples k and k+1, continuing from the last sample, which must be sample 0).
+    /// between samples k and k+1, continuing from the last sample, which must be sample 0). On
+    /// `threads` threads (None: the process-wide pool): long lie_euler batches run in chunks.
+    #[pyo3(signature = (t, gyro, accel, gyro_saturated, accel_saturated, threads=None))]
+    #[allow(clippy::too_many_arguments)] // the sample arrays, their flags and the thread count
     fn integrate(
         &mut self,
         py: Python<'_>,
@@ -152,13 +155,18 @@ impl PyPreintegrator {
         accel: PyReadonlyArray2<'_, f64>,
         gyro_saturated: PyReadonlyArray1<'_, bool>,
         accel_saturated: PyReadonlyArray1<'_, bool>,
+        threads: Option<usize>,
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
         let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
         let inner = &mut self.inner;
-        py.detach(|| inner.integrate_samples_clipped(&samples, flags.mask().as_ref()))
-            .map_err(|e| as_argument(py, "imu", "imu / bias", e))
+        py.detach(|| {
+            crate::threads::run_in_pool(threads, || {
+                inner.integrate_samples_clipped(&samples, flags.mask().as_ref())
+            })
+        })?
+        .map_err(|e| as_argument(py, "imu", "imu / bias", e))
     }
 
     /// `(ΔR (3, 3), Δv (3,), Δp (3,), Δt, covariance (9, 9), bias Jacobian (9, 6), combined

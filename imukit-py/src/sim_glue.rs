@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{contiguous, unit_quaternion, Name};
-use crate::{raise, to_py};
+use crate::{raise, threads, to_py};
 
 fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
     Ok(Vector3::from(obj.extract::<[f64; 3]>()?))
@@ -131,14 +131,17 @@ type Arrays<'py> = (
 );
 
 /// `(position, velocity, rotation xyzw, gyro, accel)` of the closed-form motion `trajectory` (an
-/// `imukit.sim` motion, its fields checked there) of kind `kind` at the times `t`.
+/// `imukit.sim` motion, its fields checked there) of kind `kind` at the times `t`, on `threads`
+/// threads (None: the process-wide pool).
 #[pyfunction]
+#[pyo3(signature = (kind, trajectory, t, gravity, threads=None))]
 pub(crate) fn sim_motion<'py>(
     py: Python<'py>,
     kind: Name<MotionKind>,
     trajectory: &Bound<'py, PyAny>,
     t: PyReadonlyArray1<'py, f64>,
     gravity: [f64; 3],
+    threads: Option<usize>,
 ) -> PyResult<Arrays<'py>> {
     let motion = motion(kind.0, trajectory)?;
     // No private copy: imukit.sim passes an array it has just made and shares with no one.
@@ -162,7 +165,7 @@ pub(crate) fn sim_motion<'py>(
             accel: ag.as_slice_mut()?,
         };
         let g = Vector3::from(gravity);
-        py.detach(|| sim::evaluate(&motion, t, &g, out))
+        py.detach(|| threads::run_in_pool(threads, || sim::evaluate(&motion, t, &g, out)))?
             .map_err(|e| to_py(py, "simulate", e))?;
     }
     Ok((p, v, q, w, a))
@@ -200,8 +203,9 @@ pub(crate) fn sim_sensor_default(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> 
 /// returns the true biases. The model is `errors` (an `imukit.sim.SensorErrors`, read by name) with
 /// the constant `bias` and the white-noise `density` and bias `random_walk` of this triad.
 /// Private to `imukit.sim`, which passes arrays it has just made and shares with no one, so nothing
-/// is copied.
+/// is copied. On `threads` threads (None: the process-wide pool).
 #[pyfunction]
+#[pyo3(signature = (t, ideal, errors, bias, density, random_walk, seed, triad, threads=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sim_measure<'py>(
     py: Python<'py>,
@@ -213,6 +217,7 @@ pub(crate) fn sim_measure<'py>(
     random_walk: f64,
     seed: u64,
     triad: u64,
+    threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let model = SensorModel {
         matrix: Matrix3::from(errors.matrix).transpose(),
@@ -235,7 +240,7 @@ pub(crate) fn sim_measure<'py>(
             .as_slice_mut()
             .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
         let argument = if triad == 0 { "gyro_errors" } else { "accel_errors" };
-        py.detach(|| sim::measure_in_place(t, values, &model, seed, triad, b))
+        py.detach(|| threads::run_in_pool(threads, || sim::measure_in_place(t, values, &model, seed, triad, b)))?
             .map_err(|e| raise(py, crate::class_name(&e), argument, e.root()))?;
     }
     Ok(bias)

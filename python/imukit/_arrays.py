@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit._errors import DTypeError, NonFiniteError, ParameterError, ShapeError, TimestampError
+from imukit.threads import checked
 
 FloatArray = NDArray[np.float64]
 Kernel = Callable[..., FloatArray]
@@ -78,13 +79,16 @@ def batched(
     inputs: list[tuple[ArrayLike, str, tuple[int, ...]]],
     out_tail: tuple[int, ...],
     *options: Any,
+    threads: object = None,
 ) -> FloatArray:
-    """Broadcast ``inputs`` over their leading dimensions, run ``kernel`` once, reshape back.
+    """Broadcast ``inputs`` over their leading dimensions, run ``kernel`` once on ``threads``
+    threads (the public function's argument, checked here), reshape back.
 
     Several inputs are concatenated row-wise (``[q, p]`` for a product), so the core sees one
     contiguous ``(n, sum of widths)`` array. The error name given to the core is the first
     input's when there is one input, else all names joined.
     """
+    count = checked(threads)
     arrays = []
     for x, name, tail in inputs:
         arr = as_float_array(x, name)
@@ -98,7 +102,7 @@ def batched(
     rows = [np.broadcast_to(a, batch + t).reshape(-1, int(np.prod(t))) for a, (_, _, t) in zip(arrays, inputs)]
     flat = np.ascontiguousarray(rows[0] if len(rows) == 1 else np.concatenate(rows, axis=1))
     name = " / ".join(n for _, n, _ in inputs)
-    out = kernel(flat, name, *options)
+    out = kernel(flat, name, *options, threads=count)
     return out.reshape(batch + out_tail)
 
 

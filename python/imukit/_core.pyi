@@ -113,32 +113,42 @@ STRAPDOWN_SCHEME_ALIASES: dict[str, str]
 QUAT_CONVENTIONS: tuple[str, ...]
 FILTER_WORLDS: tuple[str, ...]
 
-# The process-wide thread count of the parallel kernels (default: rayon's, one per core).
+# The process-wide thread count of the parallel kernels (default: rayon's, one per core). Every
+# kernel below that takes `threads` runs on that many threads, None: on this process-wide count.
 def set_num_threads(n: int) -> None: ...
 def get_num_threads() -> int: ...
 
 # so3 / quat / euler row maps: `x` is a C-contiguous (n, k) float64 array, `name` the argument
-# named in errors; each returns a new (n, m) array. Bad rows raise with `exc.index` = the row.
-def so3_hat(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
-def so3_vee(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3)
-def so3_exp(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
-def so3_log(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3)
-def so3_jacobian(x: _Rows, name: str, kind: _Jacobian | str) -> _Rows: ...  # (n, 3) -> (n, 9)
-def quat_multiply(x: _Rows, name: str, convention: _Convention | str) -> _Rows: ...  # (n, 8) [q, p] -> (n, 4)
-def quat_conjugate(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
-def quat_inverse(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
-def quat_normalize(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 4)
-def quat_rotate(x: _Rows, name: str) -> _Rows: ...  # (n, 7) [q, v] -> (n, 3)
+# named in errors, `threads` the thread count; each returns a new (n, m) array. Bad rows raise
+# with `exc.index` = the row.
+def so3_hat(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_vee(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
+def so3_exp(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_log(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
+def so3_jacobian(
+    x: _Rows, name: str, kind: _Jacobian | str, threads: int | None = None
+) -> _Rows: ...  # (n, 3) -> (n, 9)
+def quat_multiply(
+    x: _Rows, name: str, convention: _Convention | str, threads: int | None = None
+) -> _Rows: ...  # (n, 8) [q, p] -> (n, 4)
+def quat_conjugate(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_inverse(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_normalize(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 4) -> (n, 4)
+def quat_rotate(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 7) [q, v] -> (n, 3)
 def quat_product_matrix(
-    x: _Rows, name: str, side: _Side | str, convention: _Convention | str
+    x: _Rows, name: str, side: _Side | str, convention: _Convention | str, threads: int | None = None
 ) -> _Rows: ...  # (n, 4) -> (n, 16)
-def quat_omega_matrix(x: _Rows, name: str, convention: _Convention | str) -> _Rows: ...  # (n, 3) -> (n, 16)
-def quat_exp(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 4)
-def quat_log(x: _Rows, name: str) -> _Rows: ...  # (n, 4) -> (n, 3)
-def euler_to_matrix(x: _Rows, name: str) -> _Rows: ...  # (n, 3) ZYX -> (n, 9)
-def euler_from_matrix(x: _Rows, name: str) -> _Rows: ...  # (n, 9) -> (n, 3) ZYX
-def euler_rate_matrix(x: _Rows, name: str, tolerance: float) -> _Rows: ...  # (n, 3) -> (n, 9)
-def euler_rate_matrix_inv(x: _Rows, name: str) -> _Rows: ...  # (n, 3) -> (n, 9)
+def quat_omega_matrix(
+    x: _Rows, name: str, convention: _Convention | str, threads: int | None = None
+) -> _Rows: ...  # (n, 3) -> (n, 16)
+def quat_exp(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 4)
+def quat_log(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 4) -> (n, 3)
+def euler_to_matrix(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) ZYX -> (n, 9)
+def euler_from_matrix(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3) ZYX
+def euler_rate_matrix(
+    x: _Rows, name: str, tolerance: float, threads: int | None = None
+) -> _Rows: ...  # (n, 3) -> (n, 9)
+def euler_rate_matrix_inv(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
 
 # Attitudes (n, 4) xyzw from (n,) seconds and (n, 3) rates; (1, 4) with final_only. `initial` xyzw.
 def attitude_integrate(
@@ -149,6 +159,7 @@ def attitude_integrate(
     representation: _Representation | str,
     gimbal_tolerance: float,
     final_only: bool,
+    threads: int | None = None,
 ) -> _Rows: ...
 
 # Strapdown: (N, 6) rows [p, v] and (N, 4) quaternions xyzw, row 0 = `initial`. `initial`,
@@ -178,7 +189,7 @@ def strapdown_propagate(
     every: int,
 ) -> tuple[_Rows, _Rows, _Rows]: ...
 def allan_variance(
-    y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool
+    y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool, threads: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...  # (M, C) variances, (M,) term counts
 
 # Attitude filters: option values (a field left out or None takes the Rust Default), the state
@@ -414,6 +425,7 @@ class Preintegrator:
         accel: NDArray[np.float64],
         gyro_saturated: NDArray[np.bool_],
         accel_saturated: NDArray[np.bool_],
+        threads: int | None = None,
     ) -> None: ...
     def state(
         self,
@@ -452,6 +464,7 @@ def sim_motion(
     trajectory: Static | ConstantTwist | Helix | FigureEight | VioEllipse,
     t: NDArray[np.float64],
     gravity: list[float],
+    threads: int | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 def sim_sensor_default() -> dict[str, Any]: ...
 def sim_measure(
@@ -463,4 +476,5 @@ def sim_measure(
     random_walk: float,
     seed: int,
     triad: int,
+    threads: int | None = None,
 ) -> NDArray[np.float64]: ...

@@ -21,6 +21,7 @@ from imukit._arrays import (
 )
 from imukit._errors import ParameterError, ShapeError
 from imukit._names import canonical
+from imukit.threads import checked
 
 __all__ = ["REPRESENTATIONS", "SCHEMES", "SCHEME_ALIASES", "integrate_attitude"]
 
@@ -41,6 +42,7 @@ def integrate_attitude(
     representation: str = "quaternion",
     final_only: bool = False,
     gimbal_tolerance_rad: float = 1e-6,
+    threads: int | None = None,
 ) -> Rotation:
     """Integrate body rates into attitudes ``R_wb``, one per sample.
 
@@ -74,6 +76,8 @@ def integrate_attitude(
         ``gimbal_tolerance_rad`` of ±90°).
     final_only
         Return only the attitude at ``t[-1]`` (a single ``Rotation``).
+    threads
+        ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
 
     Returns
     -------
@@ -100,7 +104,8 @@ def integrate_attitude(
         what="an angle in [0, π/2) radians",
         accept=lambda x: 0.0 <= x < np.pi / 2,
     )
+    count = checked(threads)
     out = _core.attitude_integrate(
-        seconds, np.ascontiguousarray(rates), start, scheme, representation, tolerance, bool(final_only)
+        seconds, np.ascontiguousarray(rates), start, scheme, representation, tolerance, bool(final_only), count
     )
     return rotation_from_unit_quat(out[0] if final_only else out)

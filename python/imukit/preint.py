@@ -50,6 +50,7 @@ from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
+from imukit.threads import checked
 
 __all__ = [
     "SCHEMES",
@@ -76,7 +77,6 @@ predict = _preint_math.predict
 residual = _preint_math.residual
 residual_jacobians = _preint_math.residual_jacobians
 
-_MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 _DEFAULT_FACTOR = _core.DEFAULT_SATURATION_NOISE_FACTOR
 _DEFAULT_GRAVITY = _core.GRAVITY
 _DEFAULT_SCHEME = PreintParams.scheme
@@ -230,15 +230,19 @@ class PreintegratedImu:
         self._inputs.append(_Measurement(a, w, step, *flags))
         self._changed()
 
-    def integrate(self, imu: ImuData) -> None:
+    def integrate(self, imu: ImuData, *, threads: int | None = None) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
         share their boundary sample). Long lie_euler batches (over 65,536 intervals, without
         ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
-        rounding (1e-12 relative) and independent of the core count."""
+        rounding (1e-12 relative) and independent of the core count.
+
+        ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
+        """
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
-        self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated)
+        count = checked(threads)
+        self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated, count)
         self._inputs.append(imu)
         self._changed(float(imu.t[0]), float(imu.t[-1]))
 
@@ -425,6 +429,7 @@ def preintegrate(
     scheme: str = _DEFAULT_SCHEME,
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
+    threads: int | None = None,
 ) -> PreintegratedImu:
     """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
 
@@ -434,6 +439,8 @@ def preintegrate(
     its ``gyro_range`` / ``accel_range``) have that sensor's white-noise density multiplied by
     ``saturation_noise_factor`` (finite, ≥ 1; 1 ignores the flags); see the module docs for which
     intervals that covers.
+
+    ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
     pim = PreintegratedImu(
         params,
@@ -444,7 +451,7 @@ def preintegrate(
         combined=combined,
         saturation_noise_factor=saturation_noise_factor,
     )
-    pim.integrate(imu)
+    pim.integrate(imu, threads=threads)
     return pim
 
 
@@ -468,14 +475,6 @@ def _core_windows(
 ) -> list[_core.Preintegrator]:
     b = np.ascontiguousarray(_windows(imu, boundaries).offsets)
     return _core.preint_windows(imu, b, params._template(), threads)
-
-
-def _threads(threads: object) -> int | None:
-    if threads is not None and (
-        isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= _MAX_THREADS
-    ):
-        raise ParameterError(f"expected an int in [1, {_MAX_THREADS}] or None, got {threads!r}", argument="threads")
-    return threads
 
 
 @overload
@@ -512,7 +511,7 @@ def preintegrate_windows(
 ) -> Preintegration | list[PreintegratedImu]:
     """Every window ``[boundaries[m], boundaries[m+1]]`` (M + 1 times → M windows) preintegrated
     with ``params``, as one :class:`Preintegration` record, filled by one native call (``engine=
-    "rust"``), the windows in parallel on ``threads`` threads (default: all cores), GIL released.
+    "rust"``), the windows in parallel, GIL released.
 
     ``boundaries`` (M + 1,) are times on ``imu.t``'s clock (integer ns for integer stamps; the
     record then carries them exactly as ``t_start_ns``/``t_end_ns``), strictly increasing, within
@@ -521,11 +520,12 @@ def preintegrate_windows(
     interpolation of its neighbours in ``"midpoint"``; consecutive windows share it. Clipped
     samples inflate the noise as in :func:`preintegrate`, so a window holding one has a larger
     covariance; the other windows are unchanged. ``engine``: a name of :data:`imukit._engines.ENGINES`.
+    ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
 
     Deprecated form: without ``params``, the keyword options (``noise=`` …) give the old result, a
     list of :class:`PreintegratedImu` (one per window; they merge and ``reintegrate(bias)``).
     """
-    n = _threads(threads)
+    n = checked(threads)
     if params is None:
         deprecated(
             "preintegrate_windows(imu, boundaries, noise=...) returning a list is deprecated: pass a "
@@ -543,9 +543,14 @@ def preintegrate_windows(
     return ENGINES[engine](imu, _windows(imu, boundaries), params, n)
 
 
-def reintegrate(preintegration: Preintegration, imu: ImuData, bias: ImuBias, *, engine: str = "rust") -> Preintegration:
+def reintegrate(
+    preintegration: Preintegration, imu: ImuData, bias: ImuBias, *, engine: str = "rust", threads: int | None = None
+) -> Preintegration:
     """The windows of ``preintegration`` preintegrated again from the samples ``imu`` with ``bias``
-    (the same options otherwise): exact, where :func:`corrected` is first order."""
+    (the same options otherwise): exact, where :func:`corrected` is first order.
+
+    ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
+    """
     if not isinstance(preintegration, Preintegration):
         raise ParameterError(
             f"expected an imukit.Preintegration, got {type(preintegration).__name__}", argument="preintegration"
@@ -558,8 +563,11 @@ def reintegrate(preintegration: Preintegration, imu: ImuData, bias: ImuBias, *, 
         start, end = preintegration.t_start_ns, preintegration.t_end_ns
     params = preintegration.params.replace(bias=bias)
     if np.array_equal(start[1:], end[:-1]):
-        return preintegrate_windows(imu, np.append(start, end[-1:]), params, engine=engine)
-    pieces = [preintegrate_windows(imu, [a, b], params, engine=engine) for a, b in zip(start, end, strict=True)]
+        return preintegrate_windows(imu, np.append(start, end[-1:]), params, engine=engine, threads=threads)
+    pieces = [
+        preintegrate_windows(imu, [a, b], params, engine=engine, threads=threads)
+        for a, b in zip(start, end, strict=True)
+    ]
     return concatenate(pieces)
 
 

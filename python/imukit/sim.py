@@ -39,6 +39,7 @@ from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_s
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
+from imukit.threads import checked
 
 __all__ = [
     "Circle",
@@ -76,10 +77,10 @@ class _ClosedForm:
 
     _kind: ClassVar[Literal["static", "constant_twist", "helix", "figure_eight", "vio_ellipse"]]
 
-    def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
+    def _truth(self, t: FloatArray, gravity: FloatArray, threads: int | None) -> tuple[FloatArray, ...]:
         motion = cast("Static | ConstantTwist | Helix | FigureEight | VioEllipse", self)
         checked = {f.name: _CHECKS[str(f.type)](getattr(motion, f.name), f.name) for f in dataclasses.fields(motion)}
-        return _core.sim_motion(self._kind, dataclasses.replace(motion, **checked), t, [*gravity])
+        return _core.sim_motion(self._kind, dataclasses.replace(motion, **checked), t, [*gravity], threads)
 
 
 @dataclass(frozen=True)
@@ -182,7 +183,8 @@ class Waypoints:
         self._position = CubicSpline(t, p, bc_type=bc_type)
         self._rotation = RotationSpline(t, rotations)
 
-    def _truth(self, t: FloatArray, gravity: FloatArray) -> tuple[FloatArray, ...]:
+    def _truth(self, t: FloatArray, gravity: FloatArray, threads: int | None) -> tuple[FloatArray, ...]:
+        del threads  # scipy's splines run on the calling thread
         if t[0] < self.times[0] or t[-1] > self.times[-1]:
             raise ParameterError(
                 f"the waypoints span [{self.times[0]}, {self.times[-1]}] s, the simulation [{t[0]}, {t[-1]}] s",
@@ -291,6 +293,7 @@ def simulate(
     gravity: ArrayLike = GRAVITY,
     seed: int = 0,
     start: float = 0.0,
+    threads: int | None = None,
 ) -> tuple[ImuData, Trajectory]:
     """Simulate ``trajectory`` at ``rate`` [Hz] for ``duration`` [s] from time ``start``: samples
     ``t_k = start + k / rate``, ``k = 0 … floor(duration·rate)``. Returns the readings as
@@ -300,6 +303,8 @@ def simulate(
     ImuData's ``gyro_range`` / ``accel_range``, so the clipped samples are flagged
     (``ImuData.gyro_saturated``, ``accel_saturated``). ``gravity`` is the world-frame ``g`` [m/s²] in
     ``R_wbᵀ (a − g)``, by default :data:`imukit.GRAVITY`.
+
+    ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
     rate_hz = real_scalar(
         rate, "rate", what="a positive, finite rate in Hz", accept=lambda x: math.isfinite(x) and x > 0
@@ -309,6 +314,7 @@ def simulate(
         duration, "duration", what=what, accept=lambda x: math.isfinite(x * rate_hz) and x * rate_hz >= 1
     )
     begin = _finite(start, "start")
+    count = checked(threads)
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**64:
         raise ParameterError(f"expected an int in [0, 2**64), got {seed!r}", argument="seed")
     for name, value, kind, shown in (
@@ -330,7 +336,7 @@ def simulate(
         raise ParameterError(
             f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
         )
-    truth = trajectory._truth(t, g)
+    truth = trajectory._truth(t, g, count)
     if not all(np.isfinite(a).all() for a in truth):
         names = " / ".join(_parameter_names(trajectory))
         raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
@@ -343,10 +349,18 @@ def simulate(
         b = bias or ImuBias()
         # In place: gyro and accel are this call's own fresh arrays (and Waypoints' fresh results).
         bias_g = _core.sim_measure(
-            t, gyro, gyro_errors or SensorErrors(), b.gyro, noise.gyro_density, noise.gyro_random_walk, seed, 0
+            t, gyro, gyro_errors or SensorErrors(), b.gyro, noise.gyro_density, noise.gyro_random_walk, seed, 0, count
         )
         bias_a = _core.sim_measure(
-            t, accel, accel_errors or SensorErrors(), b.accel, noise.accel_density, noise.accel_random_walk, seed, 1
+            t,
+            accel,
+            accel_errors or SensorErrors(),
+            b.accel,
+            noise.accel_density,
+            noise.accel_random_walk,
+            seed,
+            1,
+            count,
         )
     ranges = [None if e is None else e._full_scale() for e in (gyro_errors, accel_errors)]
     imu = ImuData._from_core(t, gyro, accel, *ranges)

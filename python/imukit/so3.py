@@ -16,7 +16,8 @@ Jacobians, named by the first-order identity they satisfy::
 
 The inverses are singular at θ = 2πk (k ≠ 0). All functions take any array-like whose last
 dimension(s) match, broadcast over leading dimensions and return float64 arrays. See
-``docs/conventions.md``.
+``docs/conventions.md``. Every function takes the keyword-only
+``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
 """
 
 from __future__ import annotations
@@ -39,30 +40,30 @@ __all__ = [
 ]
 
 
-def hat(phi: ArrayLike) -> FloatArray:
+def hat(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``[φ]×``, the skew matrix with ``[φ]× v = φ × v``: ``(..., 3)`` → ``(..., 3, 3)``."""
-    return batched(_core.so3_hat, [(phi, "phi", (3,))], (3, 3))
+    return batched(_core.so3_hat, [(phi, "phi", (3,))], (3, 3), threads=threads)
 
 
-def vee(matrix: ArrayLike) -> FloatArray:
+def vee(matrix: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """Inverse of :func:`hat`: ``(..., 3, 3)`` → ``(..., 3)``.
 
     For a matrix that is not exactly skew, returns the vector of its skew part ``(M - Mᵀ)/2``
     (the nearest element of so(3)).
     """
-    return batched(_core.so3_vee, [(matrix, "matrix", (3, 3))], (3,))
+    return batched(_core.so3_vee, [(matrix, "matrix", (3, 3))], (3,), threads=threads)
 
 
-def exp(phi: ArrayLike) -> FloatArray:
+def exp(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``Exp(φ)``, Rodrigues' formula, exact to rounding near θ = 0: ``(..., 3)`` → ``(..., 3, 3)``.
 
     For a scipy ``Rotation`` instead of matrices use ``Rotation.from_rotvec``; this returns the
     matrices that the Jacobian formulas consume.
     """
-    return batched(_core.so3_exp, [(phi, "phi", (3,))], (3, 3))
+    return batched(_core.so3_exp, [(phi, "phi", (3,))], (3, 3), threads=threads)
 
 
-def log(rotation: Rotation | ArrayLike) -> FloatArray:
+def log(rotation: Rotation | ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``Log(R)``: rotation vectors with angle in [0, π], ``(..., 3, 3)`` or ``Rotation`` → ``(..., 3)``.
 
     Accurate at the identity and at π. Matrices must be orthonormal with det +1 to 1e-6
@@ -70,24 +71,24 @@ def log(rotation: Rotation | ArrayLike) -> FloatArray:
     logarithm; either may be returned.
     """
     matrices = rotation.as_matrix() if isinstance(rotation, Rotation) else rotation
-    return batched(_core.so3_log, [(matrices, "rotation", (3, 3))], (3,))
+    return batched(_core.so3_log, [(matrices, "rotation", (3, 3))], (3,), threads=threads)
 
 
-def right_jacobian(phi: ArrayLike) -> FloatArray:
+def right_jacobian(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``J_r(φ)``: ``Exp(φ + δ) ≈ Exp(φ) Exp(J_r(φ) δ)``; ``(..., 3)`` → ``(..., 3, 3)``."""
-    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "right")
+    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "right", threads=threads)
 
 
-def right_jacobian_inv(phi: ArrayLike) -> FloatArray:
+def right_jacobian_inv(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``J_r⁻¹(φ)``: ``Log(Exp(φ) Exp(δ)) ≈ φ + J_r⁻¹(φ) δ``; ``(..., 3)`` → ``(..., 3, 3)``."""
-    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "right_inv")
+    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "right_inv", threads=threads)
 
 
-def left_jacobian(phi: ArrayLike) -> FloatArray:
+def left_jacobian(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``J_l(φ) = J_r(-φ)``: ``Exp(φ + δ) ≈ Exp(J_l(φ) δ) Exp(φ)``; ``(..., 3)`` → ``(..., 3, 3)``."""
-    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "left")
+    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "left", threads=threads)
 
 
-def left_jacobian_inv(phi: ArrayLike) -> FloatArray:
+def left_jacobian_inv(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
     """``J_l⁻¹(φ)``: ``Log(Exp(δ) Exp(φ)) ≈ φ + J_l⁻¹(φ) δ``; ``(..., 3)`` → ``(..., 3, 3)``."""
-    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "left_inv")
+    return batched(_core.so3_jacobian, [(phi, "phi", (3,))], (3, 3), "left_inv", threads=threads)

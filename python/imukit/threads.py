@@ -1,10 +1,17 @@
 """Threads of the parallel kernels: ``set_num_threads``, ``get_num_threads``.
 
 The Rust kernels (batched so3 / quat / euler maps, attitude integration, preintegration windows,
-the simulator) run on a rayon pool. By default that is rayon's global pool, one thread per core.
-``set_num_threads(n)`` makes every later call use ``n`` threads (e.g. ``set_num_threads(1)`` in a
-Dask or multiprocessing worker, so that N workers do not each start one thread per core); a
-``threads=`` argument on a call overrides it for that call. Results do not depend on the count.
+the simulator, the Allan variance) run on a rayon pool. By default that is rayon's global pool, one
+thread per core. ``set_num_threads(n)`` makes every later call use ``n`` threads (e.g.
+``set_num_threads(1)`` in a Dask or multiprocessing worker, so that N workers do not each start one
+thread per core); a ``threads=`` argument on a call overrides it for that call. Results do not
+depend on the count.
+
+Every public function that reaches a parallel kernel takes the keyword-only ``threads``: the number
+of threads for that call, an int in [1, MAX_THREADS]; None (the default) uses the setting of
+``set_num_threads``. They are the so3 / quat / euler batch functions, ``integrate_attitude``, ``noise.allan_deviation``,
+``sim.simulate``, ``preintegrate``, ``PreintegratedImu.integrate``, ``preintegrate_windows`` and
+``preint.reintegrate``.
 """
 
 from __future__ import annotations
@@ -19,18 +26,29 @@ __all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads"]
 MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 
 
-def set_num_threads(n: int) -> None:
-    """Use ``n`` threads (an int in [1, MAX_THREADS]) in every parallel kernel from now on."""
+def _count(n: object, argument: str) -> int:
+    """``n`` as an int in [1, MAX_THREADS], else :class:`ParameterError` naming ``argument``."""
     expected = f"expected an int in [1, {MAX_THREADS}], got {n!r}"
     if isinstance(n, bool):
-        raise ParameterError(expected, argument="n")
+        raise ParameterError(expected, argument=argument)
     try:
-        count = operator.index(n)
+        count = operator.index(n)  # type: ignore[arg-type]
     except TypeError:
-        raise ParameterError(expected, argument="n") from None
+        raise ParameterError(expected, argument=argument) from None
     if not 1 <= count <= MAX_THREADS:
-        raise ParameterError(expected, argument="n")
-    _core.set_num_threads(count)
+        raise ParameterError(expected, argument=argument)
+    return count
+
+
+def checked(threads: object) -> int | None:
+    """A public function's ``threads=``: None (the process setting) or an int in [1, MAX_THREADS],
+    else :class:`ParameterError` with ``argument="threads"``."""
+    return None if threads is None else _count(threads, "threads")
+
+
+def set_num_threads(n: int) -> None:
+    """Use ``n`` threads (an int in [1, MAX_THREADS]) in every parallel kernel from now on."""
+    _core.set_num_threads(_count(n, "n"))
 
 
 def get_num_threads() -> int:

@@ -11,6 +11,7 @@ from imukit import _core
 from imukit._arrays import FloatArray, as_float_array
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import _number
+from imukit.threads import checked
 
 
 class AllanDeviation(NamedTuple):
@@ -84,7 +85,7 @@ def _cluster_sizes(taus: ArrayLike | None, rate: float, n: int) -> list[int]:
 
 
 def allan_deviation(
-    x: ArrayLike, rate: float, *, taus: ArrayLike | None = None, overlapping: bool = True
+    x: ArrayLike, rate: float, *, taus: ArrayLike | None = None, overlapping: bool = True, threads: int | None = None
 ) -> AllanDeviation:
     """Allan deviation σ(τ) of a rate signal ``x`` sampled at ``rate`` Hz.
 
@@ -100,6 +101,8 @@ def allan_deviation(
     overlapping
         The overlapping estimator (default: every start index, the better-determined estimate) or
         the non-overlapping one (disjoint adjacent clusters).
+    threads
+        ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
 
     Returns
     -------
@@ -130,7 +133,8 @@ def allan_deviation(
         raise ShapeError(f"expected at least 2 samples, got {n}", argument="x")
     f = _rate(rate)
     m = _cluster_sizes(taus, f, n)
-    variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping))
+    count = checked(threads)
+    variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping), count)
     deviation = np.sqrt(variance)
     return AllanDeviation(
         taus=np.asarray(m, dtype=np.float64) / f,
