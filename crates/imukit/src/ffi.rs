@@ -18,6 +18,9 @@ use crate::{euler, quat, so3, Error, Result};
 /// Rows below which a batch runs on the calling thread (thread hand-off costs more than it saves).
 const PARALLEL_MIN_ROWS: usize = 8192;
 
+/// Rows per unit of parallel work.
+const BLOCK_ROWS: usize = 1024;
+
 /// Tolerance on `max |RᵀR − I|` for a 3×3 input to count as a rotation.
 pub const ROTATION_TOLERANCE: f64 = 1e-6;
 
@@ -42,35 +45,34 @@ where
             output: out.len() / O,
         });
     }
-    let row = |(index, (x, y)): (usize, (&[f64], &mut [f64]))| -> Result<()> {
-        let x: &[f64; I] = x.try_into().map_err(|_| Error::RowLength { len: x.len(), row: I })?;
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { index });
+    // Rows `first..` of `x` into `y`, on one thread: a plain loop, so that `f` inlines into it.
+    let block = |first: usize, x: &[f64], y: &mut [f64]| -> Result<()> {
+        for (offset, (x, y)) in x.chunks_exact(I).zip(y.chunks_exact_mut(O)).enumerate() {
+            let index = first + offset;
+            let x: &[f64; I] = x.try_into().map_err(|_| Error::RowLength { len: x.len(), row: I })?;
+            if x.iter().any(|v| !v.is_finite()) {
+                return Err(Error::NonFinite { index });
+            }
+            let value = f(x).map_err(|e| e.at(index))?;
+            if value.iter().any(|v| !v.is_finite()) {
+                return Err(Error::Overflow { index });
+            }
+            y.copy_from_slice(&value);
         }
-        let value = f(x).map_err(|e| e.at(index))?;
-        if value.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Overflow { index });
-        }
-        y.copy_from_slice(&value);
         Ok(())
     };
-    let serial = |out: &mut [f64]| {
-        input
-            .chunks_exact(I)
-            .zip(out.chunks_exact_mut(O))
-            .enumerate()
-            .try_for_each(row)
-    };
     if rows < PARALLEL_MIN_ROWS {
-        return serial(out);
+        return block(0, input, out);
     }
+    // Rayon hands out blocks of rows, not rows: per-row splitting costs as much as a cheap row
+    // (so3 exp) and leaves the inlining of `f` to the optimiser's mood.
     let parallel = input
-        .par_chunks_exact(I)
-        .zip(out.par_chunks_exact_mut(O))
+        .par_chunks(I * BLOCK_ROWS)
+        .zip(out.par_chunks_mut(O * BLOCK_ROWS))
         .enumerate()
-        .try_for_each(row);
+        .try_for_each(|(b, (x, y))| block(b * BLOCK_ROWS, x, y));
     // A parallel failure may name any bad row; report the first, as the serial path does.
-    parallel.or_else(|_| serial(out))
+    parallel.or_else(|_| block(0, input, out))
 }
 
 fn vec3(x: &[f64]) -> Vector3<f64> {
