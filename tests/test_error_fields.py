@@ -107,3 +107,17 @@ def test_every_deprecation_points_at_the_users_line(name: str, tmp_path: Path) -
     with pytest.warns(DeprecationWarning) as record:
         DEPRECATED[name](tmp_path)
     assert [w.filename for w in record if issubclass(w.category, DeprecationWarning)] == [__file__]
+
+
+def test_scheme_defaults_are_the_cores() -> None:
+    # Each default is written once, in the core's `Default`; Python's signatures read it.
+    assert (_core.ATTITUDE_DEFAULT_SCHEME, _core.STRAPDOWN_DEFAULT_SCHEME, _core.PREINT_DEFAULT_SCHEME) == (
+        "rk2",
+        "midpoint",
+        "midpoint",
+    )
+    assert inspect.signature(ik.integrate_attitude).parameters["scheme"].default == "rk2"
+    for f in (ik.integrate, ik.propagate):
+        assert inspect.signature(f).parameters["scheme"].default == "midpoint"
+    noise = ik.ImuNoise(gyro_density=1e-3, accel_density=1e-2, gyro_random_walk=1e-5, accel_random_walk=1e-4)
+    assert ik.PreintParams(noise).scheme == "midpoint"

@@ -56,7 +56,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     }
     convert::add_names::<attitude::Scheme>(m, "ATTITUDE_SCHEMES", Some("ATTITUDE_SCHEME_ALIASES"))?;
     convert::add_names::<attitude::Representation>(m, "ATTITUDE_REPRESENTATIONS", None)?;
+    m.add("ATTITUDE_DEFAULT_SCHEME", attitude::Options::default().scheme.name())?;
     convert::add_names::<strapdown::Scheme>(m, "STRAPDOWN_SCHEMES", Some("STRAPDOWN_SCHEME_ALIASES"))?;
+    m.add("STRAPDOWN_DEFAULT_SCHEME", strapdown::Options::default().scheme.name())?;
     convert::add_names::<ffi::Convention>(m, "QUAT_CONVENTIONS", None)?;
     convert::add_names::<imukit::filters::World>(m, "FILTER_WORLDS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
@@ -73,6 +75,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
     convert::add_names::<imukit::preint::Scheme>(m, "PREINT_SCHEMES", Some("PREINT_SCHEME_ALIASES"))?;
+    m.add("PREINT_DEFAULT_SCHEME", imukit::preint::Scheme::default().name())?;
     m.add(
         "DEFAULT_SATURATION_NOISE_FACTOR",
         imukit::preint::DEFAULT_SATURATION_NOISE_FACTOR,

@@ -11,15 +11,18 @@ from typing_extensions import Self, disjoint_base
 from imukit.sim import ConstantTwist, FigureEight, Helix, SensorErrors, Static, VioEllipse
 
 __all__ = [
+    "ATTITUDE_DEFAULT_SCHEME",
     "ATTITUDE_REPRESENTATIONS",
     "ATTITUDE_SCHEMES",
     "ATTITUDE_SCHEME_ALIASES",
     "DEFAULT_SATURATION_NOISE_FACTOR",
     "FILTER_WORLDS",
     "GRAVITY",
+    "PREINT_DEFAULT_SCHEME",
     "PREINT_SCHEMES",
     "PREINT_SCHEME_ALIASES",
     "QUAT_CONVENTIONS",
+    "STRAPDOWN_DEFAULT_SCHEME",
     "STRAPDOWN_SCHEMES",
     "STRAPDOWN_SCHEME_ALIASES",
     "AccelRejection",
@@ -106,9 +109,13 @@ __version__: str
 GRAVITY: tuple[float, float, float]
 # Canonical names (tuples, in the core's order) and deprecated aliases ({old: canonical}).
 ATTITUDE_SCHEMES: tuple[str, ...]
+# `attitude::Options::default().scheme`.
+ATTITUDE_DEFAULT_SCHEME: str
 ATTITUDE_SCHEME_ALIASES: dict[str, str]
 ATTITUDE_REPRESENTATIONS: tuple[str, ...]
 STRAPDOWN_SCHEMES: tuple[str, ...]
+# `strapdown::Options::default().scheme`.
+STRAPDOWN_DEFAULT_SCHEME: str
 STRAPDOWN_SCHEME_ALIASES: dict[str, str]
 QUAT_CONVENTIONS: tuple[str, ...]
 FILTER_WORLDS: tuple[str, ...]
@@ -406,6 +413,8 @@ class _PreintFields(Protocol):
 
 DEFAULT_SATURATION_NOISE_FACTOR: float
 PREINT_SCHEMES: tuple[str, ...]
+# `preint::Scheme::default()`.
+PREINT_DEFAULT_SCHEME: str
 PREINT_SCHEME_ALIASES: dict[str, str]
 
 @final

@@ -65,7 +65,7 @@ class PreintParams:
     noise: ImuNoise
     bias: ImuBias = dataclasses.field(default_factory=ImuBias)
     gravity: tuple[float, float, float] = _core.GRAVITY
-    scheme: str = "midpoint"
+    scheme: str = _core.PREINT_DEFAULT_SCHEME
     combined: bool = False
     saturation_noise_factor: float = _core.DEFAULT_SATURATION_NOISE_FACTOR
 

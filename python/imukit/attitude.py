@@ -38,7 +38,7 @@ def integrate_attitude(
     gyro: ArrayLike,
     *,
     initial: Rotation | None = None,
-    scheme: str = "rk2",
+    scheme: str = _core.ATTITUDE_DEFAULT_SCHEME,
     representation: str = "quaternion",
     final_only: bool = False,
     gimbal_tolerance_rad: float = 1e-6,

@@ -69,7 +69,7 @@ def integrate(
     initial: NavState,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
     bias: ImuBias | None = None,
-    scheme: str = "midpoint",
+    scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
 ) -> Trajectory:
     """Integrate IMU samples into positions, velocities and attitudes, one per sample.
 
@@ -102,7 +102,7 @@ def propagate(
     noise: ImuNoise,
     bias: ImuBias | None = None,
     gravity: ArrayLike = _DEFAULT_GRAVITY,
-    scheme: str = "midpoint",
+    scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     covariance_every: int = 1,
 ) -> Trajectory:
     """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).

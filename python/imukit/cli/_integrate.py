@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from imukit import _core
 from imukit.cli._common import (
     CliError,
     add_input_options,
@@ -75,7 +76,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--scheme",
         choices=(*SCHEMES, *SCHEME_ALIASES),  # the deprecated names keep working (with a warning)
-        default="midpoint",
+        default=_core.STRAPDOWN_DEFAULT_SCHEME,
         help="integration scheme (default: %(default)s)",
     )
     p.add_argument(
