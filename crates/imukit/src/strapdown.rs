@@ -24,7 +24,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::imu::{Bias, NavState, Samples};
 use crate::interp::{Cubic, StepInterpolator};
-use crate::{imu, quat, so3, Error, Result};
+use crate::{imu, quat, so3, Cancel, Error, Result};
 
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -262,7 +262,20 @@ pub fn integrate(
     initial: &NavState,
     bias: &Bias,
     options: &Options,
+    out: Option<StatesOut<'_>>,
+) -> Result<NavState> {
+    integrate_cancellable(samples, initial, bias, options, out, &Cancel::new())
+}
+
+/// [`integrate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled every
+/// [`Cancel::EVERY`] samples).
+pub fn integrate_cancellable(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    bias: &Bias,
+    options: &Options,
     mut out: Option<StatesOut<'_>>,
+    cancel: &Cancel,
 ) -> Result<NavState> {
     let n = samples.t.len();
     if let Some(out) = out.as_ref() {
@@ -276,7 +289,7 @@ pub fn integrate(
         if let Some(out) = out.as_mut() {
             out.store(k + 1, next);
         }
-        Ok(())
+        cancel.check(k)
     })?;
     check_finite_result(&x, out.as_ref(), n)?;
     Ok(x)

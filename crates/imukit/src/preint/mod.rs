@@ -34,6 +34,7 @@
 
 mod batch;
 mod blocks;
+mod continuity;
 mod merge;
 mod midpoint;
 mod state;
@@ -47,6 +48,7 @@ use crate::mat3::mul;
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
+pub use continuity::{End, Ends};
 pub use midpoint::MidpointStepMatrices;
 pub use windows::{preintegrate_windows, preintegrate_windows_clipped, preintegrate_windows_into, WindowsOut};
 
@@ -203,6 +205,8 @@ pub struct Preintegrator {
     bias_walk: Option<BiasWalk>,
     /// The midpoint scheme's memory of the samples at the window's ends.
     ends: midpoint::Ends,
+    /// The samples it starts and ends with, for the continuity rule (`continuity.rs`).
+    boundary: Ends,
     /// Intervals since ΔR was last projected onto SO(3) (see [`PROJECT_EVERY`]).
     since_projection: u32,
 }
@@ -237,6 +241,7 @@ impl Preintegrator {
             jac: ZERO_CROSS,
             bias_walk: None,
             ends: midpoint::Ends::default(),
+            boundary: Ends::default(),
             since_projection: 0,
         }
     }
@@ -311,11 +316,31 @@ impl Preintegrator {
                 got: format!("{dt}"),
             });
         }
+        // The sample starts this interval (euler: held over it) or ends it (midpoint).
+        let sample = End {
+            t: None,
+            accel: *accel,
+            gyro: *gyro,
+        };
+        if self.scheme == Scheme::Euler {
+            self.boundary
+                .check_next(&sample, "the sample")
+                .map_err(|e| e.in_argument("accel / gyro"))?;
+        }
         let mut next = self.clone();
         next.integrate_measurement_clipped(accel, gyro, dt, clipped);
         if !next.is_finite() {
             return Err(Error::Overflow { index: 0 }.in_argument("accel / gyro / dt"));
         }
+        let (first, last) = match self.scheme {
+            // The end of a held interval is open: any sample may be held next.
+            Scheme::Euler => (sample, None),
+            Scheme::Midpoint => (sample, Some(sample)),
+        };
+        next.boundary = self.boundary.then(&Ends {
+            first: Some(first),
+            last,
+        });
         *self = next;
         Ok(())
     }
