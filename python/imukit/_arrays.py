@@ -27,9 +27,28 @@ _TO_XYZW = [1, 2, 3, 0]
 _TO_WXYZ = [3, 0, 1, 2]
 
 
+def plain_array(x: ArrayLike, name: str) -> NDArray[Any]:
+    """``x`` as a numpy array: the one conversion of array input. Nested sequences of different
+    lengths are a :class:`ShapeError` (numpy's own ``ValueError`` names no argument); a masked
+    array with masked values is a :class:`DTypeError`, since ``np.asarray`` would silently use the
+    values under the mask (one without masked values is its data)."""
+    if isinstance(x, np.ma.MaskedArray) and np.ma.count_masked(x):
+        raise DTypeError(
+            f"expected plain numbers, got a masked array with {np.ma.count_masked(x)} masked values: "
+            "fill them (x.filled(np.nan) to have them refused as missing) or drop them",
+            argument=name,
+        )
+    try:
+        return np.asarray(x)
+    except ValueError:  # numpy: "setting an array element with a sequence ... inhomogeneous shape"
+        raise ShapeError(
+            "expected a rectangular array, got nested sequences of different lengths", argument=name
+        ) from None
+
+
 def as_float_array(x: ArrayLike, name: str) -> FloatArray:
-    """``x`` as a float64 array, refusing dtypes that are not real numbers."""
-    arr = np.asarray(x)
+    """``x`` as a float64 array (:func:`plain_array`), refusing dtypes that are not real numbers."""
+    arr = plain_array(x, name)
     if arr.dtype.kind not in "fiub":
         raise DTypeError(f"expected real numbers, got an array of dtype {arr.dtype}", argument=name)
     if arr.dtype.kind == "b":
@@ -49,12 +68,12 @@ def vector3(x: ArrayLike, name: str) -> FloatArray:
 def real_scalar(value: object, name: str, *, what: str, accept: Callable[[float], bool]) -> float:
     """``value`` as a float for which ``accept`` holds, else :class:`ParameterError` naming ``name``.
 
-    Only real numbers qualify: a string that happens to parse as one, None and arrays with more than
-    one element are refused, so that a wrongly typed option fails here and not as a bare
-    ``TypeError`` deep inside.
+    Only real numbers qualify: a string that happens to parse as one, a bool (``dt=True`` is no step
+    of 1 s), None and arrays with more than one element are refused, so that a wrongly typed option
+    fails here and not as a bare ``TypeError`` deep inside.
     """
     x = math.nan
-    if not isinstance(value, (str, bytes)):
+    if not isinstance(value, (str, bytes, bool, np.bool_)):
         try:
             x = float(value)  # type: ignore[arg-type]
         except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond float64
@@ -210,7 +229,7 @@ def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str =
 
 
 def _stamp_array(x: ArrayLike, name: str) -> NDArray[Any]:
-    raw = np.asarray(x)
+    raw = plain_array(x, name)
     if raw.ndim != 1 or len(raw) == 0:
         raise ShapeError(f"expected shape (N,) with N ≥ 1, got {raw.shape}", argument=name)
     return raw

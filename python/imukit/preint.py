@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit import _core, _preint_math
-from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from_ns
+from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar, seconds_from_ns
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
@@ -478,14 +478,25 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
     clock: integer ns for integer stamps, else float seconds)."""
     if not isinstance(imu, ImuData):
         raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
-    raw = np.asarray(boundaries)
+    raw = plain_array(boundaries, "boundaries")
     if raw.ndim != 1:
         raise ShapeError(f"expected shape (M,), got {raw.shape}", argument="boundaries")
     if raw.dtype.kind in "iu" and imu.t_ns is not None:
         ns = raw.astype(np.int64)
         return Windows(seconds_from_ns(ns - imu.t_ns[0]), ns / 1e9, ns)
     t = as_float_array(raw, "boundaries")
-    return Windows(t - imu.t[0], t, None)
+    offsets = t - imu.t[0]
+    if imu.t_ns is not None:
+        # Float boundaries taken from an ns recording's imu.t (epoch seconds, 0.24 µs apart): a
+        # sample's own time is that sample exactly, so the last one stays inside the span and
+        # windows between samples are as long as their ns stamps say (not 0.10000014 s).
+        k = np.minimum(np.searchsorted(imu.t, t), len(imu) - 1)
+        on_sample = imu.t[k] == t
+        offsets[on_sample] = imu.seconds[k[on_sample]]
+        if on_sample.all():
+            ns = imu.t_ns[k]
+            return Windows(offsets, t, ns)
+    return Windows(offsets, t, None)
 
 
 def _core_windows(
