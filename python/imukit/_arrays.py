@@ -32,9 +32,10 @@ def plain_array(x: ArrayLike, name: str) -> NDArray[Any]:
     lengths are a :class:`ShapeError` (numpy's own ``ValueError`` names no argument); a masked
     array with masked values is a :class:`DTypeError`, since ``np.asarray`` would silently use the
     values under the mask (one without masked values is its data)."""
-    if isinstance(x, np.ma.MaskedArray) and np.ma.count_masked(x):
+    masked = int(np.count_nonzero(np.ma.getmaskarray(x))) if isinstance(x, np.ma.MaskedArray) else 0
+    if masked:
         raise DTypeError(
-            f"expected plain numbers, got a masked array with {np.ma.count_masked(x)} masked values: "
+            f"expected plain numbers, got a masked array with {masked} masked values: "
             "fill them (x.filled(np.nan) to have them refused as missing) or drop them",
             argument=name,
         )
