@@ -245,9 +245,15 @@ pub(crate) fn sim_measure<'py>(
         let values = ideal
             .as_slice_mut()
             .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
-        let argument = if triad == 0 { "gyro_errors" } else { "accel_errors" };
+        let errors = if triad == 0 { "gyro_errors" } else { "accel_errors" };
+        // The core names the model's field; simulate's argument holding it is this one.
+        let argument = |e: &imukit::Error| match e.argument() {
+            Some("density" | "random_walk") => "noise",
+            Some("bias") => "bias",
+            _ => errors,
+        };
         py.detach(|| threads::run_in_pool(threads, || sim::measure_in_place(t, values, &model, seed, triad, b)))?
-            .map_err(|e| raise(py, crate::class_name(&e), argument, e.root()))?;
+            .map_err(|e| raise(py, crate::class_name(&e), argument(&e), e.root()))?;
     }
     Ok(bias)
 }

@@ -342,3 +342,18 @@ def readonly_array(
         raise ShapeError(f"expected shape {shape_text}, got {arr.shape}", argument=name)
     check_finite_rows(arr, name, what)
     return readonly_copy(arr)
+
+
+def row_norms(x: FloatArray, name: str) -> FloatArray:
+    """Euclidean norms of the rows of ``x`` (N, k), scale-safe: each row is divided by its largest
+    magnitude before squaring, so rows near 1e154 (whose squares overflow) or 1e-200 (whose squares
+    underflow to 0) get their true norm. A norm beyond float64 itself (an overflowing difference, a
+    row of ±1e308) is a :class:`NonFiniteError` naming ``name``."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        scale = np.max(np.abs(x), axis=1)
+        safe = np.where(scale > 0, scale, 1.0)
+        out: FloatArray = scale * np.sqrt(np.sum((x / safe[:, None]) ** 2, axis=1))
+    bad = np.flatnonzero(~np.isfinite(out))
+    if bad.size:
+        raise NonFiniteError(f"row {int(bad[0])} is too large in magnitude: its norm overflows float64", argument=name)
+    return out

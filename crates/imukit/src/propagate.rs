@@ -295,9 +295,23 @@ pub fn propagate_cancellable(
             last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
         }
     }
-    strapdown::check_finite_result(&x, states.as_ref(), n)?;
+    strapdown::check_finite_result(&x, states.as_ref(), (samples, initial, bias, options))?;
     if !last.iter().all(|v| v.is_finite()) {
-        return Err(Error::Overflow { index: n - 1 });
+        // The mean is finite: the initial covariance grew past f64, or the noise added to it.
+        let span = samples.t[n - 1] - samples.t[0];
+        let densities = [
+            noise.gyro_density,
+            noise.accel_density,
+            noise.gyro_random_walk,
+            noise.accel_random_walk,
+        ];
+        let added = densities.iter().fold(0.0_f64, |m, d| m.max(d * d * span));
+        let name = if added > covariance.amax() {
+            "noise"
+        } else {
+            "covariance"
+        };
+        return Err(Error::Overflow { index: n - 1 }.in_argument(name));
     }
     Ok((x, last))
 }
