@@ -159,7 +159,7 @@ def test_midpoint_streaming_and_batches_equal_one_batch() -> None:
     two.integrate(imu[80:])
     assert np.abs(two.delta_position - whole.delta_position).max() < 1e-13
     assert np.abs(two.covariance - whole.covariance).max() < 1e-12 * np.abs(whole.covariance).max()
-    with pytest.raises(ik.ParameterError, match="imu: expected a midpoint batch starting with the"):
+    with pytest.raises(ik.ParameterError, match="imu: expected a continuation starting with the"):
         two.integrate(imu[100:])
     assert two.delta_t == pytest.approx(whole.delta_t, abs=1e-14)  # the refused batch added nothing
 

@@ -11,6 +11,7 @@ use imukit::imu::{Bias, NavState, Noise, Samples};
 use imukit::names::Named;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{PyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 
@@ -26,6 +27,78 @@ pub(crate) fn private_copy<'py, D: numpy::ndarray::Dimension>(
 ) -> PyResult<Bound<'py, PyArray<f64, D>>> {
     let _ = py;
     Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
+}
+
+/// What a call's outputs need, for the message when they cannot be had: `count` items of `what`
+/// taking `bytes` in all, asked for through `argument`.
+pub(crate) struct Demand<'a> {
+    pub(crate) argument: &'a str,
+    pub(crate) what: &'static str,
+    pub(crate) count: usize,
+    pub(crate) bytes: u128,
+}
+
+impl<'a> Demand<'a> {
+    /// The demand of one float64 array of `shape` (`shape[0]` items of `what`).
+    pub(crate) fn of(argument: &'a str, what: &'static str, shape: &[usize]) -> Self {
+        Demand {
+            argument,
+            what,
+            count: shape.first().copied().unwrap_or(1),
+            bytes: shape.iter().fold(8u128, |b, &d| b.saturating_mul(d as u128)),
+        }
+    }
+
+    /// The `ResourceError` refusing it ("boundaries: 20,000,000 windows need 24.2 GB").
+    fn refuse(&self, py: Python<'_>) -> PyErr {
+        let e = imukit::Error::Allocation {
+            count: self.count,
+            what: self.what,
+            bytes: self.bytes,
+        };
+        to_py(py, self.argument, e)
+    }
+}
+
+/// A zeroed float64 array of `shape`, allocated by numpy (see [`private_copy`]), part of
+/// `demand`. Memory that cannot be had is a `ResourceError` naming the argument and the size,
+/// never a panic: rust-numpy's own constructors panic on the null array numpy returns then.
+pub(crate) fn zeros<'py, const K: usize>(
+    py: Python<'py>,
+    demand: &Demand<'_>,
+    shape: [usize; K],
+) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Dim<[usize; K]>>>>
+where
+    numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
+{
+    if demand.bytes > isize::MAX as u128 || Demand::of("", "", &shape).bytes > isize::MAX as u128 {
+        return Err(demand.refuse(py));
+    }
+    let array = py
+        .import("numpy")?
+        .getattr("zeros")?
+        .call1((PyTuple::new(py, shape)?,))
+        .map_err(|e| {
+            if e.is_instance_of::<PyMemoryError>(py) {
+                demand.refuse(py)
+            } else {
+                e
+            }
+        })?;
+    Ok(array.cast_into()?)
+}
+
+/// [`zeros`] of one array, the whole demand.
+pub(crate) fn zeros_for<'py, const K: usize>(
+    py: Python<'py>,
+    argument: &str,
+    what: &'static str,
+    shape: [usize; K],
+) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Dim<[usize; K]>>>>
+where
+    numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
+{
+    zeros(py, &Demand::of(argument, what, &shape), shape)
 }
 
 /// The buffer of a C-contiguous array.

@@ -16,6 +16,9 @@ pub(crate) fn class_name(e: &imukit::Error) -> &'static str {
         E::GimbalLock { .. } => "GimbalLockError",
         E::NonIncreasingTime { .. } => "TimestampError",
         E::Parameter { .. } | E::Unsupported { .. } => "ParameterError",
+        E::Allocation { .. } => "ResourceError",
+        // Only reached when no signal handler raised (the glue returns that exception instead).
+        E::Interrupted { .. } => "ImukitError",
         E::Argument { .. } => "ImukitError",
     }
 }

@@ -6,7 +6,7 @@ use imukit::ffi::{self, Convention, Jacobian, ProductMatrix};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, private_copy, Name};
+use crate::convert::{contiguous, private_copy, zeros_for, Name};
 use crate::{raise, threads, to_py};
 
 /// Runs `kernel` over the rows of `x` (shape `(n, width_in)`) into a new `(n, width_out)` array.
@@ -27,7 +27,7 @@ fn run<'py>(
     let input = private_copy(py, &x)?;
     let input = input.readonly();
     let input = contiguous(py, name, &input)?;
-    let out = PyArray2::<f64>::zeros(py, [shape[0], width_out], false);
+    let out = zeros_for(py, name, "rows", [shape[0], width_out])?;
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::convert::{BiasFields, Name, NoiseFields};
+use crate::convert::{zeros, BiasFields, Demand, Name, NoiseFields};
 use crate::{raise, to_py, SampleCopies};
 
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
@@ -23,11 +23,17 @@ struct FlagCopies {
 }
 
 impl FlagCopies {
-    fn new(gyro: &PyReadonlyArray1<'_, bool>, accel: &PyReadonlyArray1<'_, bool>) -> Self {
-        Self {
-            gyro: gyro.as_array().to_vec(),
-            accel: accel.as_array().to_vec(),
-        }
+    fn new(py: Python<'_>, gyro: &PyReadonlyArray1<'_, bool>, accel: &PyReadonlyArray1<'_, bool>) -> PyResult<Self> {
+        let copy = |name: &'static str, flags: &PyReadonlyArray1<'_, bool>| {
+            let flags = flags.as_array();
+            let mut out = imukit::try_vec(flags.len(), "flags").map_err(|e| to_py(py, name, e))?;
+            out.extend(flags.iter().copied());
+            Ok::<_, PyErr>(out)
+        };
+        Ok(Self {
+            gyro: copy("gyro_saturated", gyro)?,
+            accel: copy("accel_saturated", accel)?,
+        })
     }
 
     /// The mask, or None when nothing is flagged (the unflagged path, bit for bit).
@@ -143,9 +149,10 @@ impl PyPreintegrator {
     }
 
     /// The N − 1 intervals of the samples (euler: sample k held over `[t_k, t_k+1)`; midpoint:
-    /// between samples k and k+1, continuing from the last sample, which must be sample 0). On
+    /// between samples k and k+1), continuing from the last sample, which must be sample 0 (the
+    /// same time on the caller's `clock`, the first and last sample's times, and readings). On
     /// `threads` threads (None: the process-wide pool): long lie_euler batches run in chunks.
-    #[pyo3(signature = (t, gyro, accel, gyro_saturated, accel_saturated, threads=None))]
+    #[pyo3(signature = (t, gyro, accel, gyro_saturated, accel_saturated, clock, threads=None))]
     #[allow(clippy::too_many_arguments)] // the sample arrays, their flags and the thread count
     fn integrate(
         &mut self,
@@ -155,15 +162,16 @@ impl PyPreintegrator {
         accel: PyReadonlyArray2<'_, f64>,
         gyro_saturated: PyReadonlyArray1<'_, bool>,
         accel_saturated: PyReadonlyArray1<'_, bool>,
+        clock: [f64; 2],
         threads: Option<usize>,
     ) -> PyResult<()> {
         let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
         let samples = copies.samples(py)?;
-        let flags = FlagCopies::new(&gyro_saturated, &accel_saturated);
+        let flags = FlagCopies::new(py, &gyro_saturated, &accel_saturated)?;
         let inner = &mut self.inner;
         py.detach(|| {
             crate::threads::run_in_pool(threads, || {
-                inner.integrate_samples_clipped(&samples, flags.mask().as_ref())
+                inner.integrate_samples_at(&samples, flags.mask().as_ref(), clock)
             })
         })?
         .map_err(|e| as_argument(py, "imu", "imu / bias", e))
@@ -227,7 +235,7 @@ fn run_windows<'py, R: Send>(
 ) -> PyResult<R> {
     let copies = SampleCopies::new(py, &imu.t, &imu.gyro, &imu.accel)?;
     let samples = copies.samples(py)?;
-    let flags = FlagCopies::new(&imu.gyro_saturated, &imu.accel_saturated);
+    let flags = FlagCopies::new(py, &imu.gyro_saturated, &imu.accel_saturated)?;
     let mask = flags.mask();
     let boundaries = crate::private_copy(py, boundaries)?.readonly();
     let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
@@ -279,14 +287,22 @@ pub(crate) fn preint_windows_record<'py>(
     let template = params.template(py)?;
     let m = boundaries.as_array().len().saturating_sub(1);
     let combined = template.covariance_combined().is_some();
+    // 1.2 kB a window (2 kB with the combined covariance): all of it or a ResourceError.
+    let per_window = 8 * (9 + 3 + 3 + 1 + 81 + 54 + if combined { 225 } else { 0 });
+    let demand = Demand {
+        argument: "boundaries",
+        what: "windows",
+        count: m,
+        bytes: m as u128 * per_window,
+    };
     let record: Record<'py> = (
-        PyArray3::zeros(py, [m, 3, 3], false),
-        PyArray2::zeros(py, [m, 3], false),
-        PyArray2::zeros(py, [m, 3], false),
-        PyArray1::zeros(py, [m], false),
-        PyArray3::zeros(py, [m, 9, 9], false),
-        PyArray3::zeros(py, [m, 9, 6], false),
-        combined.then(|| PyArray3::zeros(py, [m, 15, 15], false)),
+        zeros(py, &demand, [m, 3, 3])?,
+        zeros(py, &demand, [m, 3])?,
+        zeros(py, &demand, [m, 3])?,
+        zeros(py, &demand, [m])?,
+        zeros(py, &demand, [m, 9, 9])?,
+        zeros(py, &demand, [m, 9, 6])?,
+        combined.then(|| zeros(py, &demand, [m, 15, 15])).transpose()?,
     );
     {
         let (mut r, mut v, mut p) = (record.0.readwrite(), record.1.readwrite(), record.2.readwrite());

@@ -7,7 +7,7 @@ use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{contiguous, unit_quaternion, Name};
+use crate::convert::{contiguous, unit_quaternion, zeros, zeros_for, Demand, Name};
 use crate::{raise, threads, to_py};
 
 fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
@@ -147,8 +147,14 @@ pub(crate) fn sim_motion<'py>(
     // No private copy: imukit.sim passes an array it has just made and shares with no one.
     let t = contiguous(py, "t", &t)?;
     let n = t.len();
-    let make = |w: usize| PyArray2::<f64>::zeros(py, [n, w], false);
-    let (p, v, q, w, a) = (make(3), make(3), make(4), make(3), make(3));
+    let demand = Demand {
+        argument: "t",
+        what: "samples",
+        count: n,
+        bytes: n as u128 * 8 * 16,
+    };
+    let make = |w: usize| zeros(py, &demand, [n, w]);
+    let (p, v, q, w, a) = (make(3)?, make(3)?, make(4)?, make(3)?, make(3)?);
     {
         let (mut pg, mut vg, mut qg, mut wg, mut ag) = (
             p.readwrite(),
@@ -232,16 +238,22 @@ pub(crate) fn sim_measure<'py>(
     };
     let t = contiguous(py, "t", &t)?;
     let n = t.len();
-    let bias = PyArray2::<f64>::zeros(py, [n, 3], false);
+    let bias = zeros_for(py, "t", "samples", [n, 3])?;
     {
         let mut bg = bias.readwrite();
         let b = bg.as_slice_mut()?;
         let values = ideal
             .as_slice_mut()
             .map_err(|_| raise(py, "ShapeError", "ideal", "expected a C-contiguous float64 array"))?;
-        let argument = if triad == 0 { "gyro_errors" } else { "accel_errors" };
+        let errors = if triad == 0 { "gyro_errors" } else { "accel_errors" };
+        // The core names the model's field; simulate's argument holding it is this one.
+        let argument = |e: &imukit::Error| match e.argument() {
+            Some("density" | "random_walk") => "noise",
+            Some("bias") => "bias",
+            _ => errors,
+        };
         py.detach(|| threads::run_in_pool(threads, || sim::measure_in_place(t, values, &model, seed, triad, b)))?
-            .map_err(|e| raise(py, crate::class_name(&e), argument, e.root()))?;
+            .map_err(|e| raise(py, crate::class_name(&e), argument(&e), e.root()))?;
     }
     Ok(bias)
 }

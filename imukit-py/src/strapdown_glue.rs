@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, BiasFields, Name, NavStateFields, NoiseFields, SampleCopies};
+use crate::convert::{contiguous, zeros, BiasFields, Demand, Name, NavStateFields, NoiseFields, SampleCopies};
 use crate::{raise, to_py};
 
 /// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
@@ -22,13 +22,13 @@ type StatesAndCovariances<'py> = (
     Bound<'py, PyArray2<f64>>,
 );
 
-/// Zeroed `(n, 6)` and `(n, 4)` state arrays.
-fn state_arrays(py: Python<'_>, n: usize) -> States<'_> {
-    (
-        PyArray2::<f64>::zeros(py, [n, 6], false),
-        PyArray2::<f64>::zeros(py, [n, 4], false),
-    )
+/// Zeroed `(n, 6)` and `(n, 4)` state arrays, part of `demand`.
+fn state_arrays<'py>(py: Python<'py>, demand: &Demand<'_>, n: usize) -> PyResult<States<'py>> {
+    Ok((zeros(py, demand, [n, 6])?, zeros(py, demand, [n, 4])?))
 }
+
+/// Bytes of one stored state (`[p, v]` and a quaternion).
+const STATE_BYTES: u128 = 8 * 10;
 
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // mirrors the keyword options of imukit.integrate
@@ -49,15 +49,24 @@ pub(crate) fn strapdown_integrate<'py>(
     let (initial, bias) = (NavState::from(initial), Bias::from(bias));
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
-    let (pv, rot) = state_arrays(py, samples.len());
+    let n = samples.len();
+    let demand = Demand {
+        argument: "imu",
+        what: "states",
+        count: n,
+        bytes: n as u128 * STATE_BYTES,
+    };
+    let (pv, rot) = state_arrays(py, &demand, n)?;
     {
         let (mut pv_guard, mut rot_guard) = (pv.readwrite(), rot.readwrite());
         let out = StatesOut {
             position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
             rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
         };
-        py.detach(|| strapdown::integrate(&samples, &initial, &bias, &options, Some(out)))
-            .map_err(|e| to_py(py, "imu / bias", e))?;
+        crate::threads::interruptible(py, n, |cancel| {
+            strapdown::integrate_cancellable(&samples, &initial, &bias, &options, Some(out), cancel)
+        })?
+        .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot))
 }
@@ -90,8 +99,16 @@ pub(crate) fn strapdown_propagate<'py>(
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
     let samples = copies.samples(py)?;
     let n = samples.len();
-    let (pv, rot) = state_arrays(py, n);
-    let covariances = PyArray2::<f64>::zeros(py, [propagate::covariance_count(n, every), 225], false);
+    // The covariances dominate: 15,000,000 of them (the default stride 1) need 27 GB.
+    let count = propagate::covariance_count(n, every);
+    let demand = Demand {
+        argument: "covariance_every",
+        what: "covariances",
+        count,
+        bytes: n as u128 * STATE_BYTES + count as u128 * 8 * 225,
+    };
+    let (pv, rot) = state_arrays(py, &demand, n)?;
+    let covariances = zeros(py, &demand, [count, 225])?;
     {
         let (mut pv_guard, mut rot_guard, mut c_guard) = (pv.readwrite(), rot.readwrite(), covariances.readwrite());
         let outputs = propagate::Outputs {
@@ -102,8 +119,10 @@ pub(crate) fn strapdown_propagate<'py>(
             covariances: c_guard.as_slice_mut()?.as_chunks_mut().0,
             every,
         };
-        py.detach(|| propagate::propagate(&samples, &initial, &p0, &bias, &noise, &options, outputs))
-            .map_err(|e| to_py(py, "imu / bias", e))?;
+        crate::threads::interruptible(py, n, |cancel| {
+            propagate::propagate_cancellable(&samples, &initial, &p0, &bias, &noise, &options, outputs, cancel)
+        })?
+        .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot, covariances))
 }

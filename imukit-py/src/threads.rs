@@ -2,9 +2,17 @@
 //! (until then: rayon's global pool, one thread per core), and per-call pools for an explicit
 //! `threads=` argument. Pools are cached by size: building one spawns its threads, so a call
 //! with `threads=4` reuses the pool of the previous one instead of paying that every time.
+//!
+//! Long kernels run [`interruptible`]: on a thread of their own while the calling thread, waiting
+//! with the GIL released, runs Python's signal handlers every [`POLL`], so that Ctrl-C stops them
+//! within a few ms instead of when they return (11.6 s on a 25 M-sample `propagate`).
 
 use std::collections::HashMap;
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::time::Duration;
+
+use imukit::Cancel;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -66,4 +74,54 @@ pub(crate) fn get_num_threads() -> usize {
         Some(n) => n,
         None => rayon::current_num_threads(),
     }
+}
+
+/// How often the waiting thread runs the signal handlers.
+const POLL: Duration = Duration::from_millis(20);
+
+/// Samples below which a kernel runs on the calling thread: it ends before a Ctrl-C would matter,
+/// and starting a thread costs about 20 µs.
+pub(crate) const INTERRUPTIBLE_FROM: usize = 4 * Cancel::EVERY;
+
+/// `kernel(cancel)` with the GIL released, stoppable by Ctrl-C: for `n` samples from
+/// [`INTERRUPTIBLE_FROM`] it runs on a scoped thread while this one runs Python's signal handlers
+/// every [`POLL`]; when one raises (KeyboardInterrupt) the flag is set, the kernel stops at its
+/// next poll ([`Cancel::EVERY`] samples), and that exception is returned instead of its result.
+pub(crate) fn interruptible<R: Send>(
+    py: Python<'_>,
+    n: usize,
+    kernel: impl FnOnce(&Cancel) -> R + Send,
+) -> PyResult<R> {
+    let cancel = Cancel::new();
+    if n < INTERRUPTIBLE_FROM {
+        return Ok(py.detach(|| kernel(&cancel)));
+    }
+    let (tx, rx) = mpsc::channel();
+    std::thread::scope(|scope| {
+        let cancel = &cancel;
+        scope.spawn(move || {
+            // The receiver lives until this thread is joined (end of scope).
+            let _ = tx.send(kernel(cancel));
+        });
+        let mut raised: Option<PyErr> = None;
+        let mut rx = rx;
+        loop {
+            // The receiver is Send, not Sync: it crosses into the GIL-free wait and back.
+            let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
+            rx = back;
+            match received {
+                Ok(result) => return raised.map_or(Ok(result), Err),
+                Err(RecvTimeoutError::Timeout) if raised.is_none() => {
+                    if let Err(e) = py.check_signals() {
+                        cancel.cancel();
+                        raised = Some(e);
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(PyRuntimeError::new_err("the kernel's thread ended without a result"));
+                }
+            }
+        }
+    })
 }

@@ -23,6 +23,7 @@ from imukit._errors import (
     MissingDependencyError,
     NonFiniteError,
     ParameterError,
+    ResourceError,
     ShapeError,
     TimestampError,
 )
@@ -59,6 +60,7 @@ __all__ = [
     "PreintegratedImu",
     "Preintegration",
     "ResidualJacobians",
+    "ResourceError",
     "ShapeError",
     "TimestampError",
     "Trajectory",

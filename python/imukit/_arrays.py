@@ -27,9 +27,29 @@ _TO_XYZW = [1, 2, 3, 0]
 _TO_WXYZ = [3, 0, 1, 2]
 
 
+def plain_array(x: ArrayLike, name: str) -> NDArray[Any]:
+    """``x`` as a numpy array: the one conversion of array input. Nested sequences of different
+    lengths are a :class:`ShapeError` (numpy's own ``ValueError`` names no argument); a masked
+    array with masked values is a :class:`DTypeError`, since ``np.asarray`` would silently use the
+    values under the mask (one without masked values is its data)."""
+    masked = int(np.count_nonzero(np.ma.getmaskarray(x))) if isinstance(x, np.ma.MaskedArray) else 0
+    if masked:
+        raise DTypeError(
+            f"expected plain numbers, got a masked array with {masked} masked values: "
+            "fill them (x.filled(np.nan) to have them refused as missing) or drop them",
+            argument=name,
+        )
+    try:
+        return np.asarray(x)
+    except ValueError:  # numpy: "setting an array element with a sequence ... inhomogeneous shape"
+        raise ShapeError(
+            "expected a rectangular array, got nested sequences of different lengths", argument=name
+        ) from None
+
+
 def as_float_array(x: ArrayLike, name: str) -> FloatArray:
-    """``x`` as a float64 array, refusing dtypes that are not real numbers."""
-    arr = np.asarray(x)
+    """``x`` as a float64 array (:func:`plain_array`), refusing dtypes that are not real numbers."""
+    arr = plain_array(x, name)
     if arr.dtype.kind not in "fiub":
         raise DTypeError(f"expected real numbers, got an array of dtype {arr.dtype}", argument=name)
     if arr.dtype.kind == "b":
@@ -49,12 +69,12 @@ def vector3(x: ArrayLike, name: str) -> FloatArray:
 def real_scalar(value: object, name: str, *, what: str, accept: Callable[[float], bool]) -> float:
     """``value`` as a float for which ``accept`` holds, else :class:`ParameterError` naming ``name``.
 
-    Only real numbers qualify: a string that happens to parse as one, None and arrays with more than
-    one element are refused, so that a wrongly typed option fails here and not as a bare
-    ``TypeError`` deep inside.
+    Only real numbers qualify: a string that happens to parse as one, a bool (``dt=True`` is no step
+    of 1 s), None and arrays with more than one element are refused, so that a wrongly typed option
+    fails here and not as a bare ``TypeError`` deep inside.
     """
     x = math.nan
-    if not isinstance(value, (str, bytes)):
+    if not isinstance(value, (str, bytes, bool, np.bool_)):
         try:
             x = float(value)  # type: ignore[arg-type]
         except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond float64
@@ -210,7 +230,7 @@ def as_stamps(t: ArrayLike | None, t_ns: ArrayLike | None = None, *, name: str =
 
 
 def _stamp_array(x: ArrayLike, name: str) -> NDArray[Any]:
-    raw = np.asarray(x)
+    raw = plain_array(x, name)
     if raw.ndim != 1 or len(raw) == 0:
         raise ShapeError(f"expected shape (N,) with N ≥ 1, got {raw.shape}", argument=name)
     return raw
@@ -322,3 +342,18 @@ def readonly_array(
         raise ShapeError(f"expected shape {shape_text}, got {arr.shape}", argument=name)
     check_finite_rows(arr, name, what)
     return readonly_copy(arr)
+
+
+def row_norms(x: FloatArray, name: str) -> FloatArray:
+    """Euclidean norms of the rows of ``x`` (N, k), scale-safe: each row is divided by its largest
+    magnitude before squaring, so rows near 1e154 (whose squares overflow) or 1e-200 (whose squares
+    underflow to 0) get their true norm. A norm beyond float64 itself (an overflowing difference, a
+    row of ±1e308) is a :class:`NonFiniteError` naming ``name``."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        scale = np.max(np.abs(x), axis=1)
+        safe = np.where(scale > 0, scale, 1.0)
+        out: FloatArray = scale * np.sqrt(np.sum((x / safe[:, None]) ** 2, axis=1))
+    bad = np.flatnonzero(~np.isfinite(out))
+    if bad.size:
+        raise NonFiniteError(f"row {int(bad[0])} is too large in magnitude: its norm overflows float64", argument=name)
+    return out

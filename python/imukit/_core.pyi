@@ -434,6 +434,7 @@ class Preintegrator:
         accel: NDArray[np.float64],
         gyro_saturated: NDArray[np.bool_],
         accel_saturated: NDArray[np.bool_],
+        clock: tuple[float, float],
         threads: int | None = None,
     ) -> None: ...
     def state(

@@ -17,6 +17,7 @@ __all__ = [
     "MissingDependencyError",
     "NonFiniteError",
     "ParameterError",
+    "ResourceError",
     "ShapeError",
     "TimestampError",
 ]
@@ -75,6 +76,11 @@ class ParameterError(ImukitError, ValueError):
     """A keyword option has a value outside its domain."""
 
 
+class ResourceError(ImukitError, MemoryError):
+    """The memory a result sized by the input needs cannot be had (the message names the argument
+    that sized it and the size: ``"boundaries: 20,000,000 windows need 51.7 GB"``)."""
+
+
 class TimestampError(ImukitError, ValueError):
     """Timestamps that are not strictly increasing (the message names the first bad sample)."""
 
@@ -97,6 +103,7 @@ for _cls in (
     InvalidRotationError,
     GimbalLockError,
     ParameterError,
+    ResourceError,
     TimestampError,
     FileFormatError,
     MissingDependencyError,

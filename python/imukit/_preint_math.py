@@ -90,16 +90,26 @@ def corrected(pre: Preintegration, bias: ImuBias | None = None) -> Deltas:
     )
 
 
+def _finite(arrays: tuple[FloatArray, ...], argument: str, what: str) -> None:
+    """Finite states at extreme finite values (±1e308) overflow these sums: refused naming the
+    argument (``NonFiniteError``), never returned as inf or passed on as NaN."""
+    if not all(np.isfinite(a).all() for a in arrays):
+        raise NonFiniteError(f"too large in magnitude: {what} overflows float64", argument=argument)
+
+
 def predict(pre: Preintegration, state_i: States, bias: ImuBias | None = None) -> States:
     """The states at the windows' ends from those at their starts (module docs)."""
     dr, dv, dp = corrected(pre, bias)
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
-    return States(
-        p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
-        v_i + g * dt + _mv(r_i, dv),
-        r_i @ dr,
-    )
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = States(
+            p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
+            v_i + g * dt + _mv(r_i, dv),
+            r_i @ dr,
+        )
+    _finite(out, "state_i", "the predicted state p_i + v_i Δt + ½ g Δt² + R_i Δp")
+    return out
 
 
 class _Parts(NamedTuple):
@@ -115,11 +125,15 @@ def _parts(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias 
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
     p_j, v_j, r_j = state_j
-    u_v = v_j - v_i - g * dt
-    u_p = p_j - p_i - v_i * dt - 0.5 * g * dt * dt
-    ri_t = _t(r_i)
-    e = _t(dr) @ ri_t @ r_j
-    r = np.concatenate([so3.log(e), _mv(ri_t, u_v) - dv, _mv(ri_t, u_p) - dp], axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        u_v = v_j - v_i - g * dt
+        u_p = p_j - p_i - v_i * dt - 0.5 * g * dt * dt
+        ri_t = _t(r_i)
+        e = _t(dr) @ ri_t @ r_j
+        r_v, r_p = _mv(ri_t, u_v) - dv, _mv(ri_t, u_p) - dp
+    # Before so3.log and the Jacobians, which would name their own internal argument ("phi").
+    _finite((u_v, u_p, r_v, r_p), "state_j", "its difference from state_i (p_j − p_i − v_i Δt, v_j − v_i)")
+    r = np.concatenate([so3.log(e), r_v, r_p], axis=-1)
     return _Parts(r, u_v, u_p, e)
 
 

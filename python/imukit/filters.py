@@ -31,6 +31,7 @@ Equations, rejection rules, the gain ramp, the ``Law`` seam and measured test nu
 
 from __future__ import annotations
 
+import threading
 from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
@@ -165,6 +166,9 @@ class _Filter:
         mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
         rest_detection: RestDetection | None = _OPTIONS.rest_detection,
     ) -> None:
+        # update() reads, steps and replaces the state: from several threads at once, unlocked,
+        # updates were lost (issue 17); with it they run one after another.
+        self._lock = threading.Lock()
         if not isinstance(world, str):  # the core checks the name
             raise ParameterError(f"expected one of {WORLDS}, got {world!r}", argument="world")
         self.options = _core.FilterOptions(
@@ -206,17 +210,14 @@ class _Filter:
 
     def update(self, gyro: ArrayLike, accel: ArrayLike, dt: float, mag: ArrayLike | None = None) -> Rotation:
         """One streaming sample (``dt`` [s] since the previous one; ignored on the first, which
-        initialises); returns the current attitude ``R_wb``."""
-        self._state = FilterState(
-            self._core_filter.update(
-                self._state,
-                _vec3(gyro, "gyro"),
-                _vec3(accel, "accel"),
-                real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
-                None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist(),
-            )
-        )
-        return rotation_from_unit_quat(self._state.quaternion)
+        initialises); returns the current attitude ``R_wb``. Thread-safe: calls from several
+        threads run one after another, none lost."""
+        w, a = _vec3(gyro, "gyro"), _vec3(accel, "accel")
+        step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
+        m = None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist()
+        with self._lock:
+            self._state = state = FilterState(self._core_filter.update(self._state, w, a, step, m))
+        return rotation_from_unit_quat(state.quaternion)
 
     def run(
         self, imu: ImuData, *, mag: ArrayLike | None = None, initial: Rotation | FilterState | None = None

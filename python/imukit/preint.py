@@ -34,7 +34,9 @@ model of each scheme: ``docs/preintegration.md`` and the module docs of ``crates
 
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 from typing import Any, NamedTuple, overload
 
 import numpy as np
@@ -42,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit import _core, _preint_math
-from imukit._arrays import FloatArray, as_float_array, real_scalar, seconds_from_ns
+from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar, seconds_from_ns
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
@@ -151,6 +153,7 @@ class PreintegratedImu:
         # takes the samples explicitly.
         self._inputs: list[_Input] = []
         self._started = False  # whether anything was integrated (the span's start is set)
+        self._lock = threading.Lock()
 
     def __reduce__(self) -> tuple[Any, ...]:
         # The core pickles its complete state; the replay log of the deprecated reintegrate(bias)
@@ -163,6 +166,7 @@ class PreintegratedImu:
         out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
         out._started = True
         out._snapshot, out._span = None, (math.nan, math.nan)
+        out._lock = threading.Lock()
         return out
 
     @property
@@ -226,9 +230,10 @@ class PreintegratedImu:
                 raise ShapeError(f"expected shape (3,), got {v.shape}", argument=name)
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
         flags = (_flag(gyro_saturated, "gyro_saturated"), _flag(accel_saturated, "accel_saturated"))
-        self._core.integrate_measurement([*a], [*w], step, *flags)
-        self._inputs.append(_Measurement(a, w, step, *flags))
-        self._changed()
+        with self._lock:
+            self._core.integrate_measurement([*a], [*w], step, *flags)
+            self._inputs.append(_Measurement(a, w, step, *flags))
+            self._changed()
 
     def integrate(self, imu: ImuData, *, threads: int | None = None) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
@@ -242,14 +247,24 @@ class PreintegratedImu:
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         count = checked(threads)
-        self._core.integrate(imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated, count)
-        self._inputs.append(imu)
-        self._changed(float(imu.t[0]), float(imu.t[-1]))
+        clock = (float(imu.t[0]), float(imu.t[-1]))
+        # The core call releases the GIL: the lock makes each call whole (the core state, the span
+        # and the snapshot change together); calls from several threads run one after another.
+        with self._lock:
+            self._core.integrate(
+                imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated, clock, count
+            )
+            self._inputs.append(imu)
+            self._changed(*clock)
 
     def snapshot(self) -> Preintegration:
         """The preintegration as a :class:`Preintegration` record (M = 1), read from the core in one
         call and kept until the next sample; ``t_start``/``t_end`` are those of the samples given
         to :meth:`integrate` (NaN after :meth:`integrate_measurement` or :meth:`merge`)."""
+        with self._lock:
+            return self._read_snapshot()
+
+    def _read_snapshot(self) -> Preintegration:
         if self._snapshot is None:
             r, v, p, dt, cov, jac, combined = self._core.state()
             self._snapshot = Preintegration._owning(
@@ -318,8 +333,11 @@ class PreintegratedImu:
         if self.params.gravity != other.params.gravity:
             raise ParameterError("expected the same gravity", argument="other")
         params = self.params.replace(combined=False)
-        merged = self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
-        return merged
+        # Both locks, taken in one global order (a.merge(b) and b.merge(a) at once cannot deadlock).
+        with contextlib.ExitStack() as held:
+            for _, lock in sorted({id(x): x._lock for x in (self, other)}.items()):
+                held.enter_context(lock)
+            return self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
         """The old ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian)`` tuple (test helpers read it)."""
@@ -460,14 +478,25 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
     clock: integer ns for integer stamps, else float seconds)."""
     if not isinstance(imu, ImuData):
         raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
-    raw = np.asarray(boundaries)
+    raw = plain_array(boundaries, "boundaries")
     if raw.ndim != 1:
         raise ShapeError(f"expected shape (M,), got {raw.shape}", argument="boundaries")
     if raw.dtype.kind in "iu" and imu.t_ns is not None:
         ns = raw.astype(np.int64)
         return Windows(seconds_from_ns(ns - imu.t_ns[0]), ns / 1e9, ns)
     t = as_float_array(raw, "boundaries")
-    return Windows(t - imu.t[0], t, None)
+    offsets = t - imu.t[0]
+    if imu.t_ns is not None:
+        # Float boundaries taken from an ns recording's imu.t (epoch seconds, 0.24 µs apart): a
+        # sample's own time is that sample exactly, so the last one stays inside the span and
+        # windows between samples are as long as their ns stamps say (not 0.10000014 s).
+        k = np.minimum(np.searchsorted(imu.t, t), len(imu) - 1)
+        on_sample = imu.t[k] == t
+        offsets[on_sample] = imu.seconds[k[on_sample]]
+        if on_sample.all():
+            ns = imu.t_ns[k]
+            return Windows(offsets, t, ns)
+    return Windows(offsets, t, None)
 
 
 def _core_windows(
@@ -597,11 +626,21 @@ def regular_boundaries(imu: ImuData, period: float) -> NDArray[Any]:
     """Window edges on ``imu.t``'s clock every ``period`` seconds from the first sample, the last
     one at or before the last sample: integer ns for ns stamps (the period rounded to a whole ns,
     the count by integer division: exact), else float seconds (the count lowered while rounding puts
-    the last edge past the last sample). At least one window: a longer period is a
-    :class:`ParameterError` naming ``period``."""
+    the last edge past the last sample). At least one window, and at most one per sample step: a
+    period longer than the recording, or shorter than its mean sample step, is a
+    :class:`ParameterError` naming ``period`` (``imukit preintegrate --window 1e-9`` asked for 2·10¹⁰
+    windows of a 20 s recording and ran out of memory)."""
     if not isinstance(imu, ImuData):
         raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
     window_s = real_scalar(period, "period", what="a positive, finite period [s]", accept=lambda x: 0 < x < math.inf)
+    if not window_s <= imu.duration:  # before the count, which would overflow for 1e308
+        raise ParameterError(f"{window_s} s is longer than the recording ({imu.duration:.6g} s)", argument="period")
+    step = imu.duration / (len(imu) - 1)
+    if window_s < step:
+        raise ParameterError(
+            f"{window_s} s is shorter than the sample step ({step:.6g} s): more windows than samples",
+            argument="period",
+        )
     if imu.t_ns is not None:
         step = max(round(window_s * 1e9), 1)
         count = int(imu.t_ns[-1] - imu.t_ns[0]) // step

@@ -180,8 +180,19 @@ class Waypoints:
         if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
             raise ShapeError(f"expected a scipy Rotation of length M = len(times) = {len(t)}", argument="rotations")
         self.times = t
-        self._position = CubicSpline(t, p, bc_type=bc_type)
-        self._rotation = RotationSpline(t, rotations)
+        # Steps that are positive but tiny next to the span (1e-300 s) overflow the splines' 1/h³
+        # terms: scipy then raised its own ValueError ("array must not contain infs or NaNs").
+        try:
+            with np.errstate(over="raise", divide="raise", invalid="raise"):
+                self._position = CubicSpline(t, p, bc_type=bc_type)
+                self._rotation = RotationSpline(t, rotations)
+        except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+            steps = np.diff(t)
+            raise ParameterError(
+                f"steps from {steps.min():.3g} s to {steps.max():.3g} s cannot be fitted by a spline "
+                "(its coefficients overflow): space the waypoints more evenly",
+                argument="times",
+            ) from None
 
     def _truth(self, t: FloatArray, gravity: FloatArray, threads: int | None) -> tuple[FloatArray, ...]:
         del threads  # scipy's splines run on the calling thread

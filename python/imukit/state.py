@@ -28,6 +28,7 @@ from imukit._arrays import (
     as_stamps,
     float_seconds,
     int64_stamps,
+    plain_array,
     readonly_array,
     readonly_copy,
     rotation_from_unit_quat,
@@ -198,12 +199,13 @@ class Trajectory(Frozen):
         """The :class:`NavState` at sample ``k`` (negative counts from the end); needs a velocity."""
         if self.velocity is None:
             raise ParameterError("this trajectory has no velocity, so it has no NavState", argument="k")
+        # A bool is no index (operator.index(True) is 1): checked before the conversion drops it.
+        if isinstance(k, (bool, np.bool_)):
+            raise ParameterError(f"expected an integer sample index, got {k!r}", argument="k")
         try:
             k = operator.index(k)
         except TypeError:
             raise ParameterError(f"expected an integer sample index, got {k!r}", argument="k") from None
-        if isinstance(k, bool):
-            raise ParameterError(f"expected an integer sample index, got {k!r}", argument="k")
         n = len(self)
         if not -n <= k < n:
             raise IndexError(f"k: sample {k} out of range for a trajectory of {n} samples")
@@ -230,7 +232,7 @@ class Trajectory(Frozen):
 def _stamps(t: ArrayLike | None, t_ns: ArrayLike | None) -> Stamps:
     """:func:`as_stamps`; integer ``t`` that is not nanoseconds keeps the :class:`DTypeError` it got
     when ``t`` took float seconds only (integer nanoseconds went in ``t_ns``)."""
-    raw = None if t is None else np.asarray(t)
+    raw = None if t is None else plain_array(t, "t")
     if t_ns is None and raw is not None and raw.dtype.kind in "iu" and raw.ndim == 1:
         if too_fine_for_ns(int64_stamps(raw, "t")) is not None:
             raise DTypeError(

@@ -116,8 +116,9 @@ trait State: Copy + std::ops::Add<Output = Self> + std::ops::Mul<f64, Output = S
         Ok(())
     }
     /// The pitch (degrees) if the path from `previous` to `self` jumped across a singularity
-    /// between samples (Euler angles: cos(pitch) changed sign without landing within the tolerance).
-    fn crossed_singularity(&self, _previous: &Self) -> Option<f64> {
+    /// between samples (Euler angles: cos(pitch) changed sign without landing within the tolerance),
+    /// the step having turned the body by at most `turn` radians (`|ω| h`).
+    fn crossed_singularity(&self, _previous: &Self, _turn: f64) -> Option<f64> {
         None
     }
     fn project(self) -> Self;
@@ -188,15 +189,18 @@ impl State for Vector3<f64> {
         euler::check_pitch(self.y, tolerance)
     }
     #[inline]
-    fn crossed_singularity(&self, previous: &Self) -> Option<f64> {
+    fn crossed_singularity(&self, previous: &Self, turn: f64) -> Option<f64> {
         // Near ±90° the ZYX rates grow like tan θ: a step that crosses cos θ = 0, or that turns yaw
         // or roll by more than MAX_EULER_STEP, has not resolved the dynamics (the integrated pitch
-        // then turns back instead of passing through 90°).
+        // then turns back instead of passing through 90°). A jump the body's own turn explains
+        // (a pure yaw of 1 rad/s over dt = 1e15 s) is no sign of the singularity: only jumps
+        // beyond twice `turn` are.
         let wrapped = |d: f64| (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
         let jump = wrapped(self.x - previous.x)
             .abs()
             .max(wrapped(self.z - previous.z).abs());
-        (self.y.cos() * previous.y.cos() <= 0.0 || jump > MAX_EULER_STEP).then(|| self.y.to_degrees())
+        let amplified = jump > MAX_EULER_STEP && jump > 2.0 * turn;
+        (self.y.cos() * previous.y.cos() <= 0.0 || amplified).then(|| self.y.to_degrees())
     }
     #[inline]
     fn project(self) -> Self {
@@ -392,7 +396,8 @@ fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Opti
             y = y.project();
         }
         y.admissible(tol).map_err(|e| e.at(k + 1))?;
-        if let Some(pitch_deg) = y.crossed_singularity(&previous) {
+        let turn = w0.amax().max(w1.amax()) * 3f64.sqrt() * h;
+        if let Some(pitch_deg) = y.crossed_singularity(&previous, turn) {
             return Err(Error::GimbalLock {
                 index: k + 1,
                 pitch_deg,

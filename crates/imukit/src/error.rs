@@ -96,6 +96,23 @@ pub enum Error {
         /// What is wrong with it.
         source: Box<Error>,
     },
+    /// The memory a result sized by the input needs could not be had (checked before allocating,
+    /// so that an input asking for too much is refused instead of aborting the process).
+    #[error("{} {what} need {}", thousands(*.count), bytes_text(*.bytes))]
+    Allocation {
+        /// How many items were asked for.
+        count: usize,
+        /// What they are, plural ("windows", "covariances").
+        what: &'static str,
+        /// Their size in bytes (as u128: the product may exceed `usize`).
+        bytes: u128,
+    },
+    /// The caller cancelled a long kernel through its [`Cancel`] flag (Python: Ctrl-C).
+    #[error("interrupted at sample {index}")]
+    Interrupted {
+        /// The sample reached.
+        index: usize,
+    },
     /// A parameter (not array data) is out of its domain.
     #[error("{name} must be {expected}, got {got}")]
     Parameter {
@@ -166,7 +183,8 @@ impl Error {
             | Error::ZeroQuaternion { index, .. }
             | Error::NotRotation { index, .. }
             | Error::GimbalLock { index, .. }
-            | Error::NonIncreasingTime { index, .. } => Some(*index),
+            | Error::NonIncreasingTime { index, .. }
+            | Error::Interrupted { index } => Some(*index),
             _ => None,
         }
     }
@@ -186,6 +204,78 @@ impl Error {
             Error::Argument { source, .. } => source.root(),
             other => other,
         }
+    }
+}
+
+/// `count` with thousands separators: `20,000,001`.
+pub fn thousands(count: usize) -> String {
+    let digits = count.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// A byte count in decimal units, one decimal: `51.7 GB`.
+pub fn bytes_text(bytes: u128) -> String {
+    let units = [
+        (1e18, "EB"),
+        (1e15, "PB"),
+        (1e12, "TB"),
+        (1e9, "GB"),
+        (1e6, "MB"),
+        (1e3, "kB"),
+    ];
+    let b = bytes as f64;
+    match units.iter().find(|(scale, _)| b >= *scale) {
+        Some((scale, unit)) => format!("{:.1} {unit}", b / scale),
+        None => format!("{bytes} B"),
+    }
+}
+
+/// An empty vector with room for `count` items of `T`, or [`Error::Allocation`] when the memory
+/// cannot be had (`Vec::try_reserve_exact`: no abort on exhaustion).
+pub fn try_vec<T>(count: usize, what: &'static str) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(count).map_err(|_| Error::Allocation {
+        count,
+        what,
+        bytes: count as u128 * std::mem::size_of::<T>() as u128,
+    })?;
+    Ok(v)
+}
+
+/// A flag another thread sets to stop a long kernel early: the kernel polls it every
+/// [`Cancel::EVERY`] samples (a few ms of work) and returns [`Error::Interrupted`]. The Python glue
+/// sets it when a signal handler raises (Ctrl-C) while the kernel runs with the GIL released.
+#[derive(Debug, Default)]
+pub struct Cancel(std::sync::atomic::AtomicBool);
+
+impl Cancel {
+    /// Samples between two polls: 65,536 strapdown steps take 3–10 ms.
+    pub const EVERY: usize = 1 << 16;
+
+    /// A flag not set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Asks the kernel polling this flag to stop.
+    pub fn cancel(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// [`Error::Interrupted`] at sample `k` when `k` is a polling point and the flag is set.
+    #[inline]
+    pub fn check(&self, k: usize) -> Result<()> {
+        if k.is_multiple_of(Self::EVERY) && self.0.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(Error::Interrupted { index: k });
+        }
+        Ok(())
     }
 }
 

@@ -41,4 +41,4 @@ pub mod so3;
 pub mod strapdown;
 pub mod time;
 
-pub use error::{Error, Result};
+pub use error::{try_vec, Cancel, Error, Result};

@@ -33,7 +33,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use crate::imu::{Bias, NavState, Noise, Samples};
 use crate::mat3::{mul, mul_t};
 use crate::strapdown::{self, Options, StatesOut, Stepper};
-use crate::{so3, Error, Result};
+use crate::{so3, Cancel, Error, Result};
 
 /// 15×15 error-state covariance, order `[δp, δv, δθ, δb_a, δb_g]`.
 pub type Covariance = SMatrix<f64, 15, 15>;
@@ -207,6 +207,31 @@ pub fn propagate(
     options: &Options,
     outputs: Outputs<'_>,
 ) -> Result<(NavState, Covariance)> {
+    propagate_cancellable(
+        samples,
+        initial,
+        covariance,
+        bias,
+        noise,
+        options,
+        outputs,
+        &Cancel::new(),
+    )
+}
+
+/// [`propagate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled every
+/// [`Cancel::EVERY`] samples).
+#[allow(clippy::too_many_arguments)] // propagate's inputs and the flag
+pub fn propagate_cancellable(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    covariance: &Covariance,
+    bias: &Bias,
+    noise: &Noise,
+    options: &Options,
+    outputs: Outputs<'_>,
+    cancel: &Cancel,
+) -> Result<(NavState, Covariance)> {
     noise.check()?;
     strapdown::check_parameters(initial, bias, options)?;
     let n = samples.t.len();
@@ -262,7 +287,7 @@ pub fn propagate(
         if (k + 1).is_multiple_of(every) || k + 2 == n {
             store_cov(&p, &mut stored);
         }
-        Ok(())
+        cancel.check(k)
     })?;
     let mut last = Covariance::zeros();
     for (i, row) in p.iter().enumerate() {
@@ -270,9 +295,23 @@ pub fn propagate(
             last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
         }
     }
-    strapdown::check_finite_result(&x, states.as_ref(), n)?;
+    strapdown::check_finite_result(&x, states.as_ref(), (samples, initial, bias, options))?;
     if !last.iter().all(|v| v.is_finite()) {
-        return Err(Error::Overflow { index: n - 1 });
+        // The mean is finite: the initial covariance grew past f64, or the noise added to it.
+        let span = samples.t[n - 1] - samples.t[0];
+        let densities = [
+            noise.gyro_density,
+            noise.accel_density,
+            noise.gyro_random_walk,
+            noise.accel_random_walk,
+        ];
+        let added = densities.iter().fold(0.0_f64, |m, d| m.max(d * d * span));
+        let name = if added > covariance.amax() {
+            "noise"
+        } else {
+            "covariance"
+        };
+        return Err(Error::Overflow { index: n - 1 }.in_argument(name));
     }
     Ok((x, last))
 }

@@ -73,6 +73,7 @@ pub fn adjoint(r: &Rotation3<f64>) -> Matrix3<f64> {
 }
 
 /// Right Jacobian `J_r(φ) = I − ((1 − cos θ)/θ²) [φ]× + ((θ − sin θ)/θ³) [φ]×²`.
+#[inline]
 pub fn right_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     jacobian(&-phi)
 }

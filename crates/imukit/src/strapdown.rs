@@ -24,7 +24,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::imu::{Bias, NavState, Samples};
 use crate::interp::{Cubic, StepInterpolator};
-use crate::{imu, quat, so3, Error, Result};
+use crate::{imu, quat, so3, Cancel, Error, Result};
 
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -262,7 +262,20 @@ pub fn integrate(
     initial: &NavState,
     bias: &Bias,
     options: &Options,
+    out: Option<StatesOut<'_>>,
+) -> Result<NavState> {
+    integrate_cancellable(samples, initial, bias, options, out, &Cancel::new())
+}
+
+/// [`integrate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled every
+/// [`Cancel::EVERY`] samples).
+pub fn integrate_cancellable(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    bias: &Bias,
+    options: &Options,
     mut out: Option<StatesOut<'_>>,
+    cancel: &Cancel,
 ) -> Result<NavState> {
     let n = samples.t.len();
     if let Some(out) = out.as_ref() {
@@ -276,23 +289,65 @@ pub fn integrate(
         if let Some(out) = out.as_mut() {
             out.store(k + 1, next);
         }
-        Ok(())
+        cancel.check(k)
     })?;
-    check_finite_result(&x, out.as_ref(), n)?;
+    check_finite_result(&x, out.as_ref(), (samples, initial, bias, options))?;
     Ok(x)
 }
 
 /// Finite inputs can still overflow (e.g. 1e200 rad/s): refuse a non-finite result, naming the
-/// first non-finite stored state when there is a store, else the last sample. An RK4 step can
-/// also overflow only the quaternion's norm: `q/|q|` with `|q|² = inf` is the zero quaternion,
-/// finite but no rotation, so an attitude off the unit sphere is refused the same way.
-pub(crate) fn check_finite_result(x: &NavState, out: Option<&StatesOut<'_>>, n: usize) -> Result<()> {
+/// first non-finite stored state when there is a store, else the last sample, under the input
+/// whose term of the sum dominates ([`overflow_culprit`]). An RK4 step can also overflow only the
+/// quaternion's norm: `q/|q|` with `|q|² = inf` is the zero quaternion, finite but no rotation, so
+/// an attitude off the unit sphere is refused the same way (a rate's fault: `imu` or `bias`).
+pub(crate) fn check_finite_result(
+    x: &NavState,
+    out: Option<&StatesOut<'_>>,
+    run: (&Samples<'_>, &NavState, &Bias, &Options),
+) -> Result<()> {
     let finite = x.position.iter().chain(x.velocity.iter()).all(|v| v.is_finite());
-    if finite && crate::quat::is_unit_coords(x.rotation.coords.as_slice()) {
+    let unit = crate::quat::is_unit_coords(x.rotation.coords.as_slice());
+    if finite && unit {
         return Ok(());
     }
+    let (samples, initial, bias, options) = run;
+    let n = samples.t.len();
     let index = out.and_then(StatesOut::first_non_finite).unwrap_or(n - 1);
-    Err(Error::Overflow { index })
+    Err(Error::Overflow { index }.in_argument(overflow_culprit(samples, initial, bias, options, finite)))
+}
+
+/// The input to blame for an overflow of the mean: the largest term of
+/// `p = p₀ + v₀T + ½(R(a − b_a) + g)T²` over the span T when position or velocity overflowed,
+/// else (the attitude: `|ω − b_g|`) the rates or the gyro bias. Errors in Python then name the
+/// argument the user can change (`initial`, `imu`, `bias`, `gravity`), not "imu / bias".
+fn overflow_culprit(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    bias: &Bias,
+    options: &Options,
+    finite: bool,
+) -> &'static str {
+    let largest = |rows: &[[f64; 3]]| rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !finite {
+        let n = samples.t.len();
+        let span = (samples.t[n - 1] - samples.t[0]).max(f64::MIN_POSITIVE);
+        let reach = span.max(span * span);
+        let terms = [
+            (
+                "initial",
+                initial.position.amax().max(initial.velocity.amax() * span.max(1.0)),
+            ),
+            ("imu", largest(samples.accel) * reach),
+            ("bias", bias.accel.amax() * reach),
+            ("gravity", options.gravity.amax() * reach),
+        ];
+        return terms.iter().fold(terms[0], |m, t| if t.1 > m.1 { *t } else { m }).0;
+    }
+    if bias.gyro.amax() > largest(samples.gyro) {
+        "bias"
+    } else {
+        "imu"
+    }
 }
 
 /// Finite initial state, biases and gravity.

@@ -221,7 +221,9 @@ fn deltas_and_bias_jacobian_do_not_change_and_no_flags_or_factor_one_change_noth
             let h = t[k] - t[k - 1];
             streamed.integrate_measurement_clipped(&s.accel_at(held), &s.gyro_at(held), h, Clipped::NONE);
         }
-        assert_eq!(streamed, plain);
+        // All but the batch's ends (continuity.rs), which unchecked steps do not record.
+        let (a, b) = (streamed.state_words(), plain.state_words());
+        assert_eq!(a[..a.len() - 18], b[..b.len() - 18]);
     }
 }
 

@@ -7,7 +7,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from imukit._arrays import FloatArray
+from imukit._arrays import FloatArray, row_norms
 from imukit.eval._align import Alignment
 from imukit.eval._prepare import prepare
 from imukit.eval._stats import ErrorStats, error_stats
@@ -58,6 +58,7 @@ def ape(
     """
     prepared = prepare(estimate, reference, method=align, max_dt=max_dt, offset=offset)
     est, ref = prepared.estimate, prepared.reference
-    translation = np.linalg.norm(est.position - ref.position, axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflowing difference: refused below
+        translation = row_norms(est.position - ref.position, "estimate")
     rotation = np.asarray((ref.rotation.inv() * est.rotation).magnitude(), dtype=np.float64)
     return AbsoluteError(translation, rotation, error_stats(translation), error_stats(rotation), *prepared)

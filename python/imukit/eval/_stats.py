@@ -27,11 +27,14 @@ class ErrorStats(NamedTuple):
 
 def error_stats(e: FloatArray) -> ErrorStats:
     """:class:`ErrorStats` of ``e``; the callers guarantee ``len(e) ≥ 1``."""
+    # Scaled by the largest error: e * e overflows from 1.3e154 (a finite norm) and underflows.
+    top = float(np.max(np.abs(e)))
+    rmse = top * float(np.sqrt(np.mean((e / top) ** 2))) if top > 0 else 0.0
     return ErrorStats(
-        rmse=float(np.sqrt(np.mean(e * e))),
+        rmse=rmse,
         mean=float(np.mean(e)),
         median=float(np.median(e)),
-        std=float(np.std(e)),
+        std=top * float(np.std(e / top)) if top > 0 else 0.0,
         min=float(np.min(e)),
         max=float(np.max(e)),
         n=len(e),

@@ -9,7 +9,7 @@ from typing import Literal, Union
 
 import numpy as np
 
-from imukit._arrays import choice
+from imukit._arrays import choice, real_scalar
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuData
 from imukit.io._lines import (
@@ -191,15 +191,9 @@ def _read(
 
 
 def _gravity(value: object) -> float:
-    try:
-        g = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        g = math.nan
-    if not (math.isfinite(g) and g > 0.0):
-        raise ParameterError(
-            f"expected a positive, finite number of m/s^2 per g, got {value!r}", argument="standard_gravity"
-        )
-    return g
+    # The one numeric-option rule (real_scalar): "9.8" and True are refused as every option refuses them.
+    what = "a positive, finite number of m/s^2 per g"
+    return real_scalar(value, "standard_gravity", what=what, accept=lambda g: math.isfinite(g) and g > 0.0)
 
 
 def _check_columns(columns: object, name: str, count: int) -> None:

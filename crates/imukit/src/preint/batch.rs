@@ -10,7 +10,7 @@
 
 use rayon::prelude::*;
 
-use super::{clipped_at, ClipMask, Preintegrator, Scheme};
+use super::{clipped_at, ClipMask, End, Ends, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::imu::Samples;
 
@@ -34,26 +34,43 @@ impl Preintegrator {
     /// a window is the window's last sample, and keeps that sample's flags).
     pub fn integrate_samples_clipped(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>) -> Result<()> {
         samples.validate()?;
+        let n = samples.t.len();
+        self.integrate_samples_at(samples, clipped, [samples.t[0], samples.t[n - 1]])
+    }
+
+    /// [`Preintegrator::integrate_samples_clipped`] of samples whose first and last times on the
+    /// caller's clock are `clock` (a caller that re-bases `samples.t`, as Python does, keeps its
+    /// own clock): a batch continuing a preintegration must start with its last sample, the same
+    /// time and readings, in both schemes (module docs of `continuity.rs`; errors name `samples`).
+    pub fn integrate_samples_at(
+        &mut self,
+        samples: &Samples<'_>,
+        clipped: Option<&ClipMask<'_>>,
+        clock: [f64; 2],
+    ) -> Result<()> {
+        samples.validate()?;
         if let Some(mask) = clipped {
             mask.check(samples.t.len())?;
         }
         let n = samples.t.len();
-        let first = (samples.accel_at(0), samples.gyro_at(0));
-        if let Some(last) = self.last_sample().filter(|last| *last != first) {
-            return Err(Error::Parameter {
-                name: "samples",
-                expected: "a midpoint batch starting with the preintegration's last sample",
-                got: format!(
-                    "accel {:?}, gyro {:?} after {:?}, {:?}",
-                    first.0, first.1, last.0, last.1
-                ),
-            });
+        let end = |k: usize, t: f64| End {
+            t: Some(t),
+            accel: samples.accel_at(k),
+            gyro: samples.gyro_at(k),
+        };
+        let ends = Ends {
+            first: Some(end(0, clock[0])),
+            last: Some(end(n - 1, clock[1])),
+        };
+        if let Some(first) = &ends.first {
+            self.boundary.check_next(first, "samples")?;
         }
         let mut next = self.clone();
         next.add_validated(samples, clipped)?;
         if !next.is_finite() {
             return Err(Error::Overflow { index: n - 1 });
         }
+        next.boundary = self.boundary.then(&ends);
         *self = next;
         Ok(())
     }

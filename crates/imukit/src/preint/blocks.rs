@@ -25,6 +25,7 @@ pub(super) const ZERO_CROSS: Cross = [[Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 /// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ` for the euler scheme's own white noise
 /// (`B = [0; ΔR h; ½ ΔR h²]`, `C = [J_r h; 0; 0]`, `Σ_a = var_a I`, `Σ_g = var_g I`): `B Σ_a Bᵀ`
 /// reduces to multiples of I because ΔR is orthonormal. With zero variances, `A Σ Aᵀ` alone.
+#[inline(always)]
 pub(super) fn propagate(
     cov: &CovarianceBlocks,
     phi: &Matrix3<f64>,
@@ -61,6 +62,7 @@ pub(super) fn propagate(
 }
 
 /// `(b + bᵀ)/2`: keeps the diagonal blocks exactly symmetric against rounding.
+#[inline]
 pub(super) fn symmetric(b: Matrix3<f64>) -> Matrix3<f64> {
     (b + b.transpose()) * 0.5
 }

@@ -56,6 +56,9 @@ impl Preintegrator {
             );
             return Err(mismatch("a preintegration with the same saturation noise factor", got));
         }
+        if let Some(first) = &next.boundary.first {
+            self.boundary.check_next(first, "next")?;
+        }
         if self.scheme == Scheme::Midpoint {
             match (&self.ends.last, &next.ends.first) {
                 (None, _) => {
@@ -133,6 +136,7 @@ impl Preintegrator {
             jac: blocks::cross_of(&jac),
             bias_walk: None,
             ends,
+            boundary: self.boundary.then(&next.boundary),
             since_projection: 0,
         })
     }

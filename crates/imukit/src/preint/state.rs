@@ -7,13 +7,14 @@
 //! noise (4: densities, random walks), saturation factor, ΔR (9), Δv (3), Δp (3), Δt, covariance
 //! blocks (6 × 9), Jacobian (54), bias walk (flag, cross 54, var_g, var_a), first and last
 //! midpoint samples (each: flag, accel 3, gyro 3, var flag, var 2, scale 2), start and end cross
-//! covariances (54 each), intervals since the last projection.
+//! covariances (54 each), intervals since the last projection, then the continuity ends (first
+//! and last, each: flag, time flag, t, accel 3, gyro 3; absent in states written before them: unknown).
 
 use nalgebra::{Matrix3, Vector3};
 
 use super::blocks::{Cross, ZERO_CROSS};
 use super::midpoint::Sample;
-use super::{BiasWalk, Preintegrator, Scheme};
+use super::{BiasWalk, End, Ends, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::imu::Noise;
 
@@ -127,6 +128,18 @@ impl Preintegrator {
         w.cross(&self.ends.start_cross);
         w.cross(&self.ends.end_cross);
         w.all(&[f64::from(self.since_projection)]);
+        for end in [self.boundary.first, self.boundary.last] {
+            w.flag(end.is_some());
+            let e = end.unwrap_or(End {
+                t: None,
+                accel: Vector3::zeros(),
+                gyro: Vector3::zeros(),
+            });
+            w.flag(e.t.is_some());
+            w.all(&[e.t.unwrap_or(0.0)]);
+            w.all(e.accel.as_slice());
+            w.all(e.gyro.as_slice());
+        }
         w.0
     }
 
@@ -165,6 +178,18 @@ impl Preintegrator {
         (p.ends.start_cross, p.ends.end_cross) = (r.cross()?, r.cross()?);
         // A count below PROJECT_EVERY (16): exact in f64, and saturating on anything else.
         p.since_projection = r.one()? as u32;
+        if !r.0.is_empty() {
+            let mut end = || -> Result<Option<End>> {
+                let present = r.flag()?;
+                let t = r.flag()?.then_some(r.one()?);
+                let (accel, gyro) = (r.vector()?, r.vector()?);
+                Ok(present.then_some(End { t, accel, gyro }))
+            };
+            p.boundary = Ends {
+                first: end()?,
+                last: end()?,
+            };
+        }
         if !r.0.is_empty() {
             return Err(Error::RowCount {
                 input: words.len() - r.0.len(),

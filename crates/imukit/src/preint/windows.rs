@@ -13,8 +13,8 @@ use std::cmp::Ordering;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::{clipped_at, ClipMask, Clipped, Preintegrator, Scheme};
-use crate::error::{Error, Result};
+use super::{clipped_at, ClipMask, Clipped, End, Ends, Preintegrator, Scheme};
+use crate::error::{try_vec, Error, Result};
 use crate::imu::Samples;
 
 /// `template` (an empty preintegrator: scheme, bias, noise, bias walk) run over each window
@@ -36,10 +36,13 @@ pub fn preintegrate_windows_clipped(
     template: &Preintegrator,
 ) -> Result<Vec<Preintegrator>> {
     check_inputs(samples, clipped, boundaries)?;
-    let windows: Vec<Preintegrator> = boundaries
-        .par_windows(2)
-        .map(|w| window(samples, clipped, w[0], w[1], template))
-        .collect();
+    // One state (a few kB) per window: 20,000,000 windows would need 51.7 GB.
+    let mut windows = try_vec(boundaries.len() - 1, "windows").map_err(|e| e.in_argument("boundaries"))?;
+    windows.par_extend(
+        boundaries
+            .par_windows(2)
+            .map(|w| window(samples, clipped, w[0], w[1], template)),
+    );
     check_windows(samples, boundaries, 0, &windows)?;
     Ok(windows)
 }
@@ -227,7 +230,8 @@ fn window(
     // Samples strictly inside (lo, hi); k0 is the last sample at or before lo.
     let inside = t.partition_point(|&x| x <= lo)..t.partition_point(|&x| x < hi);
     let k0 = inside.start - 1;
-    let mut current = at(samples, clipped, k0, lo, scheme);
+    let first = at(samples, clipped, k0, lo, scheme);
+    let mut current = first;
     let mut time = lo;
     if scheme == Scheme::Midpoint {
         p.integrate_measurement_clipped(&current.0, &current.1, 0.0, current.2);
@@ -245,6 +249,19 @@ fn window(
             (samples.accel_at(k), samples.gyro_at(k), clipped_at(clipped, k)),
         );
     }
-    add(&mut p, hi, at(samples, clipped, inside.end - 1, hi, scheme));
+    let last = at(samples, clipped, inside.end - 1, hi, scheme);
+    add(&mut p, hi, last);
+    // The signal at each boundary, which the adjacent window shares: euler holds the sample at
+    // or before it (the one starting there when the boundary is a sample time).
+    let held = t.partition_point(|&x| x <= hi) - 1;
+    let end_at = |(accel, gyro, _): Point| End { t: None, accel, gyro };
+    let last = match scheme {
+        Scheme::Euler => (samples.accel_at(held), samples.gyro_at(held), Clipped::NONE),
+        Scheme::Midpoint => last,
+    };
+    p.boundary = Ends {
+        first: Some(end_at(first)),
+        last: Some(end_at(last)),
+    };
     p
 }

@@ -266,9 +266,27 @@ pub fn measure_in_place(
             }
         });
     match values.iter().position(|v| !v.is_finite()) {
-        Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument("ideal")),
+        Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument(overflow_culprit(t, model))),
         None => Ok(()),
     }
+}
+
+/// The model field to blame for readings that overflowed: the largest of the white noise's
+/// `density/√h`, the walk's `random_walk·√T`, the constant bias and the error model's sigmas (the
+/// ideal readings were checked finite), named as [`SensorModel`]'s fields.
+fn overflow_culprit(t: &[f64], model: &SensorModel) -> &'static str {
+    let shortest = t.windows(2).fold(f64::INFINITY, |m, w| m.min(w[1] - w[0]));
+    let span = t[t.len() - 1] - t[0];
+    let terms = [
+        ("density", model.density / shortest.sqrt()),
+        ("random_walk", model.random_walk * span.sqrt()),
+        ("bias", model.bias.amax()),
+        ("errors", model.turn_on_sigma.max(model.gauss_markov_sigma)),
+    ];
+    terms
+        .iter()
+        .fold(("errors", 0.0), |m, t| if t.1 > m.1 { *t } else { m })
+        .0
 }
 
 fn quantise(v: f64, resolution: f64) -> f64 {

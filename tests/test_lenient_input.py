@@ -1,0 +1,102 @@
+"""Foreign exceptions for bad arguments and lenient parsing, settled (issue 17, items 13 and 16).
+
+- Ragged nested lists raised numpy's ``ValueError``: a :class:`ShapeError` naming the argument.
+- Masked arrays: ``np.asarray`` used the values under the mask; a masked value is a
+  :class:`DTypeError` (an array without masked values is its data).
+- ``sim.Waypoints`` whose positive steps overflow the splines (1e-300 s next to 2 s) raised scipy's
+  ``ValueError``: a :class:`ParameterError` naming ``times``.
+- Bools are not numbers: ``dt=True``, ``Trajectory.state(True)`` (its check came after
+  ``operator.index`` had turned True into 1) and ``standard_gravity=True`` are refused, and so is a
+  numeric string, ``standard_gravity="9.8"``, as every numeric option refuses one.
+- Float boundaries taken from an int64-ns recording's ``imu.t`` (epoch seconds, 0.24 µs apart)
+  refused the last sample and gave 0.10000014 s windows; a boundary equal to a sample's time is that
+  sample now, so they equal the integer-ns boundaries exactly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+
+NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+
+
+@pytest.mark.parametrize(
+    ("call", "argument"),
+    [
+        (lambda: ik.so3.exp([[1.0, 2.0, 3.0], [1.0, 2.0]]), "phi"),
+        (lambda: ik.quat.multiply([[0, 0, 0, 1.0], [0, 0, 1.0]], [0, 0, 0, 1.0]), "q"),
+        (lambda: ik.ImuData([0.0, 1.0], [[1, 2, 3], [1, 2]], np.zeros((2, 3))), "gyro"),
+        (lambda: ik.ImuData([[0.0], [1.0, 2.0]], np.zeros((2, 3)), np.zeros((2, 3))), "t"),
+    ],
+)
+def test_ragged_lists_are_a_shape_error_naming_the_argument(call, argument: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ik.ShapeError, match="rectangular") as info:
+        call()
+    assert info.value.argument == argument
+
+
+def test_masked_values_are_refused_unmasked_arrays_are_data() -> None:
+    phi = np.ma.masked_array([[0.1, 0.2, 0.3]], mask=[[0, 1, 0]])
+    with pytest.raises(ik.DTypeError, match="phi: expected plain numbers, got a masked array with 1 masked"):
+        ik.so3.exp(phi)
+    clean = np.ma.masked_array([[0.1, 0.2, 0.3]], mask=False)
+    assert np.array_equal(ik.so3.exp(clean), ik.so3.exp(np.array([[0.1, 0.2, 0.3]])))
+    t = np.ma.masked_array([0.0, 0.005, 0.01], mask=[0, 0, 1])
+    with pytest.raises(ik.DTypeError, match="masked") as info:
+        ik.ImuData(t, np.zeros((3, 3)), np.zeros((3, 3)))
+    assert info.value.argument == "t"
+
+
+@pytest.mark.parametrize("times", [[0.0, 1e-300, 2.0], [0.0, 1e-200, 2.0], [0.0, 1e300, 2e300]])
+def test_waypoints_whose_splines_overflow_name_times(times: list[float]) -> None:
+    positions = [[0.0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    rotations = Rotation.from_rotvec([[0.0, 0, 0], [0, 0, 0.5], [0, 0.2, 1]])
+    with pytest.raises(ik.ParameterError, match="cannot be fitted by a spline") as info:
+        ik.sim.Waypoints(times, positions, rotations)
+    assert info.value.argument == "times"
+    ik.sim.Waypoints([0.0, 1.0, 2.0], positions, rotations)  # an ordinary spacing fits
+
+
+def test_bools_are_not_numbers() -> None:
+    pim = ik.PreintegratedImu(noise=NOISE)
+    with pytest.raises(ik.ParameterError, match="dt: expected a step in seconds, got True"):
+        pim.integrate_measurement([0.0, 0, 9.81], [0.0, 0, 0], True)
+    traj = ik.integrate(
+        ik.ImuData(np.arange(3) * 0.01, np.zeros((3, 3)), np.tile([0.0, 0, 9.81], (3, 1))),
+        initial=ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity()),
+    )
+    for k in (True, np.bool_(False)):
+        with pytest.raises(ik.ParameterError, match="k: expected an integer sample index"):
+            traj.state(k)  # type: ignore[arg-type]
+    assert np.array_equal(traj.state(1).position, traj.position[1])
+
+
+@pytest.mark.parametrize("gravity", ["9.8", True, b"9.8"])
+def test_standard_gravity_refuses_strings_and_bools(tmp_path: Path, gravity: object) -> None:
+    path = tmp_path / "imu.csv"
+    path.write_text("t,gx,gy,gz,ax,ay,az\n0,0,0,0,0,0,1\n0.01,0,0,0,0,0,1\n")
+    columns = {"time_column": "t", "gyro_columns": ["gx", "gy", "gz"], "accel_columns": ["ax", "ay", "az"]}
+    with pytest.raises(ik.ParameterError) as info:
+        ik.io.read_imu_csv(path, **columns, accel_unit="g", standard_gravity=gravity)  # type: ignore[arg-type]
+    assert info.value.argument == "standard_gravity"
+    imu = ik.io.read_imu_csv(path, **columns, accel_unit="g", standard_gravity=9.8)  # type: ignore[arg-type]
+    assert imu.accel[0, 2] == 9.8
+
+
+def test_float_boundaries_from_ns_stamps_equal_the_ns_boundaries() -> None:
+    n = 2001
+    ns = 1_400_000_000_000_000_000 + np.arange(n, dtype=np.int64) * 5_000_000
+    imu = ik.ImuData(ns, np.tile([0.1, -0.2, 0.3], (n, 1)), np.tile([0.0, 0, 9.81], (n, 1)))
+    params = ik.PreintParams(NOISE)
+    from_floats = ik.preintegrate_windows(imu, imu.t[::20], params)  # the last boundary is the last sample
+    from_ns = ik.preintegrate_windows(imu, imu.t_ns[::20], params)
+    assert np.allclose(from_floats.delta_t, 0.1, rtol=0, atol=1e-13)  # was 0.10000014
+    for name in ("delta_t", "delta_rotation", "delta_velocity", "delta_position", "covariance"):
+        assert np.array_equal(getattr(from_floats, name), getattr(from_ns, name)), name
+    assert np.array_equal(from_floats.t_start_ns, from_ns.t_start_ns)
