@@ -195,8 +195,8 @@ def euroc_trial() -> Trial | None:
     rate = float((n - 1) / d.seconds[-1])
     return Trial(
         "euroc_v1_02_medium",
-        d.gyro,
-        d.accel,
+        np.ascontiguousarray(d.gyro),
+        np.ascontiguousarray(d.accel),
         np.zeros((n, 3)),
         d.rotation.as_quat(scalar_first=True),
         np.ones(n, bool),
