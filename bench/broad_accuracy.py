@@ -1,8 +1,16 @@
-"""Attitude-filter accuracy on the shared BROAD trials: vqf, ahrs, imufusion (and imukit's filters
-when ``imukit.filters`` exists), default parameters, measured in one run.
+"""Attitude-filter accuracy on the 12 shared BROAD trials and the EuRoC excerpt: imukit's filters
+(``Mahony``, ``Madgwick``, and ``Robust`` online and offline once ``imukit.filters.Robust`` exists),
+vqf (``VQF``, ``offlineVQF``, ``BasicVQF``), ahrs (Mahony, Madgwick) and imufusion, default
+parameters, measured in one run.
 
-Usage: ``python bench/broad_accuracy.py [--data ../shared/data/broad] [--out report.md]`` (about 70 s;
-ahrs is pure Python).
+Usage: ``python bench/broad_accuracy.py [--data ../shared/data/broad] [--out report.md]`` (about 6
+minutes on a loaded 2-core machine; ahrs is pure Python and imufusion a Python loop).
+
+Tables: per trial (one per quantity, a column per filter), per cross-validation group
+(``GROUPS``) and over all trials: 6D inclination and heading (constant heading offset removed),
+9D total, heading and inclination. EuRoC V1_02_medium (``../shared/data/euroc_v1_02_medium``,
+200 Hz, no magnetometer): 6D inclination against its ground truth over the whole excerpt, read with
+``tests/euroc.py``.
 
 Metric (BROAD, Laidig et al., Data 2021): :func:`imukit.eval.attitude_error` — error quaternion in
 the ENU world frame split into heading and inclination, RMSE over the trial's ``movement`` samples
@@ -12,7 +20,7 @@ filters as they are.
 
 Every peer's output is converted to ``q_wb`` (body to world, Hamilton, w first) in ENU:
 
-* ``vqf.VQF`` (the full online filter, not ``BasicVQF``; ``offlineVQF`` as an extra row): ENU
+* ``vqf.VQF`` (the full online filter), ``vqf.offlineVQF`` and ``vqf.BasicVQF``: ENU
   (its magnetometer correction puts north on +y), ``q_wb``: used as is.
 * ``ahrs.filters.Mahony``: propagates ``q ⊗ [0, ω]`` (``q_wb``) and pulls the estimate towards
   gravity on world +z and the horizontal magnetic field on world +y: ENU, used as is. Its 9D start
@@ -36,6 +44,7 @@ IMU sample k compared with mocap sample k − lag), so the effect is visible, ne
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -49,7 +58,27 @@ from scipy.spatial.transform import Rotation
 import imukit as ik
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "broad"  # the team's shared/ folder
-TRIALS = ("01_undisturbed_slow_rotation_A", "06_undisturbed_fast_rotation_A", "24_disturbed_tapping_A")
+# The cross-validation groups of ../shared/data/README.md; TRIALS is all of them, in order.
+GROUPS: dict[str, tuple[str, ...]] = {
+    "rotation": (
+        "01_undisturbed_slow_rotation_A",
+        "03_undisturbed_slow_rotation_C",
+        "06_undisturbed_fast_rotation_A",
+        "08_undisturbed_fast_rotation_with_breaks_A",
+    ),
+    "translation": (
+        "10_undisturbed_slow_translation_A",
+        "12_undisturbed_slow_translation_C",
+        "18_undisturbed_fast_translation_with_breaks_B",
+    ),
+    "tapping+vibration": ("24_disturbed_tapping_A", "27_disturbed_phone_vibration_B"),
+    "magnets": (
+        "28_disturbed_stationary_magnet_A",
+        "32_disturbed_attached_magnet_1cm",
+        "34_disturbed_attached_magnet_3cm",
+    ),
+}
+TRIALS: tuple[str, ...] = tuple(name for names in GROUPS.values() for name in names)
 G = 9.80665
 # q_z(+90°), w first: NWU world -> ENU world (north x -> y, west y -> -x)
 NWU_TO_ENU = np.array([np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)])
@@ -92,6 +121,15 @@ def run_vqf(tr: Trial, nine: bool) -> np.ndarray:
     return np.asarray(f.updateBatch(tr.gyr, tr.acc)["quat6D"])
 
 
+def run_basic_vqf(tr: Trial, nine: bool) -> np.ndarray:
+    import vqf
+
+    f = vqf.BasicVQF(1.0 / tr.rate)
+    if nine:
+        return np.asarray(f.updateBatch(tr.gyr, tr.acc, tr.mag)["quat9D"])
+    return np.asarray(f.updateBatch(tr.gyr, tr.acc)["quat6D"])
+
+
 def run_offline_vqf(tr: Trial, nine: bool) -> np.ndarray:
     import vqf
 
@@ -129,27 +167,41 @@ def run_imufusion(tr: Trial, nine: bool) -> np.ndarray:
     return ik.quat.multiply(NWU_TO_ENU, out, scalar_first=True)
 
 
-def imukit_runner(name: str) -> Callable[[Trial, bool], np.ndarray] | None:
-    """HOOK for imukit's own filters: used when ``imukit.filters.<name>`` exists, else skipped.
-
-    Expected API (issue 7): ``imukit.filters.<name>().run(imu, mag=...)`` returning a scipy
-    ``Rotation`` (R_wb, ENU) or an object with ``.rotation``.
-    """
-    try:
-        from imukit import filters
-    except ImportError:
-        return None
-    cls = getattr(filters, name, None)
+def imukit_runner(name: str, **run_kw: Any) -> Callable[[Trial, bool], np.ndarray] | None:
+    """imukit's filter ``imukit.filters.<name>`` (None while it does not exist, e.g. ``Robust``
+    before it lands): ``<name>().run(imu, mag=..., **run_kw).rotation`` (``R_wb``, ENU)."""
+    cls = getattr(ik.filters, name, None)
     if cls is None:
         return None
 
     def run(tr: Trial, nine: bool) -> np.ndarray:
         imu = ik.ImuData(np.arange(len(tr.gyr)) / tr.rate, tr.gyr, tr.acc)
-        res: Any = cls().run(imu, mag=tr.mag if nine else None)
-        rot = res.rotation if hasattr(res, "rotation") else res
-        return np.asarray(rot.as_quat(scalar_first=True))
+        res: Any = cls().run(imu, mag=tr.mag if nine else None, **run_kw)
+        return np.asarray(res.rotation.as_quat(scalar_first=True))
 
     return run
+
+
+def euroc_trial() -> Trial | None:
+    """The EuRoC excerpt as a 6D trial (every sample scored; no magnetometer), or None when absent."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from euroc import IMU_CSV
+    from euroc import load as load_euroc
+
+    if not IMU_CSV.exists():
+        return None
+    d = load_euroc()
+    n = len(d.seconds)
+    rate = float((n - 1) / d.seconds[-1])
+    return Trial(
+        "euroc_v1_02_medium",
+        np.ascontiguousarray(d.gyro),
+        np.ascontiguousarray(d.accel),
+        np.zeros((n, 3)),
+        d.rotation.as_quat(scalar_first=True),
+        np.ones(n, bool),
+        rate,
+    )
 
 
 # --- lag ------------------------------------------------------------------------------------------
@@ -197,21 +249,54 @@ def shifted(truth: np.ndarray, lag: int) -> np.ndarray:
 # --- report ---------------------------------------------------------------------------------------
 
 
+RUNNERS: list[tuple[str, Callable[[Trial, bool], np.ndarray] | None]] = [
+    ("imukit Mahony", imukit_runner("Mahony")),
+    ("imukit Madgwick", imukit_runner("Madgwick")),
+    ("imukit Robust", imukit_runner("Robust")),
+    ("imukit Robust offline", imukit_runner("Robust", offline=True)),
+    ("vqf VQF", run_vqf),
+    ("vqf offlineVQF", run_offline_vqf),
+    ("vqf BasicVQF", run_basic_vqf),
+    ("ahrs Mahony", run_ahrs_mahony),
+    ("ahrs Madgwick", run_ahrs_madgwick),
+    ("imufusion Ahrs", run_imufusion),
+]
+QUANTITIES = (  # (mode, field of the RMSE, title)
+    ("6D", "inclination", "6D inclination"),
+    ("6D", "heading", "6D heading (offset removed)"),
+    ("9D", "total", "9D total"),
+    ("9D", "heading", "9D heading"),
+    ("9D", "inclination", "9D inclination"),
+)
+
+
+def measure(label: str, runner: Callable[[Trial, bool], np.ndarray], tr: Trial, nine: bool, lag: int) -> dict[str, Any]:
+    """One filter on one trial: its RMSE (as is and with truth shifted by ``lag``), or why it failed."""
+    row: dict[str, Any] = dict(filter=label, mode="9D" if nine else "6D", trial=tr.name)
+    start = time.perf_counter()
+    try:
+        q = runner(tr, nine)
+    except Exception as exc:  # a peer failing is a result to report, not a crash
+        row["failed"] = f"{type(exc).__name__}: {exc}"
+        return row
+    row["us"] = 1e6 * (time.perf_counter() - start) / len(q)
+    if not np.isfinite(q).all():
+        row["failed"] = f"non-finite output from sample {int(np.argmax(~np.isfinite(q).all(axis=1)))}"
+        return row
+    for key, truth in (("raw", tr.truth), ("lag", shifted(tr.truth, lag))):
+        err = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=not nine, mask=tr.movement, world="ENU")
+        row[key] = err.rmse(degrees=True)
+    return row
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, default=DATA, help="folder of the BROAD .mat files (default: %(default)s)")
     parser.add_argument("--out", type=Path, default=None, help="also write the markdown report here")
     args = parser.parse_args()
 
-    runners: list[tuple[str, str, Callable[[Trial, bool], np.ndarray] | None]] = [
-        ("imukit Mahony", "imukit.filters.Mahony()", imukit_runner("Mahony")),
-        ("imukit Madgwick", "imukit.filters.Madgwick()", imukit_runner("Madgwick")),
-        ("vqf VQF", "vqf.VQF(Ts)", run_vqf),
-        ("vqf offlineVQF", "vqf.offlineVQF", run_offline_vqf),
-        ("ahrs Mahony", "ahrs.filters.Mahony", run_ahrs_mahony),
-        ("ahrs Madgwick", "ahrs.filters.Madgwick", run_ahrs_madgwick),
-        ("imufusion Ahrs", "imufusion.Ahrs", run_imufusion),
-    ]
+    runners = [(label, r) for label, r in RUNNERS if r is not None]
+    labels = [label for label, _ in runners]
     trials = [load(args.data / f"{name}.mat") for name in TRIALS]
     lines: list[str] = []
 
@@ -233,82 +318,59 @@ def main() -> None:
             f"| {lag:+d} | {cs} |"
         )
 
-    rows: list[dict[str, Any]] = []
-    skipped = []
-    for label, _, runner in runners:
-        if runner is None:
-            skipped.append(label)
-            continue
-        for nine in (False, True):
-            mode = "9D" if nine else "6D"
-            for tr in trials:
-                start = time.perf_counter()
-                try:
-                    q = runner(tr, nine)
-                except Exception as exc:  # a peer failing is a result to report, not a crash
-                    rows.append(dict(filter=label, mode=mode, trial=tr.name, failed=f"{type(exc).__name__}: {exc}"))
-                    continue
-                elapsed = time.perf_counter() - start
-                row: dict[str, Any] = dict(filter=label, mode=mode, trial=tr.name, us=1e6 * elapsed / len(q))
-                if not np.isfinite(q).all():
-                    row["failed"] = f"non-finite output from sample {int(np.argmax(~np.isfinite(q).all(axis=1)))}"
-                    rows.append(row)
-                    continue
-                for key, truth in (("raw", tr.truth), ("lag", shifted(tr.truth, lags[tr.name]))):
-                    err = ik.eval.attitude_error(
-                        q, truth, scalar_first=True, align_heading=not nine, mask=tr.movement, world="ENU"
-                    )
-                    row[key] = err.rmse(degrees=True)
-                    if key == "raw":
-                        aligned = ik.eval.attitude_error(
-                            q, truth, scalar_first=True, align_heading=True, mask=tr.movement
-                        )
-                        row["offset"] = np.degrees(aligned.heading_offset)
-                        row["missing"] = int((tr.movement & ~err.valid).sum())
-                rows.append(row)
+    rows = {
+        (label, nine, tr.name): measure(label, runner, tr, nine, lags[tr.name])
+        for label, runner in runners
+        for nine in (False, True)
+        for tr in trials
+    }
 
-    emit("\n### RMSE during movement [°] (6D: heading offset removed; 9D: as estimated)\n")
-    emit("| filter | mode | trial | total | heading | inclination | heading offset [°] | µs/sample |")
-    emit("|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        if "failed" in r:
-            emit(f"| {r['filter']} | {r['mode']} | {r['trial']} | failed: {r['failed']} | | | | |")
-            continue
-        e = r["raw"]
-        emit(
-            f"| {r['filter']} | {r['mode']} | {r['trial']} | {e.total:.2f} | {e.heading:.2f} | {e.inclination:.2f} "
-            f"| {r['offset']:+.1f} | {r['us']:.2f} |"
-        )
+    def value(label: str, mode: str, field: str, names: tuple[str, ...], key: str = "raw") -> str:
+        sel = [rows[(label, mode == "9D", n)] for n in names]
+        if any("failed" in r for r in sel):
+            return "failed"
+        return f"{np.mean([getattr(r[key], field) for r in sel]):.2f}"
 
-    emit("\n### Mean over the 3 trials [°], median time per sample\n")
-    emit("| filter | mode | total | heading | inclination | total, lag-comp. | incl., lag-comp. | µs/sample |")
-    emit("|---|---|---|---|---|---|---|---|")
-    for label, _, runner in runners:
-        if runner is None:
-            continue
-        for mode in ("6D", "9D"):
-            sel = [r for r in rows if r["filter"] == label and r["mode"] == mode]
-            ok = [r for r in sel if "failed" not in r]
-            if len(ok) < len(sel):
-                emit(f"| {label} | {mode} | {len(sel) - len(ok)} of {len(sel)} trials failed | | | | | |")
-                if not ok:
-                    continue
+    head = "| | " + " | ".join(labels) + " |\n|---|" + "---|" * len(labels)
+    for mode, field, title in QUANTITIES:
+        emit(f"\n### {title} RMSE during movement [°], per trial\n")
+        emit(head)
+        for tr in trials:
+            emit(f"| {tr.name} | " + " | ".join(value(lb, mode, field, (tr.name,)) for lb in labels) + " |")
+    emit("\n### Means per group and over all 12 trials [°]\n")
+    emit("| quantity | group | " + " | ".join(labels) + " |\n|---|---|" + "---|" * len(labels))
+    for mode, field, title in QUANTITIES:
+        for group, names in (*GROUPS.items(), ("all 12", TRIALS)):
+            emit(f"| {title} | {group} | " + " | ".join(value(lb, mode, field, names) for lb in labels) + " |")
+    emit("\n### All 12 trials with truth shifted by the measured lag [°]\n")
+    emit("| quantity | " + " | ".join(labels) + " |\n|---|" + "---|" * len(labels))
+    for mode, field, title in QUANTITIES:
+        emit(f"| {title} | " + " | ".join(value(lb, mode, field, TRIALS, "lag") for lb in labels) + " |")
+    emit("\n### Median time per sample [µs] (one whole-trial call, Python loops included)\n")
+    emit("| mode | " + " | ".join(labels) + " |\n|---|" + "---|" * len(labels))
+    for mode in ("6D", "9D"):
+        us = [[rows[(lb, mode == "9D", n)].get("us", np.nan) for n in TRIALS] for lb in labels]
+        emit(f"| {mode} | " + " | ".join(f"{np.nanmedian(u):.2f}" for u in us) + " |")
+    failed = [f"{k[0]} {'9D' if k[1] else '6D'} {k[2]}: {r['failed']}" for k, r in rows.items() if "failed" in r]
+    if failed:
+        emit("\nFailed runs: " + "; ".join(failed) + ".")
+    missing = [label for label, r in RUNNERS if r is None]
+    if missing:
+        emit(f"\nNot in this build (rows appear once they exist): {', '.join(missing)}.")
 
-            def mean(key: str, field: str, ok: list[dict[str, Any]] = ok) -> float:
-                return float(np.mean([getattr(r[key], field) for r in ok]))
-
-            us = float(np.median([r["us"] for r in ok]))
-            emit(
-                f"| {label} | {mode} | {mean('raw', 'total'):.2f} | {mean('raw', 'heading'):.2f} "
-                f"| {mean('raw', 'inclination'):.2f} | {mean('lag', 'total'):.2f} | {mean('lag', 'inclination'):.2f} "
-                f"| {us:.2f} |"
-            )
-    if skipped:
-        emit(f"\nSkipped (not available in this build): {', '.join(skipped)}.")
-    emit(
-        f"\nMovement samples without a mocap quaternion, excluded: "
-        f"{ {tr.name: int((tr.movement & np.isnan(tr.truth).any(axis=1)).sum()) for tr in trials} }."
-    )
+    euroc = euroc_trial()
+    if euroc is None:
+        emit("\nEuRoC excerpt not found: skipped.")
+    else:
+        emit(f"\n### EuRoC V1_02_medium excerpt ({len(euroc.gyr)} samples, {euroc.rate:.1f} Hz), 6D [°]\n")
+        emit("| filter | inclination RMSE | heading RMSE (offset removed) | max inclination |")
+        emit("|---|---|---|---|")
+        for label, runner in runners:
+            q = runner(euroc, False)
+            err = ik.eval.attitude_error(q, euroc.truth, scalar_first=True, align_heading=True, world="ENU")
+            r = err.rmse(degrees=True)
+            worst = float(np.degrees(np.nanmax(err.inclination)))
+            emit(f"| {label} | {r.inclination:.2f} | {r.heading:.2f} | {worst:.2f} |")
     if args.out is not None:
         args.out.write_text("\n".join(lines) + "\n")
 

@@ -1,9 +1,10 @@
 """VQF 6D on a real BROAD trial through imukit.eval.attitude_error: the metric reproduces the published
-accuracy, and a wrong frame convention is caught; imukit's filters meet issue 7's accuracy targets on
-the 3 shared trials. Skips when the shared data folder is absent."""
+accuracy, and a wrong frame convention is caught; imukit's filters hold their accuracy at the defaults
+on the 12 shared trials (issue 15). Skips when the shared data folder is absent."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -66,29 +67,61 @@ def test_wrong_conventions_give_large_errors(vqf_run: tuple[np.ndarray, ...]) ->
 
 
 BROAD = TRIAL.parent
-TRIALS = ("01_undisturbed_slow_rotation_A", "06_undisturbed_fast_rotation_A", "24_disturbed_tapping_A")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+from broad_accuracy import GROUPS  # noqa: E402  (the cross-validation groups, one place)
+
+# Measured at the defaults (docs/filters_accuracy.md, bench/broad_accuracy.py), per group
+# (6D inclination, 9D total) [°]; the bounds are 15% above, so a 20% regression fails.
+MEASURED = {
+    "Mahony": {
+        "rotation": (1.30, 3.57),
+        "translation": (0.70, 1.72),
+        "tapping+vibration": (0.57, 4.25),
+        "magnets": (1.21, 6.36),
+    },
+    "Madgwick": {
+        "rotation": (0.94, 2.80),
+        "translation": (1.32, 2.19),
+        "tapping+vibration": (1.16, 4.25),
+        "magnets": (1.04, 3.38),
+    },
+}
+MEAN = {"Mahony": (1.01, 3.92), "Madgwick": (1.10, 3.04)}  # over the 12 trials
 
 
-def test_imukit_filters_meet_the_broad_accuracy_targets() -> None:
-    """Issue 7: with default parameters, on the 3 shared trials, the best imukit filter has a mean
-    6D inclination RMSE ≤ 1.0° and a mean 9D total RMSE ≤ 3.0° (docs/filters_accuracy.md: Mahony
-    6D 0.85°, Madgwick 9D 2.24°; 1.73° and 6.26° with the defaults before tuning)."""
+@pytest.fixture(scope="module")
+def broad_scores() -> dict[tuple[str, str], tuple[float, float]]:
+    """(filter, trial) -> (6D inclination, 9D total) RMSE [°] at the defaults."""
     scipy_io = pytest.importorskip("scipy.io")
-    inc6: dict[str, list[float]] = {"Mahony": [], "Madgwick": []}
-    tot9: dict[str, list[float]] = {"Mahony": [], "Madgwick": []}
-    for name in TRIALS:
+    out = {}
+    for name in (n for names in GROUPS.values() for n in names):
         d = scipy_io.loadmat(BROAD / f"{name}.mat")
         gyr, acc, mag = (np.ascontiguousarray(d[k], dtype=float) for k in ("imu_gyr", "imu_acc", "imu_mag"))
         imu = ik.ImuData(np.arange(len(gyr)) / float(d["sampling_rate"].item()), gyr, acc)
         truth, movement = np.asarray(d["opt_quat"], dtype=float), d["movement"].ravel().astype(bool)
         for cls in (ik.filters.Mahony, ik.filters.Madgwick):
+            r = []
             for nine in (False, True):
                 q = cls().run(imu, mag=mag if nine else None).rotation.as_quat(scalar_first=True)
-                r = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=not nine, mask=movement).rmse(
-                    degrees=True
-                )
-                (tot9 if nine else inc6)[cls.__name__].append(r.total if nine else r.inclination)
-    best6 = min(float(np.mean(v)) for v in inc6.values())
-    best9 = min(float(np.mean(v)) for v in tot9.values())
-    assert best6 <= 1.0, inc6
-    assert best9 <= 3.0, tot9
+                e = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=not nine, mask=movement)
+                r.append(e.rmse(degrees=True).total if nine else e.rmse(degrees=True).inclination)
+            out[(cls.__name__, name)] = (r[0], r[1])
+    return out
+
+
+@pytest.mark.parametrize("filt", ["Mahony", "Madgwick"])
+def test_imukit_filters_hold_their_broad_accuracy(
+    filt: str, broad_scores: dict[tuple[str, str], tuple[float, float]]
+) -> None:
+    """Issue 15: at the defaults no trial has a 6D inclination RMSE above 3° (the textbook laws
+    reached 31.6° (Mahony) and 7.6° (Madgwick) on trial 18), and the per-group and overall means stay
+    within 15% of the measured ones."""
+    scores = {n: broad_scores[(filt, n)] for names in GROUPS.values() for n in names}
+    worst = max(scores, key=lambda n: scores[n][0])
+    assert scores[worst][0] <= 3.0, (worst, scores[worst])
+    for group, names in GROUPS.items():
+        inc6, tot9 = (float(np.mean([scores[n][i] for n in names])) for i in (0, 1))
+        bound6, bound9 = (1.15 * m for m in MEASURED[filt][group])
+        assert inc6 <= bound6 and tot9 <= bound9, (group, inc6, tot9)
+    inc6, tot9 = (float(np.mean([s[i] for s in scores.values()])) for i in (0, 1))
+    assert inc6 <= 1.15 * MEAN[filt][0] and tot9 <= 1.15 * MEAN[filt][1], (inc6, tot9)

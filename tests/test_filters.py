@@ -55,11 +55,12 @@ def inclination_deg(a: Rotation, b: Rotation, world: str) -> np.ndarray:
 @pytest.mark.parametrize("world", ["ENU", "NED"])
 @pytest.mark.parametrize("cls", FILTERS)
 def test_frame_convergence(cls: type[Mahony], world: str) -> None:
-    """From a 30° wrong start, 20 s at rest converge: 6D in inclination, 9D fully."""
+    """From a 30° wrong start, 30 s at rest converge: 6D in inclination, 9D fully (an error still
+    above the 3° gate after the 3 s ramp is rejected until the 15 s recovery restarts the ramp)."""
     offset = Rotation.from_rotvec(np.radians(30.0) * np.array([0.6, -0.48, 0.64]))
     worst6 = worst9 = 0.0
     for m in axis_rotations():
-        imu, mag = static_imu(m, world, 2000)
+        imu, mag = static_imu(m, world, 3000)
         truth = Rotation.from_matrix(m)
         f = cls(world=world)
         start = offset * truth
@@ -73,9 +74,10 @@ def test_frame_convergence(cls: type[Mahony], world: str) -> None:
         r9 = f.run(imu, mag=mag, initial=start).rotation[-1]
         worst6 = max(worst6, float(inclination_deg(r6, truth, world)))
         worst9 = max(worst9, float(np.degrees((r9 * truth.inv()).magnitude())))
-    # Madgwick's normalised gradient chatters at 2β dt (0.08° at the default β = 0.07, 100 Hz).
+    # Madgwick's normalised gradient chatters at 2β dt (0.05° at the default β = 0.041, 100 Hz).
     assert worst6 < 0.1, worst6
-    assert worst9 < 0.1, worst9
+    # Mahony 9D: its bias integral (k_P / k_I = 30 s) is still settling at 30 s: 0.11°.
+    assert worst9 < 0.15, worst9
 
 
 def test_ned_is_enu_relabelled() -> None:
@@ -133,17 +135,19 @@ def accelerating_imu(rate: float = 100.0) -> tuple[ik.ImuData, np.ndarray]:
     return ik.ImuData(t, np.zeros((len(t), 3)), accel), t
 
 
-# The defaults (4 m/s², 30°, tuned on BROAD) let 5 m/s² sideways (27°, +1.2 m/s²) through: a strict
-# rejection is what these tests exercise.
-STRICT = AccelRejection(norm=1.0, angle_rad=np.radians(10.0))
+# The textbook gate on the raw sample (no low pass, whose filtered vector turns only gradually):
+# a strict rejection of 5 m/s² sideways (27°, +1.2 m/s²) is what these tests exercise. The
+# defaults (low pass, 2 m/s², 3°) are tested on sustained acceleration in test_filters_motion.py.
+STRICT = AccelRejection(norm=1.0, angle_rad=np.radians(10.0), recovery_s=5.0)
+RAW = {"acc_lowpass": None}
 
 
 @pytest.mark.parametrize("cls", FILTERS)
 def test_acceleration_rejection(cls: type[Mahony]) -> None:
     imu, t = accelerating_imu()
     during = t < 13.0
-    tilt_rej = np.degrees(cls(acc_rejection=STRICT).run(imu).rotation.magnitude())[during].max()
-    tilt_raw = np.degrees(cls(acc_rejection=None).run(imu).rotation.magnitude())[during].max()
+    tilt_rej = np.degrees(cls(acc_rejection=STRICT, **RAW).run(imu).rotation.magnitude())[during].max()
+    tilt_raw = np.degrees(cls(acc_rejection=None, **RAW).run(imu).rotation.magnitude())[during].max()
     assert tilt_rej < 1.0, tilt_rej
     assert tilt_raw > 1.0, tilt_raw
 
@@ -157,7 +161,7 @@ def test_rejection_recovers_after_timeout() -> None:
     accel = np.tile(UP_READING["ENU"], (len(t), 1))
     accel[t >= 5.0] = r.T @ UP_READING["ENU"]
     imu = ik.ImuData(t, np.zeros((len(t), 3)), accel)
-    tilt = np.degrees(Mahony(acc_rejection=STRICT).run(imu).rotation.magnitude())
+    tilt = np.degrees(Mahony(acc_rejection=STRICT, **RAW).run(imu).rotation.magnitude())
     assert tilt[(t > 5.5) & (t < 9.9)].max() < 0.5  # rejected (20° > 10°), before the 5 s timeout
     assert abs(tilt[-1] - 20.0) < 0.1  # recovered
 

@@ -775,6 +775,7 @@ def _filter(kind: str, v: dict[str, Any]) -> filters.Mahony | filters.Madgwick:
     options = {
         "gravity": v["f_gravity"],
         "gain_ramp": filters.GainRamp(v["ramp_duration_s"], v["ramp_factor"]),
+        "acc_lowpass": filters.AccelLowPass(v["acc_lowpass_tau_s"]),
         "acc_rejection": filters.AccelRejection(v["acc_norm"], v["acc_angle_rad"], v["acc_recovery_s"]),
         "mag_rejection": filters.MagRejection(v["mag_norm_fraction"], v["mag_dip_rad"], v["mag_recovery_s"]),
         "rest_detection": filters.RestDetection(v["rest_gyro"], v["rest_accel"], v["rest_duration_s"], v["rest_tau_s"]),
@@ -790,6 +791,7 @@ _FILTER_SCALARS = {
     "f_gravity": 9.81,
     "ramp_duration_s": 3.0,
     "ramp_factor": 10.0,
+    "acc_lowpass_tau_s": 1.0,
     "acc_norm": 4.0,
     "acc_angle_rad": 0.5,
     "acc_recovery_s": 5.0,
@@ -806,12 +808,19 @@ _FILTER_NAMES = {
     "f_gravity": ("gravity",),
     "ramp_duration_s": ("gain_ramp",),
     "ramp_factor": ("gain_ramp", "gains"),  # the ramp multiplies the gains
+    "acc_lowpass_tau_s": ("acc_lowpass",),
     **{k: ("acc_rejection",) for k in ("acc_norm", "acc_angle_rad", "acc_recovery_s")},
     **{k: ("mag_rejection",) for k in ("mag_norm_fraction", "mag_dip_rad", "mag_recovery_s")},
     **{k: ("rest_detection",) for k in ("rest_gyro", "rest_accel", "rest_duration_s", "rest_tau_s")},
 }
 _FILTER_ARGS = {k: Arg("scalar", names=_FILTER_NAMES.get(k, (k,))) for k in _FILTER_SCALARS}
-_FILTER_COVERS = ("filters.GainRamp", "filters.AccelRejection", "filters.MagRejection", "filters.RestDetection")
+_FILTER_COVERS = (
+    "filters.GainRamp",
+    "filters.AccelLowPass",
+    "filters.AccelRejection",
+    "filters.MagRejection",
+    "filters.RestDetection",
+)
 
 for _kind, _cls_name in (("mahony", "Mahony"), ("madgwick", "Madgwick")):
 

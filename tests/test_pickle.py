@@ -185,6 +185,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "KalibrImu": lambda: ik.io.KalibrImu(NOISE, 200.0, {"rostopic": "/imu0", "T_BS": [[1.0, 0.0], [0.0, 1.0]]}),
     # imukit.filters: options, the saved state and the result
     "GainRamp": lambda: ik.filters.GainRamp(),
+    "AccelLowPass": lambda: ik.filters.AccelLowPass(0.5),
     "AccelRejection": lambda: ik.filters.AccelRejection(),
     "MagRejection": lambda: ik.filters.MagRejection(),
     "RestDetection": lambda: ik.filters.RestDetection(),

@@ -5,7 +5,7 @@
 
 use arbitrary::Arbitrary;
 use imukit::filters::{
-    AccelRejection, CommonState, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
+    AccelLowPass, AccelRejection, CommonState, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
     RestDetection, State, World,
 };
 use imukit_fuzz::{assert_finite, assert_unit, finite, vector, Series};
@@ -18,6 +18,7 @@ struct Input {
     ned: bool,
     gravity: f64,
     ramp: [f64; 2],
+    accel_lowpass: Option<f64>,
     accel_rejection: Option<[f64; 3]>,
     mag_rejection: Option<[f64; 3]>,
     rest: Option<[f64; 4]>,
@@ -71,11 +72,14 @@ fuzz_target!(|input: Input| {
             duration_s: input.ramp[0],
             factor: input.ramp[1],
         },
-        acc_rejection: input.accel_rejection.map(|[norm, angle_rad, recovery_s]| AccelRejection {
-            norm,
-            angle_rad,
-            recovery_s,
-        }),
+        acc_lowpass: input.accel_lowpass.map(|tau_s| AccelLowPass { tau_s }),
+        acc_rejection: input
+            .accel_rejection
+            .map(|[norm, angle_rad, recovery_s]| AccelRejection {
+                norm,
+                angle_rad,
+                recovery_s,
+            }),
         mag_rejection: input
             .mag_rejection
             .map(|[norm_fraction, dip_rad, recovery_s]| MagRejection {
@@ -110,7 +114,10 @@ fn drive<L: Law>(law: L, options: Options, input: &Input) {
         None => State::default(),
     };
     // A restored state is only as finite as what was restored (bias, times).
-    let finite_state = input.restore.as_ref().is_none_or(|r| finite(&r.bias) && finite(&r.scalars));
+    let finite_state = input
+        .restore
+        .as_ref()
+        .is_none_or(|r| finite(&r.bias) && finite(&r.scalars));
     let a = input.series.arrays();
     let n = a.t.len();
     let gyro = a.gyro.as_chunks::<3>().0;

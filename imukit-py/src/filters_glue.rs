@@ -2,7 +2,7 @@
 //!
 //! | Python (`imukit._core`) | Rust (`imukit::filters`) |
 //! |---|---|
-//! | `GainRamp`, `AccelRejection`, `MagRejection`, `RestDetection` (frozen values; omitted or None fields take the Rust `Default`) | the option structs, field for field |
+//! | `GainRamp`, `AccelLowPass`, `AccelRejection`, `MagRejection`, `RestDetection` (frozen values; omitted or None fields take the Rust `Default`) | the option structs, field for field |
 //! | `MahonyGains`, `MadgwickGains` | the laws `Mahony`, `Madgwick` |
 //! | `FilterOptions` (`FilterOptions.default()`: `Options::default()`) | `Options` |
 //! | `FilterState` (named getters, pickles by name) | `CommonState` + the law's `Extra` by `Fields` names |
@@ -13,8 +13,8 @@
 //! `ParameterError` here, where the conversion fails.
 
 use imukit::filters::{
-    AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony, Options,
-    RestDetection, State, World,
+    AccelLowPass, AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony,
+    Options, RestDetection, State, World,
 };
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -97,6 +97,10 @@ value_class!(
     PyGainRamp = GainRamp as "GainRamp", errors "gain_ramp." { duration_s: "duration", factor: "factor" }
 );
 value_class!(
+    /// Accelerometer low pass in the gyro frame (`imukit::filters::AccelLowPass`).
+    PyAccelLowPass = AccelLowPass as "AccelLowPass", errors "acc_lowpass." { tau_s: "tau" }
+);
+value_class!(
     /// Acceleration rejection (`imukit::filters::AccelRejection`).
     PyAccelRejection = AccelRejection as "AccelRejection", errors "acc_rejection." {
         norm: "norm", angle_rad: "angle", recovery_s: "recovery"
@@ -130,6 +134,7 @@ pub(crate) struct PyFilterOptions {
     world: Name<World>,
     gravity: f64,
     gain_ramp: Option<PyGainRamp>,
+    acc_lowpass: Option<PyAccelLowPass>,
     acc_rejection: Option<PyAccelRejection>,
     mag_rejection: Option<PyMagRejection>,
     rest_detection: Option<PyRestDetection>,
@@ -138,12 +143,14 @@ pub(crate) struct PyFilterOptions {
 #[pymethods]
 impl PyFilterOptions {
     #[new]
-    #[pyo3(signature = (*, world, gravity, gain_ramp, acc_rejection, mag_rejection, rest_detection))]
+    #[pyo3(signature = (*, world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection))]
+    #[allow(clippy::too_many_arguments)] // one keyword per option
     fn new(
         py: Python<'_>,
         world: Name<World>,
         gravity: &Bound<'_, PyAny>,
         gain_ramp: Option<PyGainRamp>,
+        acc_lowpass: Option<PyAccelLowPass>,
         acc_rejection: Option<PyAccelRejection>,
         mag_rejection: Option<PyMagRejection>,
         rest_detection: Option<PyRestDetection>,
@@ -152,6 +159,7 @@ impl PyFilterOptions {
             world,
             gravity: real(py, "gravity", Some(gravity), f64::NAN)?,
             gain_ramp,
+            acc_lowpass,
             acc_rejection,
             mag_rejection,
             rest_detection,
@@ -166,6 +174,7 @@ impl PyFilterOptions {
             world: Name(o.world),
             gravity: o.gravity,
             gain_ramp: Some(o.gain_ramp.into()),
+            acc_lowpass: o.acc_lowpass.map(Into::into),
             acc_rejection: o.acc_rejection.map(Into::into),
             mag_rejection: o.mag_rejection.map(Into::into),
             rest_detection: o.rest_detection.map(Into::into),
@@ -177,6 +186,7 @@ impl PyFilterOptions {
         kwargs.set_item("world", self.world)?;
         kwargs.set_item("gravity", self.gravity)?;
         kwargs.set_item("gain_ramp", self.gain_ramp)?;
+        kwargs.set_item("acc_lowpass", self.acc_lowpass)?;
         kwargs.set_item("acc_rejection", self.acc_rejection)?;
         kwargs.set_item("mag_rejection", self.mag_rejection)?;
         kwargs.set_item("rest_detection", self.rest_detection)?;
@@ -197,6 +207,7 @@ impl PyFilterOptions {
                 },
                 Into::into,
             ),
+            acc_lowpass: self.acc_lowpass.map(Into::into),
             acc_rejection: self.acc_rejection.map(Into::into),
             mag_rejection: self.mag_rejection.map(Into::into),
             rest_detection: self.rest_detection.map(Into::into),
@@ -268,7 +279,7 @@ impl PyFilterState {
 impl PyFilterState {
     /// A state from its fields by name (what pickling stores); checked and normalised by the core.
     #[new]
-    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, extra=None))]
+    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], extra=None))]
     #[allow(clippy::too_many_arguments)] // one keyword per field of the state
     fn new(
         py: Python<'_>,
@@ -283,6 +294,8 @@ impl PyFilterState {
         mag_norm: f64,
         mag_dip_sin: f64,
         mag_dip_cos: f64,
+        acc_lp1: [f64; 3],
+        acc_lp2: [f64; 3],
         extra: Option<Vec<(String, f64)>>,
     ) -> PyResult<Self> {
         let common = CommonState {
@@ -296,6 +309,8 @@ impl PyFilterState {
             mag_norm,
             mag_dip_sin,
             mag_dip_cos,
+            acc_lp1: Vector3::from(acc_lp1),
+            acc_lp2: Vector3::from(acc_lp2),
             ..CommonState::default()
         }
         .restored(quaternion)
@@ -344,6 +359,8 @@ impl PyFilterState {
             norm,
             sin,
             cos,
+            [0.0; 3],
+            [0.0; 3],
             None,
         )
     }
@@ -377,6 +394,8 @@ impl PyFilterState {
         d.set_item("mag_norm", s.mag_norm)?;
         d.set_item("mag_dip_sin", s.mag_dip_sin)?;
         d.set_item("mag_dip_cos", s.mag_dip_cos)?;
+        d.set_item("acc_lp1", <[f64; 3]>::from(s.acc_lp1))?;
+        d.set_item("acc_lp2", <[f64; 3]>::from(s.acc_lp2))?;
         d.set_item("extra", self.extra.clone())?;
         Ok(d)
     }
@@ -449,6 +468,18 @@ impl PyFilterState {
     #[getter]
     fn mag_dip_cos(&self) -> f64 {
         self.common.mag_dip_cos
+    }
+
+    /// First stage of the accelerometer low pass, body axes [m/s²].
+    #[getter]
+    fn acc_lp1<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.acc_lp1.as_slice())
+    }
+
+    /// The filtered specific force the law sees, body axes [m/s²].
+    #[getter]
+    fn acc_lp2<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.acc_lp2.as_slice())
     }
 
     /// The law's own state by field name (empty for Mahony and Madgwick).

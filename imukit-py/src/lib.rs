@@ -63,6 +63,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::add_names::<imukit::filters::World>(m, "FILTER_WORLDS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
     m.add_class::<filters_glue::PyGainRamp>()?;
+    m.add_class::<filters_glue::PyAccelLowPass>()?;
     m.add_class::<filters_glue::PyAccelRejection>()?;
     m.add_class::<filters_glue::PyMagRejection>()?;
     m.add_class::<filters_glue::PyRestDetection>()?;

@@ -25,6 +25,7 @@ __all__ = [
     "STRAPDOWN_DEFAULT_SCHEME",
     "STRAPDOWN_SCHEMES",
     "STRAPDOWN_SCHEME_ALIASES",
+    "AccelLowPass",
     "AccelRejection",
     "FilterOptions",
     "FilterState",
@@ -211,6 +212,12 @@ class GainRamp:
     def __getnewargs__(self) -> tuple[float, ...]: ...
 
 @final
+class AccelLowPass:
+    tau_s: float
+    def __new__(cls, tau_s: _Number | None = None) -> AccelLowPass: ...
+    def __getnewargs__(self) -> tuple[float, ...]: ...
+
+@final
 class AccelRejection:
     norm: float
     angle_rad: float
@@ -263,6 +270,7 @@ class FilterOptions:
     world: str
     gravity: float
     gain_ramp: GainRamp | None
+    acc_lowpass: AccelLowPass | None
     acc_rejection: AccelRejection | None
     mag_rejection: MagRejection | None
     rest_detection: RestDetection | None
@@ -272,6 +280,7 @@ class FilterOptions:
         world: str,
         gravity: _Number,
         gain_ramp: GainRamp | None,
+        acc_lowpass: AccelLowPass | None,
         acc_rejection: AccelRejection | None,
         mag_rejection: MagRejection | None,
         rest_detection: RestDetection | None,
@@ -296,6 +305,8 @@ class FilterState:
         mag_norm: float,
         mag_dip_sin: float,
         mag_dip_cos: float,
+        acc_lp1: list[float] = ...,
+        acc_lp2: list[float] = ...,
         extra: list[tuple[str, float]] | None = None,
     ) -> Self: ...
     @staticmethod
@@ -328,6 +339,10 @@ class FilterState:
     def mag_dip_sin(self) -> float: ...
     @property
     def mag_dip_cos(self) -> float: ...
+    @property
+    def acc_lp1(self) -> NDArray[np.float64]: ...
+    @property
+    def acc_lp2(self) -> NDArray[np.float64]: ...
     @property
     def extra(self) -> list[tuple[str, float]]: ...
 

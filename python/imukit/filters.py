@@ -12,14 +12,16 @@ first sample           initialises: tilt from the accelerometer, heading from th
                        else ZYX yaw 0; output as is
 gyro_bias              the bias estimate after each sample [rad/s]
 saturation             a clipped accelerometer sample (an axis at ±range, ``ImuData.accel_saturated``)
-                       has ‖a‖ ≥ range, so the norm test of :class:`AccelRejection` skips it whenever
-                       range > g + ``norm`` (±2 g sensors and up with the defaults), except during
-                       the :class:`GainRamp`, when rejection is off; a clipped gyro sample is
-                       integrated as read, its error then corrected like any other (heading only
-                       in 9D)
+                       has ‖a‖ ≥ range, so the raw norm test of :class:`AccelRejection` skips its
+                       correction whenever range > g + ``norm`` (±2 g sensors and up with the
+                       defaults), except during the :class:`GainRamp`; with :class:`AccelLowPass`
+                       (default) it still enters the low-passed vector, as every sample does; a
+                       clipped gyro sample is integrated as read, its error then corrected like any
+                       other (heading only in 9D)
 =====================  ===========================================================================
 
-Options are the core's value classes (``imukit._core``): :class:`GainRamp`, :class:`AccelRejection`,
+Options are the core's value classes (``imukit._core``): :class:`GainRamp`, :class:`AccelLowPass`,
+:class:`AccelRejection`,
 :class:`MagRejection`, :class:`RestDetection`, frozen, compared by value and picklable; a field left out
 (or None) takes the Rust ``Default``, the one place every default number is written. The filters'
 keyword defaults (gains, ``world``, ``gravity``, which options are on) are read from the core too.
@@ -45,6 +47,7 @@ from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuData
 
 __all__ = [
+    "AccelLowPass",
     "AccelRejection",
     "FilterResult",
     "FilterState",
@@ -56,6 +59,7 @@ __all__ = [
 ]
 
 GainRamp = _core.GainRamp
+AccelLowPass = _core.AccelLowPass
 AccelRejection = _core.AccelRejection
 MagRejection = _core.MagRejection
 RestDetection = _core.RestDetection
@@ -121,7 +125,7 @@ class FilterResult(NamedTuple):
     state: FilterState
 
 
-_Option = TypeVar("_Option", GainRamp, AccelRejection, MagRejection, RestDetection)
+_Option = TypeVar("_Option", GainRamp, AccelLowPass, AccelRejection, MagRejection, RestDetection)
 
 
 def _option(value: object, cls: type[_Option], name: str) -> _Option | None:
@@ -162,6 +166,7 @@ class _Filter:
         world: str = _OPTIONS.world,
         gravity: float = _OPTIONS.gravity,
         gain_ramp: GainRamp | None = _OPTIONS.gain_ramp,
+        acc_lowpass: AccelLowPass | None = _OPTIONS.acc_lowpass,
         acc_rejection: AccelRejection | None = _OPTIONS.acc_rejection,
         mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
         rest_detection: RestDetection | None = _OPTIONS.rest_detection,
@@ -175,6 +180,7 @@ class _Filter:
             world=world,
             gravity=gravity,
             gain_ramp=_option(gain_ramp, GainRamp, "gain_ramp"),
+            acc_lowpass=_option(acc_lowpass, AccelLowPass, "acc_lowpass"),
             acc_rejection=_option(acc_rejection, AccelRejection, "acc_rejection"),
             mag_rejection=_option(mag_rejection, MagRejection, "mag_rejection"),
             rest_detection=_option(rest_detection, RestDetection, "rest_detection"),
@@ -275,7 +281,7 @@ class Mahony(_Filter):
     Parameters
     ----------
     kp
-        Proportional gain [1/s] (default 0.5, tuned on BROAD: docs/filters.md).
+        Proportional gain [1/s] (default 0.3, tuned on BROAD: docs/filters_accuracy.md).
     ki
         Integral gain [1/s²] of the gyro-bias estimate (default 0.01; 0 disables it).
     world
@@ -284,6 +290,10 @@ class Mahony(_Filter):
         Gravity magnitude [m/s²] for the rejection and rest tests (default 9.81).
     gain_ramp
         :class:`GainRamp` (default 3 s from 10×), or None for none.
+    acc_lowpass
+        :class:`AccelLowPass` (default 1 s per stage): the law sees the specific force low-passed
+        in the gyro's frame, where accelerations that come and go cancel (Laidig & Seel 2023); None:
+        the raw sample (the textbook law).
     acc_rejection, mag_rejection
         :class:`AccelRejection` / :class:`MagRejection` (defaults on), or None to use every sample.
     rest_detection
@@ -315,9 +325,9 @@ class Madgwick(_Filter):
     Parameters
     ----------
     beta
-        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.07, tuned on BROAD:
-        docs/filters.md). The bias estimate changes only through ``rest_detection``.
-    world, gravity, gain_ramp, acc_rejection, mag_rejection, rest_detection
+        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.041, tuned on BROAD:
+        docs/filters_accuracy.md). The bias estimate changes only through ``rest_detection``.
+    world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection
         As for :class:`Mahony`.
     """
 

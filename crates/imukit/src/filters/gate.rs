@@ -7,7 +7,8 @@
 //! | reject | otherwise: the rejection clock advances by `dt` and the sample is not used |
 //! | recover | once the clock reaches `recovery_s`: the clock restarts and the sample is used; the caller resets what the gate protects (the accelerometer restarts the gain ramp, the magnetometer re-learns its reference field) |
 //!
-//! Tests: accelerometer, `|‖a‖ − g| ≤ norm` and `∠(a, up_pred) ≤ angle_rad`; magnetometer,
+//! Tests: accelerometer, `|‖a‖ − g| ≤ norm` on the raw sample and `∠(a, up_pred) ≤ angle_rad` on
+//! the vector the law uses (the filtered one with [`super::AccelLowPass`]); magnetometer,
 //! `|‖m‖ − m₀| ≤ norm_fraction · m₀` and `|δ − δ₀| ≤ dip_rad` against the reference `m₀`, `δ₀`
 //! learned from the first field sample.
 
@@ -74,14 +75,21 @@ impl Gates {
         }
     }
 
-    /// The unit accelerometer direction if the sample is used (`accel_norm` its norm; a zero
-    /// reading is never used). A recovery restarts the gain ramp.
+    /// The unit direction of `accel` (the vector the law uses, `accel_norm` its norm; a zero one
+    /// is never used) if the sample is used. With a low pass, `raw_norm` is the unfiltered
+    /// sample's norm and the norm test is on it: a sustained acceleration changes the raw norm at
+    /// once, while the filtered vector turns slowly and a law whose correction rate does not
+    /// shrink with the error (Madgwick's) would follow it below any angle threshold; the angle
+    /// test stays on the filtered vector, since the raw direction swings with every movement of
+    /// the hand. A recovery restarts the gain ramp.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // the vector, both norms, the prediction and the clock
     pub(crate) fn accelerometer(
         &self,
         s: &mut CommonState,
         accel: &Vector3<f64>,
         accel_norm: f64,
+        raw_norm: f64,
         up_pred: &Vector3<f64>,
         ramping: bool,
         dt: f64,
@@ -99,7 +107,7 @@ impl Gates {
             dt,
             || {
                 self.accel
-                    .is_some_and(|r| (accel_norm - self.gravity).abs() <= r.norm && dir.dot(up_pred) >= self.cos_angle)
+                    .is_some_and(|r| (raw_norm - self.gravity).abs() <= r.norm && dir.dot(up_pred) >= self.cos_angle)
             },
         );
         match verdict {

@@ -22,10 +22,11 @@ pub struct Madgwick {
 }
 
 impl Default for Madgwick {
-    /// `β = 0.07`: tuned on the BROAD trials (`bench/tune_filters.py`, `docs/filters.md`);
-    /// Madgwick's own experiments (2010 / 2011) found 0.033 (IMU) and 0.041 (MARG) best.
+    /// `β = 0.041`: tuned on the 12 BROAD trials with the default options
+    /// (`bench/tune_filters.py`, `docs/filters_accuracy.md`), the value Madgwick's own experiments
+    /// (2010 / 2011) found best for MARG.
     fn default() -> Self {
-        Self { beta: 0.07 }
+        Self { beta: 0.041 }
     }
 }
 

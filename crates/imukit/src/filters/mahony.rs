@@ -24,10 +24,11 @@ pub struct Mahony {
 }
 
 impl Default for Mahony {
-    /// `k_P = 0.5`, `k_I = 0.01`: tuned on the BROAD trials (`bench/tune_filters.py`): a
-    /// crossover near 0.5 rad/s and a bias time constant `k_P / k_I = 50` s (`docs/filters.md`).
+    /// `k_P = 0.3`, `k_I = 0.01`: tuned on the 12 BROAD trials with the default options
+    /// (`bench/tune_filters.py`, leave-one-group-out scores in `docs/filters_accuracy.md`): a
+    /// crossover near 0.3 rad/s and a bias time constant `k_P / k_I = 30` s.
     fn default() -> Self {
-        Self { kp: 0.5, ki: 0.01 }
+        Self { kp: 0.3, ki: 0.01 }
     }
 }
 

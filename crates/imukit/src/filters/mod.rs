@@ -64,7 +64,7 @@ mod world;
 
 pub use madgwick::Madgwick;
 pub use mahony::Mahony;
-pub use options::{check, AccelRejection, GainRamp, MagRejection, Options, RestDetection};
+pub use options::{check, AccelLowPass, AccelRejection, GainRamp, MagRejection, Options, RestDetection};
 pub use state::{CommonState, Fields, State};
 pub use world::{initial_attitude, World};
 
@@ -159,6 +159,20 @@ fn check_overflow(s: &CommonState, index: usize) -> Result<()> {
     }
 }
 
+/// Both stages of the accelerometer low pass ([`AccelLowPass`]) one step towards `accel`; the
+/// filtered vector. A state without one (zero: an `initial` attitude, a restored older state)
+/// starts it at this sample.
+#[inline(always)]
+fn low_pass(s: &mut CommonState, accel: &Vector3<f64>, tau_s: f64, dt: f64) -> Vector3<f64> {
+    if s.acc_lp2 == Vector3::zeros() {
+        (s.acc_lp1, s.acc_lp2) = (*accel, *accel);
+    }
+    let alpha = dt / (tau_s + dt);
+    s.acc_lp1 += (accel - s.acc_lp1) * alpha;
+    s.acc_lp2 += (s.acc_lp1 - s.acc_lp2) * alpha;
+    s.acc_lp2
+}
+
 impl<L: Law> Filter<L> {
     /// A filter with `law`'s gains and the shared `options`; errors on a gain or an option
     /// outside its domain.
@@ -227,6 +241,7 @@ impl<L: Law> Filter<L> {
         if !s.initialized {
             s.q = initial_attitude(o.world, accel, mag);
             s.initialized = true;
+            (s.acc_lp1, s.acc_lp2) = (*accel, *accel);
             if let Some(m) = mag {
                 let norm = m.norm();
                 if norm > 0.0 {
@@ -240,7 +255,16 @@ impl<L: Law> Filter<L> {
         let gain = o.ramp_gain(s.ramp_elapsed);
         let (north_pred, up_pred) = o.world.predicted(&s.q);
         let accel_norm = accel.norm();
-        let accel_dir = self.gates.accelerometer(s, accel, accel_norm, &up_pred, ramping, dt);
+        let accel_dir = match o.acc_lowpass {
+            Some(lp) => {
+                let f = low_pass(s, accel, lp.tau_s, dt);
+                self.gates
+                    .accelerometer(s, &f, f.norm(), accel_norm, &up_pred, ramping, dt)
+            }
+            None => self
+                .gates
+                .accelerometer(s, accel, accel_norm, accel_norm, &up_pred, ramping, dt),
+        };
         let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
 
         // Rest detection: bias low pass towards the raw gyro.
@@ -276,11 +300,17 @@ impl<L: Law> Filter<L> {
         // |q_k| for a unit E), so it stays off the dependency chain: the exact exponential keeps
         // the norm to rounding, this only stops the rounding from accumulating.
         let renorm = 0.5 * (3.0 - s.q.norm_squared());
-        let q = multiply(
-            s.q.quaternion(),
-            exp(&((gyro - s.bias) * dt + correction_dt)).quaternion(),
-        );
+        let turn = exp(&((gyro - s.bias) * dt + correction_dt));
+        let q = multiply(s.q.quaternion(), turn.quaternion());
         s.q = UnitQuaternion::new_unchecked(q * renorm);
+        if o.acc_lowpass.is_some() {
+            // Into the new body axes by the gyro turn alone: `Exp(θ)ᵀ = Exp(c) Exp(θ + c)ᵀ` to
+            // first order in the small correction `c`, i.e. one cross product after the full turn.
+            for f in [&mut s.acc_lp1, &mut s.acc_lp2] {
+                let w = turn.inverse_transform_vector(f);
+                *f = w + correction_dt.cross(&w);
+            }
+        }
         s.time += dt;
         if ramping {
             s.ramp_elapsed += dt;

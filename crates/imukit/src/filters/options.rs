@@ -43,13 +43,44 @@ pub struct AccelRejection {
 }
 
 impl Default for AccelRejection {
-    /// 4 m/s², 30°, 5 s: tuned on BROAD's handheld motion (`docs/filters.md`).
+    /// 2 m/s², 3°, 15 s: with [`AccelLowPass`] the angle is that of the filtered vector, so 3°
+    /// rarely fires on handheld motion, while the raw norm test and the angle catch a sustained
+    /// acceleration, held for up to 15 s (`docs/filters.md`, `bench/tune_filters.py`).
     fn default() -> Self {
         Self {
-            norm: 4.0,
-            angle_rad: 30f64.to_radians(),
-            recovery_s: 5.0,
+            norm: 2.0,
+            angle_rad: 3f64.to_radians(),
+            recovery_s: 15.0,
         }
+    }
+}
+
+/// Low-pass pre-filter of the accelerometer in an almost-inertial frame (Laidig & Seel, "VQF:
+/// Highly accurate IMU orientation estimation with bias estimation and magnetic disturbance
+/// rejection", Information Fusion 91, 2023, §IV-B): the specific force `a = R_ibᵀ (p̈_i + g u_i)`
+/// is a body-frame vector; in a frame `I` that only turns with the gyro its linear part
+/// `R_ib a − g u_i = p̈_i` integrates to a velocity change, which stays bounded while gravity
+/// accumulates, so a low pass in `I` keeps gravity and cancels accelerations that come and go.
+///
+/// Carried in body axes: before the step the filtered vectors are turned by the gyro increment
+/// (`f ← Exp((ω − b̂) dt)ᵀ f`; the correction `ω_c` is the estimate's, not the body's, turn) and
+/// pulled towards the new sample by two first-order stages, `f₁ ← f₁ + α (a − f₁)`,
+/// `f₂ ← f₂ + α (f₁ − f₂)`, `α = dt / (tau_s + dt)` (a critically damped second-order low
+/// pass). The law and the accelerometer gate see `f₂` instead of `a`; rest detection keeps the
+/// raw sample. An acceleration `p̈` of frequency `f` reaches the estimate attenuated by
+/// `1 / (1 + (2π f tau_s)²)`, and a gyro-bias error `δb` tilts the filtered vector by about
+/// `2 tau_s δb` (its lag).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelLowPass {
+    /// Time constant of each of the two stages [s].
+    pub tau_s: f64,
+}
+
+impl Default for AccelLowPass {
+    /// 1 s: tuned on the 12 BROAD trials with leave-one-group-out validation
+    /// (`bench/tune_filters.py`, `docs/filters_accuracy.md`).
+    fn default() -> Self {
+        Self { tau_s: 1.0 }
     }
 }
 
@@ -115,6 +146,9 @@ pub struct Options {
     pub gravity: f64,
     /// Start-up gain ramp.
     pub gain_ramp: GainRamp,
+    /// Accelerometer low pass in the gyro frame; None: each raw sample is used as is (the
+    /// textbook laws).
+    pub acc_lowpass: Option<AccelLowPass>,
     /// Acceleration rejection; None: every accelerometer sample is used.
     pub acc_rejection: Option<AccelRejection>,
     /// Magnetic rejection; None: every magnetometer sample is used.
@@ -129,6 +163,7 @@ impl Default for Options {
             world: World::Enu,
             gravity: crate::imu::GRAVITY[2].abs(),
             gain_ramp: GainRamp::default(),
+            acc_lowpass: Some(AccelLowPass::default()),
             acc_rejection: Some(AccelRejection::default()),
             mag_rejection: Some(MagRejection::default()),
             rest_detection: None,
@@ -143,6 +178,9 @@ impl Options {
         let ramp = &self.gain_ramp;
         check("gain_ramp.duration", ramp.duration_s, "finite and ≥ 0", |x| x >= 0.0)?;
         check("gain_ramp.factor", ramp.factor, "finite and ≥ 1", |x| x >= 1.0)?;
+        if let Some(f) = self.acc_lowpass {
+            check("acc_lowpass.tau", f.tau_s, "finite and > 0", |x| x > 0.0)?;
+        }
         if let Some(r) = self.acc_rejection {
             check("acc_rejection.norm", r.norm, "finite and > 0", |x| x > 0.0)?;
             check("acc_rejection.angle", r.angle_rad, "in (0, π]", |x| {

@@ -31,6 +31,10 @@ pub struct CommonState {
     pub mag_dip_sin: f64,
     /// `cos δ₀` of the reference dip angle (≥ 0).
     pub mag_dip_cos: f64,
+    /// First stage of the accelerometer low pass, body axes [m/s²] (zero: not started).
+    pub acc_lp1: Vector3<f64>,
+    /// Second stage, the filtered specific force the law sees [m/s²] (zero: not started).
+    pub acc_lp2: Vector3<f64>,
 }
 
 impl Default for CommonState {
@@ -47,6 +51,8 @@ impl Default for CommonState {
             mag_norm: 0.0,
             mag_dip_sin: 0.0,
             mag_dip_cos: 1.0,
+            acc_lp1: Vector3::zeros(),
+            acc_lp2: Vector3::zeros(),
         }
     }
 }
@@ -80,6 +86,8 @@ impl CommonState {
         let finite = xyzw
             .iter()
             .chain(self.bias.iter())
+            .chain(self.acc_lp1.iter())
+            .chain(self.acc_lp2.iter())
             .chain(&scalars)
             .all(|x| x.is_finite());
         if !finite {
