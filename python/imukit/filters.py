@@ -52,6 +52,7 @@ __all__ = [
     "MagRejection",
     "Mahony",
     "RestDetection",
+    "Robust",
 ]
 
 GainRamp = _core.GainRamp
@@ -329,3 +330,6 @@ class Madgwick(_Filter):
     def beta(self) -> float:
         """``β`` [1/s]."""
         return float(self.gains.beta)
+
+
+from imukit._robust import Robust  # noqa: E402  (it builds on the helpers above)
