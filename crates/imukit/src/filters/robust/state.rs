@@ -2,7 +2,7 @@
 //! assigning), flattened to named numbers by [`Fields`] for the bindings (exact round trip).
 //! Attitudes are internal ENU (the world conversion is applied at the output only).
 
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix2x3, Matrix3, Quaternion, SMatrix, UnitQuaternion, Vector2, Vector3};
 
 use crate::filters::Fields;
 
@@ -30,16 +30,7 @@ impl Flat for bool {
     }
 }
 
-impl Flat for Vector3<f64> {
-    fn push(&self, out: &mut Vec<f64>) {
-        out.extend(self.iter());
-    }
-    fn take(it: &mut impl Iterator<Item = f64>) -> Option<Self> {
-        Some(Self::new(it.next()?, it.next()?, it.next()?))
-    }
-}
-
-impl Flat for Matrix3<f64> {
+impl<const R: usize, const C: usize> Flat for SMatrix<f64, R, C> {
     fn push(&self, out: &mut Vec<f64>) {
         out.extend(self.iter());
     }
@@ -118,6 +109,19 @@ state!(
     rest_accel: Vector3<f64> = ["rest_accel_x", "rest_accel_y", "rest_accel_z"],
     /// Seconds the rest thresholds have held.
     rest_time: f64 = ["rest_time"],
+    /// Butterworth delay elements of the rows x, y of `R_E'b` (the correction loop's response to
+    /// a bias, see `step::bias_window`).
+    loop_rot1: Matrix2x3<f64> = ["lr1_00", "lr1_10", "lr1_01", "lr1_11", "lr1_02", "lr1_12"],
+    /// Second delay elements of the same.
+    loop_rot2: Matrix2x3<f64> = ["lr2_00", "lr2_10", "lr2_01", "lr2_11", "lr2_02", "lr2_12"],
+    /// Butterworth delay elements of `(R_E'b b̂)_{x,y}`.
+    loop_bias1: Vector2<f64> = ["lb1_x", "lb1_y"],
+    /// Second delay elements of the same.
+    loop_bias2: Vector2<f64> = ["lb2_x", "lb2_y"],
+    /// Heading loop's error driven by row z of `R_E'b` [s].
+    loop_head_rot: Vector3<f64> = ["lh_x", "lh_y", "lh_z"],
+    /// Heading loop's error driven by `(R_E'b b̂)_z` [rad].
+    loop_head_bias: f64 = ["lh_b"],
     /// Seconds in the current bias window.
     win_time: f64 = ["win_time"],
     /// Whether the whole current window was at rest.
@@ -126,9 +130,10 @@ state!(
     win_gyro: Vector3<f64> = ["win_gyro_x", "win_gyro_y", "win_gyro_z"],
     /// Sum of the corrections over the window (x, y: inclination; z: heading) [rad].
     win_corr: Vector3<f64> = ["win_corr_x", "win_corr_y", "win_corr_z"],
-    /// `Σ R_E'b dt` over the window (rows x, y), and over the samples with a heading correction
-    /// (row z) [s].
+    /// Sum of the loops' responses to the rotation, `S` with `C = −S b + O` [s].
     win_rot: Matrix3<f64> = ["w00", "w10", "w20", "w01", "w11", "w21", "w02", "w12", "w22"],
+    /// Sum of the loops' responses to the estimated bias, `O` [rad].
+    win_off: Vector3<f64> = ["win_off_x", "win_off_y", "win_off_z"],
     /// Seconds of the window with a heading correction.
     win_mag_time: f64 = ["win_mag_time"],
     /// Whether the reference field has been learned.
@@ -174,6 +179,13 @@ impl Default for RobustState {
             win_gyro: Vector3::zeros(),
             win_corr: Vector3::zeros(),
             win_rot: Matrix3::zeros(),
+            win_off: Vector3::zeros(),
+            loop_rot1: Matrix2x3::zeros(),
+            loop_rot2: Matrix2x3::zeros(),
+            loop_bias1: Vector2::zeros(),
+            loop_bias2: Vector2::zeros(),
+            loop_head_rot: Vector3::zeros(),
+            loop_head_bias: 0.0,
             win_mag_time: 0.0,
             mag_ready: false,
             mag_norm: 0.0,

@@ -1,7 +1,9 @@
 //! One online step of [`super::Robust`] (internal ENU frame; the equations are in `super`'s
 //! module doc and `docs/filters_robust.md`).
 
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use std::ops::{Add, AddAssign, Mul, Sub};
+
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
 
 use super::params::RobustParams;
 use super::state::RobustState;
@@ -51,6 +53,20 @@ impl Coefs {
         } else {
             Self::new(p, dt)
         }
+    }
+}
+
+impl Coefs {
+    /// One Butterworth step of input `x` with delay elements `s1`, `s2` (per element).
+    #[inline(always)]
+    fn butter<T>(&self, x: T, s1: &mut T, s2: &mut T) -> T
+    where
+        T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f64, Output = T>,
+    {
+        let y = x * self.b0 + *s1;
+        *s1 = x * self.b1 - y * self.a1 + *s2;
+        *s2 = x * self.b0 - y * self.a2;
+        y
     }
 }
 
@@ -148,9 +164,7 @@ pub(super) fn step(
         s.lp_s1 = a_i * (c.b1 - c.a1) + s.lp_s2;
         s.lp_ready = true;
     }
-    let a_f = a_i * c.b0 + s.lp_s1;
-    s.lp_s1 = a_i * c.b1 - a_f * c.a1 + s.lp_s2;
-    s.lp_s2 = a_i * c.b0 - a_f * c.a2;
+    let a_f = c.butter(a_i, &mut s.lp_s1, &mut s.lp_s2);
 
     // Inclination: rotate E' so that the filtered specific force points up. The rotation taking
     // the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0) (half-angle identity).
@@ -172,16 +186,16 @@ pub(super) fn step(
     let q6 = compose(&s.q_incl, &s.q_gyro);
     let r6 = *q6.to_rotation_matrix().matrix();
 
-    let mut mag_weight = 0.0;
+    let mut heading_gain = None;
     if let Some(m) = mag {
         if let Some((gain, err)) = magnetometer(p, c, s, &(r6 * m), gyro) {
             s.heading = wrap(s.heading + gain * err);
             corr.z = gain * err;
-            mag_weight = 1.0;
+            heading_gain = Some(gain);
         }
     }
     if dt > 0.0 {
-        bias_window(p, s, gyro, &corr, &r6, mag_weight, dt);
+        bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
     }
     let q = if mag.is_some() {
         compose(&yaw(s.heading), &q6)
@@ -258,35 +272,57 @@ fn magnetometer(
 }
 
 /// Accumulates one sample into the bias window and, when the window is full, makes one Kalman
-/// update of the bias: at rest with the mean gyro (`H = I`), in motion with the mean correction
-/// rate (`H = −Σ R dt / T` on the corrected axes: a bias error ε turns the estimate at `R ε` in
-/// the world, and the corrections undo it).
+/// update of the bias.
+///
+/// In motion (derivation in `docs/filters_robust.md`): with `ε = b − b̂` the estimate turns at
+/// `R ε` in the world; the inclination loop answers with corrections `c = −L∗(R ε)` (`L` the
+/// Butterworth, for small angles, x and y) and the heading loop with `c_z = −F∗(R ε)_z` (`F` its
+/// first-order loop, while the field is used). Running the same loops on `R` and on `R b̂` gives
+/// `S = Σ L∗R dt` and `O = Σ L∗(R b̂) dt`, and `C = Σ c = −S b + O`: a measurement of `b` itself
+/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length). At rest: the
+/// mean gyro, `H = I`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // one sample's pieces, all needed
 fn bias_window(
     p: &RobustParams,
+    c: &Coefs,
     s: &mut RobustState,
     gyro: &Vector3<f64>,
     corr: &Vector3<f64>,
     r6: &Matrix3<f64>,
-    mag_weight: f64,
-    dt: f64,
+    nine: bool,
+    heading_gain: Option<f64>,
 ) {
+    let dt = c.dt;
+    let rb = r6 * s.bias;
+    let rot_xy = r6.fixed_rows::<2>(0).into_owned();
+    let lr = c.butter(rot_xy, &mut s.loop_rot1, &mut s.loop_rot2);
+    let lb = c.butter(Vector2::new(rb.x, rb.y), &mut s.loop_bias1, &mut s.loop_bias2);
+    s.win_rot.fixed_rows_mut::<2>(0).add_assign(lr * dt);
+    s.win_off.x += lb.x * dt;
+    s.win_off.y += lb.y * dt;
+    if nine {
+        s.loop_head_rot += r6.row(2).transpose() * dt;
+        s.loop_head_bias += rb.z * dt;
+        if let Some(k) = heading_gain {
+            let (out_r, out_b) = (s.loop_head_rot * k, s.loop_head_bias * k);
+            s.loop_head_rot -= out_r;
+            s.loop_head_bias -= out_b;
+            s.win_rot.row_mut(2).add_assign(out_r.transpose());
+            s.win_off.z += out_b;
+            s.win_mag_time += dt;
+        }
+    }
     s.win_time += dt;
     s.win_rest &= s.rest;
     s.win_gyro += gyro * dt;
     s.win_corr += corr;
-    for j in 0..3 {
-        s.win_rot[(0, j)] += r6[(0, j)] * dt;
-        s.win_rot[(1, j)] += r6[(1, j)] * dt;
-        s.win_rot[(2, j)] += r6[(2, j)] * (dt * mag_weight);
-    }
-    s.win_mag_time += dt * mag_weight;
     if s.win_time < p.bias_window_s {
         return;
     }
     let t = s.win_time;
     s.bias_cov += Matrix3::identity() * (p.bias_sigma_init_rad_s.powi(2) / p.bias_forgetting_s * t);
-    let (h, y, r) = if s.win_rest {
+    let (h, innovation, r) = if s.win_rest {
         (
             Matrix3::identity(),
             s.win_gyro / t - s.bias,
@@ -294,21 +330,21 @@ fn bias_window(
         )
     } else {
         let mut h = -s.win_rot / t;
-        let mut y = s.win_corr / t;
         if s.win_mag_time < 0.5 * t {
             h.row_mut(2).fill(0.0);
-            y.z = 0.0;
-        } else {
-            h.row_mut(2).scale_mut(t / s.win_mag_time);
         }
-        (h, y, p.bias_sigma_motion_rad_s.powi(2))
+        let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
+        if s.win_mag_time < 0.5 * t {
+            innovation.z = 0.0;
+        }
+        (h, innovation, p.bias_sigma_motion_rad_s.powi(2))
     };
     let pm = s.bias_cov;
     let innovation_cov = h * pm * h.transpose() + Matrix3::identity() * r;
     if let Some(inv) = innovation_cov.try_inverse() {
         let k = pm * h.transpose() * inv;
         let clip = p.bias_clip_rad_s;
-        s.bias = (s.bias + k * y).map(|b| b.clamp(-clip, clip));
+        s.bias = (s.bias + k * innovation).map(|b| b.clamp(-clip, clip));
         let pn = (Matrix3::identity() - k * h) * pm;
         s.bias_cov = (pn + pn.transpose()) * 0.5;
     }
@@ -317,5 +353,6 @@ fn bias_window(
     s.win_gyro = Vector3::zeros();
     s.win_corr = Vector3::zeros();
     s.win_rot = Matrix3::zeros();
+    s.win_off = Vector3::zeros();
     s.win_mag_time = 0.0;
 }
