@@ -32,9 +32,9 @@ GROUPS: dict[str, tuple[str, ...]] = {
 }
 # The grid of --cv: each parameter's candidates (the default among them).
 GRID: dict[str, tuple[float, ...]] = {
-    "tau_acc_s": (2.0, 3.0, 4.5),
-    "tau_mag_s": (6.0, 9.0, 14.0),
-    "bias_sigma_motion_rad_s": tuple(np.radians([0.05, 0.1, 0.2])),
+    "tau_acc_s": (1.5, 2.0, 3.0),
+    "tau_mag_s": (9.0, 14.0, 20.0),
+    "bias_sigma_motion_rad_s": (float(np.radians(0.1)), float(np.radians(0.2))),
 }
 
 Runner = Callable[[Trial, bool], np.ndarray]
@@ -124,10 +124,8 @@ def cross_validate(trs: list[Trial], offline: bool) -> None:
         params = dict(zip(keys, values, strict=True))
         run = robust_runner(offline, **params)
         results.append((params, score(run, trs, False), score(run, trs, True)))
-        print(
-            f"  {params}: 6D {np.mean(list(results[-1][1].values())):.3f}, 9D {np.mean(list(results[-1][2].values())):.3f}",
-            flush=True,
-        )
+        m6, m9 = np.mean(list(results[-1][1].values())), np.mean(list(results[-1][2].values()))
+        print(f"  {params}: 6D {m6:.3f}, 9D {m9:.3f}", flush=True)
 
     def best(names: set[str]) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
         def sub(d: dict[str, float]) -> dict[str, float]:
@@ -140,7 +138,8 @@ def cross_validate(trs: list[Trial], offline: bool) -> None:
     print(f"\n### {mode}: tuned on all 12: {p}")
     print(f"all trials: 6D {np.mean(list(s6.values())):.3f}°, 9D {np.mean(list(s9.values())):.3f}°")
     print(
-        f"\n| held-out group | chosen on the other three | 6D incl. held out | 9D total held out | 6D (all-trials choice) | 9D (all-trials choice) |"
+        "\n| held-out group | chosen on the other three | 6D incl. held out | 9D total held out "
+        "| 6D (all-trials choice) | 9D (all-trials choice) |"
     )
     print("|---|---|---|---|---|---|")
     cv6, cv9 = {}, {}
@@ -154,9 +153,8 @@ def cross_validate(trs: list[Trial], offline: bool) -> None:
             f"| {g} | {short} | {np.mean([g6[k] for k in held]):.3f} | {np.mean([g9[k] for k in held]):.3f} "
             f"| {np.mean([s6[k] for k in held]):.3f} | {np.mean([s9[k] for k in held]):.3f} |"
         )
-    print(
-        f"| **all, leave-one-group-out** | | {np.mean(list(cv6.values())):.3f} | {np.mean(list(cv9.values())):.3f} | {np.mean(list(s6.values())):.3f} | {np.mean(list(s9.values())):.3f} |"
-    )
+    means = [np.mean(list(d.values())) for d in (cv6, cv9, s6, s9)]
+    print("| **all, leave-one-group-out** | | " + " | ".join(f"{m:.3f}" for m in means) + " |")
 
 
 def speed(n: int = 1_000_000, repeat: int = 3) -> None:
@@ -186,9 +184,8 @@ def speed(n: int = 1_000_000, repeat: int = 3) -> None:
             call()
             ts.append(time.perf_counter() - start)
         times[name] = float(np.median(ts))
-    print(
-        f"\n### Speed, {n} samples, median of {repeat} [s]\n\n| case | time [s] | ns/sample | vqf / Robust |\n|---|---|---|---|"
-    )
+    print(f"\n### Speed, {n} samples, median of {repeat} [s]\n")
+    print("| case | time [s] | ns/sample | vqf / Robust |\n|---|---|---|---|")
     for name, t in times.items():
         ref = ""
         if name.startswith("Robust"):

@@ -53,6 +53,8 @@ __all__ = [
     "Mahony",
     "RestDetection",
     "Robust",
+    "RobustResult",
+    "RobustState",
 ]
 
 GainRamp = _core.GainRamp
@@ -332,4 +334,4 @@ class Madgwick(_Filter):
         return float(self.gains.beta)
 
 
-from imukit._robust import Robust  # noqa: E402  (it builds on the helpers above)
+from imukit._robust import Robust, RobustResult, RobustState  # noqa: E402  (builds on the helpers above)

@@ -56,12 +56,12 @@ impl Default for RobustParams {
     fn default() -> Self {
         let deg = 1f64.to_radians();
         Self {
-            tau_acc_s: 3.0,
-            tau_mag_s: 9.0,
+            tau_acc_s: 2.0,
+            tau_mag_s: 20.0,
             bias_window_s: 1.0,
             bias_sigma_init_rad_s: 0.5 * deg,
             bias_forgetting_s: 100.0,
-            bias_sigma_motion_rad_s: 0.1 * deg,
+            bias_sigma_motion_rad_s: 0.2 * deg,
             bias_sigma_rest_rad_s: 0.03 * deg,
             bias_clip_rad_s: 2.0 * deg,
             rest_gyro_rad_s: 2.0 * deg,

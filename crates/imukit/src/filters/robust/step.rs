@@ -231,7 +231,7 @@ fn magnetometer(
     gyro: &Vector3<f64>,
 ) -> Option<(f64, f64)> {
     let norm = m_e.norm();
-    if !(norm > 0.0) {
+    if norm.is_nan() || norm <= 0.0 {
         return None;
     }
     // Dip below the horizontal, E' vertical being z.
