@@ -169,6 +169,19 @@ impl Robust {
         continued: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
+        self.run_with(state, inputs, continued, out, None)
+    }
+
+    /// [`Robust::run`], with the bias of every step taken from `bias` (one row per sample)
+    /// instead of the estimate when given (the smoother's second passes).
+    fn run_with(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        continued: bool,
+        out: &mut Outputs<'_>,
+        bias: Option<&[[f64; 3]]>,
+    ) -> Result<()> {
         let n = inputs.t.len();
         check_lengths(inputs)?;
         if !out.len_ok(n) {
@@ -185,8 +198,8 @@ impl Robust {
             });
         }
         match inputs.mag {
-            Some(m) => self.run_loop::<true>(state, inputs, m, continued, out),
-            None => self.run_loop::<false>(state, inputs, &[], continued, out),
+            Some(m) => self.run_loop::<true>(state, inputs, m, continued, out, bias),
+            None => self.run_loop::<false>(state, inputs, &[], continued, out, bias),
         }
     }
 
@@ -197,6 +210,7 @@ impl Robust {
         mags: &[[f64; 3]],
         continued: bool,
         out: &mut Outputs<'_>,
+        bias: Option<&[[f64; 3]]>,
     ) -> Result<()> {
         let p = &self.params;
         let mut coefs = Coefs::new(p, 0.0);
@@ -220,6 +234,9 @@ impl Robust {
             };
             if dt > 0.0 || !state.initialized {
                 coefs = coefs.for_dt(p, dt);
+                if let Some(b) = bias {
+                    state.bias = row(&b[k]);
+                }
                 step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
                 check_overflow(state, k)?;
             }
