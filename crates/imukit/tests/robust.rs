@@ -3,7 +3,7 @@
 //! save / restore / resume, NED = ENU rotated, the smoother deterministic and finite.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::filters::{Inputs, Robust, RobustOutputs, RobustParams, RobustState, World};
+use imukit::filters::{Inputs, Robust, RobustParams, RobustState, RobustTrack, World};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 const G: f64 = 9.81;
@@ -88,51 +88,34 @@ fn simulate(
     r
 }
 
-/// Per-sample outputs of one run.
-struct Out {
-    q: Vec<[f64; 4]>,
-    bias: Vec<[f64; 3]>,
-    sigma: Vec<[f64; 3]>,
-    rest: Vec<bool>,
-    disturbed: Vec<bool>,
+/// The attitude of row `k`.
+fn quat(o: &RobustTrack, k: usize) -> UnitQuaternion<f64> {
+    let [x, y, z, w] = o.q[k];
+    UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z))
 }
 
-impl Out {
-    fn new(n: usize) -> Self {
-        Self {
-            q: vec![[0.0; 4]; n],
-            bias: vec![[0.0; 3]; n],
-            sigma: vec![[0.0; 3]; n],
-            rest: vec![false; n],
-            disturbed: vec![false; n],
-        }
-    }
-
-    fn view(&mut self) -> RobustOutputs<'_> {
-        RobustOutputs {
-            q: &mut self.q,
-            bias: &mut self.bias,
-            bias_sigma: &mut self.sigma,
-            rest: &mut self.rest,
-            mag_disturbed: &mut self.disturbed,
-        }
-    }
-
-    fn quat(&self, k: usize) -> UnitQuaternion<f64> {
-        let [x, y, z, w] = self.q[k];
-        UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z))
-    }
-}
-
-fn run(f: &Robust, r: &Record, nine: bool, offline: bool) -> Out {
-    let mut out = Out::new(r.t.len());
+fn run(f: &Robust, r: &Record, nine: bool, offline: bool) -> RobustTrack {
+    let mut out = RobustTrack::new(r.t.len());
     let mut s = RobustState::default();
     if offline {
-        f.smooth(&mut s, &r.inputs(nine), &mut out.view()).unwrap();
+        f.smooth(&mut s, &r.inputs(nine), &mut out.outputs()).unwrap();
     } else {
-        f.run(&mut s, &r.inputs(nine), false, &mut out.view()).unwrap();
+        f.run(&mut s, &r.inputs(nine), false, &mut out.outputs()).unwrap();
     }
     out
+}
+
+/// Turning (after 5 s at rest) with noise, no acceleration, the clean field.
+fn turning_record(seconds: f64, bias: Vector3<f64>, seed: u64) -> Record {
+    simulate(
+        seconds,
+        tilted(),
+        turning,
+        |_| Vector3::zeros(),
+        |_| FIELD.into(),
+        bias,
+        (0.003, 0.03, seed),
+    )
 }
 
 /// Angle between the estimated and the true up direction in the body [°].
@@ -184,7 +167,7 @@ fn figure_eight_accelerations_cancel() {
     );
     let out = run(&filter(), &r, false, false);
     let worst = (0..r.t.len())
-        .map(|k| tilt_deg(&out.quat(k), &r.truth[k]))
+        .map(|k| tilt_deg(&quat(&out, k), &r.truth[k]))
         .fold(0.0, f64::max);
     // A filter correcting towards the raw accelerometer tilts by up to atan(3√2/g) ≈ 23°; the
     // Butterworth (τ = 2 s) passes 10% at 0.25 Hz, so about 1.7° plus the bias loop's share. The
@@ -214,7 +197,7 @@ fn sustained_acceleration_leaks_in_bounded_and_leaves() {
         (0.0, 0.0, 2),
     );
     let out = run(&filter(), &r, false, false);
-    let tilt: Vec<f64> = (0..r.t.len()).map(|k| tilt_deg(&out.quat(k), &r.truth[k])).collect();
+    let tilt: Vec<f64> = (0..r.t.len()).map(|k| tilt_deg(&quat(&out, k), &r.truth[k])).collect();
     let during = tilt[..(20.0 * RATE) as usize].iter().fold(0.0, |a: f64, &b| a.max(b));
     let after = tilt[(35.0 * RATE) as usize..].iter().fold(0.0, |a: f64, &b| a.max(b));
     assert!(tilt[(10.0 * RATE) as usize - 1] < 1e-6);
@@ -257,11 +240,11 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
                     "nine {nine} seed {seed} axis {i}: {}°/s",
                     err / deg
                 );
-                assert!(out.sigma[k][i] < 0.2 * deg && out.sigma[k][i] > 0.0);
+                assert!(out.bias_sigma[k][i] < 0.2 * deg && out.bias_sigma[k][i] > 0.0);
                 // σ over the second half, sampled every 5 s
                 for m in (r.t.len() / 2..r.t.len()).step_by(500) {
                     total += 1;
-                    if (out.bias[m][i] - bias[i]).abs() <= 2.0 * out.sigma[m][i] {
+                    if (out.bias[m][i] - bias[i]).abs() <= 2.0 * out.bias_sigma[m][i] {
                         covered += 1;
                     }
                 }
@@ -274,15 +257,7 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
 
 #[test]
 fn rest_is_detected_and_motion_is_not() {
-    let r = simulate(
-        40.0,
-        tilted(),
-        turning,
-        |_| Vector3::zeros(),
-        |_| FIELD.into(),
-        Vector3::zeros(),
-        (0.003, 0.03, 3),
-    );
+    let r = turning_record(40.0, Vector3::zeros(), 3);
     let out = run(&filter(), &r, false, false);
     assert!(out.rest[(4.5 * RATE) as usize]);
     assert!(
@@ -306,15 +281,7 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
         }
     };
     for offline in [false, true] {
-        let clean = simulate(
-            60.0,
-            tilted(),
-            turning,
-            |_| Vector3::zeros(),
-            |_| FIELD.into(),
-            Vector3::zeros(),
-            (0.003, 0.03, 4),
-        );
+        let clean = turning_record(60.0, Vector3::zeros(), 4);
         let dist = simulate(
             60.0,
             tilted(),
@@ -330,7 +297,7 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
         );
         let (mut incl, mut head) = (0.0f64, 0.0f64);
         for k in 0..clean.t.len() {
-            let (qa, qb) = (a.quat(k), b.quat(k));
+            let (qa, qb) = (quat(&a, k), quat(&b, k));
             incl = incl.max(tilt_deg(&qa, &qb));
             let d = (heading(&qa) - heading(&qb)).to_degrees();
             head = head.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
@@ -339,25 +306,17 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
         let bound = if offline { 0.2 } else { 0.1 };
         assert!(incl < bound, "offline {offline}: inclination {incl}°");
         assert!(head < 2.0, "offline {offline}: heading {head}°");
-        assert!(b.disturbed[(25.0 * RATE) as usize] && !b.disturbed[(15.0 * RATE) as usize]);
+        assert!(b.mag_disturbed[(25.0 * RATE) as usize] && !b.mag_disturbed[(15.0 * RATE) as usize]);
         // The clean run's heading is right.
         let k = clean.t.len() - 1;
-        let e = (heading(&a.quat(k)) - heading(&clean.truth[k])).to_degrees();
+        let e = (heading(&quat(&a, k)) - heading(&clean.truth[k])).to_degrees();
         assert!(e.abs() < 1.0, "{e}");
     }
 }
 
 #[test]
 fn streaming_equals_batch_and_resume_equals_uninterrupted() {
-    let r = simulate(
-        20.0,
-        tilted(),
-        turning,
-        |_| Vector3::zeros(),
-        |_| FIELD.into(),
-        Vector3::zeros(),
-        (0.003, 0.03, 5),
-    );
+    let r = turning_record(20.0, Vector3::zeros(), 5);
     let f = filter();
     for nine in [false, true] {
         let batch = run(&f, &r, nine, false);
@@ -373,21 +332,21 @@ fn streaming_equals_batch_and_resume_equals_uninterrupted() {
         // Resume: the first half, then the second continued from the saved state.
         let h = r.t.len() / 2;
         let mut s = RobustState::default();
-        let mut first = Out::new(h);
+        let mut first = RobustTrack::new(h);
         let cut = |a: usize, b: usize| Inputs {
             t: &r.t[a..b],
             gyro: &r.gyro[a..b],
             accel: &r.accel[a..b],
             mag: nine.then_some(&r.mag[a..b]),
         };
-        f.run(&mut s, &cut(0, h), false, &mut first.view()).unwrap();
+        f.run(&mut s, &cut(0, h), false, &mut first.outputs()).unwrap();
         let saved = s;
-        let mut second = Out::new(r.t.len() - h);
-        f.run(&mut s, &cut(h, r.t.len()), true, &mut second.view()).unwrap();
+        let mut second = RobustTrack::new(r.t.len() - h);
+        f.run(&mut s, &cut(h, r.t.len()), true, &mut second.outputs()).unwrap();
         assert_eq!(second.q, batch.q[h..]);
-        let mut again = Out::new(r.t.len() - h);
+        let mut again = RobustTrack::new(r.t.len() - h);
         let mut restored = RobustState::restored(&imukit::filters::Fields::values(&saved)).unwrap();
-        f.run(&mut restored, &cut(h, r.t.len()), true, &mut again.view())
+        f.run(&mut restored, &cut(h, r.t.len()), true, &mut again.outputs())
             .unwrap();
         assert_eq!(again.q, second.q);
     }
@@ -395,15 +354,7 @@ fn streaming_equals_batch_and_resume_equals_uninterrupted() {
 
 #[test]
 fn ned_is_enu_turned() {
-    let r = simulate(
-        20.0,
-        tilted(),
-        turning,
-        |_| Vector3::zeros(),
-        |_| FIELD.into(),
-        Vector3::zeros(),
-        (0.003, 0.03, 6),
-    );
+    let r = turning_record(20.0, Vector3::zeros(), 6);
     let enu = run(&filter(), &r, true, false);
     let ned = run(
         &Robust::new(RobustParams::default(), World::Ned).unwrap(),
@@ -416,7 +367,7 @@ fn ned_is_enu_turned() {
         0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0,
     )));
     for k in (0..r.t.len()).step_by(97) {
-        assert!((c * enu.quat(k)).angle_to(&ned.quat(k)) < 1e-9);
+        assert!((c * quat(&enu, k)).angle_to(&quat(&ned, k)) < 1e-9);
     }
 }
 
@@ -424,15 +375,7 @@ fn ned_is_enu_turned() {
 fn offline_is_deterministic_finite_and_better_at_the_start() {
     let deg = 1f64.to_radians();
     let bias = Vector3::new(0.5, -0.3, 0.2) * deg;
-    let r = simulate(
-        60.0,
-        tilted(),
-        turning,
-        |_| Vector3::zeros(),
-        |_| FIELD.into(),
-        bias,
-        (0.003, 0.03, 7),
-    );
+    let r = turning_record(60.0, bias, 7);
     let f = filter();
     for nine in [false, true] {
         let (a, b) = (run(&f, &r, nine, true), run(&f, &r, nine, true));
@@ -446,14 +389,14 @@ fn offline_is_deterministic_finite_and_better_at_the_start() {
             .all(|x| x.is_finite()));
         // The smoothed bias at the start knows what the forward pass learns later.
         let online = run(&f, &r, nine, false);
-        let err = |o: &Out, k: usize| (Vector3::from(o.bias[k]) - bias).norm();
+        let err = |o: &RobustTrack, k: usize| (Vector3::from(o.bias[k]) - bias).norm();
         assert!(
             err(&a, 10) < 0.5 * err(&online, 10),
             "{} {}",
             err(&a, 10),
             err(&online, 10)
         );
-        let worst = |o: &Out| (0..n).map(|k| tilt_deg(&o.quat(k), &r.truth[k])).fold(0.0, f64::max);
+        let worst = |o: &RobustTrack| (0..n).map(|k| tilt_deg(&quat(o, k), &r.truth[k])).fold(0.0, f64::max);
         assert!(worst(&a) < worst(&online), "{} {}", worst(&a), worst(&online));
     }
 }
@@ -485,9 +428,9 @@ fn errors_name_the_input() {
         t: &t,
         ..r.inputs(false)
     };
-    let mut out = Out::new(t.len());
+    let mut out = RobustTrack::new(t.len());
     let e = f
-        .run(&mut RobustState::default(), &inputs, false, &mut out.view())
+        .run(&mut RobustState::default(), &inputs, false, &mut out.outputs())
         .unwrap_err();
     assert_eq!((e.argument(), e.index()), (Some("t"), Some(5)));
 }

@@ -66,7 +66,7 @@ mod world;
 pub use madgwick::Madgwick;
 pub use mahony::Mahony;
 pub use options::{check, AccelRejection, GainRamp, MagRejection, Options, RestDetection};
-pub use robust::{Outputs as RobustOutputs, Robust, RobustParams, RobustState};
+pub use robust::{Outputs as RobustOutputs, Robust, RobustParams, RobustState, Track as RobustTrack};
 pub use state::{CommonState, Fields, State};
 pub use world::{initial_attitude, World};
 

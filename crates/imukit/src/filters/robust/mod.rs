@@ -78,6 +78,54 @@ impl Outputs<'_> {
     }
 }
 
+/// Owned per-sample outputs (what [`Outputs`] views).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// `q_wb` as `[x, y, z, w]`.
+    pub q: Vec<[f64; 4]>,
+    /// Gyro-bias estimate [rad/s].
+    pub bias: Vec<[f64; 3]>,
+    /// Its standard deviation per axis [rad/s].
+    pub bias_sigma: Vec<[f64; 3]>,
+    /// Rest detected.
+    pub rest: Vec<bool>,
+    /// Magnetometer sample rejected as disturbed.
+    pub mag_disturbed: Vec<bool>,
+}
+
+impl Track {
+    /// `n` rows of zeros.
+    pub fn new(n: usize) -> Self {
+        Self {
+            q: vec![[0.0; 4]; n],
+            bias: vec![[0.0; 3]; n],
+            bias_sigma: vec![[0.0; 3]; n],
+            rest: vec![false; n],
+            mag_disturbed: vec![false; n],
+        }
+    }
+
+    /// The rows as outputs of a run.
+    pub fn outputs(&mut self) -> Outputs<'_> {
+        Outputs {
+            q: &mut self.q,
+            bias: &mut self.bias,
+            bias_sigma: &mut self.bias_sigma,
+            rest: &mut self.rest,
+            mag_disturbed: &mut self.mag_disturbed,
+        }
+    }
+
+    /// The rows in reverse order.
+    fn reverse(&mut self) {
+        self.q.reverse();
+        self.bias.reverse();
+        self.bias_sigma.reverse();
+        self.rest.reverse();
+        self.mag_disturbed.reverse();
+    }
+}
+
 /// A configured robust filter (no state: every call takes a [`RobustState`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Robust {

@@ -19,49 +19,10 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::{Outputs, Robust, RobustState};
+use super::{Outputs, Robust, RobustState, Track};
 use crate::filters::Inputs;
 use crate::quat::{exp, log, multiply};
 use crate::Result;
-
-/// One pass's outputs, owned.
-struct Pass {
-    q: Vec<[f64; 4]>,
-    bias: Vec<[f64; 3]>,
-    sigma: Vec<[f64; 3]>,
-    rest: Vec<bool>,
-    disturbed: Vec<bool>,
-}
-
-impl Pass {
-    fn new(n: usize) -> Self {
-        Self {
-            q: vec![[0.0; 4]; n],
-            bias: vec![[0.0; 3]; n],
-            sigma: vec![[0.0; 3]; n],
-            rest: vec![false; n],
-            disturbed: vec![false; n],
-        }
-    }
-
-    fn reverse(&mut self) {
-        self.q.reverse();
-        self.bias.reverse();
-        self.sigma.reverse();
-        self.rest.reverse();
-        self.disturbed.reverse();
-    }
-
-    fn outputs(&mut self) -> Outputs<'_> {
-        Outputs {
-            q: &mut self.q,
-            bias: &mut self.bias,
-            bias_sigma: &mut self.sigma,
-            rest: &mut self.rest,
-            mag_disturbed: &mut self.disturbed,
-        }
-    }
-}
 
 fn quat(x: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(x[3], x[0], x[1], x[2]))
@@ -147,19 +108,19 @@ impl Robust {
             });
         }
         let start = *state;
-        let mut fwd = Pass::new(n);
+        let mut fwd = Track::new(n);
         self.run(state, inputs, false, &mut fwd.outputs())?;
         if n == 0 {
             return Ok(());
         }
         let rev = Reversed::new(inputs);
-        let mut bwd = Pass::new(n);
+        let mut bwd = Track::new(n);
         self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs())?;
         bwd.reverse();
 
         let mut weights = vec![0.5; n];
         for (k, weight) in weights.iter_mut().enumerate() {
-            let (sf, sb) = (Vector3::from(fwd.sigma[k]), Vector3::from(bwd.sigma[k]));
+            let (sf, sb) = (Vector3::from(fwd.bias_sigma[k]), Vector3::from(bwd.bias_sigma[k]));
             let (vf, vb) = (sf.norm_squared(), sb.norm_squared());
             if vf + vb > 0.0 {
                 *weight = vf / (vf + vb);
@@ -176,7 +137,7 @@ impl Robust {
                 out.bias_sigma[k][i] = var.sqrt();
             }
             out.rest[k] = fwd.rest[k] || bwd.rest[k];
-            out.mag_disturbed[k] = fwd.disturbed[k] && bwd.disturbed[k];
+            out.mag_disturbed[k] = fwd.mag_disturbed[k] && bwd.mag_disturbed[k];
         }
 
         // Second stage: the fused bias in every step of both passes.
