@@ -271,7 +271,7 @@ fn rest_is_detected_and_motion_is_not() {
 
 #[test]
 fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
-    // The field's norm × 1.5 (same direction... and a turned one) from 20 s to 40 s.
+    // From 20 s to 40 s the field is 1.5 times as strong and turned by 46° about the vertical.
     let disturbed = |t: f64| {
         let f = Vector3::from(FIELD);
         if (20.0..40.0).contains(&t) {
