@@ -32,11 +32,10 @@ GROUPS: dict[str, tuple[str, ...]] = {
 }
 # The grid of --cv: each parameter's candidates (the default among them).
 GRID: dict[str, tuple[float, ...]] = {
-    "tau_acc_s": (1.5, 2.0, 3.0),
-    "tau_mag_s": (9.0, 14.0, 20.0),
-    "bias_sigma_motion_rad_s": (float(np.radians(0.1)), float(np.radians(0.2))),
+    "tau_acc_s": (2.0, 3.0),
+    "tau_mag_s": (9.0, 20.0),
+    "bias_window_s": (1.0, 2.0, 4.0),
 }
-
 Runner = Callable[[Trial, bool], np.ndarray]
 
 

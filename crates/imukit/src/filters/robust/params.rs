@@ -58,7 +58,7 @@ impl Default for RobustParams {
         Self {
             tau_acc_s: 2.0,
             tau_mag_s: 20.0,
-            bias_window_s: 1.0,
+            bias_window_s: 4.0,
             bias_sigma_init_rad_s: 0.5 * deg,
             bias_forgetting_s: 100.0,
             bias_sigma_motion_rad_s: 0.2 * deg,

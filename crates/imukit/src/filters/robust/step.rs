@@ -171,7 +171,8 @@ pub(super) fn step(
     let a_e = s.q_incl * a_f;
     let an = a_e.norm();
     let mut corr = Vector3::zeros();
-    if an > 1e-9 {
+    // A zero or overflowing (finite but huge) specific force has no direction.
+    if an > 1e-9 && an.is_finite() {
         let n = a_e / an;
         let w = 1.0 + n.z;
         let qc = if w > 1e-9 {
