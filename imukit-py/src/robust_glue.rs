@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::convert::{rows, unit_quaternion, Name};
-use crate::{contiguous, private_copy, raise, to_py};
+use crate::{private_copy, raise, to_py, SampleCopies};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
 /// take `base`'s value.
@@ -214,17 +214,16 @@ impl PyRobustFilter {
     ) -> PyResult<Outputs<'py>> {
         let mut s = state.0;
         let n = t.shape()[0];
-        let t = private_copy(py, &t)?.readonly();
-        let gyro = private_copy(py, &gyro)?.readonly();
-        let accel = private_copy(py, &accel)?.readonly();
+        let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+        let samples = copies.samples(py)?;
         let mag = match mag {
             Some(m) => Some(private_copy(py, &m)?.readonly()),
             None => None,
         };
         let inputs = Inputs {
-            t: contiguous(py, "t", &t)?,
-            gyro: rows(py, "gyro", &gyro)?,
-            accel: rows(py, "accel", &accel)?,
+            t: samples.t(),
+            gyro: samples.gyro(),
+            accel: samples.accel(),
             mag: match &mag {
                 Some(m) => Some(rows(py, "mag", m)?),
                 None => None,
