@@ -874,6 +874,52 @@ for _kind, _cls_name in (("mahony", "Mahony"), ("madgwick", "Madgwick")):
         return values, call
 
 
+@entry(
+    "filters.Robust.run",
+    ("filters.Robust", "filters.Robust.run"),
+    {
+        **{k: Arg(a.role, names=(*(a.names or (k,)), "imu")) for k, a in IMU_ARGS.items()},
+        "mag": Arg("array", optional=True),
+        "initial": Arg("rotation", optional=True),
+    },
+)
+def _robust_run(rng: np.random.Generator) -> Any:
+    v = imu_values(rng)
+    values = {**v, "mag": rng.standard_normal(v["gyro"].shape), "initial": None}
+    return values, lambda v: filters.Robust().run(imu_of(v), mag=v["mag"], initial=v["initial"])
+
+
+@entry(
+    "filters.Robust.update",
+    (*(f"filters.Robust.{m}" for m in ("update", "get_state", "set_state", "reset")), "filters.RobustState"),
+    {
+        "u_gyro": Arg("array", names=("gyro",)),
+        "u_accel": Arg("array", names=("accel",)),
+        "dt": Arg("scalar"),
+        "u_mag": Arg("array", optional=True, names=("mag",)),
+        "initial": Arg("rotation", optional=True),
+    },
+)
+def _robust_update(rng: np.random.Generator) -> Any:
+    values = {
+        "u_gyro": 0.1 * rng.standard_normal(3),
+        "u_accel": np.array([0.0, 0.0, 9.81]) + rng.standard_normal(3),
+        "dt": 0.01,
+        "u_mag": rng.standard_normal(3),
+        "initial": Rotation.random(rng=rng),
+    }
+
+    def call(v: dict[str, Any]) -> Any:
+        f = filters.Robust()
+        f.reset(v["initial"])
+        first = f.update(v["u_gyro"], v["u_accel"], v["dt"], v["u_mag"])
+        f.set_state(filters.RobustState(**f.get_state().fields()))
+        second = f.update(v["u_gyro"], v["u_accel"], v["dt"], v["u_mag"])
+        return first, second, f.get_state()
+
+    return values, call
+
+
 # -- evaluation
 
 
@@ -1037,6 +1083,7 @@ NOT_ENTRY_POINTS = {
     "Trajectory.write_tum": "writes a validated Trajectory to a path (imukit.io)",
     "ResidualJacobians": "a plain record returned by PreintegratedImu.residual_jacobians",
     "filters.FilterResult": "a plain record returned by run",
+    "filters.RobustResult": "a plain record returned by run",
     "noise.AllanFit": "the result of fit_allan (its methods are covered)",
     "sim.Motion": "a typing alias of the motion classes",
 }

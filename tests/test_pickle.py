@@ -49,6 +49,7 @@ NOT_DATA: dict[str, str] = {
     # state (FilterResult, FilterState) are the data, registered below.
     "Mahony": "an estimator object, not a value",
     "Madgwick": "an estimator object, not a value",
+    "Robust": "an estimator object, not a value",
     # io detection plumbing: a context manager and a lazily read file head, not values.
     "Registration": "a context manager that unregisters a format on exit",
     "Format": "a registry entry of functions (sniff, reader): a worker imports the same registry",
@@ -110,6 +111,11 @@ def _allan() -> ik.noise.AllanDeviation:
 def _filter_result() -> ik.filters.FilterResult:
     imu, _ = _sim()
     return ik.filters.Mahony().run(imu)
+
+
+def _robust_result() -> ik.filters.RobustResult:
+    imu, _ = _sim()
+    return ik.filters.Robust().run(imu)
 
 
 def _report() -> ReadReport:
@@ -191,6 +197,8 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "RestDetection": lambda: ik.filters.RestDetection(),
     "FilterState": lambda: _filter_result().state,
     "FilterResult": _filter_result,
+    "RobustState": lambda: _robust_result().state,
+    "RobustResult": _robust_result,
     # Exceptions carry their fields.
     **{
         name: _error(getattr(ik, name))

@@ -12,6 +12,7 @@ mod errors;
 mod filters_glue;
 mod math_glue;
 mod preint_glue;
+mod robust_glue;
 mod sim_glue;
 mod strapdown_glue;
 mod threads;
@@ -73,6 +74,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyMadgwickGains>()?;
     m.add_class::<filters_glue::PyMahonyFilter>()?;
     m.add_class::<filters_glue::PyMadgwickFilter>()?;
+    robust_glue::register(m)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
     convert::add_names::<imukit::preint::Scheme>(m, "PREINT_SCHEMES", Some("PREINT_SCHEME_ALIASES"))?;

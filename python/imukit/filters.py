@@ -56,6 +56,9 @@ __all__ = [
     "MagRejection",
     "Mahony",
     "RestDetection",
+    "Robust",
+    "RobustResult",
+    "RobustState",
 ]
 
 GainRamp = _core.GainRamp
@@ -340,3 +343,6 @@ class Madgwick(_Filter):
     def beta(self) -> float:
         """``β`` [1/s]."""
         return float(self.gains.beta)
+
+
+from imukit._robust import Robust, RobustResult, RobustState  # noqa: E402  (builds on the helpers above)

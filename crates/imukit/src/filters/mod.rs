@@ -59,12 +59,14 @@ pub mod gate;
 mod madgwick;
 mod mahony;
 mod options;
+mod robust;
 mod state;
 mod world;
 
 pub use madgwick::Madgwick;
 pub use mahony::Mahony;
 pub use options::{check, AccelLowPass, AccelRejection, GainRamp, MagRejection, Options, RestDetection};
+pub use robust::{Outputs as RobustOutputs, Robust, RobustParams, RobustState, Track as RobustTrack};
 pub use state::{CommonState, Fields, State};
 pub use world::{initial_attitude, World};
 

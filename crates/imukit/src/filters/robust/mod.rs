@@ -1,0 +1,340 @@
+//! `Robust`: an attitude filter whose accelerometer correction does not tilt under sustained or
+//! short accelerations, with a Kalman estimate of the gyro bias, rest detection, a magnetometer
+//! heading decoupled from inclination with disturbance rejection, and an acausal smoother.
+//!
+//! Design after Laidig & Seel, "VQF: Highly accurate IMU orientation estimation with bias
+//! estimation and magnetic disturbance rejection", Information Fusion 91 (2023) 187–204; the
+//! equations here are derived in `docs/filters_robust.md` and written from them.
+//!
+//! | item | convention |
+//! |---|---|
+//! | estimate | `q_wb = Rz(ψ) ⊗ q_incl ⊗ q_gyro` (internal ENU; NED applied at the output), Hamilton |
+//! | `q_gyro` | strapdown body → almost-inertial `I`: `q_gyro ← q_gyro ⊗ Exp((ω − b̂) dt)` |
+//! | specific force | `a_I = R(q_gyro) a`, low-passed by a 2nd-order Butterworth (τ = `tau_acc_s`) in `I`, where the body's accelerations average out while gravity stays put |
+//! | inclination | `q_incl ← q_c ⊗ q_incl`, `q_c` the smallest rotation taking `R(q_incl) ā_I` to up: applied in full every sample, so the estimate's up is the filtered specific force |
+//! | heading (9D) | `ψ ← ψ + k e`, `e` the angle of the horizontal field from north (+y) in `E'`, `k = 1 − exp(−dt/τ_mag)`: about the vertical only, so the field never tilts the estimate |
+//! | magnetic disturbance | norm `|‖m‖ − m₀| ≤ f m₀` and dip `|δ − δ₀| ≤ θ` against the reference learned at the first sample; rejected at most `mag_max_rejection_s`, then used at `mag_slow_factor × τ_mag`; a homogeneous field held while turning for `mag_new_field_s` becomes the reference |
+//! | bias | Kalman filter on `b` (random walk): per window of `bias_window_s`, at rest the mean gyro (`H = I`), in motion the mean correction rate (`H = −Σ R dt / T`, x, y from inclination, z from heading); clipped to `±bias_clip_rad_s` |
+//! | rest | `‖ω − ω̄‖`, `‖ω̄‖ < rest_gyro_rad_s` and `‖a − ā‖ < rest_accel` (first-order low passes, `rest_tau_s`) for `rest_duration_s` |
+//! | first sample | initialises: tilt from the accelerometer, yaw 0 (6D) or heading from the field (9D), unless an initial attitude is given; output as is |
+//! | outputs per sample | `q_wb`, `b̂`, `σ_b = √diag P`, rest flag, magnetic-disturbance flag, after that sample |
+//! | offline | [`Robust::smooth`]: forward and backward (time-reversed) passes fused by their uncertainties |
+//!
+//! Why not a [`super::Law`]: the law seam corrects one attitude with `ω_c dt`; this filter keeps
+//! three factors of the attitude, a low-pass state and a bias covariance, and outputs more per
+//! sample, so it is its own struct (it reuses [`super::initial_attitude`], [`super::World`],
+//! [`super::Inputs`], [`super::Fields`] and [`super::check`]).
+
+mod params;
+mod smoother;
+mod state;
+mod step;
+
+pub use params::RobustParams;
+pub use state::RobustState;
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::{finite, row, Inputs, World};
+use crate::{Error, Result};
+use step::Coefs;
+
+/// Per-sample outputs of a run, one row per sample.
+#[derive(Debug)]
+pub struct Outputs<'a> {
+    /// `q_wb` as `[x, y, z, w]`.
+    pub q: &'a mut [[f64; 4]],
+    /// Gyro-bias estimate [rad/s].
+    pub bias: &'a mut [[f64; 3]],
+    /// Its standard deviation per axis [rad/s].
+    pub bias_sigma: &'a mut [[f64; 3]],
+    /// Rest detected.
+    pub rest: &'a mut [bool],
+    /// Magnetometer sample rejected as disturbed (always false in 6D).
+    pub mag_disturbed: &'a mut [bool],
+}
+
+impl Outputs<'_> {
+    fn len_ok(&self, n: usize) -> bool {
+        [
+            self.q.len(),
+            self.bias.len(),
+            self.bias_sigma.len(),
+            self.rest.len(),
+            self.mag_disturbed.len(),
+        ]
+        .iter()
+        .all(|&l| l == n)
+    }
+
+    #[inline(always)]
+    fn write(&mut self, k: usize, s: &RobustState) {
+        self.q[k] = s.q.coords.into();
+        self.bias[k] = s.bias.into();
+        let p = &s.bias_cov;
+        self.bias_sigma[k] = [p[(0, 0)].sqrt(), p[(1, 1)].sqrt(), p[(2, 2)].sqrt()];
+        self.rest[k] = s.rest;
+        self.mag_disturbed[k] = s.mag_disturbed;
+    }
+}
+
+/// Owned per-sample outputs (what [`Outputs`] views).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// `q_wb` as `[x, y, z, w]`.
+    pub q: Vec<[f64; 4]>,
+    /// Gyro-bias estimate [rad/s].
+    pub bias: Vec<[f64; 3]>,
+    /// Its standard deviation per axis [rad/s].
+    pub bias_sigma: Vec<[f64; 3]>,
+    /// Rest detected.
+    pub rest: Vec<bool>,
+    /// Magnetometer sample rejected as disturbed.
+    pub mag_disturbed: Vec<bool>,
+}
+
+impl Track {
+    /// `n` rows of zeros.
+    pub fn new(n: usize) -> Self {
+        Self {
+            q: vec![[0.0; 4]; n],
+            bias: vec![[0.0; 3]; n],
+            bias_sigma: vec![[0.0; 3]; n],
+            rest: vec![false; n],
+            mag_disturbed: vec![false; n],
+        }
+    }
+
+    /// The rows as outputs of a run.
+    pub fn outputs(&mut self) -> Outputs<'_> {
+        Outputs {
+            q: &mut self.q,
+            bias: &mut self.bias,
+            bias_sigma: &mut self.bias_sigma,
+            rest: &mut self.rest,
+            mag_disturbed: &mut self.mag_disturbed,
+        }
+    }
+
+    /// The rows in reverse order.
+    fn reverse(&mut self) {
+        self.q.reverse();
+        self.bias.reverse();
+        self.bias_sigma.reverse();
+        self.rest.reverse();
+        self.mag_disturbed.reverse();
+    }
+}
+
+/// A configured robust filter (no state: every call takes a [`RobustState`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Robust {
+    params: RobustParams,
+    world: World,
+}
+
+impl Robust {
+    /// A filter with `params` in `world`; errors on a parameter outside its domain.
+    pub fn new(params: RobustParams, world: World) -> Result<Self> {
+        params.validate()?;
+        Ok(Self { params, world })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &RobustParams {
+        &self.params
+    }
+
+    /// The world frame.
+    pub fn world(&self) -> World {
+        self.world
+    }
+
+    /// A state initialised at attitude `q` (`q_wb` in this filter's world) at `time`, zero bias
+    /// with the prior covariance.
+    pub fn state_at(&self, q: &UnitQuaternion<f64>, time: f64) -> RobustState {
+        let mut s = RobustState::default();
+        step::initialise(
+            &self.params,
+            &mut s,
+            Some(step::from_world(self.world, q)),
+            &Vector3::zeros(),
+            &Vector3::zeros(),
+        );
+        s.q = *q;
+        s.time = time;
+        s
+    }
+
+    /// One streaming sample: an uninitialised `state` is initialised (and `dt` ignored);
+    /// otherwise `dt` [s] must be positive and finite. Errors name the argument.
+    pub fn update(
+        &self,
+        state: &mut RobustState,
+        gyro: &Vector3<f64>,
+        accel: &Vector3<f64>,
+        mag: Option<&Vector3<f64>>,
+        dt: f64,
+    ) -> Result<()> {
+        for (name, v) in [("gyro", Some(gyro)), ("accel", Some(accel)), ("mag", mag)] {
+            if v.is_some_and(|v| !finite(v)) {
+                return Err(Error::NonFinite { index: 0 }.in_argument(name));
+            }
+        }
+        let dt = if state.initialized {
+            if !(dt > 0.0 && dt.is_finite()) {
+                return Err(Error::Parameter {
+                    name: "dt",
+                    expected: "a positive finite step [s]",
+                    got: format!("{dt}"),
+                });
+            }
+            dt
+        } else {
+            0.0
+        };
+        step::step(
+            &self.params,
+            self.world,
+            &Coefs::new(&self.params, dt),
+            state,
+            gyro,
+            accel,
+            mag,
+        );
+        state.time += dt;
+        check_overflow(state, 0)
+    }
+
+    /// Runs over `inputs`, writing one row of `out` per sample. With `continued` false the first
+    /// sample initialises an uninitialised `state` or, for an initialised one, is a step of
+    /// length 0 (output as the state has it, time set); with `continued` true the first sample
+    /// is a step over `t[0] − state.time`. `state` ends as the state after the last sample.
+    pub fn run(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        continued: bool,
+        out: &mut Outputs<'_>,
+    ) -> Result<()> {
+        self.run_with(state, inputs, continued, out, None)
+    }
+
+    /// [`Robust::run`], with the bias of every step taken from `bias` (one row per sample)
+    /// instead of the estimate when given (the smoother's second passes).
+    fn run_with(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        continued: bool,
+        out: &mut Outputs<'_>,
+        bias: Option<&[[f64; 3]]>,
+    ) -> Result<()> {
+        let n = inputs.t.len();
+        check_lengths(inputs)?;
+        if !out.len_ok(n) {
+            return Err(Error::RowCount {
+                input: n,
+                output: out.q.len(),
+            });
+        }
+        if continued && !state.initialized {
+            return Err(Error::Parameter {
+                name: "initial",
+                expected: "an initialised state to continue from",
+                got: "an uninitialised state".into(),
+            });
+        }
+        match inputs.mag {
+            Some(m) => self.run_loop::<true>(state, inputs, m, continued, out, bias),
+            None => self.run_loop::<false>(state, inputs, &[], continued, out, bias),
+        }
+    }
+
+    fn run_loop<const NINE: bool>(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        mags: &[[f64; 3]],
+        continued: bool,
+        out: &mut Outputs<'_>,
+        bias: Option<&[[f64; 3]]>,
+    ) -> Result<()> {
+        let p = &self.params;
+        let mut coefs = Coefs::new(p, 0.0);
+        let mut previous = state.time;
+        for (k, &t) in inputs.t.iter().enumerate() {
+            let gyro = row(&inputs.gyro[k]);
+            let accel = row(&inputs.accel[k]);
+            let mag = if NINE { Some(row(&mags[k])) } else { None };
+            let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.sum());
+            if !sum.is_finite() {
+                non_finite(k, t, &gyro, &accel, mag.as_ref())?;
+            }
+            let dt = if k == 0 && !continued {
+                0.0
+            } else {
+                let dt = t - previous;
+                if dt.is_nan() || dt <= 0.0 {
+                    return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
+                }
+                dt
+            };
+            if dt > 0.0 || !state.initialized {
+                coefs = coefs.for_dt(p, dt);
+                if let Some(b) = bias {
+                    state.bias = row(&b[k]);
+                }
+                step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
+                check_overflow(state, k)?;
+            }
+            state.time = t;
+            previous = t;
+            out.write(k, state);
+        }
+        Ok(())
+    }
+}
+
+/// Every input row count equal to `t`'s.
+fn check_lengths(inputs: &Inputs<'_>) -> Result<()> {
+    let n = inputs.t.len();
+    for (name, x) in [
+        ("gyro", Some(inputs.gyro)),
+        ("accel", Some(inputs.accel)),
+        ("mag", inputs.mag),
+    ] {
+        if let Some(x) = x.filter(|x| x.len() != n) {
+            return Err(Error::RowCount {
+                input: n,
+                output: x.len(),
+            }
+            .in_argument(name));
+        }
+    }
+    Ok(())
+}
+
+/// The error naming the first non-finite input of sample `k` (a finite sum overflowing is none).
+fn non_finite(k: usize, t: f64, gyro: &Vector3<f64>, accel: &Vector3<f64>, mag: Option<&Vector3<f64>>) -> Result<()> {
+    let bad = [
+        ("t", !t.is_finite()),
+        ("gyro", !finite(gyro)),
+        ("accel", !finite(accel)),
+        ("mag", mag.is_some_and(|m| !finite(m))),
+    ];
+    match bad.iter().find(|(_, b)| *b) {
+        Some((name, _)) => Err(Error::NonFinite { index: k }.in_argument(name)),
+        None => Ok(()),
+    }
+}
+
+/// Finite input so large that the state overflowed.
+fn check_overflow(s: &RobustState, index: usize) -> Result<()> {
+    let sum = s.q.coords.sum() + s.bias.sum() + s.lp_s1.sum() + s.heading;
+    if sum.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Overflow { index })
+    }
+}

@@ -1,0 +1,128 @@
+//! The parameters of [`super::Robust`] and their `Default`: the one place every default number
+//! is written (the Python bindings read them from here by name, [`Fields`]). Units are in the
+//! names where they are not SI by context: `_s` seconds, `_rad` radians, `_rad_s` rad/s.
+
+use crate::filters::{check, Fields};
+
+/// Parameters of [`super::Robust`]. Defaults: `docs/filters_robust.md` (chosen on BROAD with
+/// leave-one-group-out cross-validation, `bench/robust_tune.py`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobustParams {
+    /// Time constant of the 2nd-order Butterworth low pass of the specific force in the
+    /// almost-inertial frame [s] (cut-off `1/(2π τ)`).
+    pub tau_acc_s: f64,
+    /// Time constant of the first-order heading correction from the magnetometer [s].
+    pub tau_mag_s: f64,
+    /// Length of one bias-estimation window [s]: corrections are summed over it, then one Kalman
+    /// update (successive low-passed samples are not independent measurements).
+    pub bias_window_s: f64,
+    /// Prior standard deviation of each gyro-bias component [rad/s].
+    pub bias_sigma_init_rad_s: f64,
+    /// Time in which the bias variance grows by `bias_sigma_init²` without measurements [s]
+    /// (random-walk process noise `σ_init²/T` per second).
+    pub bias_forgetting_s: f64,
+    /// Standard deviation of a window's mean correction rate as a bias measurement in motion
+    /// [rad/s].
+    pub bias_sigma_motion_rad_s: f64,
+    /// Standard deviation of a window's mean gyro as a bias measurement at rest [rad/s].
+    pub bias_sigma_rest_rad_s: f64,
+    /// The bias estimate is clipped to ± this per axis [rad/s].
+    pub bias_clip_rad_s: f64,
+    /// Rest: `‖ω − ω̄‖` and `‖ω̄‖` below this [rad/s] (`ω̄` the first-order low pass of the gyro).
+    pub rest_gyro_rad_s: f64,
+    /// Rest: `‖a − ā‖` below this [m/s²] (`ā` the first-order low pass of the accelerometer).
+    pub rest_accel: f64,
+    /// Rest: time the thresholds must hold [s].
+    pub rest_duration_s: f64,
+    /// Time constant of the rest-detection low passes [s].
+    pub rest_tau_s: f64,
+    /// Magnetic disturbance: relative threshold on `|‖m‖ − m₀|/m₀`.
+    pub mag_norm_fraction: f64,
+    /// Magnetic disturbance: threshold on the dip-angle change `|δ − δ₀|` [rad].
+    pub mag_dip_rad: f64,
+    /// After this much uninterrupted rejection the field is used again, with the heading time
+    /// constant multiplied by `mag_slow_factor` [s].
+    pub mag_max_rejection_s: f64,
+    /// Heading time-constant multiplier for a field used after `mag_max_rejection_s`.
+    pub mag_slow_factor: f64,
+    /// A new field, homogeneous (norm and dip within the thresholds of a candidate) while the
+    /// sensor turns, becomes the reference after this many seconds of turning [s].
+    pub mag_new_field_s: f64,
+    /// Minimum rotation rate for time to count towards a new field [rad/s].
+    pub mag_new_field_gyro_rad_s: f64,
+}
+
+impl Default for RobustParams {
+    fn default() -> Self {
+        let deg = 1f64.to_radians();
+        Self {
+            tau_acc_s: 2.0,
+            tau_mag_s: 20.0,
+            bias_window_s: 4.0,
+            bias_sigma_init_rad_s: 0.5 * deg,
+            bias_forgetting_s: 100.0,
+            bias_sigma_motion_rad_s: 0.2 * deg,
+            bias_sigma_rest_rad_s: 0.03 * deg,
+            bias_clip_rad_s: 2.0 * deg,
+            rest_gyro_rad_s: 2.0 * deg,
+            rest_accel: 0.5,
+            rest_duration_s: 1.5,
+            rest_tau_s: 0.5,
+            mag_norm_fraction: 0.1,
+            mag_dip_rad: 10.0 * deg,
+            mag_max_rejection_s: 60.0,
+            mag_slow_factor: 2.0,
+            mag_new_field_s: 20.0,
+            mag_new_field_gyro_rad_s: 20.0 * deg,
+        }
+    }
+}
+
+/// Declares the field names once: [`Fields`] (by-name construction in the bindings) and the
+/// domain check of each (every parameter is finite and positive).
+macro_rules! named {
+    ($($field:ident),+ $(,)?) => {
+        impl Fields for RobustParams {
+            const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
+
+            fn values(&self) -> Vec<f64> {
+                vec![$(self.$field),+]
+            }
+
+            fn from_values(values: &[f64]) -> Option<Self> {
+                let mut it = values.iter().copied();
+                let p = Self { $($field: it.next()?),+ };
+                it.next().is_none().then_some(p)
+            }
+        }
+
+        impl RobustParams {
+            /// Checks every parameter: finite and > 0 (errors name it).
+            pub fn validate(&self) -> crate::Result<()> {
+                $(check(stringify!($field), self.$field, "finite and > 0", |x| x > 0.0)?;)+
+                check("mag_slow_factor", self.mag_slow_factor, "finite and ≥ 1", |x| x >= 1.0)
+            }
+        }
+    };
+}
+
+named!(
+    tau_acc_s,
+    tau_mag_s,
+    bias_window_s,
+    bias_sigma_init_rad_s,
+    bias_forgetting_s,
+    bias_sigma_motion_rad_s,
+    bias_sigma_rest_rad_s,
+    bias_clip_rad_s,
+    rest_gyro_rad_s,
+    rest_accel,
+    rest_duration_s,
+    rest_tau_s,
+    mag_norm_fraction,
+    mag_dip_rad,
+    mag_max_rejection_s,
+    mag_slow_factor,
+    mag_new_field_s,
+    mag_new_field_gyro_rad_s,
+);

@@ -1,0 +1,359 @@
+//! One online step of [`super::Robust`] (internal ENU frame; the equations are in `super`'s
+//! module doc and `docs/filters_robust.md`).
+
+use std::ops::{Add, AddAssign, Mul, Sub};
+
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
+
+use super::params::RobustParams;
+use super::state::RobustState;
+use crate::filters::{initial_attitude, World};
+use crate::quat::{exp, multiply};
+
+/// The coefficients that depend on the step `dt` only, recomputed when it changes.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Coefs {
+    dt: f64,
+    // Butterworth, direct form II transposed: y = b0 x + s1; s1 ← b1 x − a1 y + s2; s2 ← b2 x − a2 y.
+    b0: f64,
+    b1: f64,
+    a1: f64,
+    a2: f64,
+    rest: f64,
+    mag: f64,
+    mag_slow: f64,
+}
+
+impl Coefs {
+    /// For step `dt` [s] (a non-positive step, the first sample's, gives inert coefficients).
+    pub(super) fn new(p: &RobustParams, dt: f64) -> Self {
+        // Bilinear transform of the analogue 2nd-order Butterworth with cut-off 1/(2π τ), prewarped
+        // (Oppenheim & Schafer, Discrete-Time Signal Processing, 3rd ed., §7.1.2).
+        let k = (dt / (2.0 * p.tau_acc_s)).tan();
+        let n = 1.0 / (1.0 + std::f64::consts::SQRT_2 * k + k * k);
+        let b0 = k * k * n;
+        let first_order = |tau: f64| 1.0 - (-dt / tau).exp();
+        Self {
+            dt,
+            b0,
+            b1: 2.0 * b0,
+            a1: 2.0 * (k * k - 1.0) * n,
+            a2: (1.0 - std::f64::consts::SQRT_2 * k + k * k) * n,
+            rest: first_order(p.rest_tau_s),
+            mag: first_order(p.tau_mag_s),
+            mag_slow: first_order(p.tau_mag_s * p.mag_slow_factor),
+        }
+    }
+
+    /// These coefficients if they are for `dt`, else new ones.
+    #[inline(always)]
+    pub(super) fn for_dt(self, p: &RobustParams, dt: f64) -> Self {
+        if self.dt == dt {
+            self
+        } else {
+            Self::new(p, dt)
+        }
+    }
+}
+
+impl Coefs {
+    /// One Butterworth step of input `x` with delay elements `s1`, `s2` (per element).
+    #[inline(always)]
+    fn butter<T>(&self, x: T, s1: &mut T, s2: &mut T) -> T
+    where
+        T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f64, Output = T>,
+    {
+        let y = x * self.b0 + *s1;
+        *s1 = x * self.b1 - y * self.a1 + *s2;
+        *s2 = x * self.b0 - y * self.a2;
+        y
+    }
+}
+
+/// `q_wb` of NED from that of ENU (and back: the rotation is its own inverse): 180° about
+/// `(1, 1, 0)/√2` swaps x and y and flips z.
+fn enu_ned(q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    UnitQuaternion::new_unchecked(multiply(&Quaternion::new(0.0, h, h, 0.0), q.quaternion()))
+}
+
+/// The attitude in `world` from the internal ENU one.
+#[inline(always)]
+pub(super) fn to_world(world: World, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    match world {
+        World::Enu => *q,
+        World::Ned => enu_ned(q),
+    }
+}
+
+/// The internal ENU attitude from one in `world`.
+pub(super) fn from_world(world: World, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    to_world(world, q)
+}
+
+/// `q ⊗ r` renormalised by one Newton step (both unit: the product is unit to rounding, this
+/// stops the rounding from accumulating without a square root).
+#[inline(always)]
+fn compose(q: &UnitQuaternion<f64>, r: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let p = multiply(q.quaternion(), r.quaternion());
+    UnitQuaternion::new_unchecked(p * (0.5 * (3.0 - p.norm_squared())))
+}
+
+/// Rotation about the vertical by `psi` [rad].
+#[inline(always)]
+fn yaw(psi: f64) -> UnitQuaternion<f64> {
+    let (s, c) = (0.5 * psi).sin_cos();
+    UnitQuaternion::new_unchecked(Quaternion::new(c, 0.0, 0.0, s))
+}
+
+/// `x` wrapped to (−π, π].
+#[inline(always)]
+fn wrap(x: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    x - TAU * ((x + PI) / TAU).floor()
+}
+
+/// Sets up `s` at the first sample: attitude from `initial` (internal ENU) or from the
+/// accelerometer (yaw 0), heading from the field when there is one and no initial attitude.
+pub(super) fn initialise(
+    p: &RobustParams,
+    s: &mut RobustState,
+    initial: Option<UnitQuaternion<f64>>,
+    gyro: &Vector3<f64>,
+    accel: &Vector3<f64>,
+) {
+    s.q_gyro = initial.unwrap_or_else(|| initial_attitude(World::Enu, accel, None));
+    s.q_incl = UnitQuaternion::identity();
+    s.heading = 0.0;
+    s.bias_cov = Matrix3::identity() * p.bias_sigma_init_rad_s.powi(2);
+    s.rest_gyro = *gyro;
+    s.rest_accel = *accel;
+    s.initialized = true;
+}
+
+/// One sample on validated input with coefficients `c` for its step `c.dt` (0 on the first
+/// sample of an uninitialised state, which only initialises). Updates `s.q` (in `world`).
+#[inline(always)]
+pub(super) fn step(
+    p: &RobustParams,
+    world: World,
+    c: &Coefs,
+    s: &mut RobustState,
+    gyro: &Vector3<f64>,
+    accel: &Vector3<f64>,
+    mag: Option<&Vector3<f64>>,
+) {
+    let dt = c.dt;
+    if !s.initialized {
+        initialise(p, s, None, gyro, accel);
+        if let Some(m) = mag {
+            let m_e = s.q_gyro * m;
+            if m_e.x != 0.0 || m_e.y != 0.0 {
+                s.heading = m_e.x.atan2(m_e.y);
+            }
+        }
+    }
+    if dt > 0.0 {
+        rest_detection(p, c, s, gyro, accel);
+        s.q_gyro = compose(&s.q_gyro, &exp(&((gyro - s.bias) * dt)));
+    }
+    let a_i = s.q_gyro * accel;
+    if !s.lp_ready {
+        // Steady state for a constant input: the low pass starts at its first sample.
+        s.lp_s2 = a_i * (c.b0 - c.a2);
+        s.lp_s1 = a_i * (c.b1 - c.a1) + s.lp_s2;
+        s.lp_ready = true;
+    }
+    let a_f = c.butter(a_i, &mut s.lp_s1, &mut s.lp_s2);
+
+    // Inclination: rotate E' so that the filtered specific force points up. The rotation taking
+    // the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0) (half-angle identity).
+    let a_e = s.q_incl * a_f;
+    let an = a_e.norm();
+    let mut corr = Vector3::zeros();
+    // A zero or overflowing (finite but huge) specific force has no direction.
+    if an > 1e-9 && an.is_finite() {
+        let n = a_e / an;
+        let w = 1.0 + n.z;
+        let qc = if w > 1e-9 {
+            let k = 1.0 / (2.0 * w).sqrt();
+            Quaternion::new(w * k, n.y * k, -n.x * k, 0.0)
+        } else {
+            Quaternion::new(0.0, 1.0, 0.0, 0.0)
+        };
+        corr = Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0);
+        s.q_incl = compose(&UnitQuaternion::new_unchecked(qc), &s.q_incl);
+    }
+    let q6 = compose(&s.q_incl, &s.q_gyro);
+    let r6 = *q6.to_rotation_matrix().matrix();
+
+    let mut heading_gain = None;
+    if let Some(m) = mag {
+        if let Some((gain, err)) = magnetometer(p, c, s, &(r6 * m), gyro) {
+            s.heading = wrap(s.heading + gain * err);
+            corr.z = gain * err;
+            heading_gain = Some(gain);
+        }
+    }
+    if dt > 0.0 {
+        bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
+    }
+    let q = if mag.is_some() {
+        compose(&yaw(s.heading), &q6)
+    } else {
+        q6
+    };
+    s.q = to_world(world, &q);
+}
+
+/// First-order low passes of gyro and accelerometer; rest once both stay close to them (and the
+/// gyro small) for `rest_duration_s`.
+#[inline(always)]
+fn rest_detection(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vector3<f64>, accel: &Vector3<f64>) {
+    s.rest_gyro += (gyro - s.rest_gyro) * c.rest;
+    s.rest_accel += (accel - s.rest_accel) * c.rest;
+    let th = p.rest_gyro_rad_s * p.rest_gyro_rad_s;
+    let still = (gyro - s.rest_gyro).norm_squared() < th
+        && s.rest_gyro.norm_squared() < th
+        && (accel - s.rest_accel).norm_squared() < p.rest_accel * p.rest_accel;
+    s.rest_time = if still { s.rest_time + c.dt } else { 0.0 };
+    s.rest = s.rest_time >= p.rest_duration_s;
+}
+
+/// Disturbance detection and the heading error of field `m_e` (frame E'): `Some((gain, error))`
+/// when the field is used. The reference (norm, dip) is learned from the first sample; a field
+/// that stays homogeneous while the sensor turns for `mag_new_field_s` becomes the reference.
+#[inline(always)]
+fn magnetometer(
+    p: &RobustParams,
+    c: &Coefs,
+    s: &mut RobustState,
+    m_e: &Vector3<f64>,
+    gyro: &Vector3<f64>,
+) -> Option<(f64, f64)> {
+    let norm = m_e.norm();
+    if norm.is_nan() || norm <= 0.0 {
+        return None;
+    }
+    // Dip below the horizontal, E' vertical being z.
+    let dip = (-m_e.z / norm).clamp(-1.0, 1.0).asin();
+    let near = |n0: f64, d0: f64| (norm - n0).abs() <= p.mag_norm_fraction * n0 && (dip - d0).abs() <= p.mag_dip_rad;
+    if !s.mag_ready {
+        (s.mag_norm, s.mag_dip, s.mag_ready) = (norm, dip, true);
+        (s.cand_norm, s.cand_dip, s.cand_time) = (norm, dip, 0.0);
+    }
+    if near(s.cand_norm, s.cand_dip) {
+        if gyro.norm_squared() > p.mag_new_field_gyro_rad_s * p.mag_new_field_gyro_rad_s {
+            s.cand_time += c.dt;
+        }
+    } else {
+        (s.cand_norm, s.cand_dip, s.cand_time) = (norm, dip, 0.0);
+    }
+    let mut accepted = near(s.mag_norm, s.mag_dip);
+    if !accepted && s.cand_time >= p.mag_new_field_s {
+        (s.mag_norm, s.mag_dip) = (s.cand_norm, s.cand_dip);
+        accepted = true;
+    }
+    s.mag_disturbed = !accepted;
+    let gain = if accepted {
+        s.mag_rejected = 0.0;
+        c.mag
+    } else {
+        s.mag_rejected += c.dt;
+        if s.mag_rejected < p.mag_max_rejection_s {
+            return None;
+        }
+        c.mag_slow
+    };
+    if m_e.x == 0.0 && m_e.y == 0.0 {
+        return None;
+    }
+    // North is +y: the heading that turns the horizontal field onto it.
+    Some((gain, wrap(m_e.x.atan2(m_e.y) - s.heading)))
+}
+
+/// Accumulates one sample into the bias window and, when the window is full, makes one Kalman
+/// update of the bias.
+///
+/// In motion (derivation in `docs/filters_robust.md`): with `ε = b − b̂` the estimate turns at
+/// `R ε` in the world; the inclination loop answers with corrections `c = −L∗(R ε)` (`L` the
+/// Butterworth, for small angles, x and y) and the heading loop with `c_z = −F∗(R ε)_z` (`F` its
+/// first-order loop, while the field is used). Running the same loops on `R` and on `R b̂` gives
+/// `S = Σ L∗R dt` and `O = Σ L∗(R b̂) dt`, and `C = Σ c = −S b + O`: a measurement of `b` itself
+/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length). At rest: the
+/// mean gyro, `H = I`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // one sample's pieces, all needed
+fn bias_window(
+    p: &RobustParams,
+    c: &Coefs,
+    s: &mut RobustState,
+    gyro: &Vector3<f64>,
+    corr: &Vector3<f64>,
+    r6: &Matrix3<f64>,
+    nine: bool,
+    heading_gain: Option<f64>,
+) {
+    let dt = c.dt;
+    let rb = r6 * s.bias;
+    let rot_xy = r6.fixed_rows::<2>(0).into_owned();
+    let lr = c.butter(rot_xy, &mut s.loop_rot1, &mut s.loop_rot2);
+    let lb = c.butter(Vector2::new(rb.x, rb.y), &mut s.loop_bias1, &mut s.loop_bias2);
+    s.win_rot.fixed_rows_mut::<2>(0).add_assign(lr * dt);
+    s.win_off.x += lb.x * dt;
+    s.win_off.y += lb.y * dt;
+    if nine {
+        s.loop_head_rot += r6.row(2).transpose() * dt;
+        s.loop_head_bias += rb.z * dt;
+        if let Some(k) = heading_gain {
+            let (out_r, out_b) = (s.loop_head_rot * k, s.loop_head_bias * k);
+            s.loop_head_rot -= out_r;
+            s.loop_head_bias -= out_b;
+            s.win_rot.row_mut(2).add_assign(out_r.transpose());
+            s.win_off.z += out_b;
+            s.win_mag_time += dt;
+        }
+    }
+    s.win_time += dt;
+    s.win_rest &= s.rest;
+    s.win_gyro += gyro * dt;
+    s.win_corr += corr;
+    if s.win_time < p.bias_window_s {
+        return;
+    }
+    let t = s.win_time;
+    s.bias_cov += Matrix3::identity() * (p.bias_sigma_init_rad_s.powi(2) / p.bias_forgetting_s * t);
+    let (h, innovation, r) = if s.win_rest {
+        (
+            Matrix3::identity(),
+            s.win_gyro / t - s.bias,
+            p.bias_sigma_rest_rad_s.powi(2),
+        )
+    } else {
+        let mut h = -s.win_rot / t;
+        if s.win_mag_time < 0.5 * t {
+            h.row_mut(2).fill(0.0);
+        }
+        let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
+        if s.win_mag_time < 0.5 * t {
+            innovation.z = 0.0;
+        }
+        (h, innovation, p.bias_sigma_motion_rad_s.powi(2))
+    };
+    let pm = s.bias_cov;
+    let innovation_cov = h * pm * h.transpose() + Matrix3::identity() * r;
+    if let Some(inv) = innovation_cov.try_inverse() {
+        let k = pm * h.transpose() * inv;
+        let clip = p.bias_clip_rad_s;
+        s.bias = (s.bias + k * innovation).map(|b| b.clamp(-clip, clip));
+        let pn = (Matrix3::identity() - k * h) * pm;
+        s.bias_cov = (pn + pn.transpose()) * 0.5;
+    }
+    s.win_time = 0.0;
+    s.win_rest = true;
+    s.win_gyro = Vector3::zeros();
+    s.win_corr = Vector3::zeros();
+    s.win_rot = Matrix3::zeros();
+    s.win_off = Vector3::zeros();
+    s.win_mag_time = 0.0;
+}

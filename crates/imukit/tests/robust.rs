@@ -1,0 +1,438 @@
+//! `Robust` on simulated motion: accelerations do not tilt it, the bias is estimated with a
+//! consistent σ, a disturbed field changes neither inclination nor heading, streaming = batch,
+//! save / restore / resume, NED = ENU rotated, the smoother deterministic and finite.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use imukit::filters::{Inputs, Robust, RobustParams, RobustState, RobustTrack, World};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+const G: f64 = 9.81;
+const RATE: f64 = 100.0;
+
+/// A simulated record: truth `q_wb` (ENU) and the sensor samples.
+struct Record {
+    t: Vec<f64>,
+    truth: Vec<UnitQuaternion<f64>>,
+    gyro: Vec<[f64; 3]>,
+    accel: Vec<[f64; 3]>,
+    mag: Vec<[f64; 3]>,
+}
+
+impl Record {
+    fn inputs(&self, nine: bool) -> Inputs<'_> {
+        Inputs {
+            t: &self.t,
+            gyro: &self.gyro,
+            accel: &self.accel,
+            mag: nine.then_some(&self.mag[..]),
+        }
+    }
+}
+
+/// Deterministic standard normal numbers (xorshift64* and Box–Muller), one stream per seed.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn normal(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+
+    fn vec(&mut self, sigma: f64) -> Vector3<f64> {
+        Vector3::new(self.normal(), self.normal(), self.normal()) * sigma
+    }
+}
+
+const FIELD: [f64; 3] = [0.0, 20.0, -40.0]; // µT, ENU: north and down (dip about 63°)
+
+/// `seconds` of motion with body rate `omega(t)`, world acceleration `acc(t)` (ENU, m/s²), world
+/// field `field(t)`, gyro bias `bias`, white noise `sigma_gyro` / `sigma_acc` from `seed`.
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    seconds: f64,
+    q0: UnitQuaternion<f64>,
+    omega: impl Fn(f64) -> Vector3<f64>,
+    acc: impl Fn(f64) -> Vector3<f64>,
+    field: impl Fn(f64) -> Vector3<f64>,
+    bias: Vector3<f64>,
+    (sigma_gyro, sigma_acc, seed): (f64, f64, u64),
+) -> Record {
+    let n = (seconds * RATE) as usize;
+    let mut noise = Noise(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+    let mut q = q0;
+    let mut r = Record {
+        t: Vec::new(),
+        truth: Vec::new(),
+        gyro: Vec::new(),
+        accel: Vec::new(),
+        mag: Vec::new(),
+    };
+    for k in 0..n {
+        let t = k as f64 / RATE;
+        let w = omega(t);
+        let f = q.inverse() * (acc(t) + Vector3::new(0.0, 0.0, G)) + noise.vec(sigma_acc);
+        r.t.push(t);
+        r.truth.push(q);
+        r.gyro.push((w + bias + noise.vec(sigma_gyro)).into());
+        r.accel.push(f.into());
+        r.mag.push((q.inverse() * field(t)).into());
+        q *= UnitQuaternion::from_scaled_axis(w / RATE);
+    }
+    r
+}
+
+/// The attitude of row `k`.
+fn quat(o: &RobustTrack, k: usize) -> UnitQuaternion<f64> {
+    let [x, y, z, w] = o.q[k];
+    UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z))
+}
+
+fn run(f: &Robust, r: &Record, nine: bool, offline: bool) -> RobustTrack {
+    let mut out = RobustTrack::new(r.t.len());
+    let mut s = RobustState::default();
+    if offline {
+        f.smooth(&mut s, &r.inputs(nine), &mut out.outputs()).unwrap();
+    } else {
+        f.run(&mut s, &r.inputs(nine), false, &mut out.outputs()).unwrap();
+    }
+    out
+}
+
+/// Turning (after 5 s at rest) with noise, no acceleration, the clean field.
+fn turning_record(seconds: f64, bias: Vector3<f64>, seed: u64) -> Record {
+    simulate(
+        seconds,
+        tilted(),
+        turning,
+        |_| Vector3::zeros(),
+        |_| FIELD.into(),
+        bias,
+        (0.003, 0.03, seed),
+    )
+}
+
+/// Angle between the estimated and the true up direction in the body [°].
+fn tilt_deg(est: &UnitQuaternion<f64>, truth: &UnitQuaternion<f64>) -> f64 {
+    let (a, b) = (est.inverse() * Vector3::z(), truth.inverse() * Vector3::z());
+    a.angle(&b).to_degrees()
+}
+
+/// Heading of `q`'s body x axis projected on the horizontal [rad] (ENU).
+fn heading(q: &UnitQuaternion<f64>) -> f64 {
+    let x = q * Vector3::x();
+    x.y.atan2(x.x)
+}
+
+fn filter() -> Robust {
+    Robust::new(RobustParams::default(), World::Enu).unwrap()
+}
+
+fn turning(t: f64) -> Vector3<f64> {
+    if t < 5.0 {
+        Vector3::zeros()
+    } else {
+        Vector3::new(
+            0.4 * (0.7 * t).sin(),
+            0.3 * (0.5 * t + 1.0).sin(),
+            0.5 * (0.3 * t).cos(),
+        )
+    }
+}
+
+fn tilted() -> UnitQuaternion<f64> {
+    UnitQuaternion::from_euler_angles(0.3, -0.2, 1.0)
+}
+
+#[test]
+fn figure_eight_accelerations_cancel() {
+    // Horizontal figure eight with 3 m/s² peaks on each axis (period 4 s) while turning, faded in
+    // over 10 s (a sine switched on at full amplitude has a low-frequency part of its own).
+    let w = std::f64::consts::TAU / 4.0;
+    let acc = |t: f64| Vector3::new(-3.0 * (w * t).sin(), -3.0 * (2.0 * w * t).sin(), 0.0) * (t / 10.0).min(1.0);
+    let r = simulate(
+        60.0,
+        tilted(),
+        turning,
+        acc,
+        |_| FIELD.into(),
+        Vector3::zeros(),
+        (0.0, 0.0, 1),
+    );
+    let out = run(&filter(), &r, false, false);
+    let worst = (0..r.t.len())
+        .map(|k| tilt_deg(&quat(&out, k), &r.truth[k]))
+        .fold(0.0, f64::max);
+    // A filter correcting towards the raw accelerometer tilts by up to atan(3√2/g) ≈ 23°; the
+    // Butterworth (τ = 2 s) passes 10% at 0.25 Hz, so about 1.7° plus the bias loop's share. The
+    // issue's 0.5° needs τ ≈ 4 s, which costs accuracy on BROAD (docs/filters_robust.md).
+    assert!(worst < 3.0, "worst tilt {worst}°");
+}
+
+#[test]
+fn sustained_acceleration_leaks_in_bounded_and_leaves() {
+    // 5 m/s² east for 10 s: a low pass of τ = 2 s cannot tell it from gravity for that long
+    // (docs/filters_robust.md, limits: the issue's 0.5° is not met); the tilt stays near the
+    // raw-accelerometer error atan(5/g) = 27° (Butterworth overshoot 4%, and the bias loop takes
+    // part of the tilt for drift: 32.7° measured) and returns within 15 s.
+    let acc = |t: f64| {
+        if (10.0..20.0).contains(&t) {
+            Vector3::new(5.0, 0.0, 0.0)
+        } else {
+            Vector3::zeros()
+        }
+    };
+    let r = simulate(
+        50.0,
+        tilted(),
+        |_| Vector3::zeros(),
+        acc,
+        |_| FIELD.into(),
+        Vector3::zeros(),
+        (0.0, 0.0, 2),
+    );
+    let out = run(&filter(), &r, false, false);
+    let tilt: Vec<f64> = (0..r.t.len()).map(|k| tilt_deg(&quat(&out, k), &r.truth[k])).collect();
+    let during = tilt[..(20.0 * RATE) as usize].iter().fold(0.0, |a: f64, &b| a.max(b));
+    let after = tilt[(35.0 * RATE) as usize..].iter().fold(0.0, |a: f64, &b| a.max(b));
+    assert!(tilt[(10.0 * RATE) as usize - 1] < 1e-6);
+    assert!(during < 35.0 && during > 5.0, "{during}");
+    assert!(after < 0.5, "{after}");
+}
+
+#[test]
+fn bias_estimated_and_sigma_consistent_over_seeds() {
+    let deg = 1f64.to_radians();
+    let bias = Vector3::new(1.0, -1.0, 1.0) * deg;
+    // Rest 5 s, then 25 s turning and 5 s rest, repeated.
+    let omega = |t: f64| {
+        if t % 30.0 < 5.0 {
+            Vector3::zeros()
+        } else {
+            turning(t)
+        }
+    };
+    let mut covered = 0;
+    let mut total = 0;
+    for nine in [false, true] {
+        for seed in 0..8 {
+            let r = simulate(
+                150.0,
+                tilted(),
+                omega,
+                |_| Vector3::zeros(),
+                |_| FIELD.into(),
+                bias,
+                (0.003, 0.03, seed),
+            );
+            let out = run(&filter(), &r, nine, false);
+            let k = (124.9 * RATE) as usize; // the end of a rest phase
+            for i in 0..3 {
+                let err = out.bias[k][i] - bias[i];
+                // The issue asks 0.02 °/s; measured up to 0.041 over these seeds with the 4 s bias
+                // window (0.031 with 1 s, which is worse on BROAD 9D): docs/filters_robust.md.
+                assert!(
+                    err.abs() < 0.05 * deg,
+                    "nine {nine} seed {seed} axis {i}: {}°/s",
+                    err / deg
+                );
+                assert!(out.bias_sigma[k][i] < 0.2 * deg && out.bias_sigma[k][i] > 0.0);
+                // σ over the second half, sampled every 5 s
+                for m in (r.t.len() / 2..r.t.len()).step_by(500) {
+                    total += 1;
+                    if (out.bias[m][i] - bias[i]).abs() <= 2.0 * out.bias_sigma[m][i] {
+                        covered += 1;
+                    }
+                }
+            }
+        }
+    }
+    // 2σ covers 95% of a Gaussian error; a σ too small by half would cover about 68%.
+    assert!(covered as f64 >= 0.9 * total as f64, "{covered} of {total}");
+}
+
+#[test]
+fn rest_is_detected_and_motion_is_not() {
+    let r = turning_record(40.0, Vector3::zeros(), 3);
+    let out = run(&filter(), &r, false, false);
+    assert!(out.rest[(4.5 * RATE) as usize]);
+    assert!(
+        !out.rest[(2.0 * RATE) as usize..(5.0 * RATE) as usize]
+            .iter()
+            .all(|&x| x)
+            || out.rest[(4.9 * RATE) as usize]
+    );
+    assert!(out.rest[(7.0 * RATE) as usize..].iter().all(|&x| !x));
+}
+
+#[test]
+fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
+    // From 20 s to 40 s the field is 1.5 times as strong and turned by 46° about the vertical.
+    let disturbed = |t: f64| {
+        let f = Vector3::from(FIELD);
+        if (20.0..40.0).contains(&t) {
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 0.8) * f * 1.5
+        } else {
+            f
+        }
+    };
+    for offline in [false, true] {
+        let clean = turning_record(60.0, Vector3::zeros(), 4);
+        let dist = simulate(
+            60.0,
+            tilted(),
+            turning,
+            |_| Vector3::zeros(),
+            disturbed,
+            Vector3::zeros(),
+            (0.003, 0.03, 4),
+        );
+        let (a, b) = (
+            run(&filter(), &clean, true, offline),
+            run(&filter(), &dist, true, offline),
+        );
+        let (mut incl, mut head) = (0.0f64, 0.0f64);
+        for k in 0..clean.t.len() {
+            let (qa, qb) = (quat(&a, k), quat(&b, k));
+            incl = incl.max(tilt_deg(&qa, &qb));
+            let d = (heading(&qa) - heading(&qb)).to_degrees();
+            head = head.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
+        }
+        // The smoother fuses two bias estimates, each of which saw the disturbance differently.
+        let bound = if offline { 0.2 } else { 0.1 };
+        assert!(incl < bound, "offline {offline}: inclination {incl}°");
+        assert!(head < 2.0, "offline {offline}: heading {head}°");
+        assert!(b.mag_disturbed[(25.0 * RATE) as usize] && !b.mag_disturbed[(15.0 * RATE) as usize]);
+        // The clean run's heading is right.
+        let k = clean.t.len() - 1;
+        let e = (heading(&quat(&a, k)) - heading(&clean.truth[k])).to_degrees();
+        assert!(e.abs() < 1.0, "{e}");
+    }
+}
+
+#[test]
+fn streaming_equals_batch_and_resume_equals_uninterrupted() {
+    let r = turning_record(20.0, Vector3::zeros(), 5);
+    let f = filter();
+    for nine in [false, true] {
+        let batch = run(&f, &r, nine, false);
+        let mut s = RobustState::default();
+        for k in 0..r.t.len() {
+            let dt = if k == 0 { 0.0 } else { r.t[k] - r.t[k - 1] };
+            let m = Vector3::from(r.mag[k]);
+            f.update(&mut s, &r.gyro[k].into(), &r.accel[k].into(), nine.then_some(&m), dt)
+                .unwrap();
+            assert_eq!(<[f64; 4]>::from(s.q.coords), batch.q[k]);
+            assert_eq!(<[f64; 3]>::from(s.bias), batch.bias[k]);
+        }
+        // Resume: the first half, then the second continued from the saved state.
+        let h = r.t.len() / 2;
+        let mut s = RobustState::default();
+        let mut first = RobustTrack::new(h);
+        let cut = |a: usize, b: usize| Inputs {
+            t: &r.t[a..b],
+            gyro: &r.gyro[a..b],
+            accel: &r.accel[a..b],
+            mag: nine.then_some(&r.mag[a..b]),
+        };
+        f.run(&mut s, &cut(0, h), false, &mut first.outputs()).unwrap();
+        let saved = s;
+        let mut second = RobustTrack::new(r.t.len() - h);
+        f.run(&mut s, &cut(h, r.t.len()), true, &mut second.outputs()).unwrap();
+        assert_eq!(second.q, batch.q[h..]);
+        let mut again = RobustTrack::new(r.t.len() - h);
+        let mut restored = RobustState::restored(&imukit::filters::Fields::values(&saved)).unwrap();
+        f.run(&mut restored, &cut(h, r.t.len()), true, &mut again.outputs())
+            .unwrap();
+        assert_eq!(again.q, second.q);
+    }
+}
+
+#[test]
+fn ned_is_enu_turned() {
+    let r = turning_record(20.0, Vector3::zeros(), 6);
+    let enu = run(&filter(), &r, true, false);
+    let ned = run(
+        &Robust::new(RobustParams::default(), World::Ned).unwrap(),
+        &r,
+        true,
+        false,
+    );
+    // R_ned_enu: x ↔ y, z → −z.
+    let c = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::new(
+        0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0,
+    )));
+    for k in (0..r.t.len()).step_by(97) {
+        assert!((c * quat(&enu, k)).angle_to(&quat(&ned, k)) < 1e-9);
+    }
+}
+
+#[test]
+fn offline_is_deterministic_finite_and_better_at_the_start() {
+    let deg = 1f64.to_radians();
+    let bias = Vector3::new(0.5, -0.3, 0.2) * deg;
+    let r = turning_record(60.0, bias, 7);
+    let f = filter();
+    for nine in [false, true] {
+        let (a, b) = (run(&f, &r, nine, true), run(&f, &r, nine, true));
+        assert_eq!(a.q, b.q);
+        assert_eq!(a.bias, b.bias);
+        let n = r.t.len();
+        assert!(a.q[0]
+            .iter()
+            .chain(&a.q[n - 1])
+            .chain(&a.bias[0])
+            .all(|x| x.is_finite()));
+        // The smoothed bias at the start knows what the forward pass learns later.
+        let online = run(&f, &r, nine, false);
+        let err = |o: &RobustTrack, k: usize| (Vector3::from(o.bias[k]) - bias).norm();
+        assert!(
+            err(&a, 10) < 0.5 * err(&online, 10),
+            "{} {}",
+            err(&a, 10),
+            err(&online, 10)
+        );
+        let worst = |o: &RobustTrack| (0..n).map(|k| tilt_deg(&quat(o, k), &r.truth[k])).fold(0.0, f64::max);
+        assert!(worst(&a) < worst(&online), "{} {}", worst(&a), worst(&online));
+    }
+}
+
+#[test]
+fn errors_name_the_input() {
+    let f = filter();
+    let mut s = RobustState::default();
+    let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+    let e = f.update(&mut s, &nan, &Vector3::z(), None, 0.01).unwrap_err();
+    assert_eq!(e.argument(), Some("gyro"));
+    let bad = RobustParams {
+        tau_acc_s: -1.0,
+        ..RobustParams::default()
+    };
+    assert!(Robust::new(bad, World::Enu).is_err());
+    let r = simulate(
+        1.0,
+        tilted(),
+        turning,
+        |_| Vector3::zeros(),
+        |_| FIELD.into(),
+        Vector3::zeros(),
+        (0.0, 0.0, 8),
+    );
+    let mut t = r.t.clone();
+    t[5] = t[4];
+    let inputs = Inputs {
+        t: &t,
+        ..r.inputs(false)
+    };
+    let mut out = RobustTrack::new(t.len());
+    let e = f
+        .run(&mut RobustState::default(), &inputs, false, &mut out.outputs())
+        .unwrap_err();
+    assert_eq!((e.argument(), e.index()), (Some("t"), Some(5)));
+}
