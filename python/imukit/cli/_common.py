@@ -7,9 +7,10 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
@@ -284,11 +285,45 @@ def add_plot_option(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
-def unpaired(what: str, n_outside_span: int, n_in_gaps: int, max_dt: str) -> str:
-    """One line saying which ``what`` (e.g. ``"estimate poses"``) had no ground truth to be scored
-    against and why: outside the truth's span, or in its gaps longer than ``max_dt`` (e.g.
-    ``"--max-dt = 0.02 s"``); from :func:`imukit.eval.ape`'s counts."""
+def add_max_dt_option(parser: argparse.ArgumentParser) -> None:
+    """``--max-dt``: the longest ground-truth step the reference is interpolated across."""
+    parser.add_argument(
+        "--max-dt",
+        type=positive,
+        metavar="S",
+        help=f"longest ground-truth step to interpolate the reference across [s] (default: "
+        f"{io.REFERENCE_GAP_FACTOR:g} x the truth's median step, its own rate); samples in longer gaps or "
+        "outside the truth's span are not scored, and counted",
+    )
+
+
+class Paired(Protocol):
+    """What :func:`scored` reads: an :class:`imukit.eval.Association`, ``AbsoluteError`` or ``RelativeError``."""
+
+    @property
+    def mask(self) -> NDArray[np.bool_]: ...
+    @property
+    def n_outside_span(self) -> int: ...
+    @property
+    def n_in_gaps(self) -> int: ...
+    @property
+    def max_dt(self) -> float: ...
+
+
+def scored(what: str, paired: Paired, given: float | None) -> str:
+    """One line: how many of ``what`` (e.g. ``"IMU samples"``) were scored against the ground truth, as
+    a fraction of all, and why the others were not (outside its span, in its gaps longer than the
+    limit: ``--max-dt`` when ``given``, else the one derived from the truth's rate)."""
+    total, kept = len(paired.mask), int(np.count_nonzero(paired.mask))
+    line = f"scored {kept} of {total} {what} ({kept / total:.2%})"
+    if kept == total:
+        return line
+    limit = (
+        f"--max-dt = {given:g} s"
+        if given is not None
+        else f"{paired.max_dt:.4g} s ({io.REFERENCE_GAP_FACTOR:g} x its median step; --max-dt sets it)"
+    )
     return (
-        f"{n_outside_span + n_in_gaps} {what} had no ground truth and were left out: {n_outside_span} outside "
-        f"its span (before its first or after its last stamp), {n_in_gaps} in its gaps longer than {max_dt}"
+        f"{line}; left out {paired.n_outside_span} outside the ground truth's span (before its first or after "
+        f"its last stamp), {paired.n_in_gaps} in its gaps longer than {limit}"
     )

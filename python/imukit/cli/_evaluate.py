@@ -8,7 +8,16 @@ from typing import Any
 
 from rich.table import Table
 
-from imukit.cli._common import add_plot_option, out, output_path, positive, read_trajectory, unpaired, wrote
+from imukit.cli._common import (
+    add_max_dt_option,
+    add_plot_option,
+    out,
+    output_path,
+    positive,
+    read_trajectory,
+    scored,
+    wrote,
+)
 from imukit.eval import ErrorStats, ape, rpe
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
@@ -21,8 +30,9 @@ Definitions and the comparison with evo: docs/evaluation.md.
 
 Reads: EST and GT as trajectory files, format detected: TUM (`t x y z qx qy qz qw`), an EuRoC
 ground-truth CSV, a TUM-VI mocap CSV. Each EST pose is paired with GT interpolated at its stamp
-(position linear, rotation slerp; not across GT gaps over --max-dt s); unpaired poses are counted,
-those outside GT's span apart from those in its gaps.
+(position linear, rotation slerp; not across GT steps over --max-dt s, by default 2.5 x GT's median
+step); the poses scored are printed as a fraction of all, the others counted: outside GT's span
+apart from in its gaps.
 Alignment (--align): se3 (rotation + translation, Umeyama; the default), sim3 (+ scale: monocular
 VO), yaw (rotation about z + translation: the 4 unobservable DoF of VIO), position (translation
 only), none.
@@ -46,9 +56,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--align", choices=ALIGNMENTS, default="se3", help="alignment before the ATE (default: %(default)s)")
     p.add_argument("--delta", type=positive, metavar="D", help="also the RPE over pairs D apart (see --delta-unit)")
     p.add_argument("--delta-unit", choices=("m", "s", "frames"), default="m", help="unit of --delta (default: m)")
-    p.add_argument(
-        "--max-dt", type=positive, default=0.02, metavar="S", help="largest GT gap to interpolate over [s] (0.02)"
-    )
+    add_max_dt_option(p)
     p.add_argument(
         "--offset",
         type=float,
@@ -90,9 +98,7 @@ def run(args: argparse.Namespace) -> int:
         _row(table, f"RPE translation / {span}", relative.translation_stats, "m", 1.0)
         _row(table, f"RPE rotation / {span}", relative.rotation_stats, "deg", math.degrees(1.0))
     out.print(table)
-    if absolute.n_dropped:
-        counts = absolute.n_outside_span, absolute.n_in_gaps
-        out.print(unpaired("estimate poses", *counts, f"--max-dt = {args.max_dt:g} s"), markup=False)
+    out.print(scored("estimate poses", absolute, args.max_dt), markup=False)
     if absolute.alignment.scale != 1.0:
         out.print(f"sim3 scale: {absolute.alignment.scale:.6g}", markup=False)
     if png is not None:

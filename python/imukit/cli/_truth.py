@@ -9,12 +9,15 @@ from scipy.spatial.transform import Rotation
 from imukit._errors import ParameterError
 from imukit.cli._common import CliError
 from imukit.eval import Association, associate
+from imukit.eval._associate import span_text
 from imukit.imu import ImuData
+from imukit.io import reference_max_dt
 from imukit.state import Trajectory
 
 
-def truth_at(truth: Trajectory, imu: ImuData, *, max_dt: float, option: str) -> Association:
-    """``truth`` at ``imu``'s stamps where :func:`imukit.eval.associate` pairs them with ``max_dt``;
+def truth_at(truth: Trajectory, imu: ImuData, *, max_dt: float | None, option: str) -> Association:
+    """``truth`` at ``imu``'s stamps where :func:`imukit.eval.associate` pairs them with ``max_dt`` (None:
+    by the truth's own rate, :func:`imukit.io.reference_max_dt`);
     ``.mask`` marks the IMU samples that have it and ``.n_outside_span`` / ``.n_in_gaps`` count the
     others. A truth without velocity gets it from its positions' central differences. No sample
     paired: a CliError naming ``option`` (the command's option that sets ``max_dt``)."""
@@ -37,8 +40,9 @@ def truth_at(truth: Trajectory, imu: ImuData, *, max_dt: float, option: str) -> 
     try:
         return associate(stamps, truth, max_dt=max_dt)
     except ParameterError as exc:
+        limit = reference_max_dt(truth) if max_dt is None else max_dt
         raise CliError(
             f"{option}: no IMU sample lies where the ground truth can be interpolated (truth "
-            f"{truth.t[0]:.9g} … {truth.t[-1]:.9g} s, IMU {imu.t[0]:.9g} … {imu.t[-1]:.9g} s, gaps over "
-            f"{max_dt:g} s not bridged)"
+            f"{span_text(truth.t[0], truth.t[-1])}, IMU {span_text(imu.t[0], imu.t[-1])}, gaps over "
+            f"{limit:.4g} s not bridged)"
         ) from exc

@@ -21,7 +21,8 @@ Kalibr ``imu.yaml``    :func:`write_kalibr_imu`, :func:`read_kalibr_imu` → :cl
                        continuous-time noise densities (:class:`imukit.ImuNoise`) and the rate
 new formats            :class:`Format` (a name, a sniff, a reader) and :func:`register_format`: detection,
                        its error text and the CLI's help take it up; :func:`formats` lists them
-gaps                   :func:`find_gaps`: steps between samples far longer than the others
+gaps                   :func:`find_gaps`: steps between samples far longer than the others;
+                       :func:`reference_max_dt`: how far a reference is interpolated (2.5 steps)
 bad lines              every reader takes ``on_bad_line="raise" | "skip"`` and ``report=``: skipped
                        lines go to a :class:`ReadReport` (:class:`SkippedLine` records) or, without
                        one, into one :class:`SkippedLinesWarning`
@@ -40,7 +41,7 @@ from imukit.io._csv import read_imu_csv
 from imukit.io._detect import read_imu, read_trajectory
 from imukit.io._euroc import read_euroc, read_euroc_groundtruth, read_euroc_imu, read_euroc_sensor, write_euroc
 from imukit.io._format import Format, Head
-from imukit.io._gaps import GAP_FACTOR, Gap, find_gaps
+from imukit.io._gaps import GAP_FACTOR, REFERENCE_GAP_FACTOR, Gap, find_gaps, reference_max_dt
 from imukit.io._gtsam import read_gtsam_imu
 from imukit.io._kalibr import KalibrImu, read_kalibr_imu, write_kalibr_imu
 from imukit.io._kitti import read_kitti_poses
@@ -53,6 +54,7 @@ from imukit.io._tumvi import read_tumvi
 
 __all__ = [
     "GAP_FACTOR",
+    "REFERENCE_GAP_FACTOR",
     "FileFormatError",
     "Format",
     "Gap",
@@ -80,6 +82,7 @@ __all__ = [
     "read_trajectory",
     "read_tum",
     "read_tumvi",
+    "reference_max_dt",
     "register_format",
     "unregister_format",
     "write_euroc",
