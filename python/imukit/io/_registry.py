@@ -17,6 +17,7 @@ from imukit._errors import ParameterError
 from imukit.io._euroc import EUROC_FOLDER, EUROC_GROUNDTRUTH, EUROC_GROUNDTRUTH_FOLDER, EUROC_IMU_CSV
 from imukit.io._format import Format
 from imukit.io._gtsam import GTSAM_TEXT
+from imukit.io._named_csv import NAMED_CSV
 from imukit.io._rosbag import ROSBAG
 from imukit.io._tum import TUM
 from imukit.io._tumvi import TUMVI_FOLDER, TUMVI_MOCAP, TUMVI_MOCAP_FOLDER
@@ -29,6 +30,7 @@ BUILT_IN: tuple[Format, ...] = (
     EUROC_IMU_CSV,
     GTSAM_TEXT,
     ROSBAG,
+    NAMED_CSV,
     TUM,
     EUROC_GROUNDTRUTH_FOLDER,
     EUROC_GROUNDTRUTH,
