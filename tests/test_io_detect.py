@@ -21,7 +21,10 @@ TRIED_IMU = (
     "tried EuRoC / TUM-VI folder or imu0/data.csv, GTSAM / KITTI text, ROS bag, CSV with named IMU columns; "
     "other layouts: read_imu_csv"
 )
-TRIED_TRAJECTORY = "tried TUM, EuRoC ground truth, TUM-VI mocap (or their folders); KITTI poses: read_kitti_poses"
+TRIED_TRAJECTORY = (
+    "tried TUM, EuRoC ground truth, CSV with named pose columns, TUM-VI mocap (or their folders); KITTI poses: "
+    "read_kitti_poses; other layouts: read_trajectory_csv"
+)
 EUROC_IMU_HEADER = (
     "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
     "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"

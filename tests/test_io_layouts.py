@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
 from imukit.io._named_csv import column_roles
@@ -124,3 +125,68 @@ def test_a_field_count_mismatch_names_both_counts(tmp_path: Path) -> None:
         ik.io.read_imu_csv(path, header_lines=1, **cols)  # type: ignore[arg-type]
     with pytest.raises(ik.ParameterError, match=r"^header_lines: expected None or a number of lines"):
         ik.io.read_imu_csv(path, header_lines=-1, **cols)  # type: ignore[arg-type]
+
+
+TF_NAMES = [
+    "Time",
+    "header.frame_id",
+    *(f"transform.translation.{a}" for a in "xyz"),
+    *(f"transform.rotation.{a}" for a in "xyzw"),
+]
+
+
+def _poses(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t = 1403715273.0 + np.arange(n) * 0.05
+    position = np.random.default_rng(4).normal(size=(n, 3)).round(6)
+    xyzw = Rotation.random(n, random_state=5).as_quat()  # unit to rounding: kept bit for bit
+    return t, position, xyzw
+
+
+def _write_tf(path: Path, n: int = 30) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t, position, xyzw = _poses(n)
+    lines = [",".join(TF_NAMES)] + [
+        ",".join([repr(float(s)), "world", *map(repr, p.tolist()), *map(repr, q.tolist())])
+        for s, p, q in zip(t, position, xyzw)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    return t, position, xyzw
+
+
+def test_a_transform_csv_is_read_by_its_names(tmp_path: Path) -> None:
+    path = tmp_path / "vicon.csv"
+    t, position, xyzw = _write_tf(path)
+    detected = ik.io.read_trajectory(path)
+    np.testing.assert_array_equal(detected.t, t)
+    np.testing.assert_array_equal(detected.position, position)
+    np.testing.assert_array_equal(detected.rotation.as_quat(), xyzw)
+    assert detected.velocity is None
+    named = ik.io.read_trajectory_csv(
+        path,
+        time_column="Time",
+        position_columns=[f"transform.translation.{a}" for a in "xyz"],
+        quaternion_columns=[f"transform.rotation.{a}" for a in "xyzw"],
+    )
+    np.testing.assert_array_equal(named.rotation.as_quat(), xyzw)
+    # the same columns named w first: the order argument puts w last again
+    wxyz = ik.io.read_trajectory_csv(
+        path, time_column=0, position_columns=[2, 3, 4], quaternion_columns=[8, 5, 6, 7], quaternion_order="wxyz"
+    )
+    np.testing.assert_array_equal(wxyz.rotation.as_quat(), xyzw)
+
+
+def test_read_trajectory_csv_units_errors_and_bad_lines(tmp_path: Path) -> None:
+    path = tmp_path / "poses.txt"
+    path.write_text("stamp_ns;x;y;z;qw;qx;qy;qz\n1000000000;1;2;3;1;0;0;0\n2000000000;4;5;6;0;0;0;0\n")
+    cols = {"time_column": 0, "position_columns": [1, 2, 3], "quaternion_columns": [4, 5, 6, 7]}
+    report = ik.io.ReadReport()
+    traj = ik.io.read_trajectory_csv(
+        path, time_unit="ns", quaternion_order="wxyz", on_bad_line="skip", report=report, **cols
+    )  # type: ignore[arg-type]
+    assert traj.t_ns is not None and traj.t_ns.tolist() == [10**9]
+    assert [(s.line, s.reason) for s in report.skipped] == [(3, "zero quaternion: zero quaternion")]
+    with pytest.raises(ik.ParameterError, match=r"^quaternion_order: expected one of \('xyzw', 'wxyz'\), got 'zyxw'"):
+        ik.io.read_trajectory_csv(path, quaternion_order="zyxw", **cols)  # type: ignore[arg-type]
+    with pytest.raises(ik.ParameterError, match=r"^quaternion_columns: expected 4 column names or 0-based indices"):
+        ik.io.read_trajectory_csv(path, time_column=0, position_columns=[1, 2, 3], quaternion_columns=[4, 5, 6])
+    with pytest.raises(ik.ParameterError, match=r"^position_columns: no column named 'px' in the header"):
+        ik.io.read_trajectory_csv(path, time_column=0, position_columns=["px", 2, 3], quaternion_columns=[4, 5, 6, 7])

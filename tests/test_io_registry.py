@@ -31,6 +31,7 @@ BUILT_IN = (
     "tum",
     "euroc-groundtruth-folder",
     "euroc-groundtruth",
+    "named-trajectory-csv",
     "tumvi-mocap-folder",
     "tumvi-mocap",
 )

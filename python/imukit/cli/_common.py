@@ -164,6 +164,7 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
         choices=("header", "record"),
         help="stamps from each message's header.stamp (the default) or the time the recorder received it",
     )
+    add_groundtruth_options(parser, file_option=True)
 
 
 def _column(text: str) -> int | str:
@@ -172,10 +173,12 @@ def _column(text: str) -> int | str:
     return int(text) if text.isdigit() else text
 
 
-def _columns(text: str, option: str) -> list[int | str]:
+def _columns(text: str, option: str, axes: str = "x, y, z") -> list[int | str]:
     columns = [_column(c) for c in text.split(",")]
-    if len(columns) != 3:
-        raise CliError(f"expected 3 comma-separated columns (x, y, z), got {text!r}", argument=option)
+    if len(columns) != len(axes.split(", ")):
+        raise CliError(
+            f"expected {len(axes.split(', '))} comma-separated columns ({axes}), got {text!r}", argument=option
+        )
     return columns
 
 
@@ -230,12 +233,14 @@ def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
             raise FileFormatError(message, argument=exc.argument) from exc
     _report_skips(report)
     check_gaps(result[0], args.max_gap)
-    return result
+    return result[0], groundtruth_for(args, result[1])
 
 
 def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
     """A CliError naming the first bag or CSV option given, for an input read otherwise (``what`` says
     what it is)."""
+    if getattr(args, "groundtruth", None) is not None:
+        raise CliError(f"{args.path} is {what}, with a reference of its own", argument="--groundtruth")
     for names, kind in ((BAG_OPTIONS, "ROS bags"), (CSV_OPTIONS, "a generic CSV")):
         for name in names:
             value = getattr(args, name)
@@ -243,12 +248,20 @@ def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
                 raise CliError(f"{value!r} is for {kind}, but {args.path} is {what}", argument=OPTION_OF[name])
 
 
-def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
-    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap): :func:`imukit.io.read_trajectory`;
-    ``skip_bad_lines`` as for :func:`read_imu`."""
+def read_trajectory(path: str, *, skip_bad_lines: bool, csv: dict[str, Any] | None = None) -> Trajectory:
+    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap, a CSV naming its pose columns):
+    :func:`imukit.io.read_trajectory`, or with ``csv`` (:func:`groundtruth_csv`'s keywords)
+    :func:`imukit.io.read_trajectory_csv`; ``skip_bad_lines`` as for :func:`read_imu`."""
     report = ReadReport()
+    mode: Any = "skip" if skip_bad_lines else "raise"
     with err.status(f"reading {path}"):
-        result = io.read_trajectory(path, on_bad_line="skip" if skip_bad_lines else "raise", report=report)
+        if csv is None:
+            result = io.read_trajectory(path, on_bad_line=mode, report=report)
+        else:
+            try:
+                result = io.read_trajectory_csv(path, **csv, on_bad_line=mode, report=report)
+            except ParameterError as exc:  # its argument as the --gt-* option that set it
+                raise CliError(exc.message, argument=GT_OPTION_OF.get(exc.argument or "", exc.argument)) from exc
     _report_skips(report)
     return result
 
@@ -327,3 +340,68 @@ def scored(what: str, paired: Paired, given: float | None) -> str:
         f"{line}; left out {paired.n_outside_span} outside the ground truth's span (before its first or after "
         f"its last stamp), {paired.n_in_gaps} in its gaps longer than {limit}"
     )
+
+
+# read_trajectory_csv's arguments and the --gt-* options that set them.
+GT_OPTION_OF = {
+    "time_column": "--gt-time-column",
+    "position_columns": "--gt-position-columns",
+    "quaternion_columns": "--gt-quaternion-columns",
+    "quaternion_order": "--gt-quaternion-order",
+    "time_unit": "--gt-time-unit",
+    "delimiter": "--gt-delimiter",
+}
+
+
+def add_groundtruth_options(parser: argparse.ArgumentParser, *, file_option: bool) -> None:
+    """``--groundtruth FILE`` (with ``file_option``: a ground truth for any input, replacing PATH's
+    own) and the ``--gt-*`` columns that read it, or GT, as a CSV (:func:`imukit.io.read_trajectory_csv`)."""
+    group = parser.add_argument_group(
+        "ground truth from a file" if file_option else "GT as a CSV of another layout",
+        "a trajectory file (TUM, EuRoC ground truth, TUM-VI mocap, a CSV naming its pose columns), or any CSV "
+        "by --gt-time-column, --gt-position-columns and --gt-quaternion-columns (header names or 0-based indices)",
+    )
+    if file_option:
+        group.add_argument("--groundtruth", metavar="FILE", help="the ground truth (replaces the one PATH has)")
+    group.add_argument("--gt-time-column", metavar="COL", help="the time column")
+    group.add_argument("--gt-position-columns", metavar="X,Y,Z", help="the position columns [m]")
+    group.add_argument("--gt-quaternion-columns", metavar="A,B,C,D", help="the quaternion columns (R_wb)")
+    group.add_argument(
+        "--gt-quaternion-order", choices=("xyzw", "wxyz"), help="the order of those columns (default: xyzw)"
+    )
+    group.add_argument("--gt-time-unit", choices=("s", "ms", "us", "ns"), help="(default: s)")
+    group.add_argument("--gt-delimiter", choices=tuple(DELIMITERS), help="(default: detected from the first line)")
+
+
+def groundtruth_csv(args: argparse.Namespace) -> dict[str, Any] | None:
+    """read_trajectory_csv's arguments from the --gt-* options, or None when none was given."""
+    given = {name: getattr(args, f"gt_{name}") for name in GT_OPTION_OF if getattr(args, f"gt_{name}") is not None}
+    if not given:
+        return None
+    for name in ("time_column", "position_columns", "quaternion_columns"):
+        if name not in given:
+            raise CliError(f"needed with {', '.join(GT_OPTION_OF[n] for n in given)}", argument=GT_OPTION_OF[name])
+    given["time_column"] = _column(given["time_column"])
+    for name, count in (("position_columns", 3), ("quaternion_columns", 4)):
+        columns = [_column(c) for c in given[name].split(",")]
+        if len(columns) != count:
+            raise CliError(
+                f"expected {count} comma-separated columns, got {given[name]!r}", argument=GT_OPTION_OF[name]
+            )
+        given[name] = columns
+    if "delimiter" in given:
+        given["delimiter"] = DELIMITERS[given["delimiter"]]
+    return given
+
+
+def groundtruth_for(args: argparse.Namespace, own: Trajectory | None) -> Trajectory | None:
+    """The ground truth of a command reading PATH: ``--groundtruth FILE`` when given (a note when it
+    replaces PATH's own), else PATH's; --gt-* options without --groundtruth are a CliError."""
+    csv = groundtruth_csv(args)
+    if args.groundtruth is None:
+        if csv is not None:
+            raise CliError("needs --groundtruth FILE", argument=GT_OPTION_OF[next(iter(csv))])
+        return own
+    if own is not None:
+        note(f"using the ground truth of {args.groundtruth}, not the one {args.path} has")
+    return read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=csv)

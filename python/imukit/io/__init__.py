@@ -14,7 +14,8 @@ EuRoC / ASL            :func:`write_euroc`, :func:`read_euroc` (a folder), :func
 TUM-VI                 :func:`read_tumvi`: EuRoC-layout folder with ``mocap0/data.csv`` poses
 GTSAM / KITTI          :func:`read_gtsam_imu`: ``Time dt accelX … omegaZ`` text (dt checked against the
                        stamps); :func:`read_kitti_poses`: 3×4 pose rows plus a times file
-any CSV                :func:`read_imu_csv`: columns by header name or index; s/ms/us/ns, deg/s, g
+any CSV                :func:`read_imu_csv`: columns by header name or index; s/ms/us/ns, deg/s, g;
+                       :func:`read_trajectory_csv`: poses by column, quaternion xyzw or wxyz
 ROS bags               :func:`read_rosbag`, :func:`list_rosbag_topics` (ROS 1, ROS 2, MCAP; needs
                        ``imukit[ros]``)
 Kalibr ``imu.yaml``    :func:`write_kalibr_imu`, :func:`read_kalibr_imu` → :class:`KalibrImu`:
@@ -49,6 +50,7 @@ from imukit.io._noise_model import find_noise_model
 from imukit.io._registry import Registration, formats, listing, register_format, unregister_format
 from imukit.io._report import ReadReport, SkippedLine, SkippedLinesWarning
 from imukit.io._rosbag import list_rosbag_topics, read_rosbag
+from imukit.io._trajectory_csv import read_trajectory_csv
 from imukit.io._tum import read_tum, write_tum
 from imukit.io._tumvi import read_tumvi
 
@@ -80,6 +82,7 @@ __all__ = [
     "read_kitti_poses",
     "read_rosbag",
     "read_trajectory",
+    "read_trajectory_csv",
     "read_tum",
     "read_tumvi",
     "reference_max_dt",

@@ -37,7 +37,7 @@ from imukit.io._csv import read_imu_csv
 from imukit.io._format import Format, Head, is_number
 from imukit.io._lines import read_into
 from imukit.io._report import BadLines
-from imukit.io._table import read_table
+from imukit.io._table import Table, read_table
 
 __all__ = ["ColumnRoles", "column_roles"]
 
@@ -64,7 +64,7 @@ class ColumnRoles(NamedTuple):
     accel_unit: str  # "m/s^2" or "g"
 
 
-def _split(name: str) -> tuple[str, str]:
+def words_and_unit(name: str) -> tuple[str, str]:
     """``name`` as (its words, its bracketed unit): ``"Gyroscope X (deg/s)"`` → ``("gyroscope x", "deg/s")``."""
     unit = _UNIT.search(name)
     bare = name[: unit.start()] if unit else name
@@ -72,23 +72,35 @@ def _split(name: str) -> tuple[str, str]:
     return words, (unit[1].strip().lower() if unit else "")
 
 
-def _axis(words: str) -> tuple[str, str] | None:
+def axis_of(words: str, axes: str = "xyz") -> tuple[str, str] | None:
     """``"angular velocity x"`` → ``("angular velocity", "x")``; ``"gx"`` → ``("g", "x")``."""
-    if len(words) >= 2 and words[-1] in "xyz" and words[-2] == " ":
+    if len(words) >= 2 and words[-1] in axes and words[-2] == " ":
         return words[:-2], words[-1]
-    if len(words) == 2 and words[1] in "xyz":
+    if len(words) == 2 and words[1] in axes:
         return words[0], words[1]
     return None
+
+
+def time_column(split: list[tuple[str, str]]) -> tuple[int, str | None] | None:
+    """The time column among names split by :func:`words_and_unit`, and its unit when the name says
+    it; None when there is none, or two of the best rank."""
+    times = [(_TIME.index(words), k) for k, (words, _) in enumerate(split) if words in _TIME]
+    ranks = [rank for rank, _ in times]
+    if not times or ranks.count(min(ranks)) > 1:
+        return None
+    k = min(times)[1]
+    words, unit = split[k]
+    return k, _TIME_UNITS.get(unit, "ns" if words in _ROS_NS else None)
 
 
 def column_roles(names: list[str]) -> ColumnRoles | None:
     """The time, gyro, accelerometer and magnetometer columns that ``names`` (a header line's fields)
     name (module doc), or None unless one time column and the x, y, z of both gyro and accelerometer
     are each named exactly once."""
-    split = [_split(name) for name in names]
+    split = [words_and_unit(name) for name in names]
     found: dict[str, dict[str, list[int]]] = {role: {} for role in _VECTORS}
     for k, (words, _) in enumerate(split):
-        axis = _axis(words)
+        axis = axis_of(words)
         for role, prefixes in _VECTORS.items():
             if axis is not None and axis[0] in prefixes:
                 found[role].setdefault(axis[1], []).append(k)
@@ -98,20 +110,16 @@ def column_roles(names: list[str]) -> ColumnRoles | None:
             columns[role] = [axes[a][0] for a in "xyz"]
         elif role != "mag":
             return None
-    times = [(_TIME.index(words), k) for k, (words, _) in enumerate(split) if words in _TIME]
-    ranks = [rank for rank, _ in times]
-    if not times or ranks.count(min(ranks)) > 1:
+    time = time_column(split)
+    if time is None:
         return None
-    time = min(times)[1]
-    columns = {"time": [time], **columns}
-    words, unit = split[time]
-    time_unit = _TIME_UNITS.get(unit, "ns" if words in _ROS_NS else None)
+    columns = {"time": [time[0]], **columns}
     gyro = "deg/s" if split[columns["gyro"][0]][1] in _DEGREES else "rad/s"
     accel = "g" if split[columns["accel"][0]][1] == "g" else "m/s^2"
-    return ColumnRoles(columns, time_unit, gyro, accel)
+    return ColumnRoles(columns, time[1], gyro, accel)
 
 
-def _names(head: Head) -> list[str] | None:
+def header_names(head: Head) -> list[str] | None:
     """The fields of the first non-blank line when it is a header (its first field not a number)."""
     if not head.lines:
         return None
@@ -120,8 +128,16 @@ def _names(head: Head) -> list[str] | None:
     return None if is_number(fields[0]) else fields
 
 
+def stamp_unit(table: Table, column: int, unit: str | None) -> str:
+    """``unit``, or when the name did not say: ``"ns"`` for an integer first stamp above 10¹⁴, else ``"s"``."""
+    if unit is not None:
+        return unit
+    first = table.split(table.lines[0][1])[column].strip()
+    return "ns" if first.isdigit() and float(first) > _NS_STAMP else "s"
+
+
 def _sniff(path: Path, head: Head) -> bool:
-    names = _names(head)
+    names = header_names(head)
     return names is not None and column_roles(names) is not None
 
 
@@ -133,10 +149,7 @@ def named_csv(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
         raise FileFormatError(
             f"{os.fspath(path)}: its header does not name time, gyro and accelerometer columns", argument="path"
         )
-    time_unit = roles.time_unit
-    if time_unit is None:
-        first = table.split(table.lines[0][1])[roles.columns["time"][0]].strip()
-        time_unit = "ns" if first.isdigit() and float(first) > _NS_STAMP else "s"
+    time_unit = stamp_unit(table, roles.columns["time"][0], roles.time_unit)
     options: dict[str, Any] = {
         "time_column": roles.columns["time"][0],
         "gyro_columns": roles.columns["gyro"],
