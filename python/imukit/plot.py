@@ -50,6 +50,17 @@ def _save(fig: Any, path: str | os.PathLike[str]) -> Any:
     return fig
 
 
+def _save_panels(fig: Any, axes: list[Any], ylabels: list[str], title: str, path: str | os.PathLike[str]) -> Any:
+    """Label, grid and legend panels stacked over a shared time axis, then :func:`_save`."""
+    for ax, ylabel in zip(axes, ylabels):
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(title)
+    return _save(fig, path)
+
+
 def _positions(value: Trajectory | ArrayLike, name: str) -> np.ndarray:
     p = value.position if isinstance(value, Trajectory) else as_float_array(value, name)
     if p.ndim != 2 or p.shape[1] != 3:
@@ -107,13 +118,7 @@ def attitude_error_plot(
             axes, (error.heading, error.inclination, error.total), (rmse.heading, rmse.inclination, rmse.total)
         ):
             ax.plot(time, np.degrees(np.abs(values)), lw=0.8, label=f"{label} (RMSE {rms:.2f}°)")
-    for ax, name in zip(axes, ("heading", "inclination", "total")):
-        ax.set_ylabel(f"{name} error [deg]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    axes[-1].set_xlabel("time [s]")
-    axes[0].set_title(title)
-    return _save(fig, path)
+    return _save_panels(fig, axes, [f"{name} error [deg]" for name in ("heading", "inclination", "total")], title, path)
 
 
 def attitude_plot(
@@ -135,13 +140,7 @@ def attitude_plot(
         angles = rotation.as_euler("ZYX", degrees=True)
         for ax, k in zip(axes, range(3)):
             ax.plot(time, angles[:, k], lw=0.8, label=label)
-    for ax, name in zip(axes, ("yaw", "pitch", "roll")):
-        ax.set_ylabel(f"{name} [deg]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    axes[-1].set_xlabel("time [s]")
-    axes[0].set_title(title)
-    return _save(fig, path)
+    return _save_panels(fig, axes, ["yaw [deg]", "pitch [deg]", "roll [deg]"], title, path)
 
 
 def convergence_plot(

@@ -14,7 +14,7 @@ from imukit._errors import ParameterError
 from imukit.imu import ImuData
 from imukit.io._lines import Problem, as_file_error, public_reader
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_header_lines, read_stamped, read_table
+from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_columns, check_header_lines, read_stamped, read_table
 
 __all__ = ["read_imu_csv"]
 
@@ -41,7 +41,7 @@ def imu_csv(
     header_lines = check_header_lines(header_lines)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
     for name, columns in wanted.items():
-        _check_columns(columns, name, 1 if name == "time_column" else 3)
+        check_columns(columns, name, 1 if name == "time_column" else 3)
     scale = gravity if accel_unit == "g" else None
     return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", scale, delimiter, header_lines)
 
@@ -155,14 +155,3 @@ def _gravity(value: object) -> float:
             f"expected a positive, finite number of m/s^2 per g, got {value!r}", argument="standard_gravity"
         )
     return g
-
-
-def _check_columns(columns: object, name: str, count: int) -> None:
-    """``columns`` must be ``count`` names or indices (``time_column`` arrives wrapped in a list)."""
-    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        raise ParameterError(
-            f"expected {count} column names or 0-based indices (x, y, z), got {columns!r}", argument=name
-        )
-    for column in columns:
-        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)

@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeVar
 
 from imukit._errors import FileFormatError
 from imukit.imu import ImuData
@@ -51,6 +52,7 @@ _VECTORS = {
 _TIME_UNITS = {"ns": "ns", "nsec": "ns", "ms": "ms", "us": "us", "µs": "us", "s": "s", "sec": "s"}
 _DEGREES = ("deg/s", "°/s", "dps", "deg s^-1")
 _UNIT = re.compile(r"\s*[\[(]([^\])]*)[\])]\s*$")
+_T = TypeVar("_T")
 _NS_STAMP = 1e14  # an unlabelled integer stamp above this is nanoseconds (as seconds: 3 million years)
 
 
@@ -136,19 +138,30 @@ def stamp_unit(table: Table, column: int, unit: str | None) -> str:
     return "ns" if first.isdigit() and float(first) > _NS_STAMP else "s"
 
 
-def _sniff(path: Path, head: Head) -> bool:
-    names = header_names(head)
-    return names is not None and column_roles(names) is not None
+def names_sniff(detect: Callable[[list[str]], object | None]) -> Callable[[Path, Head], bool]:
+    """A format's sniff: the first line is a header whose names ``detect`` finds its columns in."""
+
+    def sniff(path: Path, head: Head) -> bool:
+        names = header_names(head)
+        return names is not None and detect(names) is not None
+
+    return sniff
+
+
+def detected(path: str | os.PathLike[str], detect: Callable[[list[str]], _T | None], what: str) -> tuple[Table, _T]:
+    """``path`` as a table with a one-line header, and what ``detect`` finds in its names; a
+    FileFormatError saying ``what`` the header does not name when it finds nothing (the reader called
+    directly, or the file changed since the sniff)."""
+    table = read_table(path, None, 1)
+    found = detect(table.headers[0][1]) if table.headers else None
+    if found is None:
+        raise FileFormatError(f"{os.fspath(path)}: its header does not name {what} columns", argument="path")
+    return table, found
 
 
 def named_csv(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
-    """A CSV file read by the columns its header names (module doc), through ``imu_csv``."""
-    table = read_table(path, None, 1)
-    roles = column_roles(table.headers[0][1]) if table.headers else None
-    if roles is None:  # called directly, or the file changed since the sniff
-        raise FileFormatError(
-            f"{os.fspath(path)}: its header does not name time, gyro and accelerometer columns", argument="path"
-        )
+    """A CSV file read by the columns its header names (module doc), through ``read_imu_csv``."""
+    table, roles = detected(path, column_roles, "time, gyro and accelerometer")
     time_unit = stamp_unit(table, roles.columns["time"][0], roles.time_unit)
     options: dict[str, Any] = {
         "time_column": roles.columns["time"][0],
@@ -161,4 +174,4 @@ def named_csv(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
     return read_into(bad, read_imu_csv, path, header_lines=1, **options)
 
 
-NAMED_CSV = Format("named-csv", "imu", _sniff, named_csv, "CSV with named IMU columns")
+NAMED_CSV = Format("named-csv", "imu", names_sniff(column_roles), named_csv, "CSV with named IMU columns")

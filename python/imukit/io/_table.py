@@ -50,6 +50,7 @@ __all__ = [
     "Stamped",
     "Table",
     "TimeUnit",
+    "check_columns",
     "check_header_lines",
     "read_stamped",
     "read_table",
@@ -163,6 +164,19 @@ def read_stamped(
     if ns is not None:
         return Stamped(values, np.array([ns[k] for k in keep], dtype=np.int64), rows.lines)
     return Stamped(values, values[:, 0] / _PER_SECOND[time_unit], rows.lines)
+
+
+def check_columns(columns: object, name: str, count: int) -> None:
+    """``columns`` must be ``count`` header names or 0-based indices (a single column arrives wrapped in
+    a list), else a ParameterError naming ``name``."""
+    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
+        what = {1: "one", 3: "x, y, z", 4: "a quaternion's"}.get(count, str(count))
+        raise ParameterError(
+            f"expected {count} column names or 0-based indices ({what}), got {columns!r}", argument=name
+        )
+    for column in columns:
+        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
+            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
 
 
 def check_header_lines(value: object) -> int | None:

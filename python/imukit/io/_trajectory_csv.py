@@ -13,18 +13,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
 from imukit._arrays import choice
-from imukit._errors import FileFormatError, ParameterError
-from imukit.io._format import Format, Head
+from imukit.io._format import Format
 from imukit.io._lines import Problem, as_file_error, public_reader, read_into, rotations_from_rows, zero_quaternion
-from imukit.io._named_csv import axis_of, header_names, stamp_unit, time_column, words_and_unit
+from imukit.io._named_csv import axis_of, detected, names_sniff, stamp_unit, time_column, words_and_unit
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_header_lines, read_stamped, read_table
+from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_columns, check_header_lines, read_stamped, read_table
 from imukit.state import Trajectory
 
 __all__ = ["read_trajectory_csv", "trajectory_columns"]
@@ -53,7 +51,7 @@ def trajectory_csv(
     wanted = {"time_column": [time_column], "position_columns": position_columns}
     wanted["quaternion_columns"] = quaternion_columns
     for name, given in wanted.items():
-        _check(given, name, {"time_column": 1, "position_columns": 3, "quaternion_columns": 4}[name])
+        check_columns(given, name, {"time_column": 1, "position_columns": 3, "quaternion_columns": 4}[name])
     table = read_table(path, delimiter, header_lines)
     columns = [table.column(c, name) for name, names in wanted.items() for c in names]
 
@@ -117,14 +115,6 @@ def read_trajectory_csv(  # type: ignore[empty-body]
     """
 
 
-def _check(columns: object, name: str, count: int) -> None:
-    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        raise ParameterError(f"expected {count} column names or 0-based indices, got {columns!r}", argument=name)
-    for column in columns:
-        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
-
-
 def trajectory_columns(names: list[str]) -> dict[str, Any] | None:
     """:func:`read_trajectory_csv`'s column keywords (``time_column``, ``position_columns``,
     ``quaternion_columns`` as indices, ``quaternion_order="xyzw"``, ``time_unit``: the name's, else
@@ -154,22 +144,17 @@ def trajectory_columns(names: list[str]) -> dict[str, Any] | None:
     }
 
 
-def _sniff(path: Path, head: Head) -> bool:
-    names = header_names(head)
-    return names is not None and trajectory_columns(names) is not None
-
-
 def named_trajectory_csv(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
-    table = read_table(path, None, 1)
-    options = trajectory_columns(table.headers[0][1]) if table.headers else None
-    if options is None:  # called directly, or the file changed since the sniff
-        raise FileFormatError(
-            f"{os.fspath(path)}: its header does not name time, position and quaternion columns", argument="path"
-        )
+    """A CSV file read by the pose columns its header names (module doc), through ``read_trajectory_csv``."""
+    table, options = detected(path, trajectory_columns, "time, position and quaternion")
     options["time_unit"] = stamp_unit(table, options["time_column"], options["time_unit"])
     return read_into(bad, read_trajectory_csv, path, header_lines=1, **options)
 
 
 NAMED_TRAJECTORY_CSV = Format(
-    "named-trajectory-csv", "trajectory", _sniff, named_trajectory_csv, "CSV with named pose columns"
+    "named-trajectory-csv",
+    "trajectory",
+    names_sniff(trajectory_columns),
+    named_trajectory_csv,
+    "CSV with named pose columns",
 )
