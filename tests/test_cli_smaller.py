@@ -121,7 +121,7 @@ def test_read_euroc_sensor_of_any_yaml_name(tmp_path: Path) -> None:
     camera.write_text("sensor_type: camera\ncomment: VI-Sensor cam0\nrate_hz: 20\nresolution: [752, 480]\n")
     with pytest.raises(
         ik.FileFormatError,
-        match=r"cam0_sensor\.yaml: a sensor file of sensor_type 'camera', not an IMU's \(missing key",
+        match=r"cam0_sensor\.yaml: not an IMU sensor file \(sensor_type 'camera'; missing key",
     ):
         ik.io.read_euroc_sensor(camera)
     assert ik.io.read_euroc_sensor(tmp_path) is None  # a folder without one: None, as before

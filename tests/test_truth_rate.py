@@ -91,3 +91,17 @@ def test_spans_print_as_plain_seconds(tmp_path: Path) -> None:
     run = cli("evaluate", tmp_path / "a", tmp_path / "b", code=1)
     assert "the estimate spans [1403715273, 1403715273.45] s" in run.stderr
     assert "e+09" not in run.stderr
+
+
+EUROC = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "euroc_v1_02_medium"
+
+
+@pytest.mark.skipif(not (EUROC / "gt0_kimera_subsampled.csv").is_file(), reason=f"{EUROC} absent (../shared/data)")
+def test_real_40_hz_euroc_truth_scores_every_sample_in_its_span() -> None:
+    """EuRoC V1_02's first 40 s of IMU (7999 samples) against its 40 Hz ground truth, which starts
+    1.01 s (202 samples) after the IMU: every other sample scored (a fixed 0.02 s scored 1560)."""
+    args = (EUROC / "imu0_data_first40s.csv", "--groundtruth", EUROC / "gt0_kimera_subsampled.csv")
+    run = cli("filter", *args)
+    assert _scored(run.stdout, "IMU samples") == (7797, 7999)
+    assert "left out 202 outside the ground truth's span" in run.stdout and ", 0 in its gaps longer" in run.stdout
+    assert _scored(cli("filter", *args, "--max-dt", "0.02").stdout, "IMU samples") == (1560, 7999)

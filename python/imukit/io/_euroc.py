@@ -279,8 +279,8 @@ def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
     FileFormatError
         The ``sensor.yaml`` found or given is not an IMU sensor file (as
         :func:`imukit.io.read_kalibr_imu`: missing noise keys or rate, a value that is not a finite
-        number; a camera's ``sensor.yaml`` is named as one), or its ``T_BS`` is not a 4×4 matrix of
-        finite numbers.
+        number, naming the keys missing; a file whose ``sensor_type`` is another sensor's says so), or
+        its ``T_BS`` is not a 4×4 matrix of finite numbers.
     """
     source = Path(path)
     if not source.exists():
@@ -301,11 +301,11 @@ def _sensor_yaml(path: Path) -> KalibrImu:
         sensor = read_kalibr_imu(path)
     except FileFormatError as exc:
         kind = _sensor_type(path)
-        if kind is None or kind == "imu":
+        if kind is None or kind == "imu":  # read_kalibr_imu's message names the keys missing
             raise
         why = exc.message.removeprefix(f"{os.fspath(path)}: ")
         raise FileFormatError(
-            f"{os.fspath(path)}: a sensor file of sensor_type {kind!r}, not an IMU's ({why})", argument="path"
+            f"{os.fspath(path)}: not an IMU sensor file (sensor_type {kind!r}; {why})", argument="path"
         ) from exc
     euroc_extrinsics(sensor, where=os.fspath(path))  # a malformed T_BS is refused here
     return sensor
