@@ -2,9 +2,10 @@
 
 =====================  ===========================================================================
 any IMU source         :func:`read_imu` → ``(ImuData, Trajectory | None)``: finds the format (EuRoC or
-                       TUM-VI folder, EuRoC IMU CSV, GTSAM/KITTI text, ROS bag), or reads a CSV by
-                       its columns (``csv=``, :func:`read_imu_csv`'s keywords); :func:`read_trajectory`
-                       → ``Trajectory`` (TUM, EuRoC ground truth, TUM-VI mocap)
+                       TUM-VI folder, EuRoC IMU CSV, GTSAM/KITTI text, ROS bag, a CSV naming its
+                       columns), or reads a CSV by its columns (``csv=``, :func:`read_imu_csv`'s
+                       keywords); :func:`read_trajectory` → ``Trajectory`` (TUM, EuRoC ground truth,
+                       a CSV naming its pose columns, TUM-VI mocap)
 TUM                    :func:`write_tum`, :func:`read_tum`: ``timestamp tx ty tz qx qy qz qw`` lines,
                        quaternion ``q_wb`` scalar-last; ``t_ns`` printed exactly with 9 decimals
 EuRoC / ASL            :func:`write_euroc`, :func:`read_euroc` (a folder), :func:`read_euroc_imu`,
