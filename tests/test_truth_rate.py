@@ -105,3 +105,5 @@ def test_real_40_hz_euroc_truth_scores_every_sample_in_its_span() -> None:
     assert _scored(run.stdout, "IMU samples") == (7797, 7999)
     assert "left out 202 outside the ground truth's span" in run.stdout and ", 0 in its gaps longer" in run.stdout
     assert _scored(cli("filter", *args, "--max-dt", "0.02").stdout, "IMU samples") == (1560, 7999)
+    integrated = cli("integrate", *args).stdout  # starts at the truth: the 202 before it count as unscored
+    assert _scored(integrated, "samples") == (7797, 7999) and "left out 202 outside" in integrated

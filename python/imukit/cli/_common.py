@@ -323,11 +323,12 @@ class Paired(Protocol):
     def max_dt(self) -> float: ...
 
 
-def scored(what: str, paired: Paired, given: float | None) -> str:
+def scored(what: str, paired: Paired, given: float | None, *, before: int = 0) -> str:
     """One line: how many of ``what`` (e.g. ``"IMU samples"``) were scored against the ground truth, as
     a fraction of all, and why the others were not (outside its span, in its gaps longer than the
-    limit: ``--max-dt`` when ``given``, else the one derived from the truth's rate)."""
-    total, kept = len(paired.mask), int(np.count_nonzero(paired.mask))
+    limit: ``--max-dt`` when ``given``, else the one derived from the truth's rate). ``before``: samples
+    the command dropped before pairing because the truth starts later (counted outside its span)."""
+    total, kept = len(paired.mask) + before, int(np.count_nonzero(paired.mask))
     line = f"scored {kept} of {total} {what} ({kept / total:.2%})"
     if kept == total:
         return line
@@ -337,7 +338,7 @@ def scored(what: str, paired: Paired, given: float | None) -> str:
         else f"{paired.max_dt:.4g} s ({io.REFERENCE_GAP_FACTOR:g} x its median step; --max-dt sets it)"
     )
     return (
-        f"{line}; left out {paired.n_outside_span} outside the ground truth's span (before its first or after "
+        f"{line}; left out {paired.n_outside_span + before} outside the ground truth's span (before its first or after "
         f"its last stamp), {paired.n_in_gaps} in its gaps longer than {limit}"
     )
 

@@ -102,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
     imu, truth = read_imu(args)
     bias = None
     if truth is not None:
+        n_read = len(imu)
         imu = trim_to_truth(imu, truth)
         initial, truth_bias = from_truth(truth, imu, max_dt=args.max_dt)
         if args.bias_from_groundtruth:
@@ -117,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
         trajectory = integrate(imu, initial=initial, scheme=args.scheme, bias=bias)
     out.print(f"integrated {len(imu)} samples over {imu.duration:.3f} s with {args.scheme}", markup=False)
     if truth is not None:
-        _report_errors(trajectory, truth, args.max_dt)
+        _report_errors(trajectory, truth, args.max_dt, before=n_read - len(imu))
     if tum is not None:
         write_tum(trajectory, tum)
         wrote("trajectory (TUM)", tum)
@@ -131,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report_errors(trajectory: Any, truth: Any, max_dt: float | None) -> None:
+def _report_errors(trajectory: Any, truth: Any, max_dt: float | None, *, before: int) -> None:
     from imukit.eval import ape
 
     error = ape(trajectory, truth, align="none", max_dt=max_dt)
@@ -141,4 +142,4 @@ def _report_errors(trajectory: Any, truth: Any, max_dt: float | None) -> None:
         f"{error.translation_stats.max:.4g} m over {error.translation_stats.n} samples (no alignment)",
         markup=False,
     )
-    out.print(scored("samples", error, max_dt), markup=False)
+    out.print(scored("samples", error, max_dt, before=before), markup=False)
