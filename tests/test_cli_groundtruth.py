@@ -101,3 +101,9 @@ def test_groundtruth_option_mistakes_name_the_option(files: dict[str, Path]) -> 
     named = ["--gt-time-column", "stamp", "--gt-position-columns", "px,y,z", "--gt-quaternion-columns", "4,5,6,7"]
     run = cli("integrate", files["imu"], "--groundtruth", files["poses"], *named, code=1)
     assert_one_line_error(run, "imukit: error: --gt-position-columns: no column named 'px' in the header")
+
+
+def test_a_broad_trial_keeps_its_own_reference(files: dict[str, Path]) -> None:
+    broad = Path(ik.__file__).parent / "_data" / "broad_excerpt.npz"
+    run = cli("filter", broad, "--groundtruth", files["vicon"], code=1)
+    assert_one_line_error(run, "imukit: error: --groundtruth: ", "is a BROAD trial, with a reference of its own")
