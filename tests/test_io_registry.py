@@ -27,9 +27,11 @@ BUILT_IN = (
     "euroc-imu-csv",
     "gtsam-text",
     "rosbag",
+    "named-csv",
     "tum",
     "euroc-groundtruth-folder",
     "euroc-groundtruth",
+    "named-trajectory-csv",
     "tumvi-mocap-folder",
     "tumvi-mocap",
 )
@@ -69,8 +71,8 @@ def toy_file(tmp_path: Path) -> Path:
 
 def test_built_in_formats_in_detection_order() -> None:
     assert tuple(f.name for f in ik.io.formats()) == BUILT_IN
-    assert [f.name for f in ik.io.formats("imu")] == list(BUILT_IN[:5])
-    assert [f.name for f in ik.io.formats("trajectory")] == list(BUILT_IN[5:])
+    assert [f.name for f in ik.io.formats("imu")] == list(BUILT_IN[:6])
+    assert [f.name for f in ik.io.formats("trajectory")] == list(BUILT_IN[6:])
     assert "tried " + ik.io.listing("imu") == TRIED_IMU
     assert "tried " + ik.io.listing("trajectory") == TRIED_TRAJECTORY
 
@@ -92,7 +94,10 @@ def test_a_registered_reader_is_detected_listed_and_removed_again(toy_file: Path
         np.testing.assert_array_equal(trajectory.position, truth.position)
         unknown = toy_file.with_suffix(".txt")
         unknown.write_text("something else\n")
-        with pytest.raises(ik.FileFormatError, match=re.escape("ROS bag, toy IMU text; other layouts: read_imu_csv")):
+        with pytest.raises(
+            ik.FileFormatError,
+            match=re.escape("ROS bag, CSV with named IMU columns, toy IMU text; other layouts: read_imu_csv"),
+        ):
             ik.io.read_imu(unknown)
         with pytest.raises(ik.FileFormatError, match=re.escape("TUM-VI mocap, toy IMU text (or their folders)")):
             ik.io.read_trajectory(unknown)
@@ -136,8 +141,13 @@ def test_the_cli_lists_and_reads_a_registered_format(
 
     assert "toy IMU text" not in help_of() + help_of("integrate")
     with ik.io.register_format(TOY):
-        assert "GTSAM / KITTI text, ROS bag, toy IMU text; other layouts: the --csv-* options" in help_of()
-        assert "ROS bag, toy IMU text; other layouts: the --csv-* options" in help_of("integrate")
+        assert (
+            "GTSAM / KITTI text, ROS bag, CSV with named IMU columns, toy IMU text; other layouts: the --csv-* options"
+            in help_of()
+        )
+        assert "ROS bag, CSV with named IMU columns, toy IMU text; other layouts: the --csv-* options" in help_of(
+            "integrate"
+        )
         out = tmp_path / "traj.txt"
         assert main(["--skip-bad-lines", "integrate", str(toy_file), "--out", str(out)]) == 0
         assert len(ik.io.read_tum(out)) == 50
@@ -147,7 +157,8 @@ def test_the_cli_lists_and_reads_a_registered_format(
         error = capsys.readouterr().err.strip().splitlines()[-1]
         assert error == (
             f"imukit: error: path: {unknown}: not an IMU format imukit knows; tried EuRoC / TUM-VI folder or "
-            "imu0/data.csv, GTSAM / KITTI text, ROS bag, toy IMU text; other layouts: the --csv-* options"
+            "imu0/data.csv, GTSAM / KITTI text, ROS bag, CSV with named IMU columns, toy IMU text; other layouts: "
+            "the --csv-* options"
         )
     assert "toy IMU text" not in help_of("integrate")
 

@@ -173,13 +173,18 @@ class ImuData(Frozen):
         return len(self.t)
 
     def __getitem__(self, index: slice) -> ImuData:
-        """A slice of the samples as a new ``ImuData``; the step must be positive and the slice non-empty."""
+        """A slice of the samples as a new ``ImuData`` (negative indices count from the end, as in
+        Python); the step must be positive and the slice non-empty."""
         if not isinstance(index, slice):
-            raise TypeError(f"ImuData indices must be slices, got {type(index).__name__}")
-        start, stop, step = index.indices(len(self))
-        if step <= 0 or len(range(start, stop, step)) == 0:
+            raise TypeError(f"ImuData indices must be slices (imu[k:k + 1] for sample k), got {type(index).__name__}")
+        n = len(self)
+        start, stop, step = index.indices(n)
+        if step <= 0:
+            raise ShapeError(f"ImuData slices need a positive step, got {index}", argument="index")
+        if len(range(start, stop, step)) == 0:
             raise ShapeError(
-                f"ImuData slices need a positive step and at least 1 sample, got {index}", argument="index"
+                f"{index} selects no sample of {n} (it runs from {start} to {stop}); an ImuData has at least one",
+                argument="index",
             )
         t = self.t if self.t_ns is None else self.t_ns
         ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}

@@ -8,6 +8,7 @@ called; without it they raise :class:`imukit.MissingDependencyError`. The Allan 
 =============================  ==============================================================
 :func:`trajectory_top_view`    x–y positions [m] of estimates and the truth, equal axes
 :func:`attitude_error_plot`    heading, inclination and total error [deg] over time [s]
+:func:`attitude_plot`          yaw, pitch and roll [deg] over time [s] (no reference needed)
 :func:`convergence_plot`       error against step size on log-log axes, with slope guides
 =============================  ==============================================================
 """
@@ -20,13 +21,14 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
 
 from imukit._arrays import as_float_array
 from imukit._errors import MissingDependencyError, ParameterError, ShapeError
 from imukit.eval import AttitudeError
 from imukit.state import Trajectory
 
-__all__ = ["attitude_error_plot", "convergence_plot", "trajectory_top_view"]
+__all__ = ["attitude_error_plot", "attitude_plot", "convergence_plot", "trajectory_top_view"]
 
 
 def _figure(name: str, rows: int = 1, height: float = 5.0) -> tuple[Any, list[Any]]:
@@ -46,6 +48,17 @@ def _figure(name: str, rows: int = 1, height: float = 5.0) -> tuple[Any, list[An
 def _save(fig: Any, path: str | os.PathLike[str]) -> Any:
     fig.savefig(os.fspath(path), format="png")
     return fig
+
+
+def _save_panels(fig: Any, axes: list[Any], ylabels: list[str], title: str, path: str | os.PathLike[str]) -> Any:
+    """Label, grid and legend panels stacked over a shared time axis, then :func:`_save`."""
+    for ax, ylabel in zip(axes, ylabels):
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(title)
+    return _save(fig, path)
 
 
 def _positions(value: Trajectory | ArrayLike, name: str) -> np.ndarray:
@@ -105,13 +118,29 @@ def attitude_error_plot(
             axes, (error.heading, error.inclination, error.total), (rmse.heading, rmse.inclination, rmse.total)
         ):
             ax.plot(time, np.degrees(np.abs(values)), lw=0.8, label=f"{label} (RMSE {rms:.2f}°)")
-    for ax, name in zip(axes, ("heading", "inclination", "total")):
-        ax.set_ylabel(f"{name} error [deg]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    axes[-1].set_xlabel("time [s]")
-    axes[0].set_title(title)
-    return _save(fig, path)
+    return _save_panels(fig, axes, [f"{name} error [deg]" for name in ("heading", "inclination", "total")], title, path)
+
+
+def attitude_plot(
+    path: str | os.PathLike[str],
+    t: ArrayLike,
+    rotations: Mapping[str, Rotation],
+    *,
+    title: str,
+) -> Any:
+    """Three panels over time ``t`` [s]: yaw, pitch and roll [deg] (intrinsic z-y'-x'') of each
+    ``R_wb``, labelled by its key: what a filter run shows without a reference to score it against."""
+    time = as_float_array(t, "t")
+    if not rotations:
+        raise ParameterError("expected at least one Rotation to draw", argument="rotations")
+    fig, axes = _figure("attitude_plot", rows=3, height=7.0)
+    for label, rotation in rotations.items():
+        if len(rotation) != len(time):
+            raise ShapeError(f"rotations[{label!r}]: {len(rotation)} samples, but t has {len(time)}")
+        angles = rotation.as_euler("ZYX", degrees=True)
+        for ax, k in zip(axes, range(3)):
+            ax.plot(time, angles[:, k], lw=0.8, label=label)
+    return _save_panels(fig, axes, ["yaw [deg]", "pitch [deg]", "roll [deg]"], title, path)
 
 
 def convergence_plot(

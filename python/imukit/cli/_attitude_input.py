@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit.cli._common import CliError, err, read_imu, refuse_reader_options
 from imukit.cli._truth import truth_at
+from imukit.eval import Association
 from imukit.imu import ImuData
 
 BROAD_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
@@ -22,14 +23,14 @@ BROAD_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling
 class AttitudeInput(NamedTuple):
     """``imu``; ``mag`` (N, 3) or None; ``truth_xyzw`` (N, 4) reference ``R_wb`` at the IMU samples
     (NaN rows where there is none) or None; ``mask`` (N,) the samples to score (BROAD's movement);
-    ``unpaired``: how many IMU samples got no reference from a ground-truth trajectory (outside its
-    span, in its gaps over ``--max-dt``), None for a reference given per sample."""
+    ``paired``: the association with a ground-truth trajectory (which IMU samples got a reference,
+    and why the others did not), None for a reference given per sample."""
 
     imu: ImuData
     mag: FloatArray | None
     truth_xyzw: FloatArray | None
     mask: NDArray[np.bool_] | None
-    unpaired: tuple[int, int] | None = None
+    paired: Association | None = None
 
 
 def read_broad(path: str | Path) -> AttitudeInput:
@@ -68,4 +69,4 @@ def read_attitude_input(args: argparse.Namespace) -> AttitudeInput:
     paired = truth_at(truth, imu, max_dt=args.max_dt, option="--max-dt")
     q = np.full((len(imu), 4), np.nan)  # NaN: no reference, counted by attitude_error, not scored
     q[paired.mask] = paired.reference.rotation.as_quat()
-    return AttitudeInput(imu, None, q, None, (paired.n_outside_span, paired.n_in_gaps))
+    return AttitudeInput(imu, None, q, None, paired)

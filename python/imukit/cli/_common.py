@@ -7,9 +7,10 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
@@ -163,6 +164,7 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
         choices=("header", "record"),
         help="stamps from each message's header.stamp (the default) or the time the recorder received it",
     )
+    add_groundtruth_options(parser, file_option=True)
 
 
 def _column(text: str) -> int | str:
@@ -171,10 +173,12 @@ def _column(text: str) -> int | str:
     return int(text) if text.isdigit() else text
 
 
-def _columns(text: str, option: str) -> list[int | str]:
+def _columns(text: str, option: str, axes: str = "x, y, z") -> list[int | str]:
     columns = [_column(c) for c in text.split(",")]
-    if len(columns) != 3:
-        raise CliError(f"expected 3 comma-separated columns (x, y, z), got {text!r}", argument=option)
+    if len(columns) != len(axes.split(", ")):
+        raise CliError(
+            f"expected {len(axes.split(', '))} comma-separated columns ({axes}), got {text!r}", argument=option
+        )
     return columns
 
 
@@ -229,12 +233,14 @@ def read_imu(args: argparse.Namespace) -> tuple[ImuData, Trajectory | None]:
             raise FileFormatError(message, argument=exc.argument) from exc
     _report_skips(report)
     check_gaps(result[0], args.max_gap)
-    return result
+    return result[0], groundtruth_for(args, result[1])
 
 
 def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
     """A CliError naming the first bag or CSV option given, for an input read otherwise (``what`` says
     what it is)."""
+    if getattr(args, "groundtruth", None) is not None:
+        raise CliError(f"{args.path} is {what}, with a reference of its own", argument="--groundtruth")
     for names, kind in ((BAG_OPTIONS, "ROS bags"), (CSV_OPTIONS, "a generic CSV")):
         for name in names:
             value = getattr(args, name)
@@ -242,12 +248,20 @@ def refuse_reader_options(args: argparse.Namespace, what: str) -> None:
                 raise CliError(f"{value!r} is for {kind}, but {args.path} is {what}", argument=OPTION_OF[name])
 
 
-def read_trajectory(path: str, *, skip_bad_lines: bool) -> Trajectory:
-    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap): :func:`imukit.io.read_trajectory`;
-    ``skip_bad_lines`` as for :func:`read_imu`."""
+def read_trajectory(path: str, *, skip_bad_lines: bool, csv: dict[str, Any] | None = None) -> Trajectory:
+    """A trajectory file (TUM, EuRoC ground truth, TUM-VI mocap, a CSV naming its pose columns):
+    :func:`imukit.io.read_trajectory`, or with ``csv`` (:func:`groundtruth_csv`'s keywords)
+    :func:`imukit.io.read_trajectory_csv`; ``skip_bad_lines`` as for :func:`read_imu`."""
     report = ReadReport()
+    mode: Any = "skip" if skip_bad_lines else "raise"
     with err.status(f"reading {path}"):
-        result = io.read_trajectory(path, on_bad_line="skip" if skip_bad_lines else "raise", report=report)
+        if csv is None:
+            result = io.read_trajectory(path, on_bad_line=mode, report=report)
+        else:
+            try:
+                result = io.read_trajectory_csv(path, **csv, on_bad_line=mode, report=report)
+            except ParameterError as exc:  # its argument as the --gt-* option that set it
+                raise CliError(exc.message, argument=GT_OPTION_OF.get(exc.argument or "", exc.argument)) from exc
     _report_skips(report)
     return result
 
@@ -284,11 +298,111 @@ def add_plot_option(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
-def unpaired(what: str, n_outside_span: int, n_in_gaps: int, max_dt: str) -> str:
-    """One line saying which ``what`` (e.g. ``"estimate poses"``) had no ground truth to be scored
-    against and why: outside the truth's span, or in its gaps longer than ``max_dt`` (e.g.
-    ``"--max-dt = 0.02 s"``); from :func:`imukit.eval.ape`'s counts."""
-    return (
-        f"{n_outside_span + n_in_gaps} {what} had no ground truth and were left out: {n_outside_span} outside "
-        f"its span (before its first or after its last stamp), {n_in_gaps} in its gaps longer than {max_dt}"
+def add_max_dt_option(parser: argparse.ArgumentParser) -> None:
+    """``--max-dt``: the longest ground-truth step the reference is interpolated across."""
+    parser.add_argument(
+        "--max-dt",
+        type=positive,
+        metavar="S",
+        help=f"longest ground-truth step to interpolate the reference across [s] (default: "
+        f"{io.REFERENCE_GAP_FACTOR:g} x the truth's median step, its own rate); samples in longer gaps or "
+        "outside the truth's span are not scored, and counted",
     )
+
+
+class Paired(Protocol):
+    """What :func:`scored` reads: an :class:`imukit.eval.Association`, ``AbsoluteError`` or ``RelativeError``."""
+
+    @property
+    def mask(self) -> NDArray[np.bool_]: ...
+    @property
+    def n_outside_span(self) -> int: ...
+    @property
+    def n_in_gaps(self) -> int: ...
+    @property
+    def max_dt(self) -> float: ...
+
+
+def scored(what: str, paired: Paired, given: float | None, *, before: int = 0) -> str:
+    """One line: how many of ``what`` (e.g. ``"IMU samples"``) were scored against the ground truth, as
+    a fraction of all, and why the others were not (outside its span, in its gaps longer than the
+    limit: ``--max-dt`` when ``given``, else the one derived from the truth's rate). ``before``: samples
+    the command dropped before pairing because the truth starts later (counted outside its span)."""
+    total, kept = len(paired.mask) + before, int(np.count_nonzero(paired.mask))
+    line = f"scored {kept} of {total} {what} ({kept / total:.2%})"
+    if kept == total:
+        return line
+    limit = (
+        f"--max-dt = {given:g} s"
+        if given is not None
+        else f"{paired.max_dt:.4g} s ({io.REFERENCE_GAP_FACTOR:g} x its median step; --max-dt sets it)"
+    )
+    return (
+        f"{line}; left out {paired.n_outside_span + before} outside the ground truth's span (before its first or after "
+        f"its last stamp), {paired.n_in_gaps} in its gaps longer than {limit}"
+    )
+
+
+# read_trajectory_csv's arguments and the --gt-* options that set them.
+GT_OPTION_OF = {
+    "time_column": "--gt-time-column",
+    "position_columns": "--gt-position-columns",
+    "quaternion_columns": "--gt-quaternion-columns",
+    "quaternion_order": "--gt-quaternion-order",
+    "time_unit": "--gt-time-unit",
+    "delimiter": "--gt-delimiter",
+}
+
+
+def add_groundtruth_options(parser: argparse.ArgumentParser, *, file_option: bool) -> None:
+    """``--groundtruth FILE`` (with ``file_option``: a ground truth for any input, replacing PATH's
+    own) and the ``--gt-*`` columns that read it, or GT, as a CSV (:func:`imukit.io.read_trajectory_csv`)."""
+    group = parser.add_argument_group(
+        "ground truth from a file" if file_option else "GT as a CSV of another layout",
+        "a trajectory file (TUM, EuRoC ground truth, TUM-VI mocap, a CSV naming its pose columns), or any CSV "
+        "by --gt-time-column, --gt-position-columns and --gt-quaternion-columns (header names or 0-based indices)",
+    )
+    if file_option:
+        group.add_argument("--groundtruth", metavar="FILE", help="the ground truth (replaces the one PATH has)")
+    group.add_argument("--gt-time-column", metavar="COL", help="the time column")
+    group.add_argument("--gt-position-columns", metavar="X,Y,Z", help="the position columns [m]")
+    group.add_argument("--gt-quaternion-columns", metavar="A,B,C,D", help="the quaternion columns (R_wb)")
+    group.add_argument(
+        "--gt-quaternion-order", choices=("xyzw", "wxyz"), help="the order of those columns (default: xyzw)"
+    )
+    group.add_argument("--gt-time-unit", choices=("s", "ms", "us", "ns"), help="(default: s)")
+    group.add_argument("--gt-delimiter", choices=tuple(DELIMITERS), help="(default: detected from the first line)")
+
+
+def groundtruth_csv(args: argparse.Namespace) -> dict[str, Any] | None:
+    """read_trajectory_csv's arguments from the --gt-* options, or None when none was given."""
+    given = {name: getattr(args, f"gt_{name}") for name in GT_OPTION_OF if getattr(args, f"gt_{name}") is not None}
+    if not given:
+        return None
+    for name in ("time_column", "position_columns", "quaternion_columns"):
+        if name not in given:
+            raise CliError(f"needed with {', '.join(GT_OPTION_OF[n] for n in given)}", argument=GT_OPTION_OF[name])
+    given["time_column"] = _column(given["time_column"])
+    for name, count in (("position_columns", 3), ("quaternion_columns", 4)):
+        columns = [_column(c) for c in given[name].split(",")]
+        if len(columns) != count:
+            raise CliError(
+                f"expected {count} comma-separated columns, got {given[name]!r}", argument=GT_OPTION_OF[name]
+            )
+        given[name] = columns
+    if "delimiter" in given:
+        given["delimiter"] = DELIMITERS[given["delimiter"]]
+    return given
+
+
+def groundtruth_for(args: argparse.Namespace, own: Trajectory | None) -> Trajectory | None:
+    """The ground truth of a command reading PATH: ``--groundtruth FILE`` when given (a note when it
+    replaces PATH's own), else PATH's; --gt-* options without --groundtruth are a CliError."""
+    csv = groundtruth_csv(args)
+    if args.groundtruth is None:
+        if csv is not None:
+            raise CliError("needs --groundtruth FILE", argument=GT_OPTION_OF[next(iter(csv))])
+        return own
+    if own is not None:
+        note(f"using the ground truth of {args.groundtruth}, not the one {args.path} has")
+    return read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=csv)

@@ -8,7 +8,18 @@ from typing import Any
 
 from rich.table import Table
 
-from imukit.cli._common import add_plot_option, out, output_path, positive, read_trajectory, unpaired, wrote
+from imukit.cli._common import (
+    add_groundtruth_options,
+    add_max_dt_option,
+    add_plot_option,
+    groundtruth_csv,
+    out,
+    output_path,
+    positive,
+    read_trajectory,
+    scored,
+    wrote,
+)
 from imukit.eval import ErrorStats, ape, rpe
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
@@ -20,9 +31,12 @@ after the same alignment (sim3's scale matters to the RPE; the others leave it u
 Definitions and the comparison with evo: docs/evaluation.md.
 
 Reads: EST and GT as trajectory files, format detected: TUM (`t x y z qx qy qz qw`), an EuRoC
-ground-truth CSV, a TUM-VI mocap CSV. Each EST pose is paired with GT interpolated at its stamp
-(position linear, rotation slerp; not across GT gaps over --max-dt s); unpaired poses are counted,
-those outside GT's span apart from those in its gaps.
+ground-truth CSV, a TUM-VI mocap CSV, a CSV whose header names its pose columns
+(`transform.translation.x` ... `transform.rotation.w`); GT of any other layout by its columns
+(--gt-time-column, --gt-position-columns, --gt-quaternion-columns). Each EST pose is paired with
+GT interpolated at its stamp (position linear, rotation slerp; not across GT steps over --max-dt s,
+by default 2.5 x GT's median step); the poses scored are printed as a fraction of all, the others
+counted: outside GT's span apart from in its gaps.
 Alignment (--align): se3 (rotation + translation, Umeyama; the default), sim3 (+ scale: monocular
 VO), yaw (rotation about z + translation: the 4 unobservable DoF of VIO), position (translation
 only), none.
@@ -46,9 +60,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--align", choices=ALIGNMENTS, default="se3", help="alignment before the ATE (default: %(default)s)")
     p.add_argument("--delta", type=positive, metavar="D", help="also the RPE over pairs D apart (see --delta-unit)")
     p.add_argument("--delta-unit", choices=("m", "s", "frames"), default="m", help="unit of --delta (default: m)")
-    p.add_argument(
-        "--max-dt", type=positive, default=0.02, metavar="S", help="largest GT gap to interpolate over [s] (0.02)"
-    )
+    add_max_dt_option(p)
     p.add_argument(
         "--offset",
         type=float,
@@ -57,6 +69,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
         help="clock offset [s] added to EST's stamps before pairing (EST time t is GT time t + S; default 0)",
     )
     add_plot_option(p, "a top view of the aligned estimate and the ground truth")
+    add_groundtruth_options(p, file_option=False)
     p.set_defaults(run=run)
     return p
 
@@ -69,7 +82,7 @@ def _row(table: Table, name: str, stats: ErrorStats, unit: str, scale: float) ->
 def run(args: argparse.Namespace) -> int:
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
     estimate = read_trajectory(args.estimate, skip_bad_lines=args.skip_bad_lines)
-    truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines)
+    truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=groundtruth_csv(args))
     absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt, offset=args.offset)
     table = Table(title=f"{args.estimate} against {args.groundtruth} (alignment: {args.align})")
     for column in ("error", "unit", "RMSE", "mean", "median", "std", "min", "max", "samples"):
@@ -90,9 +103,7 @@ def run(args: argparse.Namespace) -> int:
         _row(table, f"RPE translation / {span}", relative.translation_stats, "m", 1.0)
         _row(table, f"RPE rotation / {span}", relative.rotation_stats, "deg", math.degrees(1.0))
     out.print(table)
-    if absolute.n_dropped:
-        counts = absolute.n_outside_span, absolute.n_in_gaps
-        out.print(unpaired("estimate poses", *counts, f"--max-dt = {args.max_dt:g} s"), markup=False)
+    out.print(scored("estimate poses", absolute, args.max_dt), markup=False)
     if absolute.alignment.scale != 1.0:
         out.print(f"sim3 scale: {absolute.alignment.scale:.6g}", markup=False)
     if png is not None:

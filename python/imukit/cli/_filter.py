@@ -14,16 +14,16 @@ from imukit.cli._attitude_input import AttitudeInput, read_attitude_input
 from imukit.cli._common import (
     CliError,
     add_input_options,
+    add_max_dt_option,
     add_plot_option,
     chunks,
     out,
     output_path,
-    positive,
     progress,
-    unpaired,
+    scored,
     wrote,
 )
-from imukit.eval import attitude_error
+from imukit.eval import AttitudeError, attitude_error
 from imukit.filters import WORLDS, FilterResult, FilterState, Madgwick, Mahony
 from imukit.io import write_tum
 from imukit.state import Trajectory
@@ -45,11 +45,12 @@ z up; --world NED for x north, z down). Default gains are the BROAD-tuned ones.
 Prints: with reference attitudes (ground truth, BROAD's motion capture), the RMSE of the total,
 heading and inclination error in degrees (BROAD's split; 6D after removing the constant heading
 offset; BROAD trials over their movement phase). A ground-truth trajectory gives the reference at
-each IMU stamp by slerp, never across its gaps over --max-dt (mocap dropouts): samples without a
-reference are not scored, and how many (outside the truth's span, in its gaps) is printed.
+each IMU stamp by slerp, never across its steps over --max-dt (mocap dropouts; default 2.5 x the
+truth's median step): the samples scored are printed as a fraction of all, the others counted
+(outside the truth's span, in its gaps).
 Writes: --out, .txt/.tum: a TUM file with zero positions and the attitude quaternions;
 .csv: `t [s], qx, qy, qz, qw, bias_x, bias_y, bias_z [rad/s]` with a header line.
---plot: the attitude errors over time (needs reference attitudes).
+--plot: the attitude errors over time, or without reference attitudes the roll, pitch and yaw.
 
 Example:
   imukit filter 06_undisturbed_fast_rotation_A.mat --method madgwick --mag --plot error.png"""
@@ -66,16 +67,9 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument("--method", choices=sorted(METHODS), default="mahony", help="the filter (default: %(default)s)")
     p.add_argument("--mag", action="store_true", help="use the magnetometer (9D); the input must have one")
     p.add_argument("--world", choices=WORLDS, default=_DEFAULTS.world, help="world frame (default: %(default)s)")
-    p.add_argument(
-        "--max-dt",
-        type=positive,
-        default=0.02,
-        metavar="S",
-        help="largest ground-truth gap to interpolate the reference over [s] (default: %(default)s); samples "
-        "in longer gaps or outside the truth's span are not scored, and counted",
-    )
+    add_max_dt_option(p)
     p.add_argument("--out", metavar="FILE", help="write the attitudes: TUM (.txt, .tum) or quaternion CSV (.csv)")
-    add_plot_option(p, "the attitude error over time")
+    add_plot_option(p, "the attitude error over time (without a reference: the attitude)")
     add_input_options(p)
     p.set_defaults(run=run)
     return p
@@ -110,8 +104,6 @@ def run(args: argparse.Namespace) -> int:
             f"--mag: {args.path} has no magnetometer samples (the EuRoC, TUM-VI, KITTI and ROS readers give "
             "gyro and accelerometer only; BROAD .mat trials have one); run without --mag for 6D"
         )
-    if png is not None and data.truth_xyzw is None:
-        raise CliError(f"--plot: {args.path} has no reference attitudes to compare with")
     filt = METHODS[args.method](world=args.world)
     result = run_chunked(filt, data, use_mag=args.mag)
     name = f"{type(filt).__name__} {'9D' if args.mag else '6D'}"
@@ -119,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     if target is not None:  # before the plot, which may fail for want of matplotlib
         _write(target, data, result)
         wrote("attitudes", target)
+    error = None
     if data.truth_xyzw is not None:
         error = attitude_error(
             result.rotation, data.truth_xyzw, world=args.world, align_heading=not args.mag, mask=data.mask
@@ -130,14 +123,26 @@ def run(args: argparse.Namespace) -> int:
             + ("" if args.mag else " (constant heading offset removed: 6D)"),
             markup=False,
         )
-        if data.unpaired is not None and any(data.unpaired):
-            out.print(unpaired("IMU samples", *data.unpaired, f"--max-dt = {args.max_dt:g} s"), markup=False)
-        if png is not None:
-            from imukit.plot import attitude_error_plot
-
-            attitude_error_plot(png, data.imu.t - data.imu.t[0], {name: error}, title=f"{name}: {args.path}")
-            wrote("attitude error plot", png)
+        if data.paired is not None:
+            out.print(scored("IMU samples", data.paired, args.max_dt), markup=False)
+    if png is not None:
+        _plot(png, data, name, result, error, args.path)
     return 0
+
+
+def _plot(
+    png: Any, data: AttitudeInput, name: str, result: FilterResult, error: AttitudeError | None, path: str
+) -> None:
+    """The attitude errors when there is a reference (``error``), else the attitudes themselves."""
+    from imukit.plot import attitude_error_plot, attitude_plot
+
+    t = data.imu.t - data.imu.t[0]
+    if error is not None:
+        attitude_error_plot(png, t, {name: error}, title=f"{name}: {path}")
+        wrote("attitude error plot", png)
+    else:
+        attitude_plot(png, t, {name: result.rotation}, title=f"{name}: {path} (no reference)")
+        wrote("attitude plot", png)
 
 
 def _write(target: Any, data: AttitudeInput, result: FilterResult) -> None:

@@ -26,12 +26,12 @@ def trim_to_truth(imu: ImuData, truth: Trajectory) -> ImuData:
     return imu[first:]
 
 
-def from_truth(truth: Trajectory, imu: ImuData, *, max_dt: float) -> tuple[NavState, ImuBias | None]:
+def from_truth(truth: Trajectory, imu: ImuData, *, max_dt: float | None) -> tuple[NavState, ImuBias | None]:
     """The ground-truth state (and biases, when it has them) at ``imu``'s first sample, by the rule of
     :func:`imukit.cli._truth.truth_at`: position, velocity and biases linear, rotation slerp, exact at
-    a common stamp, not across a truth gap over ``max_dt`` [s] (then a CliError). A truth without
-    velocity (TUM) gets it from its positions' central differences."""
-    first = truth_at(truth, imu[:1], max_dt=max_dt, option="PATH").reference
+    a common stamp, not across a truth gap over ``max_dt`` [s] (None: by the truth's rate; then a
+    CliError). A truth without velocity (TUM) gets it from its positions' central differences."""
+    first = truth_at(truth, imu[:1], max_dt=max_dt, option="--max-dt").reference
     velocity = np.zeros(3) if first.velocity is None else first.velocity[0]  # None: a one-pose truth
     state = NavState(first.position[0], velocity, first.rotation[0])
     if first.gyro_bias is None or first.accel_bias is None:

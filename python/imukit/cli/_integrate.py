@@ -11,6 +11,7 @@ from imukit import _core
 from imukit.cli._common import (
     CliError,
     add_input_options,
+    add_max_dt_option,
     add_plot_option,
     err,
     note,
@@ -18,7 +19,7 @@ from imukit.cli._common import (
     output_path,
     positive,
     read_imu,
-    unpaired,
+    scored,
     wrote,
 )
 from imukit.cli._initial import (
@@ -31,8 +32,6 @@ from imukit.cli._initial import (
 )
 from imukit.io import write_tum
 from imukit.strapdown import SCHEME_ALIASES, SCHEMES, integrate
-
-MAX_DT = 0.02  # [s] longest ground-truth interval the ATE interpolates across (imukit.eval.ape's default)
 
 DESCRIPTION = f"""\
 Integrate the IMU samples of PATH into positions, velocities and attitudes (strapdown dead
@@ -58,8 +57,9 @@ The initial state:
 Writes: --out, a TUM file (`t x y z qx qy qz qw`, one line per IMU sample); --plot, a top view
 (x-y, metres) of the trajectory and the ground truth.
 Prints: with ground truth, the final position error and the absolute trajectory error (RMSE over
-the samples inside the truth's span, no alignment: the start is the truth's), and how many samples
-were left out of it: after the truth ends, or in its gaps longer than 0.02 s.
+the samples inside the truth's span, no alignment: the start is the truth's), and the samples scored
+as a fraction of all; the others are counted: after the truth ends, or in its gaps longer than
+--max-dt (default: 2.5 x the truth's median step, so a gap-free 20 Hz truth scores every sample).
 
 Example:
   imukit integrate MH_01_easy/ --scheme rk4 --bias-from-groundtruth --out traj.txt --plot top.png"""
@@ -91,6 +91,7 @@ def add(commands: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--out", metavar="TUM", help="write the trajectory to this TUM file (.txt or .tum)")
     add_plot_option(p, "a top view of the trajectory and the ground truth")
+    add_max_dt_option(p)
     add_input_options(p)
     p.set_defaults(run=run)
     return p
@@ -102,8 +103,9 @@ def run(args: argparse.Namespace) -> int:
     imu, truth = read_imu(args)
     bias = None
     if truth is not None:
+        n_read = len(imu)
         imu = trim_to_truth(imu, truth)
-        initial, truth_bias = from_truth(truth, imu, max_dt=MAX_DT)
+        initial, truth_bias = from_truth(truth, imu, max_dt=args.max_dt)
         if args.bias_from_groundtruth:
             if truth_bias is None:
                 raise CliError("--bias-from-groundtruth: the ground truth in PATH has no biases")
@@ -117,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         trajectory = integrate(imu, initial=initial, scheme=args.scheme, bias=bias)
     out.print(f"integrated {len(imu)} samples over {imu.duration:.3f} s with {args.scheme}", markup=False)
     if truth is not None:
-        _report_errors(trajectory, truth)
+        _report_errors(trajectory, truth, args.max_dt, before=n_read - len(imu))
     if tum is not None:
         write_tum(trajectory, tum)
         wrote("trajectory (TUM)", tum)
@@ -131,15 +133,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report_errors(trajectory: Any, truth: Any) -> None:
+def _report_errors(trajectory: Any, truth: Any, max_dt: float | None, *, before: int) -> None:
     from imukit.eval import ape
 
-    error = ape(trajectory, truth, align="none", max_dt=MAX_DT)
+    error = ape(trajectory, truth, align="none", max_dt=max_dt)
     final = float(np.linalg.norm(error.estimate.position[-1] - error.reference.position[-1]))
     out.print(
         f"final position error {final:.4g} m; ATE RMSE {error.translation_stats.rmse:.4g} m, max "
         f"{error.translation_stats.max:.4g} m over {error.translation_stats.n} samples (no alignment)",
         markup=False,
     )
-    if error.n_dropped:
-        out.print(unpaired("samples", error.n_outside_span, error.n_in_gaps, f"{MAX_DT:g} s"), markup=False)
+    out.print(scored("samples", error, max_dt, before=before), markup=False)

@@ -14,6 +14,7 @@ from imukit._errors import ParameterError
 from imukit.cli._common import (
     CliError,
     add_input_options,
+    add_max_dt_option,
     chunks,
     note,
     out,
@@ -23,7 +24,9 @@ from imukit.cli._common import (
     read_imu,
     wrote,
 )
-from imukit.imu import ImuData, ImuNoise
+from imukit.cli._initial import trim_to_truth
+from imukit.cli._truth import truth_at
+from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.io import find_noise_model
 from imukit.io._noise_model import NoNoiseModelError
 from imukit.preint import (
@@ -35,6 +38,7 @@ from imukit.preint import (
     preintegrate_windows,
     regular_boundaries,
 )
+from imukit.state import Trajectory
 
 WINDOWS_PER_CALL = 2_000  # a progress step; each window is computed alone, so the split changes nothing
 
@@ -78,6 +82,10 @@ Writes --out:
         t_end_ns (M,) int64 for nanosecond stamps.
 Window edges: every --window s from the first sample, the last edge at or before the last sample
 (computed in integer ns for nanosecond stamps, the window rounded to a whole ns).
+Bias: the deltas are of the readings minus a bias, zero unless --gyro-bias / --accel-bias give a
+constant one, or --bias-from-groundtruth takes each window's from the ground truth's biases at its
+start (EuRoC's has them; interpolated, not across truth gaps over --max-dt; IMU samples before the
+truth starts are skipped); the npz then holds them (bias_gyro, bias_accel).
 Prints the number of windows and the largest window's deltas.
 
 Example:
@@ -101,6 +109,14 @@ def add(commands: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--noise", metavar="YAML", help="Kalibr imu.yaml with the noise densities")
     p.add_argument("--out", metavar="FILE", help="write the windows to this .csv or .npz file")
+    p.add_argument("--gyro-bias", metavar="X,Y,Z", type=_vector, help="a constant gyro bias [rad/s] (default: 0)")
+    p.add_argument("--accel-bias", metavar="X,Y,Z", type=_vector, help="a constant accel bias [m/s^2] (default: 0)")
+    p.add_argument(
+        "--bias-from-groundtruth",
+        action="store_true",
+        help="each window at the ground truth's biases at its start (PATH's or --groundtruth's)",
+    )
+    add_max_dt_option(p)
     add_input_options(p)
     p.set_defaults(run=run)
     return p
@@ -127,14 +143,70 @@ def boundaries(imu: ImuData, window_s: float) -> NDArray[Any]:
         raise CliError(f"--window: {e.message}") from None
 
 
-def windows(imu: ImuData, edges: NDArray[Any], noise: ImuNoise, scheme: str) -> Preintegration:
-    """:func:`imukit.preintegrate_windows` in calls of ``WINDOWS_PER_CALL`` windows, with a progress bar."""
+def _vector(text: str) -> NDArray[np.float64]:
+    """argparse type: three comma-separated finite numbers."""
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 3 comma-separated numbers, got {text!r}") from None
+    if values.shape != (3,) or not np.isfinite(values).all():
+        raise argparse.ArgumentTypeError(f"expected 3 comma-separated finite numbers, got {text!r}")
+    return values
+
+
+def window_biases(
+    args: argparse.Namespace, truth: Trajectory | None, edges: NDArray[Any]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The (M, 3) gyro and accel biases of the M windows: --gyro-bias / --accel-bias held constant,
+    or with --bias-from-groundtruth the truth's at each window start (all starts must have it); None
+    for no bias at all."""
+    m = len(edges) - 1
+    if args.bias_from_groundtruth:
+        if args.gyro_bias is not None or args.accel_bias is not None:
+            raise CliError("give --bias-from-groundtruth or --gyro-bias / --accel-bias, not both")
+        if truth is None:
+            raise CliError("--bias-from-groundtruth: PATH has no ground truth (--groundtruth FILE gives one)")
+        paired = truth_at(truth, edges[:-1], max_dt=args.max_dt, option="--max-dt")
+        gyro, accel = paired.reference.gyro_bias, paired.reference.accel_bias
+        if gyro is None or accel is None:
+            raise CliError("--bias-from-groundtruth: the ground truth has no biases")
+        if not paired.mask.all():
+            raise CliError(
+                f"{m - int(paired.mask.sum())} of {m} window starts have no ground truth ({paired.n_outside_span} "
+                f"after its span, {paired.n_in_gaps} in its gaps longer than {paired.max_dt:.4g} s)",
+                argument="--max-dt",
+            )
+        return gyro, accel
+    if args.gyro_bias is None and args.accel_bias is None:
+        return None
+    zero = np.zeros(3)
+    gyro = args.gyro_bias if args.gyro_bias is not None else zero
+    accel = args.accel_bias if args.accel_bias is not None else zero
+    return np.tile(gyro, (m, 1)), np.tile(accel, (m, 1))
+
+
+def windows(
+    imu: ImuData,
+    edges: NDArray[Any],
+    noise: ImuNoise,
+    scheme: str,
+    biases: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> Preintegration:
+    """:func:`imukit.preintegrate_windows` in calls of ``WINDOWS_PER_CALL`` windows, with a progress bar;
+    with ``biases`` (M, 3) each, every window at its own bias (one call per run of equal biases)."""
     params = PreintParams(noise, scheme=scheme)
+    runs = [(0, len(edges) - 1, params)]
+    if biases is not None:
+        gyro, accel = biases
+        change = np.flatnonzero(np.any(np.diff(np.hstack([gyro, accel]), axis=0) != 0, axis=1)) + 1
+        starts = [0, *change.tolist(), len(edges) - 1]
+        runs = [(a, b, params.replace(bias=ImuBias(gyro[a], accel[a]))) for a, b in zip(starts[:-1], starts[1:])]
     pieces: list[Preintegration] = []
     with progress("preintegrating", len(edges) - 1) as advance:
-        for a, b in chunks(len(edges) - 1, WINDOWS_PER_CALL):
-            pieces.append(preintegrate_windows(imu, edges[a : b + 1], params))
-            advance(b - a)
+        for first, last, run_params in runs:
+            for a, b in chunks(last - first, WINDOWS_PER_CALL):
+                pieces.append(preintegrate_windows(imu, edges[first + a : first + b + 1], run_params))
+                advance(b - a)
     return concatenate(pieces)
 
 
@@ -158,10 +230,16 @@ def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
-    imu, _ = read_imu(args)
+    imu, truth = read_imu(args)
+    if args.bias_from_groundtruth and truth is not None:
+        imu = trim_to_truth(imu, truth)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
-    table = arrays(windows(imu, edges, noise, args.scheme))
+    biases = window_biases(args, truth, edges)
+    table = arrays(windows(imu, edges, noise, args.scheme, biases))
+    if biases is not None:
+        table["bias_gyro"], table["bias_accel"] = biases
+        note(_bias_note(biases, args.bias_from_groundtruth))
     dp = np.linalg.norm(table["dp"], axis=1)
     largest = int(np.argmax(dp))
     out.print(
@@ -177,6 +255,15 @@ def run(args: argparse.Namespace) -> int:
             _write_csv(target, table)
         wrote("windows", target)
     return 0
+
+
+def _bias_note(biases: tuple[NDArray[np.float64], NDArray[np.float64]], from_truth: bool) -> str:
+    gyro, accel = biases
+    where = "the ground truth's at each window start, first" if from_truth else "constant"
+    return (
+        f"bias ({where}): gyro [{', '.join(f'{v:.6g}' for v in gyro[0])}] rad/s, "
+        f"accel [{', '.join(f'{v:.6g}' for v in accel[0])}] m/s^2"
+    )
 
 
 def _write_csv(target: Any, table: dict[str, NDArray[Any]]) -> None:

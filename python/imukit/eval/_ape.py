@@ -18,7 +18,7 @@ class AbsoluteError(NamedTuple):
     """Result of :func:`ape`: per-sample errors over the N associated samples and their statistics.
 
     ``estimate`` is the associated estimate after ``alignment``; ``reference`` the reference at
-    the same stamps. ``mask``, ``n_dropped``, ``n_outside_span`` and ``n_in_gaps`` come from
+    the same stamps. ``mask``, ``n_dropped``, ``n_outside_span``, ``n_in_gaps`` and ``max_dt`` come from
     :func:`associate` (over the input estimate).
     """
 
@@ -33,6 +33,7 @@ class AbsoluteError(NamedTuple):
     n_dropped: int
     n_outside_span: int
     n_in_gaps: int
+    max_dt: float
 
 
 def ape(
@@ -40,13 +41,13 @@ def ape(
     reference: Trajectory,
     *,
     align: str = "se3",
-    max_dt: float = 0.02,
+    max_dt: float | None = None,
     offset: float = 0.0,
 ) -> AbsoluteError:
     """Absolute trajectory error (ATE; evo's APE) of ``estimate`` against ``reference``.
 
-    1. :func:`associate` (``max_dt`` [s], ``offset`` [s]): the reference interpolated at the
-       estimate's stamps; unpaired samples are dropped and counted.
+    1. :func:`associate` (``max_dt`` [s], None: by the reference's rate; ``offset`` [s]): the
+       reference interpolated at the estimate's stamps; unpaired samples are dropped and counted.
     2. :func:`align` with ``method=align`` (``"se3"``, ``"sim3"``, ``"yaw"``, ``"position"``,
        ``"none"``), fitted on all associated positions, applied to the estimate.
     3. Per sample i: translation error ``‖p'_est,i − p_ref,i‖`` [m] (the aligned estimate ``p'``)

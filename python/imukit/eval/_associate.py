@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from imukit._arrays import FloatArray
 from imukit._errors import ParameterError
 from imukit.eval._checks import check_trajectory, finite_float
+from imukit.io._gaps import reference_max_dt
 from imukit.state import Trajectory
 
 _INT64 = np.iinfo(np.int64)
@@ -22,7 +23,8 @@ class Association(NamedTuple):
     ``estimate`` holds the kept estimate samples (positions, velocities, rotations, biases as they
     were) stamped in the reference's clock, i.e. its own stamps plus ``offset``; ``reference`` holds
     the reference interpolated at exactly those stamps. ``mask`` (len of the input estimate,) marks
-    the kept input samples; ``n_dropped = n_outside_span + n_in_gaps`` counts the others.
+    the kept input samples; ``n_dropped = n_outside_span + n_in_gaps`` counts the others;
+    ``max_dt`` is the longest reference step interpolated across [s] (given, or derived).
     """
 
     estimate: Trajectory
@@ -31,6 +33,12 @@ class Association(NamedTuple):
     n_dropped: int
     n_outside_span: int  # before the first or after the last reference stamp
     n_in_gaps: int  # inside the span, between reference samples more than max_dt apart
+    max_dt: float  # [s] the limit used: the argument, or REFERENCE_GAP_FACTOR x the reference's median step
+
+    @property
+    def scored(self) -> float:
+        """The fraction of the input estimate samples that were paired, in [0, 1]."""
+        return float(np.mean(self.mask))
 
 
 def culprit(offset: float, n_outside: int, n_in_gaps: int) -> str:
@@ -46,7 +54,7 @@ def associate(
     estimate: Trajectory,
     reference: Trajectory,
     *,
-    max_dt: float = 0.02,
+    max_dt: float | None = None,
     offset: float = 0.0,
 ) -> Association:
     """Pair every estimate sample with the reference interpolated at the same instant.
@@ -59,7 +67,9 @@ def associate(
     max_dt
         Longest reference interval [s] across which the reference may be interpolated. An estimate
         stamp ``s`` with ``r_k < s < r_{k+1}`` is kept only when ``r_{k+1} − r_k ≤ max_dt``; a stamp
-        equal to a reference stamp needs no interpolation and is always kept.
+        equal to a reference stamp needs no interpolation and is always kept. None (default): by the
+        reference's own rate, :func:`imukit.io.reference_max_dt` (``REFERENCE_GAP_FACTOR`` = 2.5
+        times its median step), so a gap-free 20 Hz ground truth pairs every IMU sample in its span.
     offset
         Clock offset [s] **added** to the estimate's stamps before pairing: estimate time ``t``
         corresponds to reference time ``t + offset``.
@@ -88,7 +98,7 @@ def associate(
     """
     est = check_trajectory(estimate, "estimate")
     ref = check_trajectory(reference, "reference")
-    max_dt = finite_float(max_dt, "max_dt", positive=True)
+    max_dt = reference_max_dt(ref) if max_dt is None else finite_float(max_dt, "max_dt", positive=True)
     offset = finite_float(offset, "offset")
     in_ns = est.t_ns is not None and ref.t_ns is not None
     stamps: NDArray[np.int64] | FloatArray
@@ -117,11 +127,10 @@ def associate(
     if not keep.any():
         a, b = float(est.t[0]) + offset, float(est.t[-1]) + offset
         raise ParameterError(
-            f"no estimate sample can be paired with the reference: the "
-            f"estimate spans [{a:.9g}, {b:.9g}] s "
-            f"(offset {offset:g} s applied), the reference [{float(ref.t[0]):.9g}, {float(ref.t[-1]):.9g}] s; "
+            f"no estimate sample can be paired with the reference: the estimate spans {span_text(a, b)} "
+            f"(offset {offset:g} s applied), the reference {span_text(float(ref.t[0]), float(ref.t[-1]))}; "
             f"{n_outside} samples outside the reference span, {n_gaps} inside reference gaps longer than "
-            f"max_dt = {max_dt:g} s",
+            f"max_dt = {max_dt:.6g} s",
             argument=culprit(offset, n_outside, n_gaps),
         )
 
@@ -152,4 +161,11 @@ def associate(
         gyro_bias=None if est.gyro_bias is None else est.gyro_bias[keep],
         accel_bias=None if est.accel_bias is None else est.accel_bias[keep],
     )
-    return Association(estimate_out, reference_out, keep, n_outside + n_gaps, n_outside, n_gaps)
+    return Association(estimate_out, reference_out, keep, n_outside + n_gaps, n_outside, n_gaps, max_dt)
+
+
+def span_text(a: float, b: float) -> str:
+    """``[a, b] s`` to the millisecond, never in exponent notation: Unix-epoch stamps read
+    ``[1403715273.262, 1403715418.512] s``, not ``[1.40371527e+09, 1.40371542e+09]``."""
+    a_text, b_text = (np.format_float_positional(x, precision=3, trim="-") for x in (a, b))
+    return f"[{a_text}, {b_text}] s"

@@ -24,9 +24,12 @@ class Prepared(NamedTuple):
     n_dropped: int  # = n_outside_span + n_in_gaps
     n_outside_span: int
     n_in_gaps: int
+    max_dt: float  # [s] the association's limit (given, or by the reference's rate)
 
 
-def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt: float, offset: float) -> Prepared:
+def prepare(
+    estimate: Trajectory, reference: Trajectory, *, method: str, max_dt: float | None, offset: float
+) -> Prepared:
     """:func:`associate` (``max_dt``, ``offset``), fit :func:`align` (``method``) on all pairs, apply it."""
     choice(method, "align", METHODS)  # named as ape's and rpe's keyword
     pair = associate(estimate, reference, max_dt=max_dt, offset=offset)
@@ -35,7 +38,8 @@ def prepare(estimate: Trajectory, reference: Trajectory, *, method: str, max_dt:
         raise ParameterError(
             f"{method} alignment needs at least 3 paired "
             f"samples, but only {kept} of {len(pair.mask)} estimate samples could be paired with the reference "
-            f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than max_dt = {max_dt:g} s)",
+            f"({pair.n_outside_span} outside its span, {pair.n_in_gaps} in gaps longer than "
+            f"max_dt = {pair.max_dt:.6g} s)",
             argument=culprit(offset, pair.n_outside_span, pair.n_in_gaps),
         )
     alignment = align(pair.estimate, pair.reference, method=method)

@@ -24,7 +24,8 @@ class RelativeError(NamedTuple):
     ``pairs`` (M, 2) indexes ``estimate`` and ``reference`` (the associated, aligned trajectories);
     ``separation`` (M,) is how far apart each pair is, in ``unit`` (travelled reference distance
     [m], time [s] or frames), ≥ ``delta``; ``translation / separation`` is the drift per unit.
-    ``mask``, ``n_dropped``, ``n_outside_span`` and ``n_in_gaps`` come from :func:`associate`.
+    ``mask``, ``n_dropped``, ``n_outside_span``, ``n_in_gaps`` and ``max_dt`` come from
+    :func:`associate`.
     """
 
     translation: FloatArray  # (M,) ‖translation of E_ij‖ [m]
@@ -42,6 +43,7 @@ class RelativeError(NamedTuple):
     n_dropped: int
     n_outside_span: int
     n_in_gaps: int
+    max_dt: float
 
 
 def rpe(
@@ -52,7 +54,7 @@ def rpe(
     unit: str = "m",
     align: str = "none",
     all_pairs: bool = False,
-    max_dt: float = 0.02,
+    max_dt: float | None = None,
     offset: float = 0.0,
 ) -> RelativeError:
     """Relative pose error of ``estimate`` against ``reference`` over pairs ``delta`` apart.

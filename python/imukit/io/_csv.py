@@ -5,34 +5,18 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 
 from imukit._arrays import choice, real_scalar
-from imukit._errors import FileFormatError, ParameterError
+from imukit._errors import ParameterError
 from imukit.imu import ImuData
-from imukit.io._lines import (
-    Problem,
-    Split,
-    all_exact,
-    as_file_error,
-    increasing,
-    integer_stamp,
-    parse_rows,
-    public_reader,
-    require_rows,
-)
+from imukit.io._lines import Problem, as_file_error, public_reader
 from imukit.io._report import BadLines, OnBadLine, ReadReport
+from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_columns, check_header_lines, read_stamped, read_table
 
 __all__ = ["read_imu_csv"]
-
-Column = Union[int, str]
-TimeUnit = Literal["s", "ms", "us", "ns"]
-# Nanoseconds per unit, for integer stamps; float stamps are divided by the unit's count per second.
-_NS_PER = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}
-_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
-_DELIMITERS = (",", ";", "\t", " ")
 
 
 def imu_csv(
@@ -47,18 +31,19 @@ def imu_csv(
     accel_unit: str,
     standard_gravity: float,
     delimiter: str | None,
+    header_lines: int | None,
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``."""
-    choice(time_unit, "time_unit", tuple(_NS_PER))
+    choice(time_unit, "time_unit", TIME_UNITS)
     choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
     choice(accel_unit, "accel_unit", ("m/s^2", "g"))
     gravity = _gravity(standard_gravity)
-    if delimiter is not None:
-        choice(delimiter, "delimiter", _DELIMITERS)
+    header_lines = check_header_lines(header_lines)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
     for name, columns in wanted.items():
-        _check_columns(columns, name, 1 if name == "time_column" else 3)
-    return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
+        check_columns(columns, name, 1 if name == "time_column" else 3)
+    scale = gravity if accel_unit == "g" else None
+    return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", scale, delimiter, header_lines)
 
 
 @public_reader(imu_csv)
@@ -73,6 +58,7 @@ def read_imu_csv(  # type: ignore[empty-body]
     accel_unit: Literal["m/s^2", "g"] = "m/s^2",
     standard_gravity: float = 9.80665,
     delimiter: str | None = None,
+    header_lines: int | None = None,
     on_bad_line: OnBadLine = "raise",
     report: ReadReport | None = None,
 ) -> ImuData:
@@ -81,9 +67,13 @@ def read_imu_csv(  # type: ignore[empty-body]
     Parameters
     ----------
     path
-        The text file. Its first non-blank line is the header when it is not all numbers (a leading
-        ``#`` is dropped from it, as in EuRoC's ``#timestamp [ns],…``); every data line must have as
-        many fields as the header (without one, as the first data line). Later ``#`` lines and
+        The text file. Its header is its leading lines that are ``#`` lines or whose first field is
+        not a number (or ``header_lines`` of them); the last of them names the columns (a leading
+        ``#`` is dropped, as in EuRoC's ``#timestamp [ns],…``), and a name not found there is looked
+        up in the header lines above it (an exporter's group line). Every data line must have as
+        many fields as the header (without one, as the first data line); a header or data lines
+        ending in the delimiter (``a;b;c;``) lose that empty field where it makes them agree, and a
+        header whose count still differs is one error naming both counts. Later ``#`` lines and
         blank lines are skipped. UTF-8, with or without a byte order mark.
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
@@ -105,6 +95,8 @@ def read_imu_csv(  # type: ignore[empty-body]
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs); None (default): ``";"`` if
         the first non-blank line has one, else ``","`` if it has one, else white space. Decimal
         commas are not read.
+    header_lines
+        How many non-blank lines the header has (0: none); None (default): detected as above.
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`. Bad lines: a wrong field count, text that is not a
         number (or, with ``"ns"``, not an integer) in a column read, non-finite values, and stamps
@@ -134,116 +126,26 @@ def _read(
     degrees: bool,
     gravity: float | None,
     delimiter: str | None,
+    header_lines: int | None,
 ) -> ImuData:
     """:func:`imu_csv` with checked arguments."""
-    where = os.fspath(path)
-    # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
-    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
-        numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
-    split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
-    header: list[str] | None = None
-    header_line = 0
-    if numbered and not _numeric(split(numbered[0][1].lstrip("#"))):
-        header = [name.strip() for name in split(numbered[0][1].lstrip("#"))]
-        header_line = numbered.pop(0)[0]
-    numbered = [(n, text) for n, text in numbered if not text.startswith("#")]
-    if not numbered:
-        raise FileFormatError(f"{where}: no data lines", argument="path")
-    width = len(header) if header is not None else len(split(numbered[0][1]))
-    index = {
-        name: [_index(c, name, header, header_line, width, where) for c in columns] for name, columns in wanted.items()
-    }
+    table = read_table(path, delimiter, header_lines)
+    index = {name: [table.column(c, name) for c in columns] for name, columns in wanted.items()}
     columns = index["time_column"] + index["gyro_columns"] + index["accel_columns"]
-    time = columns[0]
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
-        if time_unit == "ns" and integer_stamp(fields[time].strip()) is None:
-            return "malformed", f"time {fields[time].strip()!r} is not an integer number of nanoseconds (int64)"
         if gravity is not None and not all(math.isfinite(a * gravity) for a in row[4:7]):
             accel = ", ".join(map(repr, row[4:7]))
             return "non-finite", f"acceleration ({accel}) g overflows float64 in m/s^2"
         return None
 
-    rows = parse_rows(
-        numbered,
-        path,
-        bad,
-        split=split,
-        width=width,
-        expected=f"fields ({'the header' if header is not None else 'the first data line'} has {width})",
-        columns=columns,
-        check=check,
-    )
-    stamps = [f[time].strip() for f in rows.fields]
-    scale = _NS_PER[time_unit]
-    ns = all_exact(stamps, lambda s: integer_stamp(s, scale)) if time_unit != "s" else None
-    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, path, bad)
-    rows = rows.take(keep)
-    require_rows(rows, path, bad)
-    data = np.array(rows.values, dtype=np.float64)
-    gyro = data[:, 1:4] * (np.pi / 180.0) if degrees else data[:, 1:4]
-    accel = data[:, 4:7] * gravity if gravity is not None else data[:, 4:7]
-    if ns is not None:
-        t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-        return as_file_error(path, lambda: ImuData(t_ns, gyro, accel))
-    t = data[:, 0] / _PER_SECOND[time_unit]
-    return as_file_error(path, lambda: ImuData(t, gyro, accel))
+    data = read_stamped(table, bad, columns, time_unit, check)
+    gyro = data.values[:, 1:4] * (np.pi / 180.0) if degrees else data.values[:, 1:4]
+    accel = data.values[:, 4:7] * gravity if gravity is not None else data.values[:, 4:7]
+    return as_file_error(path, lambda: ImuData(data.stamps, gyro, accel))
 
 
 def _gravity(value: object) -> float:
     # The one numeric-option rule (real_scalar): "9.8" and True are refused as every option refuses them.
     what = "a positive, finite number of m/s^2 per g"
     return real_scalar(value, "standard_gravity", what=what, accept=lambda g: math.isfinite(g) and g > 0.0)
-
-
-def _check_columns(columns: object, name: str, count: int) -> None:
-    """``columns`` must be ``count`` names or indices (``time_column`` arrives wrapped in a list)."""
-    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
-        raise ParameterError(
-            f"expected {count} column names or 0-based indices (x, y, z), got {columns!r}", argument=name
-        )
-    for column in columns:
-        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
-            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
-
-
-def _index(column: Column, name: str, header: list[str] | None, line: int, width: int, where: str) -> int:
-    if isinstance(column, int):
-        if column >= width:
-            raise ParameterError(
-                f"column {column} is out of range: {where} has {width} columns (0-based indices 0 to {width - 1})",
-                argument=name,
-            )
-        return column
-    if header is None:
-        raise ParameterError(
-            f"column {column!r} is a name, but {where} has no header line (its first line is numbers); "
-            "pass 0-based indices",
-            argument=name,
-        )
-    found = [k for k, h in enumerate(header) if h == column]
-    if len(found) != 1:
-        problem = "no column named" if not found else f"{len(found)} columns named"
-        raise ParameterError(
-            f"{problem} {column!r} in the header of {where} (line {line}), which has {', '.join(map(repr, header))}",
-            argument=name,
-        )
-    return found[0]
-
-
-def _detect(first: str) -> str:
-    return ";" if ";" in first else "," if "," in first else " "
-
-
-def _splitter(delimiter: str) -> Split:
-    if delimiter == " ":
-        return str.split
-    return lambda text: text.split(delimiter)
-
-
-def _numeric(fields: list[str]) -> bool:
-    try:
-        [float(x) for x in fields]
-    except ValueError:
-        return False
-    return True

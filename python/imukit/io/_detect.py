@@ -91,7 +91,10 @@ def read_imu(  # type: ignore[empty-body]
     3. a file whose first non-blank line is ``Time dt accelX accelY accelZ omegaX omegaY omegaZ``:
        GTSAM / KITTI text (:func:`imukit.io.read_gtsam_imu`);
     4. a folder with ``metadata.yaml`` (a ROS 2 bag), or a file named ``*.bag``, ``*.mcap`` or
-       ``*.db3`` (any case): a ROS bag (:func:`imukit.io.read_rosbag`).
+       ``*.db3`` (any case): a ROS bag (:func:`imukit.io.read_rosbag`);
+    5. a file whose first line names a time column and the x, y, z of gyro and accelerometer
+       (``Time, angular_velocity.x, …, linear_acceleration.x, …``; ``docs/io.md``): read by
+       :func:`imukit.io.read_imu_csv` with those columns and the units the names state.
 
     Formats added with :func:`imukit.io.register_format` come after these (or where they are put).
 
@@ -167,8 +170,10 @@ def read_trajectory(  # type: ignore[empty-body]
     folder with ``imu0/data.csv`` (or under ``mav0/``) gives its
     ``state_groundtruth_estimate0/data.csv`` (EuRoC) or else its ``mocap0/data.csv`` (TUM-VI). A file
     is classified by its first data line (after ``#`` and blank lines): 17 comma-separated fields,
-    EuRoC ground truth (:func:`imukit.io.read_euroc_groundtruth`); 8 comma-separated fields, TUM-VI
-    mocap (``timestamp [ns], p x y z, q w x y z``) when a header line names the quaternion w first
+    EuRoC ground truth (:func:`imukit.io.read_euroc_groundtruth`); a first line naming a time column,
+    a position's x, y, z and a quaternion's x, y, z, w (``transform.translation.x`` …
+    ``transform.rotation.w``): :func:`imukit.io.read_trajectory_csv` with them; 8 comma-separated
+    fields, TUM-VI mocap (``timestamp [ns], p x y z, q w x y z``) when a header line names the quaternion w first
     (``q_RS_w``, ``qw``), refused without a header or with w last (``t,x,y,z,qx,qy,qz,qw``: the order
     cannot be guessed from numbers, and a wrong one is silently wrong); 8 white-space-separated
     fields, TUM (:func:`imukit.io.read_tum`). An empty file or one without data lines is said to be

@@ -254,14 +254,16 @@ def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
     Parameters
     ----------
     path
-        An EuRoC / ASL folder (``sensor.yaml`` looked for in ``imu0/``, then in ``mav0/imu0/``) or a
-        file, typically ``imu0/data.csv`` (``sensor.yaml`` looked for beside it). A folder's parent
-        is never searched.
+        An EuRoC / ASL folder (``sensor.yaml`` looked for in ``imu0/``, then in ``mav0/imu0/``), a
+        ``.yaml`` / ``.yml`` file of any name (``imu0_sensor.yaml``: read itself), or another file,
+        typically ``imu0/data.csv`` (``sensor.yaml`` looked for beside it). A folder's parent is
+        never searched.
 
     Returns
     -------
     KalibrImu or None
-        None when there is no such ``sensor.yaml``. Else, as :func:`imukit.io.read_kalibr_imu` reads
+        None when a folder or data file has no such ``sensor.yaml`` (a yaml file given by name is
+        read or refused, never None). Else, as :func:`imukit.io.read_kalibr_imu` reads
         it: ``noise`` from ``gyroscope_noise_density`` [rad/s/√Hz], ``gyroscope_random_walk``
         [rad/s²/√Hz], ``accelerometer_noise_density`` [m/s²/√Hz], ``accelerometer_random_walk``
         [m/s³/√Hz]; ``rate_hz`` [Hz]; ``extra`` every other key as PyYAML parsed it, among them
@@ -275,20 +277,47 @@ def read_euroc_sensor(path: str | os.PathLike[str]) -> KalibrImu | None:
     FileNotFoundError
         ``path`` does not exist.
     FileFormatError
-        The ``sensor.yaml`` found is not an IMU sensor file (as :func:`imukit.io.read_kalibr_imu`:
-        missing noise keys or rate, a value that is not a finite number), or its ``T_BS`` is not a
-        4×4 matrix of finite numbers.
+        The ``sensor.yaml`` found or given is not an IMU sensor file (as
+        :func:`imukit.io.read_kalibr_imu`: missing noise keys or rate, a value that is not a finite
+        number, naming the keys missing; a file whose ``sensor_type`` is another sensor's says so), or
+        its ``T_BS`` is not a 4×4 matrix of finite numbers.
     """
     source = Path(path)
     if not source.exists():
         raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
+    if source.is_file() and source.suffix.lower() in (".yaml", ".yml"):
+        return _sensor_yaml(source)
     folders = [source / "imu0", source / "mav0" / "imu0"] if source.is_dir() else [source.parent]
     for folder in folders:
         candidate = folder / "sensor.yaml"
         if candidate.is_file():
-            sensor = read_kalibr_imu(candidate)
-            euroc_extrinsics(sensor, where=os.fspath(candidate))  # a malformed T_BS is refused here
-            return sensor
+            return _sensor_yaml(candidate)
+    return None
+
+
+def _sensor_yaml(path: Path) -> KalibrImu:
+    """An EuRoC IMU ``sensor.yaml`` (any name) read, or refused saying what it is instead."""
+    try:
+        sensor = read_kalibr_imu(path)
+    except FileFormatError as exc:
+        kind = _sensor_type(path)
+        if kind is None or kind == "imu":  # read_kalibr_imu's message names the keys missing
+            raise
+        why = exc.message.removeprefix(f"{os.fspath(path)}: ")
+        raise FileFormatError(
+            f"{os.fspath(path)}: not an IMU sensor file (sensor_type {kind!r}; {why})", argument="path"
+        ) from exc
+    euroc_extrinsics(sensor, where=os.fspath(path))  # a malformed T_BS is refused here
+    return sensor
+
+
+def _sensor_type(path: Path) -> str | None:
+    """The ``sensor_type:`` line of a yaml file (EuRoC writes one per sensor), None without one."""
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            key, _, value = line.partition(":")
+            if key.strip() == "sensor_type":
+                return value.strip().strip("'\"")
     return None
 
 

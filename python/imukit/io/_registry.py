@@ -17,7 +17,9 @@ from imukit._errors import ParameterError
 from imukit.io._euroc import EUROC_FOLDER, EUROC_GROUNDTRUTH, EUROC_GROUNDTRUTH_FOLDER, EUROC_IMU_CSV
 from imukit.io._format import Format
 from imukit.io._gtsam import GTSAM_TEXT
+from imukit.io._named_csv import NAMED_CSV
 from imukit.io._rosbag import ROSBAG
+from imukit.io._trajectory_csv import NAMED_TRAJECTORY_CSV
 from imukit.io._tum import TUM
 from imukit.io._tumvi import TUMVI_FOLDER, TUMVI_MOCAP, TUMVI_MOCAP_FOLDER
 
@@ -29,16 +31,18 @@ BUILT_IN: tuple[Format, ...] = (
     EUROC_IMU_CSV,
     GTSAM_TEXT,
     ROSBAG,
+    NAMED_CSV,
     TUM,
     EUROC_GROUNDTRUTH_FOLDER,
     EUROC_GROUNDTRUTH,
+    NAMED_TRAJECTORY_CSV,
     TUMVI_MOCAP_FOLDER,
     TUMVI_MOCAP,
 )
 # The readers detection does not reach (they need more than a path), named after the list.
 _OTHERS = {
     "imu": "; other layouts: read_imu_csv",
-    "trajectory": " (or their folders); KITTI poses: read_kitti_poses",
+    "trajectory": " (or their folders); KITTI poses: read_kitti_poses; other layouts: read_trajectory_csv",
 }
 _registered = list(BUILT_IN)
 

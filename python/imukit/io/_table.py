@@ -1,0 +1,243 @@
+"""A delimited text file as a header and data lines: what :func:`imukit.io.read_imu_csv` and
+:func:`imukit.io.read_trajectory_csv` share (``docs/io.md``, "Any CSV").
+
+=================  ================================================================================
+delimiter          given, or detected from the first non-blank line: ``;`` if it has one, else ``,``
+                   if it has one, else white space
+header lines       ``header_lines=N``: the first N non-blank lines; None: the leading lines that are
+                   ``#`` lines or whose first field is not a number (an exporter's two-line header,
+                   a group line over a names line). The names are the last of them; a later ``#``
+                   line is a comment, unless it is the first (EuRoC's ``#timestamp [ns],…``)
+names              by exact text after stripping white space, looked up in the names line, then in
+                   the other header lines (``"Time [s]"`` on a group line above ``";w;x;y;z"``)
+trailing delimiter a names line or data lines ending in the delimiter (``a;b;c;``) have one empty
+                   field too many: it is dropped where that makes the two agree
+field counts       the header's and the data lines' (the most common count of the first 50) must
+                   agree, else one error naming both, not one per line
+=================  ================================================================================
+"""
+
+from __future__ import annotations
+
+import os
+from collections import Counter
+from collections.abc import Sequence
+from typing import Literal, NamedTuple, Union
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imukit._arrays import FloatArray, choice
+from imukit._errors import FileFormatError, ParameterError
+from imukit.io._format import is_number
+from imukit.io._lines import (
+    Problem,
+    RowCheck,
+    Rows,
+    Split,
+    all_exact,
+    increasing,
+    integer_stamp,
+    parse_rows,
+    require_rows,
+)
+from imukit.io._report import BadLines
+
+__all__ = [
+    "DELIMITERS",
+    "TIME_UNITS",
+    "Column",
+    "Stamped",
+    "Table",
+    "TimeUnit",
+    "check_columns",
+    "check_header_lines",
+    "read_stamped",
+    "read_table",
+]
+
+Column = Union[int, str]
+TimeUnit = Literal["s", "ms", "us", "ns"]
+DELIMITERS = (",", ";", "\t", " ")
+TIME_UNITS = ("s", "ms", "us", "ns")
+# Nanoseconds per unit, for integer stamps; float stamps are divided by the unit's count per second.
+_NS_PER = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}
+_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
+_SAMPLE = 50  # data lines whose most common field count is the data's width
+
+
+class Table(NamedTuple):
+    """A delimited text file split into its header and data lines (:func:`read_table`)."""
+
+    where: str
+    lines: list[tuple[int, str]]
+    """``(line number, stripped text)`` of the data lines."""
+    split: Split
+    """A data line into its fields (a trailing delimiter dropped where the file has one)."""
+    headers: list[tuple[int, list[str]]]
+    """``(line number, names)`` of each header line, the names line last; [] without a header."""
+    width: int
+    """The fields of a data line."""
+
+    def column(self, column: Column, name: str) -> int:
+        """The 0-based index of ``column`` (an index, or a header name), or a ParameterError naming the
+        argument ``name``: an index past the last column, a name not in the header (listing its names)."""
+        if isinstance(column, int):
+            if column >= self.width:
+                raise ParameterError(
+                    f"column {column} is out of range: {self.where} has {self.width} columns (0-based indices 0 to "
+                    f"{self.width - 1})",
+                    argument=name,
+                )
+            return column
+        if not self.headers:
+            raise ParameterError(
+                f"column {column!r} is a name, but {self.where} has no header line (its first line is numbers); "
+                "pass 0-based indices",
+                argument=name,
+            )
+        for line, names in reversed(self.headers):
+            found = [k for k, h in enumerate(names) if h == column]
+            if len(found) == 1 and found[0] < self.width:
+                return found[0]
+            if found:
+                raise ParameterError(
+                    f"{len(found)} columns named {column!r} in the header of {self.where} (line {line}); pass a "
+                    "0-based index",
+                    argument=name,
+                )
+        line, names = self.headers[-1]
+        raise ParameterError(
+            f"no column named {column!r} in the header of {self.where} (line {line}), which has "
+            f"{', '.join(map(repr, names))}",
+            argument=name,
+        )
+
+    def rows(self, bad: BadLines, columns: Sequence[int], check: RowCheck | None = None) -> Rows:
+        """:func:`imukit.io._lines.parse_rows` of the data lines, ``columns`` read as numbers."""
+        origin = "the header" if self.headers else "the first data line"
+        return parse_rows(
+            self.lines,
+            self.where,
+            bad,
+            split=self.split,
+            width=self.width,
+            expected=f"fields ({origin} has {self.width})",
+            columns=columns,
+            check=check,
+        )
+
+
+class Stamped(NamedTuple):
+    """The rows of a :class:`Table` that :func:`read_stamped` kept, in time order."""
+
+    values: FloatArray
+    """``(N, len(columns))`` floats of the columns read, the time column first."""
+    stamps: NDArray[np.int64] | FloatArray
+    """Exact int64 nanoseconds, or float seconds (what ``ImuData`` and ``Trajectory`` take as ``t``)."""
+    lines: list[int]
+
+
+def read_stamped(
+    table: Table, bad: BadLines, columns: Sequence[int], time_unit: str, check: RowCheck | None = None
+) -> Stamped:
+    """The data lines whose ``columns`` (the time column first) are finite numbers and pass ``check``,
+    stamps strictly increasing (:func:`imukit.io._lines.increasing`). ``time_unit`` ``"ns"``: integer
+    stamps, exact ``t_ns``; ``"ms"`` / ``"us"``: exact ``t_ns`` when every stamp is an integer, else like
+    ``"s"`` float seconds, one correctly rounded division by the unit's count per second."""
+    choice(time_unit, "time_unit", TIME_UNITS)
+    time = columns[0]
+
+    def stamp_check(fields: list[str], row: list[float]) -> Problem | None:
+        if time_unit == "ns" and integer_stamp(fields[time].strip()) is None:
+            return "malformed", f"time {fields[time].strip()!r} is not an integer number of nanoseconds (int64)"
+        return None if check is None else check(fields, row)
+
+    rows = table.rows(bad, columns, stamp_check)
+    stamps = [f[time].strip() for f in rows.fields]
+    scale = _NS_PER[time_unit]
+    ns = all_exact(stamps, lambda s: integer_stamp(s, scale)) if time_unit != "s" else None
+    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, table.where, bad)
+    rows = rows.take(keep)
+    require_rows(rows, table.where, bad)
+    values = np.array(rows.values, dtype=np.float64)
+    if ns is not None:
+        return Stamped(values, np.array([ns[k] for k in keep], dtype=np.int64), rows.lines)
+    return Stamped(values, values[:, 0] / _PER_SECOND[time_unit], rows.lines)
+
+
+def check_columns(columns: object, name: str, count: int) -> None:
+    """``columns`` must be ``count`` header names or 0-based indices (a single column arrives wrapped in
+    a list), else a ParameterError naming ``name``."""
+    if isinstance(columns, (str, bytes)) or not isinstance(columns, Sequence) or len(columns) != count:
+        what = {1: "one", 3: "x, y, z", 4: "a quaternion's"}.get(count, str(count))
+        raise ParameterError(
+            f"expected {count} column names or 0-based indices ({what}), got {columns!r}", argument=name
+        )
+    for column in columns:
+        if isinstance(column, bool) or not isinstance(column, (int, str)) or (isinstance(column, int) and column < 0):
+            raise ParameterError(f"expected a column name or a 0-based index (int ≥ 0), got {column!r}", argument=name)
+
+
+def check_header_lines(value: object) -> int | None:
+    """``header_lines`` as given: None or an int ≥ 0, else a ParameterError."""
+    if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+        raise ParameterError(f"expected None or a number of lines (int ≥ 0), got {value!r}", argument="header_lines")
+    return value
+
+
+def read_table(path: str | os.PathLike[str], delimiter: str | None, header_lines: int | None) -> Table:
+    """``path`` split into header and data lines (module doc). FileFormatError: no data lines, or a
+    header whose field count differs from the data lines'."""
+    if delimiter is not None:
+        choice(delimiter, "delimiter", DELIMITERS)
+    where = os.fspath(path)
+    # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
+    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
+        numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
+    d = delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else "")
+    plain = str.split if d == " " else (lambda text: text.split(d))
+    count = header_lines if header_lines is not None else _leading_header(numbered, plain)
+    head, body = numbered[:count], numbered[count:]
+    data = [(n, text) for n, text in body if not text.startswith("#")]
+    if not data:
+        raise FileFormatError(f"{where}: no data lines", argument="path")
+    named = [(n, text) for k, (n, text) in enumerate(head) if k == 0 or not text.startswith("#")]
+    headers = [(n, [name.strip() for name in plain(text.lstrip("#"))]) for n, text in named]
+    widths = Counter(len(plain(text)) for _, text in data[:_SAMPLE])
+    if not headers:
+        return Table(where, data, plain, [], len(plain(data[0][1])))
+    line, names = headers[-1]
+    width = widths.most_common(1)[0][0]
+    if d != " " and names[-1] == "" and len(names) == width + 1:  # `a;b;c;` over `1;2;3`
+        headers[-1] = (line, names[:-1])
+        return Table(where, data, plain, headers, width)
+    if d != " " and len(names) == width - 1 and all(text.endswith(d) for _, text in data[:_SAMPLE]):
+        return Table(where, data, lambda text: _drop_trailing(plain(text), d, text), headers, len(names))
+    if len(names) != width:
+        trailing = d != " " and (named[-1][1].endswith(d) or data[0][1].endswith(d))
+        raise FileFormatError(
+            f"{where}: the header (line {line}) has {len(names)} fields, data lines {width}"
+            + (f": a trailing {d!r}?" if trailing else "")
+            + " (header_lines= says how many lines the header has)",
+            argument="path",
+        )
+    return Table(where, data, plain, headers, width)
+
+
+def _leading_header(numbered: list[tuple[int, str]], split: Split) -> int:
+    """How many leading lines are header: ``#`` lines, or lines whose first field is not a number.
+    When that is every line, the first line alone (its data lines' numbers are unreadable, e.g. decimal
+    commas, and each is reported as such)."""
+    for k, (_, text) in enumerate(numbered):
+        if not text.startswith("#") and is_number(split(text)[0] if split(text) else ""):
+            return k
+    return min(len(numbered), 1)
+
+
+def _drop_trailing(fields: list[str], d: str, text: str) -> list[str]:
+    return fields[:-1] if text.endswith(d) else fields
+
+
+def _detect(first: str) -> str:
+    return ";" if ";" in first else "," if "," in first else " "

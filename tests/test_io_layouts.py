@@ -1,0 +1,192 @@
+"""Real layouts of issue 16, built here from their described shapes: a float-second `Time` CSV with
+ROS-style names (`angular_velocity.x`, `linear_acceleration.x`, `magnetic_field.x`) found by
+`read_imu`; a semicolon CSV with two header lines, the first ending in `;` (RepoIMU's T-stick
+export); field-count mismatches named with both counts. Expected values are the numbers written."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+from imukit.io._named_csv import column_roles
+
+ROS_NAMES = [
+    "Time",
+    *(f"angular_velocity.{a}" for a in "xyz"),
+    *(f"linear_acceleration.{a}" for a in "xyz"),
+    *(f"magnetic_field.{a}" for a in "xyz"),
+]
+
+
+def _values(n: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).normal(size=(n, 9)).round(6)
+
+
+def test_ros_style_names_with_float_seconds_are_detected(tmp_path: Path) -> None:
+    t = 1403715273.25 + np.arange(50) * 0.005
+    values = _values(50, 1)
+    path = tmp_path / "imu.csv"
+    lines = [",".join(ROS_NAMES)] + [",".join([repr(float(s)), *map(repr, row.tolist())]) for s, row in zip(t, values)]
+    path.write_text("\n".join(lines) + "\n")
+    imu, truth = ik.io.read_imu(path)
+    assert truth is None and imu.t_ns is None
+    np.testing.assert_array_equal(imu.t, t)
+    np.testing.assert_array_equal(imu.gyro, values[:, 0:3])
+    np.testing.assert_array_equal(imu.accel, values[:, 3:6])
+
+
+def test_column_roles_name_every_role_mag_included() -> None:
+    roles = column_roles(ROS_NAMES)
+    assert roles is not None
+    assert roles.columns == {"time": [0], "gyro": [1, 2, 3], "accel": [4, 5, 6], "mag": [7, 8, 9]}
+    assert (roles.time_unit, roles.gyro_unit, roles.accel_unit) == (None, "rad/s", "m/s^2")
+    xio = ["Time (s)", *(f"Gyroscope {a} (deg/s)" for a in "XYZ"), *(f"Accelerometer {a} (g)" for a in "XYZ")]
+    roles = column_roles(xio)
+    assert roles is not None and (roles.time_unit, roles.gyro_unit, roles.accel_unit) == ("s", "deg/s", "g")
+    assert "mag" not in roles.columns
+    rostopic = ["%time", "field.header.stamp", *ROS_NAMES[1:7]]  # rostopic echo -p: header.stamp wins, in ns
+    roles = column_roles([f"field.{n}" if "." in n and not n.startswith("field") else n for n in rostopic])
+    assert roles is not None and roles.columns["time"] == [1] and roles.time_unit == "ns"
+    assert column_roles(["Time", "gyro_x", "gyro_y", "ax", "ay", "az"]) is None  # no gyro z
+    assert column_roles(["time", "Time (s)", "gx", "gy", "gz", "ax", "ay", "az"]) is None  # which time?
+
+
+def test_rostopic_nanosecond_stamps_are_exact(tmp_path: Path) -> None:
+    path = tmp_path / "imu.csv"
+    header = "%time,field.header.stamp," + ",".join(f"field.{n}" for n in ROS_NAMES[1:7])
+    rows = [
+        "1403715273262142976,1403715273262142900,0.1,0.2,0.3,1,2,9.8",
+        "1403715273267142976,1403715273267142900,0,0,0,0,0,9.8",
+    ]
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    imu, _ = ik.io.read_imu(path)
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [1403715273262142900, 1403715273267142900]
+
+
+REPOIMU = [  # RepoIMU T-stick: a group line ending in ';' over a names line, then 14 fields per line
+    "Time [s];Orientation [];;;;Acceleration [m/s^2];;;Angular velocity [rad/s];;;Magnetic field [uT];;;",
+    ";w;x;y;z;x;y;z;x;y;z;x;y;z",
+]
+
+
+def _repoimu(path: Path, n: int = 20) -> np.ndarray:
+    rows = np.column_stack([np.arange(n) * 0.01, _values(n, 2)[:, :4], _values(n, 3)])
+    path.write_text("\n".join(REPOIMU + [";".join(repr(v) for v in row.tolist()) for row in rows]) + "\n")
+    return rows
+
+
+def test_semicolon_csv_with_two_header_lines(tmp_path: Path) -> None:
+    path = tmp_path / "TStick_Test01_Trial1.csv"
+    rows = _repoimu(path)
+    by_index = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[8, 9, 10], accel_columns=[5, 6, 7])
+    np.testing.assert_array_equal(by_index.t, rows[:, 0])
+    np.testing.assert_array_equal(by_index.gyro, rows[:, 8:11])
+    np.testing.assert_array_equal(by_index.accel, rows[:, 5:8])
+    # the group line's name finds the time column; header_lines=2 says what detection found
+    named = ik.io.read_imu_csv(path, time_column="Time [s]", gyro_columns=[8, 9, 10], accel_columns=[5, 6, 7])
+    told = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[8, 9, 10], accel_columns=[5, 6, 7], header_lines=2)
+    for imu in (named, told):
+        np.testing.assert_array_equal(imu.t, by_index.t)
+        np.testing.assert_array_equal(imu.gyro, by_index.gyro)
+    with pytest.raises(ik.ParameterError, match=r"^gyro_columns: 4 columns named 'x' in the header of .* \(line 2\)"):
+        ik.io.read_imu_csv(path, time_column=0, gyro_columns=["x", "y", "z"], accel_columns=[5, 6, 7])
+
+
+def test_trailing_delimiters_on_either_side(tmp_path: Path) -> None:
+    path = tmp_path / "imu.csv"
+    cols = {"time_column": "t", "gyro_columns": ["gx", "gy", "gz"], "accel_columns": ["ax", "ay", "az"]}
+    for text in ("t;gx;gy;gz;ax;ay;az;\n0;1;2;3;4;5;6\n", "t;gx;gy;gz;ax;ay;az\n0;1;2;3;4;5;6;\n0.1;1;2;3;4;5;6;\n"):
+        path.write_text(text)
+        imu = ik.io.read_imu_csv(path, **cols)  # type: ignore[arg-type]
+        np.testing.assert_array_equal(imu.gyro[0], [1, 2, 3])
+        np.testing.assert_array_equal(imu.accel[0], [4, 5, 6])
+
+
+def test_a_field_count_mismatch_names_both_counts(tmp_path: Path) -> None:
+    path = tmp_path / "imu.csv"
+    cols = {"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
+    path.write_text("t;gx;gy;gz;ax;ay;az;temp;;\n" + "0;1;2;3;4;5;6;20\n" * 3)  # two trailing ';'
+    message = rf"^path: {re.escape(str(path))}: the header \(line 1\) has 10 fields, data lines 8: a trailing ';'\?"
+    with pytest.raises(ik.FileFormatError, match=message):
+        ik.io.read_imu_csv(path, **cols)  # type: ignore[arg-type]
+    with pytest.raises(ik.FileFormatError, match=message):  # a file-level error in skip mode too
+        ik.io.read_imu_csv(path, on_bad_line="skip", **cols)  # type: ignore[arg-type]
+    path.write_text("t,gx,gy,gz,ax,ay,az,mx,my,mz\n" + "0,1,2,3,4,5,6\n" * 3)
+    with pytest.raises(ik.FileFormatError, match=r"the header \(line 1\) has 10 fields, data lines 7 \(header_lines"):
+        ik.io.read_imu_csv(path, **cols)  # type: ignore[arg-type]
+    # the issue's file read with a one-line header: the names line is the first data line, refused as such
+    _repoimu(path)
+    with pytest.raises(ik.FileFormatError, match=r", line 2: not a number in ';w;x;y;z"):
+        ik.io.read_imu_csv(path, header_lines=1, **cols)  # type: ignore[arg-type]
+    with pytest.raises(ik.ParameterError, match=r"^header_lines: expected None or a number of lines"):
+        ik.io.read_imu_csv(path, header_lines=-1, **cols)  # type: ignore[arg-type]
+
+
+TF_NAMES = [
+    "Time",
+    "header.frame_id",
+    *(f"transform.translation.{a}" for a in "xyz"),
+    *(f"transform.rotation.{a}" for a in "xyzw"),
+]
+
+
+def _poses(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t = 1403715273.0 + np.arange(n) * 0.05
+    position = np.random.default_rng(4).normal(size=(n, 3)).round(6)
+    xyzw = Rotation.random(n, random_state=5).as_quat()  # unit to rounding: kept bit for bit
+    return t, position, xyzw
+
+
+def _write_tf(path: Path, n: int = 30) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t, position, xyzw = _poses(n)
+    lines = [",".join(TF_NAMES)] + [
+        ",".join([repr(float(s)), "world", *map(repr, p.tolist()), *map(repr, q.tolist())])
+        for s, p, q in zip(t, position, xyzw)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    return t, position, xyzw
+
+
+def test_a_transform_csv_is_read_by_its_names(tmp_path: Path) -> None:
+    path = tmp_path / "vicon.csv"
+    t, position, xyzw = _write_tf(path)
+    detected = ik.io.read_trajectory(path)
+    np.testing.assert_array_equal(detected.t, t)
+    np.testing.assert_array_equal(detected.position, position)
+    np.testing.assert_array_equal(detected.rotation.as_quat(), xyzw)
+    assert detected.velocity is None
+    named = ik.io.read_trajectory_csv(
+        path,
+        time_column="Time",
+        position_columns=[f"transform.translation.{a}" for a in "xyz"],
+        quaternion_columns=[f"transform.rotation.{a}" for a in "xyzw"],
+    )
+    np.testing.assert_array_equal(named.rotation.as_quat(), xyzw)
+    # the same columns named w first: the order argument puts w last again
+    wxyz = ik.io.read_trajectory_csv(
+        path, time_column=0, position_columns=[2, 3, 4], quaternion_columns=[8, 5, 6, 7], quaternion_order="wxyz"
+    )
+    np.testing.assert_array_equal(wxyz.rotation.as_quat(), xyzw)
+
+
+def test_read_trajectory_csv_units_errors_and_bad_lines(tmp_path: Path) -> None:
+    path = tmp_path / "poses.txt"
+    path.write_text("stamp_ns;x;y;z;qw;qx;qy;qz\n1000000000;1;2;3;1;0;0;0\n2000000000;4;5;6;0;0;0;0\n")
+    cols = {"time_column": 0, "position_columns": [1, 2, 3], "quaternion_columns": [4, 5, 6, 7]}
+    report = ik.io.ReadReport()
+    traj = ik.io.read_trajectory_csv(
+        path, time_unit="ns", quaternion_order="wxyz", on_bad_line="skip", report=report, **cols
+    )  # type: ignore[arg-type]
+    assert traj.t_ns is not None and traj.t_ns.tolist() == [10**9]
+    assert [(s.line, s.reason) for s in report.skipped] == [(3, "zero quaternion: zero quaternion")]
+    with pytest.raises(ik.ParameterError, match=r"^quaternion_order: expected one of \('xyzw', 'wxyz'\), got 'zyxw'"):
+        ik.io.read_trajectory_csv(path, quaternion_order="zyxw", **cols)  # type: ignore[arg-type]
+    with pytest.raises(ik.ParameterError, match=r"^quaternion_columns: expected 4 column names or 0-based indices"):
+        ik.io.read_trajectory_csv(path, time_column=0, position_columns=[1, 2, 3], quaternion_columns=[4, 5, 6])
+    with pytest.raises(ik.ParameterError, match=r"^position_columns: no column named 'px' in the header"):
+        ik.io.read_trajectory_csv(path, time_column=0, position_columns=["px", 2, 3], quaternion_columns=[4, 5, 6, 7])
