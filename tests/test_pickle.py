@@ -317,6 +317,15 @@ def test_integer_stamps_survive_the_round_trip() -> None:
     np.testing.assert_array_equal(clone.gyro_saturated, imu.gyro_saturated)
 
 
+def test_magnetometer_survives_the_round_trip() -> None:
+    imu = _imu_ns()
+    with_mag = ik.ImuData(imu.t_ns, imu.gyro, imu.accel, mag=imu.accel * 3.0 + 1.0)
+    for clone in (pickle.loads(pickle.dumps(with_mag)), copy.deepcopy(with_mag)):
+        assert_same(with_mag, clone)  # field by field: mag included, bit for bit and read-only
+        assert clone.mag is not None and not clone.mag.flags.writeable
+    assert pickle.loads(pickle.dumps(imu)).mag is None
+
+
 def test_exception_fields_survive_the_round_trip() -> None:
     exc = ik.TimestampError("time must increase strictly", argument="t", index=3)
     clone = pickle.loads(pickle.dumps(exc))

@@ -47,6 +47,7 @@ def imu_csv(
     accel_unit: str,
     standard_gravity: float,
     delimiter: str | None,
+    mag_columns: Sequence[Column] | None = None,
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``."""
     choice(time_unit, "time_unit", tuple(_NS_PER))
@@ -56,6 +57,8 @@ def imu_csv(
     if delimiter is not None:
         choice(delimiter, "delimiter", _DELIMITERS)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
+    if mag_columns is not None:
+        wanted["mag_columns"] = mag_columns
     for name, columns in wanted.items():
         _check_columns(columns, name, 1 if name == "time_column" else 3)
     return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", gravity if accel_unit == "g" else None, delimiter)
@@ -73,6 +76,7 @@ def read_imu_csv(  # type: ignore[empty-body]
     accel_unit: Literal["m/s^2", "g"] = "m/s^2",
     standard_gravity: float = 9.80665,
     delimiter: str | None = None,
+    mag_columns: Sequence[Column] | None = None,
     on_bad_line: OnBadLine = "raise",
     report: ReadReport | None = None,
 ) -> ImuData:
@@ -88,7 +92,7 @@ def read_imu_csv(  # type: ignore[empty-body]
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
         header name (exact, after stripping white space) or a 0-based index. Other columns
-        (magnetometer, temperature, …) are not read.
+        (temperature, …) are not read.
     time_unit
         ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. With ``"ns"`` every stamp must be an integer and
         becomes exact int64 ``t_ns``; with ``"ms"`` or ``"us"``, integer stamps also become exact
@@ -105,6 +109,10 @@ def read_imu_csv(  # type: ignore[empty-body]
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs); None (default): ``";"`` if
         the first non-blank line has one, else ``","`` if it has one, else white space. Decimal
         commas are not read.
+    mag_columns
+        The x, y, z magnetometer columns (names or indices, as above), read into ``ImuData.mag`` as
+        they are (no unit conversion: µT by convention, any unit for the filters); None (default):
+        no magnetometer.
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`. Bad lines: a wrong field count, text that is not a
         number (or, with ``"ns"``, not an integer) in a column read, non-finite values, and stamps
@@ -153,7 +161,7 @@ def _read(
     index = {
         name: [_index(c, name, header, header_line, width, where) for c in columns] for name, columns in wanted.items()
     }
-    columns = index["time_column"] + index["gyro_columns"] + index["accel_columns"]
+    columns = [c for name in wanted for c in index[name]]  # time, gyro, accel, then mag if wanted
     time = columns[0]
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
@@ -183,11 +191,12 @@ def _read(
     data = np.array(rows.values, dtype=np.float64)
     gyro = data[:, 1:4] * (np.pi / 180.0) if degrees else data[:, 1:4]
     accel = data[:, 4:7] * gravity if gravity is not None else data[:, 4:7]
+    mag = data[:, 7:10] if "mag_columns" in wanted else None
     if ns is not None:
         t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-        return as_file_error(path, lambda: ImuData(t_ns, gyro, accel))
+        return as_file_error(path, lambda: ImuData(t_ns, gyro, accel, mag=mag))
     t = data[:, 0] / _PER_SECOND[time_unit]
-    return as_file_error(path, lambda: ImuData(t, gyro, accel))
+    return as_file_error(path, lambda: ImuData(t, gyro, accel, mag=mag))
 
 
 def _gravity(value: object) -> float:
