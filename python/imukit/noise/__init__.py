@@ -20,7 +20,16 @@ units                  N and K are the continuous densities of :class:`imukit.Im
 """
 
 from imukit.noise._allan import AllanDeviation, allan_deviation
-from imukit.noise._fit import FLICKER_FACTOR, AllanFit, fit_allan, to_imu_noise
+from imukit.noise._fit import FLICKER_FACTOR, UNRESOLVED, AllanFit, fit_allan, to_imu_noise
 from imukit.noise._plot import plot_allan
 
-__all__ = ["FLICKER_FACTOR", "AllanDeviation", "AllanFit", "allan_deviation", "fit_allan", "plot_allan", "to_imu_noise"]
+__all__ = [
+    "FLICKER_FACTOR",
+    "UNRESOLVED",
+    "AllanDeviation",
+    "AllanFit",
+    "allan_deviation",
+    "fit_allan",
+    "plot_allan",
+    "to_imu_noise",
+]
