@@ -135,6 +135,17 @@ def _windows_states() -> ik.preint.States:
     return ik.preint.States(np.arange(3.0 * m).reshape(m, 3), np.ones((m, 3)), rotation)
 
 
+def _calibration() -> ik.noise.NoiseCalibration:
+    """Residuals of the windows against states off their prediction by a rotation, a velocity, a position."""
+    p, v, r = ik.preint.predict(_windows(), _windows_states())
+    m = len(p)
+    turn = Rotation.from_rotvec(1e-4 * np.cos(np.outer(np.arange(m), [1.0, 2.0, 3.0]))).as_matrix()
+    wobble = 1e-3 * np.sin(np.outer(np.arange(m), [3.0, 1.0, 2.0]))
+    return ik.noise.calibrate_from_residuals(
+        _windows(), _windows_states(), ik.preint.States(p + wobble, v - wobble, r @ turn)
+    )
+
+
 def _error(cls: type[ik.ImukitError]) -> Callable[[], ik.ImukitError]:
     return lambda: cls("expected shape (N, 3), got (2,)", argument="gyro", index=4)
 
@@ -169,6 +180,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     # imukit.noise
     "AllanDeviation": _allan,
     "AllanFit": lambda: ik.noise.fit_allan(_allan(), sensor="gyro", axis=0),
+    "NoiseCalibration": _calibration,
     # imukit.eval
     "Association": lambda: ik.eval.associate(*_estimate()),
     "Alignment": lambda: ik.eval.align(*_estimate(), method="sim3"),
