@@ -4,11 +4,15 @@ optimiser of the same likelihood, and by the analytic property of its optimum (m
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy import optimize
 
 import imukit as ik
+from euroc import requires_euroc
+from imukit.cli import main
 from imukit.preint import PreintParams, States, preintegrate_windows
 
 GIVEN = ik.ImuNoise(1.6968e-4, 2.0e-3, 0.0, 0.0)  # EuRoC's datasheet densities
@@ -114,3 +118,48 @@ def test_refusals() -> None:
     singular = preintegrate_windows(imu, imu.t[::STEP], PreintParams(zero))
     with pytest.raises(ik.ParameterError, match="singular"):
         ik.noise.calibrate_from_residuals(singular, state_i, state_j)
+
+
+def test_cli_preintegrate_calibrate_writes_the_inflated_densities(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    true = ik.ImuNoise(4 * GIVEN.gyro_density, 4 * GIVEN.accel_density, 0.0, 0.0)
+    imu, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=200.0, duration=40.0, noise=true, bias=BIAS, seed=2)
+    ik.io.write_euroc(tmp_path / "sim", imu, truth, epoch_ns=10**18)
+    given = tmp_path / "given.yaml"
+    ik.io.write_kalibr_imu(given, ik.ImuNoise(GIVEN.gyro_density, GIVEN.accel_density, 1.9393e-5, 3e-3), rate_hz=200.0)
+    out = tmp_path / "calibrated.yaml"
+    args = ["preintegrate", str(tmp_path / "sim"), "--window", "0.1", "--noise", str(given), "--calibrate", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "windows: 400" in printed and "chi2 after: mean 9 " in printed
+    fitted = ik.io.read_kalibr_imu(out)
+    assert fitted.noise.gyro_density == pytest.approx(4 * GIVEN.gyro_density, rel=0.1)
+    assert fitted.noise.accel_density == pytest.approx(4 * GIVEN.accel_density, rel=0.1)
+    assert fitted.noise.gyro_random_walk == 1.9393e-5 and fitted.rate_hz == 200.0  # as given, not calibrated
+    text = out.read_text()
+    assert "# whitened chi2 mean" in text and "(theta block)" in text
+    # Without ground truth (a bare IMU file) the option is refused.
+    bare = tmp_path / "sim" / "imu0" / "data.csv"
+    assert main(["preintegrate", str(bare), "--window", "0.1", "--noise", str(given), "--calibrate", str(out)]) == 1
+    assert "--calibrate: needs ground truth" in capsys.readouterr().err
+
+
+@requires_euroc
+def test_euroc_datasheet_densities_are_inflated() -> None:
+    """EuRoC V1_02 (40 s excerpt), 10 Hz keyframes, midpoint: the datasheet densities give χ² ≈ 212;
+    the numbers of docs/noise.md."""
+    from euroc import load
+
+    data = load()
+    imu = ik.ImuData(data.t_ns, data.gyro, data.accel)
+    idx = np.arange(0, len(imu), STEP)
+    mean_bias = ik.ImuBias(data.gyro_bias.mean(axis=0), data.accel_bias.mean(axis=0))
+    rec = preintegrate_windows(imu, imu.t_ns[idx], PreintParams(GIVEN, bias=mean_bias))
+    rot = data.rotation.as_matrix()
+    state_i = States(data.position[idx[:-1]], data.velocity[idx[:-1]], rot[idx[:-1]])
+    state_j = States(data.position[idx[1:]], data.velocity[idx[1:]], rot[idx[1:]])
+    biases = [ik.ImuBias(g, a) for g, a in zip(data.gyro_bias[idx[:-1]], data.accel_bias[idx[:-1]])]
+    cal = ik.noise.calibrate_from_residuals(rec, state_i, state_j, bias=biases)
+    assert cal.chi2_before.mean() == pytest.approx(212, rel=0.05)
+    assert cal.gyro_factor == pytest.approx(4.37, rel=0.05) and cal.accel_factor == pytest.approx(5.07, rel=0.05)

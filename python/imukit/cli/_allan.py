@@ -82,7 +82,8 @@ def allan_fits(imu: ImuData, rate_hz: float) -> dict[str, tuple[AllanDeviation, 
 DENSITY_DIGITS, RATE_DIGITS = 4, 6
 
 
-def _digits(x: float, significant: int) -> float:
+def digits(x: float, significant: int) -> float:
+    """``x`` rounded to ``significant`` digits, so that ``repr`` writes no more."""
     return float(f"{x:.{significant}g}")
 
 
@@ -123,12 +124,12 @@ def run(args: argparse.Namespace) -> int:
         wrote(f"{sensor} Allan plot", path)
     fitted = {sensor: fit for sensor, (_, fit) in fits.items()}
     noise = to_imu_noise(gyro=fitted["gyro"], accel=fitted["accel"], unresolved=args.unresolved_walk)
-    rounded = {f.name: _digits(getattr(noise, f.name), DENSITY_DIGITS) for f in dataclasses.fields(noise)}
+    rounded = {f.name: digits(getattr(noise, f.name), DENSITY_DIGITS) for f in dataclasses.fields(noise)}
     walks, comments = walk_choices(fitted, args)
     write_kalibr_imu(
         yaml_path,
         dataclasses.replace(noise, **{**rounded, **walks}),
-        rate_hz=_digits(rate, RATE_DIGITS),
+        rate_hz=digits(rate, RATE_DIGITS),
         comments=comments,
         header=f"from imukit allan of {Path(args.path).name}: {len(imu)} samples, {imu.duration:.1f} s",
     )
