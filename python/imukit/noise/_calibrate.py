@@ -29,8 +29,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import stats
 
-from imukit._arrays import FloatArray
-from imukit._errors import NonFiniteError, ParameterError
+from imukit._arrays import FloatArray, as_float_array, check_finite_rows
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit._preint_math import States, residual
 from imukit._preint_record import Preintegration
 from imukit.imu import ImuBias, ImuNoise
@@ -159,28 +159,38 @@ def calibrate_from_residuals(
         )
     if not (isinstance(confidence, (float, int)) and not isinstance(confidence, bool) and 0.0 < confidence < 1.0):
         raise ParameterError(f"expected a number in (0, 1), got {confidence!r}", argument="confidence")
-    r = _residuals(windows, state_i, state_j, bias)
+    m = len(windows)
+    r = _residuals(windows, _states(state_i, "state_i", m), _states(state_j, "state_j", m), bias)
     cov = windows.covariance
     if not (np.isfinite(r).all() and np.isfinite(cov).all()):
         raise NonFiniteError("the residuals or covariances are not all finite", argument="windows")
     try:
-        info = np.linalg.inv(cov)  # (M, 9, 9); 9×9 each, well conditioned for nonzero densities
+        chol = np.linalg.cholesky(cov)
     except np.linalg.LinAlgError:
         raise ParameterError("a window's covariance is singular (a noise density of 0?)", argument="windows") from None
-    m = len(windows)
-    rb = r.reshape(m, 3, 3)  # (M, block, axis)
-    q = np.einsum("mbi,mbicj,mcj->bc", rb, info.reshape(m, 3, 3, 3, 3), rb)
-    chi2_before = np.einsum("mi,mij,mj->m", r, info, r)
+    # Each block's residual alone, whitened: y_b = L⁻¹ (r restricted to b), so that Q_bc = Σ_m y_bᵀ y_c
+    # is a Gram matrix (positive semi-definite in floating point too) and χ² = |Σ_b y_b|².
+    blocks = np.einsum("mi,bi->mbi", r, np.repeat(np.eye(3), 3, axis=1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        y = np.linalg.solve(chol[:, None], blocks[..., None])[..., 0]  # (M, block, 9)
+        q = np.einsum("mbi,mci->bc", y, y)
+    if not np.isfinite(q).all():
+        raise NonFiniteError(
+            "the whitened residuals overflow float64 (states far from the windows?)", argument="windows"
+        )
+    whole = y.sum(axis=1)
+    chi2_before = np.einsum("mi,mi->m", whole, whole)
     z = float(stats.norm.ppf(0.5 + confidence / 2.0))
-    free, free_iv = _fit(q, m, _FREE, z)
-    tied, tied_iv = _fit(q, m, _DENSITIES, z)
-    scale = np.repeat([tied[0], tied[1], tied[1]], 3)
-    chi2_after = np.einsum("mi,mij,mj->m", r / scale, info, r / scale)
-    noise = dataclasses.replace(
-        windows.params.noise,
-        gyro_density=windows.params.noise.gyro_density * tied[0],
-        accel_density=windows.params.noise.accel_density * tied[1],
-    )
+    given = windows.params.noise
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused just below
+        free, free_iv = _fit(q, m, _FREE, z)
+        tied, tied_iv = _fit(q, m, _DENSITIES, z)
+        densities = {"gyro_density": given.gyro_density * tied[0], "accel_density": given.accel_density * tied[1]}
+    if not all(map(math.isfinite, (*free, *tied, *densities.values()))):
+        raise NonFiniteError("the factors overflow float64 (states far from the windows?)", argument="windows")
+    noise = dataclasses.replace(given, **densities)
+    after = np.einsum("mbi,b->mi", y, [1.0 / tied[0], 1.0 / tied[1], 1.0 / tied[1]])
+    chi2_after = np.einsum("mi,mi->m", after, after)
     dist = stats.chi2(9 * m)
     return NoiseCalibration(
         block_factors=(free[0], free[1], free[2]),
@@ -195,6 +205,20 @@ def calibrate_from_residuals(
         mean_interval=(float(dist.ppf((1 - confidence) / 2) / m), float(dist.ppf((1 + confidence) / 2) / m)),
         confidence=float(confidence),
     )
+
+
+def _states(states: object, name: str, m: int) -> States:
+    """``states`` as :class:`States` of M finite float64 rows: (M, 3), (M, 3), (M, 3, 3)."""
+    if not isinstance(states, States):
+        raise ParameterError(f"expected an imukit.preint.States, got {type(states).__name__}", argument=name)
+    fields = []
+    for field, tail in zip(States._fields, ((3,), (3,), (3, 3))):
+        array = np.ascontiguousarray(as_float_array(getattr(states, field), f"{name}.{field}"))
+        if array.shape != (m, *tail):
+            raise ShapeError(f"expected shape {('M', *tail)} with M = {m} windows, got {array.shape}", argument=name)
+        check_finite_rows(array, name, "window")
+        fields.append(array)
+    return States(*fields)
 
 
 def _residuals(
