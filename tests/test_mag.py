@@ -204,11 +204,14 @@ def test_bag_magnetometer_at_another_rate_is_interpolated_and_never_extrapolated
 
     late = _write_bag(tmp_path / "late", imu, mag_ns[1:], field[1:] * 1e-6)
     with pytest.raises(ik.FileFormatError, match=r"topic /imu/mag: IMU sample 0 .* outside the magnetometer's span"):
-        ik.io.read_rosbag(late)
+        ik.io.read_rosbag(late, mag_topic="/imu/mag")
+    # Found but not asked for: the bag still reads, without the magnetometer, saying why.
+    with pytest.warns(UserWarning, match="magnetometer not read: .* IMU sample 0 .* outside the magnetometer's span"):
+        assert ik.io.read_rosbag(late)[0].mag is None
     gap = np.delete(np.arange(len(mag_ns)), range(10, 22))  # 13 steps: over GAP_FACTOR = 10
     holed = _write_bag(tmp_path / "holed", imu, mag_ns[gap], field[gap] * 1e-6)
     with pytest.raises(ik.FileFormatError, match="in a gap of 325000000 ns between magnetometer samples"):
-        ik.io.read_rosbag(holed)
+        ik.io.read_rosbag(holed, mag_topic="/imu/mag")
 
 
 def test_cli_filter_9d_from_a_csv_with_mag_columns(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

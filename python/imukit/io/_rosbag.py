@@ -316,7 +316,13 @@ def rosbag(
         if mag_name is not None:
             m_ns, m_rows = _read_topic(reader, mag_name, MAG_TYPE, time_source, where, bad)
             hint = "pass mag_topic=False to read the bag without its magnetometer"
-            imu = with_mag(imu, m_ns, m_rows * TESLA_TO_MICROTESLA, f"{where}, topic {mag_name}", hint)
+            try:
+                imu = with_mag(imu, m_ns, m_rows * TESLA_TO_MICROTESLA, f"{where}, topic {mag_name}", hint)
+            except FileFormatError as e:
+                if mag_topic is not None:
+                    raise
+                # Found, not asked for: the IMU (and ground truth) read as before this reader knew magnetometers.
+                warnings.warn(f"magnetometer not read: {e.message}", stacklevel=3)
         truth = None
         if truth_name is not None:
             truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
@@ -375,7 +381,8 @@ def read_rosbag(  # type: ignore[empty-body]
         around each IMU stamp, the message itself where the stamps coincide; an IMU sample outside the
         magnetometer's span or in a gap over ``GAP_FACTOR`` median steps is a
         :class:`FileFormatError`. None: the bag's only MagneticField topic with messages (none, or
-        several with a warning: no magnetometer); False: no magnetometer.
+        several, or one that does not cover the IMU samples: no magnetometer, with a warning saying
+        why in the last two cases); False: no magnetometer.
     on_bad_line
         ``"raise"``: the first bad message is a :class:`FileFormatError` ``path: <bag>, topic <t>,
         message <n>: …``, n being the 1-based index of the message on its topic in bag order.
