@@ -35,6 +35,12 @@ def test_mag_is_validated_sliced_and_shown() -> None:
     part = with_mag[10:20:2]
     assert part.mag is not None and np.array_equal(part.mag, mag[10:20:2])
     assert imu[3:5].mag is None and "with mag" in repr(with_mag) and "mag" not in repr(imu)
+    # Equality is by value, the magnetometer included.
+    assert with_mag == ik.ImuData(imu.t, imu.gyro, imu.accel, mag=mag.copy()) and with_mag != imu
+    other = mag.copy()
+    other[3, 2] += 1e-9
+    assert with_mag != ik.ImuData(imu.t, imu.gyro, imu.accel, mag=other)
+    assert with_mag[10:20:2] == with_mag[10:20][::2]
     with pytest.raises(ik.ShapeError, match=r"mag: expected shape \(N, 3\) with N = len\(t\) = 101"):
         ik.ImuData(imu.t, imu.gyro, imu.accel, mag=mag[:-1])
     bad = mag.copy()

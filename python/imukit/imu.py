@@ -200,11 +200,25 @@ class ImuData(Frozen):
         mag = None if self.mag is None else self.mag[index]
         return ImuData(t[index], self.gyro[index], self.accel[index], **ranges, mag=mag)
 
+    def __eq__(self, other: object) -> bool:
+        """Equal samples: the same stamps (and stamp type), readings, ranges and magnetometer, bit for bit."""
+        if not isinstance(other, ImuData):
+            return NotImplemented
+        arrays = ("t", "t_ns", "gyro", "accel", "mag")
+        same = all(_same_array(getattr(self, name), getattr(other, name)) for name in arrays)
+        return same and (self.gyro_range, self.accel_range) == (other.gyro_range, other.accel_range)
+
+    __hash__ = None  # type: ignore[assignment]
+
     def __repr__(self) -> str:
         stamps = "int64 ns" if self.t_ns is not None else "float s"
         rate = f", {self.rate_hz:.6g} Hz" if len(self) > 1 else ""
         mag = ", with mag" if self.mag is not None else ""
         return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps}{mag})"
+
+
+def _same_array(a: NDArray[np.generic] | None, b: NDArray[np.generic] | None) -> bool:
+    return a is b if a is None or b is None else bool(a.dtype == b.dtype and np.array_equal(a, b))
 
 
 def _ranges(gyro_range: float | None, accel_range: float | None) -> tuple[float | None, float | None]:
