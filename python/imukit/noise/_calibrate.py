@@ -137,8 +137,9 @@ def calibrate_from_residuals(
     ParameterError
         A bias sequence of the wrong length, ``confidence`` outside (0, 1), a block whose residuals
         are all zero (nothing to scale), a singular covariance (a density of 0).
-    NonFiniteError
-        Residuals or covariances that are not finite.
+    ShapeError, DTypeError, NonFiniteError
+        States that are not (M, 3), (M, 3), (M, 3, 3) finite real arrays (naming ``state_i`` /
+        ``state_j``); residuals, covariances or factors that are not finite (naming ``windows``).
 
     Notes
     -----
@@ -151,7 +152,9 @@ def calibrate_from_residuals(
     ``u_b (Q u)_b = 3M`` for each b, so ``uᵀ Q u = 9M``: the mean χ² after the correction is exactly
     9. Each coordinate step solves its quadratic exactly; tying v and p to one factor (the
     accelerometer's) is the same with a group of dimension 6. The intervals come from the inverse
-    Hessian in ``log u``, ``(diag(u) Q diag(u) + M diag(d))⁻¹``.
+    Hessian in ``log u``, ``(diag(u) Q diag(u) + M diag(d))⁻¹``. The consistency test itself (the
+    mean of M whitened errors against ``χ²_{9M} / M``) is the NEES test of Bar-Shalom, Li &
+    Kirubarajan, "Estimation with Applications to Tracking and Navigation" (2001), § 5.4.
     """
     if not isinstance(windows, Preintegration):
         raise ParameterError(
