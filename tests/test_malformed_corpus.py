@@ -753,6 +753,41 @@ def _fit_allan(rng: np.random.Generator) -> Any:
     return values, call
 
 
+def _calibration_states(rng: np.random.Generator, m: int, suffix: str) -> dict[str, Any]:
+    return {
+        "position" + suffix: rng.standard_normal((m, 3)),
+        "velocity" + suffix: rng.standard_normal((m, 3)),
+        "rotation" + suffix: Rotation.random(m, rng=rng).as_matrix(),
+    }
+
+
+@entry(
+    "noise.calibrate_from_residuals",
+    ("noise.calibrate_from_residuals",),
+    {
+        # so3.log names a matrix that is not a rotation "rotation" (the residual takes both states).
+        **{
+            f"{f}_{e}": Arg("array", names=(f"state_{e}", "windows", f))
+            for f in ("position", "velocity", "rotation")
+            for e in "ij"
+        },
+        "confidence": Arg("scalar"),
+    },
+)
+def _calibrate(rng: np.random.Generator) -> Any:
+    imu, _ = sim.simulate(sim.FigureEight(), rate=100.0, duration=0.4, noise=NOISE, seed=int(rng.integers(2**32)))
+    windows = ik.preintegrate_windows(imu, imu.t[[0, 20, 40]], ik.PreintParams(NOISE))  # 0.2 s each
+
+    def call(v: dict[str, Any]) -> Any:
+        def states(e: str) -> ik.preint.States:
+            return ik.preint.States(v[f"position_{e}"], v[f"velocity_{e}"], v[f"rotation_{e}"])
+
+        return noise.calibrate_from_residuals(windows, states("i"), states("j"), confidence=v["confidence"])
+
+    values = {**_calibration_states(rng, 2, "_i"), **_calibration_states(rng, 2, "_j"), "confidence": 0.9}
+    return values, call
+
+
 _PLOTS = tempfile.TemporaryDirectory(prefix="imukit-corpus-")  # removed when the module is collected
 
 
@@ -1085,6 +1120,7 @@ NOT_ENTRY_POINTS = {
     "filters.FilterResult": "a plain record returned by run",
     "filters.RobustResult": "a plain record returned by run",
     "noise.AllanFit": "the result of fit_allan (its methods are covered)",
+    "noise.NoiseCalibration": "the result of calibrate_from_residuals (a record; its property reads its fields)",
     "sim.Motion": "a typing alias of the motion classes",
 }
 

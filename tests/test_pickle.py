@@ -141,6 +141,17 @@ def _windows_states() -> ik.preint.States:
     return ik.preint.States(np.arange(3.0 * m).reshape(m, 3), np.ones((m, 3)), rotation)
 
 
+def _calibration() -> ik.noise.NoiseCalibration:
+    """Residuals of the windows against states off their prediction by a rotation, a velocity, a position."""
+    p, v, r = ik.preint.predict(_windows(), _windows_states())
+    m = len(p)
+    turn = Rotation.from_rotvec(1e-4 * np.cos(np.outer(np.arange(m), [1.0, 2.0, 3.0]))).as_matrix()
+    wobble = 1e-3 * np.sin(np.outer(np.arange(m), [3.0, 1.0, 2.0]))
+    return ik.noise.calibrate_from_residuals(
+        _windows(), _windows_states(), ik.preint.States(p + wobble, v - wobble, r @ turn)
+    )
+
+
 def _error(cls: type[ik.ImukitError]) -> Callable[[], ik.ImukitError]:
     return lambda: cls("expected shape (N, 3), got (2,)", argument="gyro", index=4)
 
@@ -175,6 +186,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     # imukit.noise
     "AllanDeviation": _allan,
     "AllanFit": lambda: ik.noise.fit_allan(_allan(), sensor="gyro", axis=0),
+    "NoiseCalibration": _calibration,
     # imukit.eval
     "Association": lambda: ik.eval.associate(*_estimate()),
     "Alignment": lambda: ik.eval.align(*_estimate(), method="sim3"),
@@ -324,6 +336,15 @@ def test_integer_stamps_survive_the_round_trip() -> None:
     assert_same(imu.seconds, clone.seconds)
     assert clone.gyro_range == 20.0
     np.testing.assert_array_equal(clone.gyro_saturated, imu.gyro_saturated)
+
+
+def test_magnetometer_survives_the_round_trip() -> None:
+    imu = _imu_ns()
+    with_mag = ik.ImuData(imu.t_ns, imu.gyro, imu.accel, mag=imu.accel * 3.0 + 1.0)
+    for clone in (pickle.loads(pickle.dumps(with_mag)), copy.deepcopy(with_mag)):
+        assert_same(with_mag, clone)  # field by field: mag included, bit for bit and read-only
+        assert clone.mag is not None and not clone.mag.flags.writeable
+    assert pickle.loads(pickle.dumps(imu)).mag is None
 
 
 def test_exception_fields_survive_the_round_trip() -> None:

@@ -167,7 +167,7 @@ def broad(rows: list[Row], folder: Path) -> None:
     errors = {}
     for cls in (filters.Mahony, filters.Madgwick):
         for nine in (False, True):
-            result, seconds = _timed(partial(cls().run, data.imu, mag=data.mag if nine else None))
+            result, seconds = _timed(partial(cls().run, data.imu, mag=nine))
             error = attitude_error(result.rotation, data.truth_xyzw, align_heading=not nine, mask=data.mask)
             rmse = error.rmse(degrees=True)
             name = f"{cls.__name__} {'9D' if nine else '6D'}"

@@ -229,7 +229,7 @@ class _Filter:
         return rotation_from_unit_quat(state.quaternion)
 
     def run(
-        self, imu: ImuData, *, mag: ArrayLike | None = None, initial: Rotation | FilterState | None = None
+        self, imu: ImuData, *, mag: ArrayLike | bool | None = None, initial: Rotation | FilterState | None = None
     ) -> FilterResult:
         """Filter a whole recording in one native call (GIL released); the streaming state is not
         touched.
@@ -239,7 +239,9 @@ class _Filter:
         imu
             The gyro and accelerometer samples.
         mag
-            ``(N, 3)`` magnetometer samples (9D), or None (6D).
+            None (default): ``imu.mag`` when the samples have one (9D), else 6D. ``False``: 6D even
+            when ``imu.mag`` is there; ``True``: ``imu.mag``, which must be there. An ``(N, 3)``
+            array: these magnetometer samples (9D), in place of ``imu.mag``.
         initial
             None: the first sample initialises. A ``Rotation``: the attitude at ``imu.t[0]`` (zero
             bias). A :class:`FilterState` (e.g. ``run(...).state`` of the previous chunk): continue
@@ -249,6 +251,10 @@ class _Filter:
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         n = len(imu.t)
         mags = None
+        if isinstance(mag, (bool, np.bool_)) or mag is None:
+            if mag and imu.mag is None:
+                raise ParameterError("mag=True, but imu has no magnetometer samples (imu.mag is None)", argument="mag")
+            mag = imu.mag if mag is None or mag else None
         if mag is not None:
             mags = np.ascontiguousarray(as_float_array(mag, "mag"))
             if mags.shape != (n, 3):

@@ -5,6 +5,9 @@ frame                  gyro and accel are in the body (IMU) frame ``b``
 gyro                   ``(N, 3)`` angular rate ω_b [rad/s]
 accel                  ``(N, 3)`` specific force ``a_m = R_wbᵀ (a_w − g_w)`` [m/s²]; +9.81 on the up
                        axis at rest (``docs/conventions.md``, row 7)
+mag                    ``(N, 3)`` magnetic field ``R_wbᵀ m_w`` in the body frame, or None; µT by
+                       convention (readers say when they know the unit), any unit for the filters,
+                       which use its direction, norm ratios and dip only (row 13)
 time                   ``t`` float64 seconds, or integer nanoseconds (EuRoC / ROS), told apart by
                        dtype (row 10); every ``dt`` comes from the stamps
 noise                  continuous-time densities, Kalibr style (row 11); :meth:`ImuNoise.discrete`
@@ -34,7 +37,8 @@ GRAVITY: tuple[float, float, float] = _core.GRAVITY
 
 
 class ImuData(Frozen):
-    """Validated, immutable IMU samples: ``t`` (N,), ``gyro`` (N, 3) [rad/s], ``accel`` (N, 3) [m/s²].
+    """Validated, immutable IMU samples: ``t`` (N,), ``gyro`` (N, 3) [rad/s], ``accel`` (N, 3) [m/s²],
+    and optionally ``mag`` (N, 3) [µT].
 
     Parameters
     ----------
@@ -58,6 +62,10 @@ class ImuData(Frozen):
         −32768 LSB down to −2000 °/s but only +32767 LSB up to 2000·32767/32768 °/s, so its range
         is ``np.deg2rad(2000) * 32767 / 32768`` — the datasheet's ``np.deg2rad(2000)`` would never
         flag a gyro pinned at its positive limit.
+    mag
+        ``(N, 3)`` magnetometer samples in the body frame, row k taken at ``t[k]``, finite, or None
+        (no magnetometer). µT by convention; the filters accept any unit (they use the direction,
+        norm ratios and dip), so a file in gauss or nT needs no conversion for them.
 
     Attributes
     ----------
@@ -68,6 +76,8 @@ class ImuData(Frozen):
         ``(N,)`` int64 nanoseconds for integer input, else None.
     gyro, accel
         ``(N, 3)`` float64, C-contiguous, read-only copies of the input.
+    mag
+        ``(N, 3)`` float64 read-only copy, or None.
     gyro_range, accel_range
         As given (float or None).
 
@@ -77,8 +87,8 @@ class ImuData(Frozen):
         Messages start with the argument name and name the first bad sample.
     """
 
-    __slots__ = ("_seconds", "accel", "accel_range", "gyro", "gyro_range", "t", "t_ns")
-    _fields = ("t", "t_ns", "gyro", "accel", "_seconds", "gyro_range", "accel_range")
+    __slots__ = ("_seconds", "accel", "accel_range", "gyro", "gyro_range", "mag", "t", "t_ns")
+    _fields = ("t", "t_ns", "gyro", "accel", "_seconds", "gyro_range", "accel_range", "mag")
 
     t: FloatArray
     t_ns: NDArray[np.int64] | None
@@ -86,6 +96,7 @@ class ImuData(Frozen):
     accel: FloatArray
     gyro_range: float | None
     accel_range: float | None
+    mag: FloatArray | None
     _seconds: FloatArray
 
     def __init__(
@@ -97,12 +108,14 @@ class ImuData(Frozen):
         max_gap: float | None = None,
         gyro_range: float | None = None,
         accel_range: float | None = None,
+        mag: ArrayLike | None = None,
     ) -> None:
         stamps = as_stamps(t)
         seconds = stamps.seconds - stamps.seconds[0]
         n = len(seconds)
         gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")
         accel_arr = readonly_array(accel, "accel", (n, 3), f"(N, 3) with N = len(t) = {n}")
+        mag_arr = None if mag is None else readonly_array(mag, "mag", (n, 3), f"(N, 3) with N = len(t) = {n}")
         if max_gap is not None:
             gap = _number(max_gap, "max_gap", positive=True, what="a positive number of seconds or None")
             steps = np.diff(seconds)
@@ -115,7 +128,8 @@ class ImuData(Frozen):
                     f"gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s", argument="t"
                 )
         # t may be the caller's array; t_ns and seconds are fresh.
-        self._set(readonly_copy(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *_ranges(gyro_range, accel_range))
+        ranges = _ranges(gyro_range, accel_range)
+        self._set(readonly_copy(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *ranges, mag_arr)
 
     @classmethod
     def _from_core(
@@ -129,7 +143,7 @@ class ImuData(Frozen):
         """Samples the compiled core has just produced, without validating or copying them (fresh,
         finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
         simulating them). The arrays are made read-only here and must not be shared elsewhere."""
-        return cls._from_validated(t, None, gyro, accel, t - t[0], *_ranges(gyro_range, accel_range))
+        return cls._from_validated(t, None, gyro, accel, t - t[0], *_ranges(gyro_range, accel_range), None)
 
     @property
     def gyro_saturated(self) -> NDArray[np.bool_]:
@@ -188,12 +202,28 @@ class ImuData(Frozen):
             )
         t = self.t if self.t_ns is None else self.t_ns
         ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}
-        return ImuData(t[index], self.gyro[index], self.accel[index], **ranges)
+        mag = None if self.mag is None else self.mag[index]
+        return ImuData(t[index], self.gyro[index], self.accel[index], **ranges, mag=mag)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal samples: the same stamps (and stamp type), readings, ranges and magnetometer, bit for bit."""
+        if not isinstance(other, ImuData):
+            return NotImplemented
+        arrays = ("t", "t_ns", "gyro", "accel", "mag")
+        same = all(_same_array(getattr(self, name), getattr(other, name)) for name in arrays)
+        return same and (self.gyro_range, self.accel_range) == (other.gyro_range, other.accel_range)
+
+    __hash__ = None  # type: ignore[assignment]
 
     def __repr__(self) -> str:
         stamps = "int64 ns" if self.t_ns is not None else "float s"
         rate = f", {self.rate_hz:.6g} Hz" if len(self) > 1 else ""
-        return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps})"
+        mag = ", with mag" if self.mag is not None else ""
+        return f"ImuData({len(self)} samples, {self.duration:.6g} s{rate}, t in {stamps}{mag})"
+
+
+def _same_array(a: NDArray[np.generic] | None, b: NDArray[np.generic] | None) -> bool:
+    return a is b if a is None or b is None else bool(a.dtype == b.dtype and np.array_equal(a, b))
 
 
 def _ranges(gyro_range: float | None, accel_range: float | None) -> tuple[float | None, float | None]:

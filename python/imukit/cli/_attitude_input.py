@@ -1,6 +1,6 @@
-"""Input of the attitude commands: IMU samples, optional magnetometer, reference attitudes at the
-IMU's samples. BROAD trials (``.mat``, and the package's ``.npz`` excerpt with the same keys) carry
-a magnetometer; the dataset readers of :mod:`imukit.io` do not (yet)."""
+"""Input of the attitude commands: IMU samples, optional magnetometer (``ImuData.mag``), reference
+attitudes at the IMU's samples. BROAD trials (``.mat``, and the package's ``.npz`` excerpt with the
+same keys) carry a magnetometer, and so may CSV files (``--csv-mag-columns``) and ROS bags."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ BROAD_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling
 
 
 class AttitudeInput(NamedTuple):
-    """``imu``; ``mag`` (N, 3) or None; ``truth_xyzw`` (N, 4) reference ``R_wb`` at the IMU samples
+    """``imu``; ``mag`` (N, 3), ``imu.mag``, or None; ``truth_xyzw`` (N, 4) reference ``R_wb`` at the IMU samples
     (NaN rows where there is none) or None; ``mask`` (N,) the samples to score (BROAD's movement);
     ``paired``: the association with a ground-truth trajectory (which IMU samples got a reference,
     and why the others did not), None for a reference given per sample."""
@@ -48,11 +48,10 @@ def read_broad(path: str | Path) -> AttitudeInput:
     if missing:
         raise CliError(f"path: {where}: not a BROAD trial, missing {', '.join(missing)}")
     rate = float(np.asarray(data["sampling_rate"]).item())
-    gyro = np.ascontiguousarray(data["imu_gyr"], dtype=np.float64)
-    imu = ImuData(np.arange(len(gyro)) / rate, gyro, np.ascontiguousarray(data["imu_acc"], dtype=np.float64))
+    gyro, accel, mag = (np.asarray(data[key], dtype=np.float64) for key in ("imu_gyr", "imu_acc", "imu_mag"))
+    imu = ImuData(np.arange(len(gyro)) / rate, gyro, accel, mag=mag)
     truth = np.asarray(data["opt_quat"], dtype=np.float64)[:, [1, 2, 3, 0]]
-    mag = np.ascontiguousarray(data["imu_mag"], dtype=np.float64)
-    return AttitudeInput(imu, mag, np.ascontiguousarray(truth), np.asarray(data["movement"]).ravel().astype(bool))
+    return AttitudeInput(imu, imu.mag, np.ascontiguousarray(truth), np.asarray(data["movement"]).ravel().astype(bool))
 
 
 def read_attitude_input(args: argparse.Namespace) -> AttitudeInput:
@@ -65,8 +64,8 @@ def read_attitude_input(args: argparse.Namespace) -> AttitudeInput:
             return read_broad(path)
     imu, truth = read_imu(args)
     if truth is None:
-        return AttitudeInput(imu, None, None, None)
+        return AttitudeInput(imu, imu.mag, None, None)
     paired = truth_at(truth, imu, max_dt=args.max_dt, option="--max-dt")
     q = np.full((len(imu), 4), np.nan)  # NaN: no reference, counted by attitude_error, not scored
     q[paired.mask] = paired.reference.rotation.as_quat()
-    return AttitudeInput(imu, None, q, None, paired)
+    return AttitudeInput(imu, imu.mag, q, None, paired)

@@ -73,6 +73,7 @@ OPTION_OF = {
     "time_column": "--csv-time-column",
     "gyro_columns": "--csv-gyro-columns",
     "accel_columns": "--csv-accel-columns",
+    "mag_columns": "--csv-mag-columns",
     "time_unit": "--csv-time-unit",
     "gyro_unit": "--gyro-unit",
     "accel_unit": "--accel-unit",
@@ -88,7 +89,16 @@ OPTION_OF = {
     "max_gap": "--max-gap",
 }
 BAG_OPTIONS = ("imu_topic", "groundtruth_topic", "time_source")
-CSV_OPTIONS = ("time_column", "gyro_columns", "accel_columns", "time_unit", "gyro_unit", "accel_unit", "delimiter")
+CSV_OPTIONS = (
+    "time_column",
+    "gyro_columns",
+    "accel_columns",
+    "mag_columns",
+    "time_unit",
+    "gyro_unit",
+    "accel_unit",
+    "delimiter",
+)
 OTHER_LAYOUTS = "other layouts: the --csv-* options"
 DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t", "space": " "}  # --csv-delimiter: read_imu_csv's
 
@@ -126,6 +136,12 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
     )
     csv.add_argument(
         "--csv-accel-columns", dest="accel_columns", metavar="X,Y,Z", help="the specific-force columns, comma-separated"
+    )
+    csv.add_argument(
+        "--csv-mag-columns",
+        dest="mag_columns",
+        metavar="X,Y,Z",
+        help="the magnetometer columns, comma-separated (optional; read as they are, uT by convention)",
     )
     csv.add_argument(
         "--csv-time-unit",
@@ -193,6 +209,8 @@ def _csv_arguments(args: argparse.Namespace) -> dict[str, Any] | None:
     given["time_column"] = _column(given["time_column"])
     given["gyro_columns"] = _columns(given["gyro_columns"], "--csv-gyro-columns")
     given["accel_columns"] = _columns(given["accel_columns"], "--csv-accel-columns")
+    if "mag_columns" in given:
+        given["mag_columns"] = _columns(given["mag_columns"], "--csv-mag-columns")
     if "delimiter" in given:
         given["delimiter"] = DELIMITERS[given["delimiter"]]
     return given

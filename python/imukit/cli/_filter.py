@@ -37,8 +37,10 @@ Estimate the attitude R_wb of each IMU sample with an attitude filter (docs/filt
 accelerometer (6D: heading free, starts at yaw 0), or with --mag also the magnetometer (9D: heading
 from magnetic north).
 
-Reads: PATH in any format imukit detects, or a BROAD trial (.mat, or a .npz with its keys), the
-only input with a magnetometer today; --mag on an input without one is refused.
+Reads: PATH in any format imukit detects, or a BROAD trial (.mat, or a .npz with its keys). A
+magnetometer comes from BROAD trials, CSV files (--csv-mag-columns), EuRoC folders written with one
+(mag0/data.csv) and ROS bags with a sensor_msgs/MagneticField topic; --mag on an input without one
+is refused.
 Frames and units: gyro rad/s, accelerometer m/s^2 in the body frame; world ENU (x east, y north,
 z up; --world NED for x north, z down). Default gains are the BROAD-tuned ones.
 
@@ -85,8 +87,7 @@ def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, 
     state: FilterState | None = None
     with progress(f"{type(filt).__name__} filter", n) as advance:
         for a, b in chunks(n, chunk):
-            mag = data.mag[a:b] if use_mag and data.mag is not None else None
-            piece = filt.run(imu[a:b], mag=mag, initial=state)
+            piece = filt.run(imu[a:b], mag=use_mag, initial=state)
             state = piece.state
             rotations.append(piece.rotation.as_quat())
             biases.append(piece.gyro_bias)
@@ -101,8 +102,9 @@ def run(args: argparse.Namespace) -> int:
     data = read_attitude_input(args)
     if args.mag and data.mag is None:
         raise CliError(
-            f"--mag: {args.path} has no magnetometer samples (the EuRoC, TUM-VI, KITTI and ROS readers give "
-            "gyro and accelerometer only; BROAD .mat trials have one); run without --mag for 6D"
+            f"--mag: {args.path} has no magnetometer samples (BROAD trials, CSV files read with "
+            "--csv-mag-columns, EuRoC folders with mag0/ and bags with a MagneticField topic have one); "
+            "run without --mag for 6D"
         )
     filt = METHODS[args.method](world=args.world)
     result = run_chunked(filt, data, use_mag=args.mag)

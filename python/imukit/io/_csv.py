@@ -32,6 +32,7 @@ def imu_csv(
     standard_gravity: float,
     delimiter: str | None,
     header_lines: int | None,
+    mag_columns: Sequence[Column] | None = None,
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``."""
     choice(time_unit, "time_unit", TIME_UNITS)
@@ -40,6 +41,8 @@ def imu_csv(
     gravity = _gravity(standard_gravity)
     header_lines = check_header_lines(header_lines)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
+    if mag_columns is not None:
+        wanted["mag_columns"] = mag_columns
     for name, columns in wanted.items():
         check_columns(columns, name, 1 if name == "time_column" else 3)
     scale = gravity if accel_unit == "g" else None
@@ -59,6 +62,7 @@ def read_imu_csv(  # type: ignore[empty-body]
     standard_gravity: float = 9.80665,
     delimiter: str | None = None,
     header_lines: int | None = None,
+    mag_columns: Sequence[Column] | None = None,
     on_bad_line: OnBadLine = "raise",
     report: ReadReport | None = None,
 ) -> ImuData:
@@ -78,7 +82,7 @@ def read_imu_csv(  # type: ignore[empty-body]
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
         header name (exact, after stripping white space) or a 0-based index. Other columns
-        (magnetometer, temperature, …) are not read.
+        (temperature, …) are not read.
     time_unit
         ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. With ``"ns"`` every stamp must be an integer and
         becomes exact int64 ``t_ns``; with ``"ms"`` or ``"us"``, integer stamps also become exact
@@ -97,6 +101,10 @@ def read_imu_csv(  # type: ignore[empty-body]
         commas are not read.
     header_lines
         How many non-blank lines the header has (0: none); None (default): detected as above.
+    mag_columns
+        The x, y, z magnetometer columns (names or indices, as above), read into ``ImuData.mag`` as
+        they are (no unit conversion: µT by convention, any unit for the filters); None (default):
+        no magnetometer.
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`. Bad lines: a wrong field count, text that is not a
         number (or, with ``"ns"``, not an integer) in a column read, non-finite values, and stamps
@@ -131,7 +139,7 @@ def _read(
     """:func:`imu_csv` with checked arguments."""
     table = read_table(path, delimiter, header_lines)
     index = {name: [table.column(c, name) for c in columns] for name, columns in wanted.items()}
-    columns = index["time_column"] + index["gyro_columns"] + index["accel_columns"]
+    columns = [c for name in wanted for c in index[name]]  # time, gyro, accel, then mag if wanted
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
         if gravity is not None and not all(math.isfinite(a * gravity) for a in row[4:7]):
@@ -142,7 +150,8 @@ def _read(
     data = read_stamped(table, bad, columns, time_unit, check)
     gyro = data.values[:, 1:4] * (np.pi / 180.0) if degrees else data.values[:, 1:4]
     accel = data.values[:, 4:7] * gravity if gravity is not None else data.values[:, 4:7]
-    return as_file_error(path, lambda: ImuData(data.stamps, gyro, accel))
+    mag = data.values[:, 7:10] if "mag_columns" in wanted else None
+    return as_file_error(path, lambda: ImuData(data.stamps, gyro, accel, mag=mag))
 
 
 def _gravity(value: object) -> float:

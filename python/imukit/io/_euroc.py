@@ -35,6 +35,7 @@ from imukit.io._lines import (
     write_rows,
     zero_quaternion,
 )
+from imukit.io._mag import with_mag
 from imukit.io._report import BadLines, OnBadLine, ReadReport
 from imukit.state import Trajectory
 
@@ -51,7 +52,10 @@ GROUNDTRUTH_HEADER = (
     "b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], "
     "b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]"
 )
+# imukit's magnetometer file (EuRoC has none): one row per IMU row, same stamps, body frame S.
+MAG_HEADER = "#timestamp [ns],m_S_x [uT],m_S_y [uT],m_S_z [uT]"
 IMU_CSV = Path("imu0", "data.csv")
+MAG_CSV = Path("mag0", "data.csv")
 GROUNDTRUTH_CSV = Path("state_groundtruth_estimate0", "data.csv")
 SENSOR_YAML = Path("imu0", "sensor.yaml")
 
@@ -83,7 +87,9 @@ def write_euroc(
     rate_hz: float | None = None,
 ) -> None:
     """Write ``imu`` (and ``truth``) as an EuRoC / ASL folder: ``imu0/data.csv`` and
-    ``state_groundtruth_estimate0/data.csv``, with EuRoC's header lines (columns in ``docs/io.md``).
+    ``state_groundtruth_estimate0/data.csv``, with EuRoC's header lines (columns in ``docs/io.md``),
+    and ``imu.mag`` when present as ``mag0/data.csv`` (``#timestamp [ns],m_S_x [uT],…``, the IMU's
+    stamps; imukit's layout, EuRoC has no magnetometer).
 
     Parameters
     ----------
@@ -141,6 +147,9 @@ def write_euroc(
     root = Path(folder)
     (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
     write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
+    if imu.mag is not None:
+        (root / MAG_CSV).parent.mkdir(parents=True, exist_ok=True)
+        write_rows(root / MAG_CSV, MAG_HEADER, map(str, imu_ns.tolist()), imu.mag, ",")
     if gt_rows is not None:
         (root / GROUNDTRUTH_CSV).parent.mkdir(parents=True, exist_ok=True)
         write_rows(root / GROUNDTRUTH_CSV, GROUNDTRUTH_HEADER, map(str, gt_rows[0].tolist()), gt_rows[1], ",")
@@ -222,8 +231,12 @@ def _stamps_ns(t_ns: NDArray[np.int64] | None, t: FloatArray, epoch: int, name: 
 def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData, Trajectory | None]:
     """:func:`read_euroc` reporting to ``bad``."""
     root = mav0_root(folder)
-    truth = root / GROUNDTRUTH_CSV
-    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+    truth, mag = root / GROUNDTRUTH_CSV, root / MAG_CSV
+    imu = euroc_imu(root / IMU_CSV, bad)
+    if mag.is_file():
+        t_ns, values, _ = read_stamped_csv(mag, bad, MAG_HEADER, f"imukit {MAG_CSV.as_posix()}")
+        imu = with_mag(imu, t_ns, values, os.fspath(mag), f"move {MAG_CSV.parent} away to read without it")
+    return imu, euroc_groundtruth(truth, bad) if truth.is_file() else None
 
 
 @public_reader(euroc_folder)
@@ -232,8 +245,10 @@ def read_euroc(  # type: ignore[empty-body]
 ) -> tuple[ImuData, Trajectory | None]:
     """Read the IMU and ground truth of an EuRoC / ASL folder (as :func:`write_euroc` writes it).
 
-    ``folder`` holds ``imu0/data.csv`` and, optionally, ``state_groundtruth_estimate0/data.csv``;
-    a folder whose ``mav0/`` holds them (a downloaded sequence) works too. The ground truth keeps
+    ``folder`` holds ``imu0/data.csv`` and, optionally, ``state_groundtruth_estimate0/data.csv`` and
+    ``mag0/data.csv`` (imukit's magnetometer file, see :func:`write_euroc`; it becomes ``imu.mag``,
+    matched to the IMU's stamps as in :mod:`imukit.io._mag`); a folder whose ``mav0/`` holds them (a
+    downloaded sequence) works too. The ground truth keeps
     its own stamps (it is not interpolated to the IMU's); it is None when its file is absent. The
     noise model and rate of ``imu0/sensor.yaml`` are read by :func:`read_euroc_sensor`.
 

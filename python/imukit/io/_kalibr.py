@@ -120,14 +120,20 @@ def write_kalibr_imu(
     rate_hz: float,
     rostopic: str | None = None,
     extra: Mapping[str, Any] | None = None,
+    comments: Mapping[str, str] | None = None,
+    header: str | None = None,
 ) -> None:
     """Write ``noise`` as a Kalibr ``imu.yaml``, each value with its unit in a comment.
 
     Floats are written with ``repr`` (``1.0e-05`` rather than ``1e-05``, which YAML 1.1 would read
-    as text), so :func:`read_kalibr_imu` gives back the same floats bit for bit. ``rate_hz`` is the
-    ``update_rate`` [Hz] > 0; ``rostopic`` (e.g. ``"/imu0"``) and the keys of ``extra`` (plain
-    Python values, written by ``yaml.safe_dump``; e.g. ``KalibrImu.extra`` of a file read) follow
-    when given. Nothing is written when an argument is refused (``ParameterError``, ``TypeError``).
+    as text), so :func:`read_kalibr_imu` gives back the same floats bit for bit: round estimates
+    to the digits they have first (``float(f"{x:.4g}")`` is written ``0.0001697``), and a measured
+    rate too (100.00000000000213 is written so). ``rate_hz`` is the ``update_rate`` [Hz] > 0;
+    ``rostopic`` (e.g. ``"/imu0"``) and the keys of ``extra`` (plain Python values, written by
+    ``yaml.safe_dump``; e.g. ``KalibrImu.extra`` of a file read) follow when given. ``comments``
+    maps Kalibr noise keys (``"gyroscope_random_walk"``, …) to text appended to that line's comment;
+    ``header`` is added to the file's first comment, one ``#`` line per line of it. Nothing is
+    written when an argument is refused (``ParameterError``, ``TypeError``).
     """
     if not isinstance(noise, ImuNoise):
         raise TypeError(f"noise: expected an imukit ImuNoise, got {type(noise).__name__}")
@@ -136,6 +142,10 @@ def write_kalibr_imu(
     taken = sorted(set(more) & {*_NOISE_KEYS, *_RATE_KEYS, *([] if rostopic is None else ["rostopic"])})
     if taken:
         raise ParameterError(f"keys {taken} are written from noise, rate_hz and rostopic", argument="extra")
+    notes = dict(comments or {})
+    unknown = sorted(set(notes) - set(_NOISE_KEYS))
+    if unknown:
+        raise ParameterError(f"keys {unknown} are not Kalibr noise keys {sorted(_NOISE_KEYS)}", argument="comments")
     if rostopic is not None:
         if not isinstance(rostopic, str):
             raise ParameterError(f"expected a string such as '/imu0', got {rostopic!r}", argument="rostopic")
@@ -146,7 +156,8 @@ def write_kalibr_imu(
         raise ParameterError(f"cannot be written as YAML (plain Python values only): {exc}", argument="extra") from None
     lines = [
         "# Kalibr IMU noise model (continuous-time densities), written by imukit",
-        *noise_lines(noise, list(_NOISE_KEYS)),
+        *(f"# {line}".rstrip() for line in (header or "").splitlines()),
+        *noise_lines(noise, list(_NOISE_KEYS), notes),
         *more_text,
         f"update_rate: {yaml_float(rate)}  # [Hz]",
     ]
@@ -154,12 +165,14 @@ def write_kalibr_imu(
         f.write("\n".join(lines) + "\n")
 
 
-def noise_lines(noise: ImuNoise, keys: list[str]) -> list[str]:
-    """``key: value  # [unit] what`` lines for the Kalibr ``keys`` of ``noise``, in that order."""
+def noise_lines(noise: ImuNoise, keys: list[str], comments: Mapping[str, str] | None = None) -> list[str]:
+    """``key: value  # [unit] what`` lines for the Kalibr ``keys`` of ``noise``, in that order, with
+    ``comments[key]`` appended where given."""
     lines = []
     for key in keys:
         field, unit, what = _NOISE_KEYS[key]
-        lines.append(f"{key}: {yaml_float(getattr(noise, field))}  # [{unit}] {what}")
+        note = (comments or {}).get(key)
+        lines.append(f"{key}: {yaml_float(getattr(noise, field))}  # [{unit}] {what}" + (f"; {note}" if note else ""))
     return lines
 
 

@@ -20,8 +20,8 @@ role       names (then an axis ``x``, ``y``, ``z``; each axis exactly once)
 Units from the bracket: time ``ns`` / ``ms`` / ``us`` (else seconds; ROS's ``header.stamp`` and
 ``%time`` columns of ``rostopic echo -p`` are nanoseconds, and so is an unlabelled integer stamp
 above 10¹⁴, which as seconds would be three million years), gyro ``deg/s`` (``°/s``, ``dps``; else
-rad/s), accel ``g`` (else m/s²). The magnetometer's columns are reported (``roles["mag"]``), not
-read: the reader takes time, gyro and accelerometer.
+rad/s), accel ``g`` (else m/s²). The magnetometer's columns, when named, are read into
+``ImuData.mag`` as they are (µT by convention).
 """
 
 from __future__ import annotations
@@ -170,6 +170,7 @@ def named_csv(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
         "time_unit": time_unit,
         "gyro_unit": roles.gyro_unit,
         "accel_unit": roles.accel_unit,
+        "mag_columns": roles.columns.get("mag"),
     }
     return read_into(bad, read_imu_csv, path, header_lines=1, **options)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -33,12 +34,15 @@ from imukit.io._lines import (
     rotations_from_rows,
     zero_quaternion,
 )
+from imukit.io._mag import with_mag
 from imukit.io._report import BadLines, ReadReport
 from imukit.state import Trajectory
 
 __all__ = ["is_bag_path", "list_rosbag_topics", "read_rosbag"]
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
+MAG_TYPE = "sensor_msgs/msg/MagneticField"
+TESLA_TO_MICROTESLA = 1e6  # sensor_msgs/MagneticField is in tesla, ImuData.mag in µT
 POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/TransformStamped", "nav_msgs/msg/Odometry")
 _SUFFIXES = (".bag", ".mcap", ".db3")
 
@@ -75,6 +79,10 @@ def _pose_values(position: Any, orientation: Any, linear: Any = None) -> _Values
 # msgtype -> (its numbers and any problem, how they are printed in messages)
 _DECODERS: dict[str, tuple[Callable[[Any], _Values], str]] = {
     IMU_TYPE: (_imu_values, "angular_velocity {0} {1} {2}, linear_acceleration {3} {4} {5}"),
+    MAG_TYPE: (
+        lambda m: ((m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z), None),
+        "magnetic_field {0} {1} {2}",
+    ),
     "geometry_msgs/msg/PoseStamped": (
         lambda m: _pose_values(m.pose.position, m.pose.orientation),
         "position {0} {1} {2}, orientation {3} {4} {5} {6}",
@@ -288,6 +296,7 @@ def rosbag(
     imu_topic: str | None,
     groundtruth_topic: str | None,
     time_source: str,
+    mag_topic: str | Literal[False] | None = None,
 ) -> tuple[ImuData, Trajectory | None]:
     """:func:`read_rosbag` reporting to ``bad``."""
     if time_source not in ("header", "record"):
@@ -301,11 +310,39 @@ def rosbag(
                 f"the bag has no {IMU_TYPE} topic with messages; its topics: {_listing(topics)}", argument="imu_topic"
             )
         truth_name = _select(reader, topics, groundtruth_topic, "groundtruth_topic", POSE_TYPES)
+        mag_name = _mag_topic(reader, topics, mag_topic)
         t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
+        imu = as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:]))
+        if mag_name is not None:
+            m_ns, m_rows = _read_topic(reader, mag_name, MAG_TYPE, time_source, where, bad)
+            hint = "pass mag_topic=False to read the bag without its magnetometer"
+            try:
+                imu = with_mag(imu, m_ns, m_rows * TESLA_TO_MICROTESLA, f"{where}, topic {mag_name}", hint)
+            except FileFormatError as e:
+                if mag_topic is not None:
+                    raise
+                # Found, not asked for: the IMU (and ground truth) read as before this reader knew magnetometers.
+                warnings.warn(f"magnetometer not read: {e.message}", stacklevel=3)
         truth = None
         if truth_name is not None:
             truth = _trajectory(where, *_read_topic(reader, truth_name, topics[truth_name], time_source, where, bad))
-    return as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:])), truth
+    return imu, truth
+
+
+def _mag_topic(reader: Any, topics: dict[str, str], requested: str | Literal[False] | None) -> str | None:
+    """The magnetometer topic to read: ``requested``, none for False, else the bag's only one with
+    messages (several: none, with a warning naming them, so that a bag read before still reads)."""
+    if requested is False:
+        return None
+    if requested is not None:
+        return _select(reader, topics, requested, "mag_topic", (MAG_TYPE,))
+    found = [t for t, m in topics.items() if m == MAG_TYPE and reader.topics[t].msgcount > 0]
+    if len(found) > 1:
+        warnings.warn(
+            f"the bag has {len(found)} {MAG_TYPE} topics ({', '.join(found)}): none read; pass mag_topic=",
+            stacklevel=4,
+        )
+    return found[0] if len(found) == 1 else None
 
 
 @public_reader(rosbag)
@@ -315,10 +352,12 @@ def read_rosbag(  # type: ignore[empty-body]
     imu_topic: str | None = None,
     groundtruth_topic: str | None = None,
     time_source: Literal["header", "record"] = "header",
+    mag_topic: str | Literal[False] | None = None,
     on_bad_line: Literal["raise", "skip"] = "raise",
     report: ReadReport | None = None,
 ) -> tuple[ImuData, Trajectory | None]:
-    """Read IMU samples, and ground truth when the bag has it, from a ROS 1 or ROS 2 bag.
+    """Read IMU samples (with the magnetometer, and ground truth, when the bag has them) from a ROS 1
+    or ROS 2 bag.
 
     Parameters
     ----------
@@ -336,6 +375,14 @@ def read_rosbag(  # type: ignore[empty-body]
         ``"header"``: each message's ``header.stamp``, the acquisition time the driver wrote; a zero
         stamp is a bad message. ``"record"``: the time the recorder received the message, for bags
         whose driver leaves ``header.stamp`` unset (transport delay and jitter then enter every dt).
+    mag_topic
+        A ``sensor_msgs/msg/MagneticField`` topic, read into ``imu.mag`` [µT] (the message is in
+        tesla) and matched to the IMU stamps: linear interpolation between the magnetometer messages
+        around each IMU stamp, the message itself where the stamps coincide; an IMU sample outside the
+        magnetometer's span or in a gap over ``GAP_FACTOR`` median steps is a
+        :class:`FileFormatError`. None: the bag's only MagneticField topic with messages (none, or
+        several, or one that does not cover the IMU samples: no magnetometer, with a warning saying
+        why in the last two cases); False: no magnetometer.
     on_bad_line
         ``"raise"``: the first bad message is a :class:`FileFormatError` ``path: <bag>, topic <t>,
         message <n>: …``, n being the 1-based index of the message on its topic in bag order.
@@ -354,8 +401,9 @@ def read_rosbag(  # type: ignore[empty-body]
     -------
     imu
         :class:`imukit.ImuData` with int64 ``t_ns``: ``angular_velocity`` → ``gyro`` [rad/s],
-        ``linear_acceleration`` → ``accel`` [m/s²], in the message's (body) frame. The message's
-        orientation and covariances are not read (except the -1 flag above).
+        ``linear_acceleration`` → ``accel`` [m/s²], in the message's (body) frame, and ``mag`` [µT]
+        (see ``mag_topic``). The message's orientation and covariances are not read (except the -1
+        flag above).
     truth
         :class:`imukit.Trajectory` with ``t_ns``, or None: the pose (``PoseStamped.pose``,
         ``Odometry.pose.pose``, or the ``TransformStamped`` transform, which maps ``child_frame_id``

@@ -1,4 +1,6 @@
-"""Allan-variance identification of IMU noise: :func:`allan_deviation`, :func:`fit_allan`, :func:`plot_allan`.
+"""Identification of IMU noise: Allan variance (:func:`allan_deviation`, :func:`fit_allan`,
+:func:`plot_allan`) and density inflation from preintegration residuals against ground truth
+(:func:`calibrate_from_residuals`, ``docs/noise.md`` § Calibration from residuals).
 
 =====================  ===========================================================================
 input                  a rate signal sampled at a constant ``rate`` [Hz]: a gyro at rest [rad/s] or an
@@ -20,7 +22,19 @@ units                  N and K are the continuous densities of :class:`imukit.Im
 """
 
 from imukit.noise._allan import AllanDeviation, allan_deviation
-from imukit.noise._fit import FLICKER_FACTOR, AllanFit, fit_allan, to_imu_noise
+from imukit.noise._calibrate import NoiseCalibration, calibrate_from_residuals
+from imukit.noise._fit import FLICKER_FACTOR, UNRESOLVED, AllanFit, fit_allan, to_imu_noise
 from imukit.noise._plot import plot_allan
 
-__all__ = ["FLICKER_FACTOR", "AllanDeviation", "AllanFit", "allan_deviation", "fit_allan", "plot_allan", "to_imu_noise"]
+__all__ = [
+    "FLICKER_FACTOR",
+    "UNRESOLVED",
+    "AllanDeviation",
+    "AllanFit",
+    "NoiseCalibration",
+    "allan_deviation",
+    "calibrate_from_residuals",
+    "fit_allan",
+    "plot_allan",
+    "to_imu_noise",
+]

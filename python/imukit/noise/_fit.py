@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import linalg, optimize, signal, stats
 
-from imukit._arrays import FloatArray, as_float_array
+from imukit._arrays import FloatArray, as_float_array, choice
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.imu import ImuNoise, _number
 from imukit.noise._allan import AllanDeviation
@@ -102,6 +102,13 @@ class AllanFit:
     """Points used minus 3."""
     taus: FloatArray
     """``(M,)`` the τ values the fit used [s]."""
+
+    @property
+    def random_walk_resolved(self) -> bool:
+        """False when the interval of K reaches 0: the recording cannot tell the random walk from none
+        (typically too short, K showing only past τ ~ its length / 10). Written as the fitted value, a
+        K of 0 tells a VIO system that the bias is constant; :func:`to_imu_noise` writes the upper end."""
+        return self.random_walk_interval[0] > 0.0
 
     def variance(self, taus: ArrayLike) -> FloatArray:
         """Model σ²(τ) at ``taus`` [s]."""
@@ -406,21 +413,36 @@ def _kernel_correlations(m: tuple[int, ...], n: tuple[int, ...], overlapping: bo
     return out
 
 
-def to_imu_noise(*, gyro: AllanFit, accel: AllanFit) -> ImuNoise:
+UNRESOLVED = ("upper", "fitted")
+"""What :func:`to_imu_noise` may write for a random walk that is not resolved."""
+
+
+def to_imu_noise(*, gyro: AllanFit, accel: AllanFit, unresolved: str = "upper") -> ImuNoise:
     """An :class:`imukit.ImuNoise` from a gyro fit and an accelerometer fit (continuous densities).
 
     ``gyro_density = gyro.noise_density``, ``gyro_random_walk = gyro.random_walk``, and the same
     for the accelerometer; the bias instabilities have no place in ``ImuNoise`` and are dropped.
     Each fit must have been made with the matching ``sensor=``, so the two cannot be swapped.
+
+    ``unresolved``: the random walk of a fit whose K interval reaches 0
+    (:attr:`AllanFit.random_walk_resolved` False) is, with ``"upper"`` (default), the upper end of
+    that interval: the largest K the data allow, never below the fitted one, so that a filter using
+    the file keeps its bias estimate open; with ``"fitted"``, the fitted value as it is (possibly 0,
+    which a VIO system reads as a constant bias).
     """
+    policy = choice(unresolved, "unresolved", UNRESOLVED)
     for name, fit in (("gyro", gyro), ("accel", accel)):
         if not isinstance(fit, AllanFit):
             raise ParameterError(f"expected an AllanFit, got {type(fit).__name__}", argument=name)
         if fit.sensor != name:
             raise ParameterError(f"expected a fit made with sensor={name!r}, got sensor={fit.sensor!r}", argument=name)
+
+    def walk(fit: AllanFit) -> float:
+        return fit.random_walk_interval[1] if policy == "upper" and not fit.random_walk_resolved else fit.random_walk
+
     return ImuNoise(
         gyro_density=gyro.noise_density,
         accel_density=accel.noise_density,
-        gyro_random_walk=gyro.random_walk,
-        accel_random_walk=accel.random_walk,
+        gyro_random_walk=walk(gyro),
+        accel_random_walk=walk(accel),
     )
