@@ -60,8 +60,8 @@ def allan_fits(imu: ImuData, rate_hz: float) -> dict[str, tuple[AllanDeviation, 
 
 
 def run(args: argparse.Namespace) -> int:
-    png = output_path(args.out, (".png",), "--out")
-    yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml") if args.yaml else png.with_suffix(".yaml")
+    png = output_path(args.out, (".png",), "--out", args)
+    yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml", args) if args.yaml else png.with_suffix(".yaml")
     imu, _ = read_imu(args)
     with err.status(f"Allan deviation of {len(imu)} samples"):
         rate = mean_rate_hz(imu)

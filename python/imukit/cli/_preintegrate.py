@@ -157,7 +157,7 @@ def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
+    target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out", args)
     imu, _ = read_imu(args)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
