@@ -19,6 +19,7 @@ from imukit.io._lines import (
     as_file_error,
     increasing,
     integer_stamp,
+    open_text,
     parse_rows,
     public_reader,
     require_rows,
@@ -138,7 +139,7 @@ def _read(
     """:func:`imu_csv` with checked arguments."""
     where = os.fspath(path)
     # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
-    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
+    with open_text(path) as f:
         numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
     split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
     header: list[str] | None = None

@@ -18,6 +18,7 @@ import yaml
 
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuNoise, _rate
+from imukit.io._lines import regular_file
 
 __all__ = ["KalibrImu", "read_kalibr_imu", "write_kalibr_imu"]
 
@@ -72,7 +73,7 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
         is not a finite number ≥ 0 (a rate must be > 0); naming the line for bytes that are not UTF-8.
     """
     where = os.fspath(path)
-    with open(path, "rb") as f:
+    with open(regular_file(path), "rb") as f:
         # Without a byte order mark (Excel, Notepad): it would hide an OpenCV directive from the pattern's \A.
         raw = f.read().removeprefix(codecs.BOM_UTF8)
     try:

@@ -22,9 +22,10 @@ import inspect
 import math
 import os
 import re
+import stat
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import Any, NamedTuple, TypeVar, Union
+from typing import Any, NamedTuple, TextIO, TypeVar, Union
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -79,11 +80,42 @@ def data_lines(path: str | os.PathLike[str]) -> Iterator[tuple[int, str]]:
     (not a number), not a ``UnicodeDecodeError`` for the whole file. A UTF-8 byte order mark (as Excel
     writes) is dropped, so a first ``#`` line stays a comment.
     """
-    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
+    with open_text(path) as f:
         for number, line in enumerate(f, start=1):
             text = line.strip()
             if text and not text.startswith("#"):
                 yield number, text
+
+
+def open_text(path: str | os.PathLike[str]) -> TextIO:
+    """``path`` opened as UTF-8 text (byte order mark dropped, other bytes as lone surrogates), if it is a
+    regular file (:func:`regular_file`)."""
+    return open(regular_file(path), encoding="utf-8-sig", errors="surrogateescape")
+
+
+def regular_file(path: str | os.PathLike[str]) -> int:
+    """A read-only descriptor of ``path``, if it is a regular file.
+
+    A FIFO, socket or device would block or never end, a folder or a symlink loop fails with an
+    ``OSError`` deep in the reader: each is a :class:`FileFormatError` naming the path, found before a
+    byte is read (the FIFO opened non-blocking so the check itself cannot hang). A missing file stays
+    ``FileNotFoundError``, as the readers document.
+    """
+    where = os.fspath(path)
+    try:
+        fd = os.open(where, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise
+    except OSError as exc:
+        raise FileFormatError(f"{where}: cannot be opened as a file ({exc.strerror})", argument="path") from exc
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        kind = "a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "not a regular file"
+        raise FileFormatError(f"{where}: expected a regular file, got {kind}", argument="path")
+    if hasattr(os, "set_blocking"):
+        os.set_blocking(fd, True)
+    return fd
 
 
 def parse_rows(

@@ -138,7 +138,9 @@ class BadLines:
     def __init__(self, on_bad_line: object, report: object) -> None:
         self.skip = check_on_bad_line(on_bad_line) == "skip"
         if report is not None and not isinstance(report, ReadReport):
-            raise TypeError(f"report: expected an imukit.io.ReadReport or None, got {type(report).__name__}")
+            raise ParameterError(
+                f"expected an imukit.io.ReadReport or None, got {type(report).__name__}", argument="report"
+            )
         self.report = report
         self.records: list[SkippedLine] = []
 

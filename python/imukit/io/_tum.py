@@ -12,6 +12,7 @@ from imukit.io._format import Format, Head
 from imukit.io._lines import (
     INT64_MAX,
     all_exact,
+    as_file_error,
     data_lines,
     increasing,
     ns_text,
@@ -66,9 +67,10 @@ def tum(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     data = np.array(rows.values, dtype=np.float64)
     rotation = rotations_from_rows(np.ascontiguousarray(data[:, 4:8]), rows.lines, os.fspath(path))
     if ns is None:
-        return Trajectory(data[:, 0], data[:, 1:4], None, rotation)
+        return as_file_error(path, lambda: Trajectory(data[:, 0], data[:, 1:4], None, rotation))
     # With t_ns, Trajectory sets t = t_ns / 1e9.
-    return Trajectory(None, data[:, 1:4], None, rotation, t_ns=np.array([ns[k] for k in keep], dtype=np.int64))
+    t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
+    return as_file_error(path, lambda: Trajectory(None, data[:, 1:4], None, rotation, t_ns=t_ns))
 
 
 @public_reader(tum)
