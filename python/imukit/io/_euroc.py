@@ -19,7 +19,7 @@ from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
 from imukit.io._format import Format, Head
-from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, yaml_float
+from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, shown, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
@@ -303,7 +303,7 @@ def euroc_extrinsics(sensor: KalibrImu, *, where: str = "sensor.yaml") -> FloatA
     numbers = [_finite(x) for x in data] if isinstance(data, list) else []
     if shape != (4, 4) or len(numbers) != 16 or None in numbers:
         raise FileFormatError(
-            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}",
+            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {shown(entry)}",
             argument="path",
         )
     return np.array(numbers, dtype=np.float64).reshape(4, 4)
