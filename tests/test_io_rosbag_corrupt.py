@@ -14,7 +14,7 @@ import imukit as ik
 from imukit.io import ReadReport, read_rosbag
 
 pytest.importorskip("rosbags", reason="rosbags is the optional [ros] extra")
-from test_io_rosbag import EPOCH_S, IMU, POSE, Bag  # noqa: E402
+from test_io_rosbag import EPOCH_S, IMU, POSE, Bag
 
 CONTAINERS = ["ros1", "ros1-lz4", "ros1-bz2", "sqlite3", "mcap-file"]
 # Offsets per container: every byte of a 40-message bag would take minutes, these cover it evenly.
