@@ -25,17 +25,15 @@ from imukit.io._lines import (
     INT64_MIN,
     Problem,
     as_file_error,
-    data_lines,
-    increasing,
+    atomic,
     integer_stamp,
-    parse_rows,
     public_reader,
-    require_rows,
     rotations_from_rows,
     write_rows,
     zero_quaternion,
 )
 from imukit.io._report import BadLines, OnBadLine, ReadReport
+from imukit.io._table import Layout, increasing_table, read_table, zero_quaternions
 from imukit.state import Trajectory
 
 __all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "read_euroc_sensor", "write_euroc"]
@@ -140,12 +138,15 @@ def write_euroc(
 
     root = Path(folder)
     (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
-    write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
+    # Each file under a temporary name, renamed when complete; imu0/data.csv, which makes the folder a
+    # dataset, last: an interrupted write (Ctrl-C in `imukit simulate`) never reads back as a valid,
+    # shorter dataset without its ground truth.
+    if noise is not None and rate is not None:
+        _write_sensor_yaml(root / SENSOR_YAML, noise, rate)
     if gt_rows is not None:
         (root / GROUNDTRUTH_CSV).parent.mkdir(parents=True, exist_ok=True)
         write_rows(root / GROUNDTRUTH_CSV, GROUNDTRUTH_HEADER, map(str, gt_rows[0].tolist()), gt_rows[1], ",")
-    if noise is not None and rate is not None:
-        _write_sensor_yaml(root / SENSOR_YAML, noise, rate)
+    write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
 
 
 def _write_sensor_yaml(path: Path, noise: ImuNoise, rate: float) -> None:
@@ -154,7 +155,7 @@ def _write_sensor_yaml(path: Path, noise: ImuNoise, rate: float) -> None:
     keys = ["gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density"]
     body = [f"rate_hz: {rate_text}", "", "# inertial sensor noise model parameters (static)"]
     body += noise_lines(noise, [*keys, "accelerometer_random_walk"])
-    with open(path, "w", encoding="ascii", newline="\n") as f:
+    with atomic(path) as temporary, open(temporary, "w", encoding="ascii", newline="\n") as f:
         f.write(_SENSOR_YAML_HEAD + "\n".join(body) + "\n")
 
 
@@ -223,7 +224,8 @@ def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData
     """:func:`read_euroc` reporting to ``bad``."""
     root = mav0_root(folder)
     truth = root / GROUNDTRUTH_CSV
-    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if truth.is_file() else None
+    # lexists: a dangling link or a folder where the file should be is an error, not "no ground truth".
+    return euroc_imu(root / IMU_CSV, bad), euroc_groundtruth(truth, bad) if os.path.lexists(truth) else None
 
 
 @public_reader(euroc_folder)
@@ -425,27 +427,24 @@ def read_stamped_csv(
             return "malformed", f"timestamp {stamp!r} is not an integer number of nanoseconds (int64)"
         return None if quaternion is None else zero_quaternion(row[quaternion : quaternion + 4])
 
-    rows = parse_rows(
-        data_lines(path),
-        path,
-        bad,
-        split=_split_comma,
-        width=width,
-        expected=f"comma-separated fields ({what})",
-        columns=range(1, width),
-        check=check,
+    layout = Layout(
+        ",",
+        width,
+        f"comma-separated fields ({what})",
+        range(1, width),
+        0,
+        "integer",
+        integer_stamp,
+        True,
+        check,
+        None if quaternion is None else zero_quaternions(quaternion),
     )
-    stamps = [f[0].strip() for f in rows.fields]
-    ns = [int(s) for s in stamps]  # integers in int64: checked above
-    keep = increasing(rows, ns, stamps, path, bad)
-    rows = rows.take(keep)
-    require_rows(rows, path, bad)
-    t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-    return t_ns, np.array(rows.values, dtype=np.float64), rows.lines
-
-
-def _split_comma(text: str) -> list[str]:
-    return text.split(",")
+    table = read_table(path, bad, layout)
+    assert table.stamps is not None  # integer stamps are required: a line without one is a bad line
+    table = increasing_table(table, table.stamps, path, bad, layout)
+    if not len(table.lines):
+        raise FileFormatError(f"{os.fspath(path)}: no data lines{bad.skipped_in(path)}", argument="path")
+    return table.stamps, table.values, table.lines.tolist()  # type: ignore[return-value]
 
 
 def dataset_root(path: str | os.PathLike[str]) -> Path | None:

@@ -25,6 +25,7 @@ import re
 import stat
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any, NamedTuple, TextIO, TypeVar, Union
 
 import numpy as np
@@ -104,7 +105,12 @@ def regular_file(path: str | os.PathLike[str]) -> int:
     where = os.fspath(path)
     try:
         fd = os.open(where, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    except FileNotFoundError:
+    except FileNotFoundError as exc:
+        if os.path.islink(where):  # there, but pointing nowhere: not the same as absent
+            target = os.readlink(where)
+            raise FileFormatError(
+                f"{where}: a symbolic link to {target!r}, which does not exist", argument="path"
+            ) from exc
         raise
     except OSError as exc:
         raise FileFormatError(f"{where}: cannot be opened as a file ({exc.strerror})", argument="path") from exc
@@ -312,12 +318,28 @@ def all_exact(stamps: Sequence[str], exact: Callable[[str], int | None]) -> list
 def write_rows(
     path: str | os.PathLike[str], header: str | None, stamps: Iterable[str], values: FloatArray, sep: str
 ) -> None:
-    """Write ``stamp<sep>v0<sep>v1…`` per row (floats as ``repr``), after ``header`` when given."""
-    with open(path, "w", encoding="ascii", newline="\n") as f:
+    """Write ``stamp<sep>v0<sep>v1…`` per row (floats as ``repr``), after ``header`` when given; all or
+    nothing (:func:`atomic`)."""
+    with atomic(path) as temporary, open(temporary, "w", encoding="ascii", newline="\n") as f:
         if header is not None:
             f.write(header + "\n")
         for stamp, row in zip(stamps, values.tolist()):
             f.write(stamp + sep + sep.join(map(repr, row)) + "\n")
+
+
+@contextmanager
+def atomic(path: str | os.PathLike[str]) -> Iterator[str]:
+    """A temporary name beside ``path`` to write to, renamed to ``path`` when the block ends normally and
+    removed when it raises (Ctrl-C included): a reader never sees a half-written file under ``path``."""
+    final = os.fspath(path)
+    folder, name = os.path.split(final)
+    temporary = os.path.join(folder, f".{name}.{os.getpid()}.imukit-partial")
+    try:
+        yield temporary
+        os.replace(temporary, final)
+    finally:
+        if os.path.lexists(temporary):
+            os.unlink(temporary)
 
 
 def as_file_error(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:
