@@ -144,7 +144,7 @@ def _read(
     split = _splitter(delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else ""))
     header: list[str] | None = None
     header_line = 0
-    if numbered and not _numeric(split(numbered[0][1].lstrip("#"))):
+    if numbered and _is_header(numbered, split, path, bad):
         header = [name.strip() for name in split(numbered[0][1].lstrip("#"))]
         header_line = numbered.pop(0)[0]
     numbered = [(n, text) for n, text in numbered if not text.startswith("#")]
@@ -248,9 +248,42 @@ def _splitter(delimiter: str) -> Split:
     return lambda text: text.split(delimiter)
 
 
-def _numeric(fields: list[str]) -> bool:
-    try:
-        [float(x) for x in fields]
-    except ValueError:
+def _is_header(numbered: list[tuple[int, str]], split: Split, path: str | os.PathLike[str], bad: BadLines) -> bool:
+    """Whether the first non-blank line is a header, judged against the next line that is not a comment.
+
+    A ``#`` line is a header. A line with text is a header unless the next line has text in the same
+    fields (then the file has a text column and no header: its first sample is data). A line of integers
+    only, above a line that is not, is ambiguous: ``0,1,…`` or ``1,2,…`` (the column numbers pandas
+    writes) is taken as the header and reported (``header``, in the report or its warning); any other
+    is refused.
+    """
+    (line, text), *rest = numbered
+    if text.startswith("#"):
+        return True
+    first = split(text)
+    second = next((split(t) for _, t in rest if not t.startswith("#")), None)
+    kinds = [_kind(f) for f in first]
+    if "text" in kinds:
+        return second is None or kinds != [_kind(f) for f in second]
+    if second is None or "float" not in {_kind(f) for f in second} or "float" in kinds:
         return False
-    return True
+    if [int(f) for f in first] in (list(range(len(first))), list(range(1, len(first) + 1))):
+        detail = f"taken as the header: the column numbers {text!r}, above line {rest[0][0]} of other numbers"
+        bad.note(path, line, "header", detail, text)
+        return True
+    raise FileFormatError(
+        f"{os.fspath(path)}, line {line}: {text!r} is integers only while the next line is not: a header or "
+        "the first sample? Start a header with '#', or write the sample's numbers with a decimal point",
+        argument="path",
+    )
+
+
+def _kind(field: str) -> str:
+    """``int``, ``float`` or ``text``: how a field reads."""
+    if integer_stamp(field.strip()) is not None:
+        return "int"
+    try:
+        float(field)
+    except ValueError:
+        return "text"
+    return "float"
