@@ -82,8 +82,10 @@ def read_imu_csv(  # type: ignore[empty-body]
     Parameters
     ----------
     path
-        The text file. Its first non-blank line is the header when it is not all numbers (a leading
-        ``#`` is dropped from it, as in EuRoC's ``#timestamp [ns],…``); every data line must have as
+        The text file. Its first non-blank line is the header when it starts with ``#`` or holds text
+        where the next line holds numbers (``docs/io.md``: a text column is data; pandas' ``0,1,2,…``
+        header is taken and reported; other integer lines above float data are refused); a leading
+        ``#`` is dropped from it, as in EuRoC's ``#timestamp [ns],…``; every data line must have as
         many fields as the header (without one, as the first data line). Later ``#`` lines and
         blank lines are skipped. UTF-8, with or without a byte order mark.
     time_column, gyro_columns, accel_columns

@@ -10,7 +10,7 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -412,7 +412,7 @@ def read_euroc_groundtruth(  # type: ignore[empty-body]
 
 def read_stamped_csv(
     path: str | os.PathLike[str], bad: BadLines, header: str, what: str, *, quaternion: int | None = None
-) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
+) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.int64]]:
     """Integer stamps, ``(N, columns - 1)`` floats and line numbers of an EuRoC-style CSV file with
     ``header``'s columns.
 
@@ -440,11 +440,12 @@ def read_stamped_csv(
         None if quaternion is None else zero_quaternions(quaternion),
     )
     table = read_table(path, bad, layout)
-    assert table.stamps is not None  # integer stamps are required: a line without one is a bad line
-    table = increasing_table(table, table.stamps, path, bad, layout)
+    # Integer stamps are required (a line without one is a bad line), so every row has one.
+    stamps = cast(NDArray[np.int64], table.stamps)
+    table = increasing_table(table, stamps, path, bad, layout)
     if not len(table.lines):
         raise FileFormatError(f"{os.fspath(path)}: no data lines{bad.skipped_in(path)}", argument="path")
-    return table.stamps, table.values, table.lines.tolist()  # type: ignore[return-value]
+    return cast(NDArray[np.int64], table.stamps), table.values, table.lines
 
 
 def dataset_root(path: str | os.PathLike[str]) -> Path | None:

@@ -29,6 +29,7 @@ from contextlib import contextmanager
 from typing import Any, NamedTuple, TextIO, TypeVar, Union
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, rotation_from_unit_quat
@@ -284,7 +285,7 @@ def zero_quaternion(quat: Sequence[float]) -> Problem | None:
     return ("zero quaternion", "zero quaternion") if not any(quat) else None
 
 
-def rotations_from_rows(quat: FloatArray, lines: Sequence[int], where: str) -> Rotation:
+def rotations_from_rows(quat: FloatArray, lines: Sequence[int] | NDArray[np.int64], where: str) -> Rotation:
     """A ``Rotation`` from ``(N, 4)`` xyzw rows read from a file (modified in place).
 
     Rows that are unit to 1e-15 are kept bit for bit (so written rotations come back exactly);

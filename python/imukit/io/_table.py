@@ -76,6 +76,19 @@ class Layout(NamedTuple):
         sep = self.separator
         return str.split if sep is None else lambda text: text.split(sep)
 
+    def parse(self, numbered: list[tuple[int, str]], path: str | os.PathLike[str], bad: BadLines) -> Rows:
+        """The lines ``numbered`` through the reference parser."""
+        return parse_rows(
+            numbered,
+            path,
+            bad,
+            split=self.split(),
+            width=self.width,
+            expected=self.expected,
+            columns=self.columns,
+            check=self.check,
+        )
+
 
 def zero_quaternions(first: int) -> Mask:
     """The ``suspect`` mask of rows whose four values from ``first`` on, a quaternion, are all zero."""
@@ -88,8 +101,12 @@ def zero_quaternions(first: int) -> Mask:
 
 def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> Table:
     """The rows of ``path`` (module doc); bad lines go to ``bad`` in file order."""
-    parts: list[Table] = []
     with open(regular_file(path), "rb", buffering=0) as f:
+        # One pass counting lines first: the arrays are allocated once, at most one row a line, and filled
+        # block by block (concatenating blocks would hold the rows twice).
+        size = 1 + sum(chunk.count(b"\n") for chunk in iter(lambda: f.read(BLOCK_BYTES), b""))
+        f.seek(0)
+        out = _Rows(size, layout)
         carry, number, previous = b"", 1, b""
         while True:
             chunk = f.read(BLOCK_BYTES)
@@ -109,24 +126,37 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> T
                     block = block[: block.rfind(b"\n") + 1]
             if block:
                 part, count = _block(path, bad, layout, block, number)
-                parts.append(part)
+                out.add(part)
                 number += count
                 previous = (previous + block)[-_TAIL_BYTES:]
             if cut is not None:
                 bad.bad(path, number, "truncated", cut, tail[-1].strip())
             if not chunk:
                 break
-    if not parts:
-        return Table(
-            np.zeros(0, np.int64),
-            np.zeros((0, len(layout.columns))),
-            None if layout.stamp == "float" else np.zeros(0, np.int64),
-        )
-    stamps = None if layout.stamp == "float" else np.concatenate([p.stamps for p in parts if p.stamps is not None])
-    exact = stamps is not None and not bool(np.any(stamps == INEXACT))
-    return Table(
-        np.concatenate([p.lines for p in parts]), np.concatenate([p.values for p in parts]), stamps if exact else None
-    )
+    return out.table()
+
+
+class _Rows:
+    """Arrays of ``size`` rows (an upper bound), filled in order; :meth:`table` views the filled ones."""
+
+    def __init__(self, size: int, layout: Layout) -> None:
+        self.lines = np.empty(size, np.int64)
+        self.values = np.empty((size, len(layout.columns)))
+        self.stamps = None if layout.stamp == "float" else np.empty(size, np.int64)
+        self.n = 0
+
+    def add(self, part: Table) -> None:
+        k, m = self.n, len(part.lines)
+        self.lines[k : k + m] = part.lines
+        self.values[k : k + m] = part.values
+        if self.stamps is not None and part.stamps is not None:
+            self.stamps[k : k + m] = part.stamps
+        self.n += m
+
+    def table(self) -> Table:
+        stamps = None if self.stamps is None else self.stamps[: self.n]
+        exact = stamps is not None and not bool(np.any(stamps == INEXACT))
+        return Table(self.lines[: self.n], self.values[: self.n], stamps if exact else None)
 
 
 def _block(path: str | os.PathLike[str], bad: BadLines, layout: Layout, block: bytes, first: int) -> tuple[Table, int]:
@@ -153,16 +183,7 @@ def _block(path: str | os.PathLike[str], bad: BadLines, layout: Layout, block: b
         text = block[start : stop if stop >= 0 else len(block)].decode("utf-8", "surrogateescape").strip()
         if text and not text.startswith("#"):
             numbered.append((int(later[k]), text))
-    rows = parse_rows(
-        numbered,
-        path,
-        bad,
-        split=layout.split(),
-        width=layout.width,
-        expected=layout.expected,
-        columns=layout.columns,
-        check=layout.check,
-    )
+    rows = layout.parse(numbered, path, bad)
     more = _stamps(rows, layout)
     merged_lines = np.concatenate([lines, np.asarray(rows.lines, dtype=np.int64)])
     merged = np.argsort(merged_lines, kind="stable")
@@ -224,16 +245,7 @@ def _pure_python(path: str | os.PathLike[str], bad: BadLines, layout: Layout) ->
     cut = _truncation(raw[-_TAIL_LINES:]) if raw and not raw[-1].endswith(("\n", "\r")) else None
     if cut is not None:
         numbered.pop()
-    rows = parse_rows(
-        numbered,
-        path,
-        bad,
-        split=layout.split(),
-        width=layout.width,
-        expected=layout.expected,
-        columns=layout.columns,
-        check=layout.check,
-    )
+    rows = layout.parse(numbered, path, bad)
     if cut is not None:
         bad.bad(path, len(raw), "truncated", cut, raw[-1].strip())
     stamps = _stamps(rows, layout)
