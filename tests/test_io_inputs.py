@@ -85,3 +85,23 @@ def test_nanosecond_steps_in_a_tum_file_name_the_file(tmp_path: Path) -> None:
     path.write_text("".join(f"1.{k:09d} 0 0 0 0 0 0 1\n" for k in range(10)))
     with pytest.raises(ik.FileFormatError, match=rf"^path: {path}: t_ns: .*median step is 1\.0 ns"):
         io.read_tum(path)
+
+
+@pytest.mark.parametrize("crlf", [False, True])
+def test_a_header_without_hash_is_a_header(tmp_path: Path, crlf: bool) -> None:
+    """An 8-field mocap CSV and an EuRoC CSV whose header lacks EuRoC's ``#`` read as with it (issue 17,
+    item 13: ``read_trajectory`` failed on line 1, "not a number")."""
+    end = "\r\n" if crlf else "\n"
+    mocap = tmp_path / "mocap.csv"
+    mocap.write_text(
+        end.join(["timestamp,x,y,z,qw,qx,qy,qz", *(f"{k}000000000,{k},0,0,1,0,0,0" for k in range(5))]) + end
+    )
+    trajectory = io.read_trajectory(mocap)
+    assert trajectory.t_ns.tolist() == [k * 10**9 for k in range(5)]  # type: ignore[union-attr]
+    imu = tmp_path / "data.csv"
+    imu.write_text("timestamp,wx,wy,wz,ax,ay,az\n" + "".join(f"{k}000000000,0,0,0,0,0,9.81\n" for k in range(1, 5)))
+    assert len(io.read_euroc_imu(imu)) == 4
+    tum = tmp_path / "t.txt"
+    tum.write_text("nan 0 0 0 0 0 0 1\n1.0 0 0 0 0 0 0 1\n")  # a word that is a number: a bad line, no header
+    with pytest.raises(ik.FileFormatError, match="line 1: non-finite value"):
+        io.read_tum(tum)

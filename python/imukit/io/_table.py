@@ -8,7 +8,8 @@ and the skip report (which line, why) are those of the pure-Python reader, bit f
 the core reads exactly as Python's ``float()`` would are taken from it. Memory: the result arrays,
 one block of text and its rows (3 M EuRoC lines: 40 s and 4.3 GB before, see ``bench/bench_readers.py``).
 
-A file with a lone carriage return (a line break to Python's text files, not to the core) is read by
+A first line whose stamp field holds a word (``timestamp,x,y,z,…``) is a header even without EuRoC's
+``#``. A file with a lone carriage return (a line break to Python's text files, not to the core) is read by
 the pure-Python path whole. A last line without a newline whose last field has fewer decimals than
 the line before it is reported as ``truncated`` (a writer cut off mid-number: ``9.81`` → ``9.``).
 """
@@ -112,7 +113,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> T
             chunk = f.read(BLOCK_BYTES)
             data = carry + chunk
             if number == 1:
-                data = data.removeprefix(codecs.BOM_UTF8)
+                data = _header_as_comment(data.removeprefix(codecs.BOM_UTF8), layout)
             end = data.rfind(b"\n") + 1 if chunk else len(data)
             block, carry = data[:end], data[end:]
             # A lone \r: Python's text files break lines there, the core does not.
@@ -134,6 +135,33 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> T
             if not chunk:
                 break
     return out.table()
+
+
+def _header_as_comment(data: bytes, layout: Layout) -> bytes:
+    """``data`` (the start of a file) with a ``#`` put before its first non-blank line when that line is a
+    header written without one (``timestamp,x,y,z,…``: a stamp field with letters), so that it is passed
+    over as EuRoC's ``#timestamp [ns],…`` is; line numbers stay the same."""
+    start = len(data) - len(data.lstrip())
+    stop = data.find(b"\n", start)
+    first = data[start : stop if stop >= 0 else len(data)].decode("utf-8", "surrogateescape").strip()
+    return data[:start] + b"#" + data[start:] if _unmarked_header(first, layout) else data
+
+
+def _unmarked_header(first: str, layout: Layout) -> bool:
+    """Whether the first non-blank line ``first`` (stripped) is a header without ``#``."""
+    fields = layout.split()(first)
+    if first.startswith("#") or len(fields) <= layout.stamp_column:
+        return False
+    stamp = fields[layout.stamp_column].strip()
+    return any(c.isalpha() for c in stamp) and not _is_float(stamp)
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 class _Rows:
@@ -242,6 +270,9 @@ def _pure_python(path: str | os.PathLike[str], bad: BadLines, layout: Layout) ->
     with open_text(path) as f:
         raw = list(f)
     numbered = [(n, text) for n, line in enumerate(raw, 1) if (text := line.strip()) and not text.startswith("#")]
+    first = next((line.strip() for line in raw if line.strip()), "")
+    if numbered and numbered[0][1] == first and _unmarked_header(first, layout):
+        numbered.pop(0)
     cut = _truncation(raw[-_TAIL_LINES:]) if raw and not raw[-1].endswith(("\n", "\r")) else None
     if cut is not None:
         numbered.pop()
