@@ -266,7 +266,8 @@ def _is_header(numbered: list[tuple[int, str]], split: Split, path: str | os.Pat
     second = next((split(t) for _, t in rest if not t.startswith("#")), None)
     kinds = [_kind(f) for f in first]
     if "text" in kinds:
-        return second is None or kinds != [_kind(f) for f in second]
+        below = None if second is None else [_kind(f) for f in second]
+        return below is None or below != kinds or "text" not in below or below.count("text") == len(below)
     if second is None or "float" not in {_kind(f) for f in second} or "float" in kinds:
         return False
     if [int(f) for f in first] in (list(range(len(first))), list(range(1, len(first) + 1))):
