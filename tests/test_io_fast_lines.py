@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import imukit as ik
+from euroc import GT_CSV, IMU_CSV, requires_euroc
 from imukit import io
 from imukit.io import _euroc, _table, _tum
 from imukit.io._report import ReadReport
@@ -128,3 +129,17 @@ def test_a_lone_carriage_return_is_read_as_python_reads_it(tmp_path: Path) -> No
     path.write_bytes(b"#t,a,b,c,d,e,f\r1000000000,0,0,0,0,0,9.81\r1005000000,0,0,0,0,0,9.81\r")
     imu = io.read_euroc_imu(path)
     assert imu.t_ns.tolist() == [1_000_000_000, 1_005_000_000]  # type: ignore[union-attr]
+
+
+@requires_euroc
+def test_real_euroc_files_read_the_same_by_both_paths(monkeypatch: pytest.MonkeyPatch) -> None:
+    """EuRoC V1_02's IMU (first 40 s) and ground truth: fast path = reference, every field bit for bit."""
+    fast = io.read_euroc_imu(IMU_CSV), io.read_euroc_groundtruth(GT_CSV)
+    monkeypatch.setattr(_euroc, "read_table", _table._pure_python)
+    reference = io.read_euroc_imu(IMU_CSV), io.read_euroc_groundtruth(GT_CSV)
+    assert len(fast[0]) == 7999 and len(fast[1]) == 16702
+    for a, b in zip(fast, reference):
+        for field in ("t_ns", "gyro", "accel", "position", "velocity", "gyro_bias", "accel_bias"):
+            if hasattr(a, field):
+                assert getattr(a, field).tobytes() == getattr(b, field).tobytes(), field
+    assert fast[1].rotation.as_quat().tobytes() == reference[1].rotation.as_quat().tobytes()
