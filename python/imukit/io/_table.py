@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from imukit import _core
 from imukit._arrays import FloatArray
+from imukit.io._format import is_number
 from imukit.io._lines import RowCheck, Rows, Split, in_order, open_text, parse_rows, regular_file
 from imukit.io._report import BadLines
 
@@ -153,15 +154,7 @@ def _unmarked_header(first: str, layout: Layout) -> bool:
     if first.startswith("#") or len(fields) <= layout.stamp_column:
         return False
     stamp = fields[layout.stamp_column].strip()
-    return any(c.isalpha() for c in stamp) and not _is_float(stamp)
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    return any(c.isalpha() for c in stamp) and not is_number(stamp)
 
 
 class _Rows:
