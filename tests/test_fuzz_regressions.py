@@ -66,9 +66,8 @@ def test_every_seed_parses_to_a_valid_result() -> None:
     # Valid files of each format reach the result checks (not only the error paths).
     seeds = fuzz_readers.seeds()
     names = {fuzz_readers.decode(seed, Path())[0] for seed in seeds}
-    # Every reader but read_rosbag (binary containers: its fuzzing starts from their magic numbers).
     assert names == {name for name, _ in fuzz_readers.READERS} - {"read_rosbag"}
-    for seed in seeds:
+    for seed in seeds + _bag_seeds():
         with tempfile.TemporaryDirectory() as folder:
             _, reader, case = fuzz_readers.decode(seed, Path(folder))
             fuzz_readers._check_result(reader(case))
@@ -88,3 +87,11 @@ def test_the_check_flags_stamps_that_do_not_increase() -> None:
     fuzz_readers._increasing(np.array([0, 10, 20]), "ImuData")
     with pytest.raises(fuzz_readers.ContractError, match="not strictly increasing"):
         fuzz_readers._increasing(np.array([0, 10, 10]), "ImuData")
+
+
+def _bag_seeds() -> list[bytes]:
+    """The valid bags the fuzzer starts read_rosbag from, one per container (checked valid above)."""
+    pytest.importorskip("rosbags", reason="rosbags is the optional [ros] extra")
+    bags = fuzz_readers.rosbag_seeds()
+    assert [b[1] for b in bags] == [0, 0, 0, 4, 2]  # ROS 1 plain / lz4 / bz2, .db3, .mcap
+    return bags

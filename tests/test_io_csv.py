@@ -120,7 +120,7 @@ COLS = {"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
     ("text", "options", "message"),
     [
         (
-            "0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3",
+            "0.0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3",
             {},
             r", line 3: expected 7 fields \(the first data line has 7\), got 4$",
         ),
@@ -130,7 +130,7 @@ COLS = {"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
         ("0,1,2,3,4,5,6\n0.1,1,2,x,4,5,6\n", {}, r", line 2: not a number in '0\.1,1,2,x,4,5,6'$"),
         ("0,1,2,3,4,5,nan\n", {}, r", line 1: non-finite value in '0,1,2,3,4,5,nan'$"),
         ("0,1,2,3,4,5,6\n0,1,2,3,4,5,6\n", {}, r", line 2: time must increase strictly, but 0 follows 0 \(line 1\)$"),
-        ("1,1,2,3,4,5,6\n0.5,1,2,3,4,5,6\n", {}, r", line 2: time must increase strictly, but 0\.5 follows 1 "),
+        ("1.0,1,2,3,4,5,6\n0.5,1,2,3,4,5,6\n", {}, r", line 2: time must increase strictly, but 0\.5 follows 1\.0 "),
         ("1.5,1,2,3,4,5,6\n", {"time_unit": "ns"}, r", line 1: time '1\.5' is not an integer number of nanosec"),
     ],
 )
@@ -199,7 +199,7 @@ def test_delimiters(tmp_path: Path, text: str, delimiter: str | None) -> None:
 
 def test_an_acceleration_in_g_that_overflows_is_a_bad_line(tmp_path: Path) -> None:
     path = tmp_path / "imu.csv"
-    path.write_text("0,1,2,3,0,0,1\n0.01,1,2,3,0,0,1e308\n0.02,1,2,3,0,0,1\n")
+    path.write_text("0.0,1,2,3,0,0,1\n0.01,1,2,3,0,0,1e308\n0.02,1,2,3,0,0,1\n")
     report = ReadReport()
     imu = ik.io.read_imu_csv(path, **COLS, accel_unit="g", on_bad_line="skip", report=report)  # type: ignore[arg-type]
     assert imu.t.tolist() == [0.0, 0.02]

@@ -217,7 +217,7 @@ def test_options_are_checked(tmp_path: Path) -> None:
     path.write_text(EUROC_IMU[1] + "\n")
     with pytest.raises(ik.ParameterError, match=r"^on_bad_line: expected 'raise' or 'skip', got 'ignore'"):
         ik.io.read_euroc_imu(path, on_bad_line="ignore")  # type: ignore[arg-type]
-    with pytest.raises(TypeError, match=r"^report: expected an imukit\.io\.ReadReport or None, got list"):
+    with pytest.raises(ik.ParameterError, match=r"^report: expected an imukit\.io\.ReadReport or None, got list"):
         ik.io.read_tum(path, report=[])  # type: ignore[arg-type]
 
 

@@ -34,7 +34,7 @@ import traceback
 import types
 import warnings
 from pathlib import Path
-from typing import Callable, Literal, NamedTuple, TypedDict
+from typing import Any, Callable, Literal, NamedTuple, TypedDict
 
 import numpy as np
 
@@ -51,6 +51,8 @@ class Case(NamedTuple):
     second: bytes
     skip: bool
     options: int
+    whole: bytes
+    """The content unsplit (a bag holds NUL bytes)."""
 
 
 def _file(case: Case, name: str, content: bytes) -> Path:
@@ -142,8 +144,9 @@ def _detect_trajectory(case: Case) -> Result:
 
 
 def _rosbag(case: Case) -> Result:
-    # The extension picks the container: ROS 1 bag or MCAP (rosbags parses both).
-    return io.read_rosbag(_file(case, "imu.mcap" if case.options & 2 else "imu.bag", case.first), **_kwargs(case))
+    # The extension picks the container: ROS 1 bag, MCAP or ROS 2 sqlite3 (rosbags parses all three).
+    name = "imu.mcap" if case.options & 2 else "imu.db3" if case.options & 4 else "imu.bag"
+    return io.read_rosbag(_file(case, name, case.whole), **_kwargs(case))
 
 
 READERS: tuple[tuple[str, Callable[[Case], Result]], ...] = (
@@ -203,7 +206,7 @@ def decode(data: bytes, folder: Path) -> tuple[str, Callable[[Case], Result], Ca
     name, reader = READERS[data[0] % len(READERS)] if data else READERS[0]
     options = data[1] if len(data) > 1 else 0
     first, _, second = data[2:].partition(b"\0")
-    return name, reader, Case(folder, first, second, bool(options & 1), options)
+    return name, reader, Case(folder, first, second, bool(options & 1), options, data[2:])
 
 
 def check_input(data: bytes) -> None:
@@ -284,11 +287,68 @@ def seeds() -> list[bytes]:
     ]
 
 
-def rosbag_starts() -> list[bytes]:
-    """Starting inputs for :func:`imukit.io.read_rosbag`: the containers' magic numbers only (ROS 1
-    bag, MCAP), enough to reach their record parsers; not valid bags."""
+def rosbag_seeds() -> list[bytes]:
+    """Valid bags for :func:`imukit.io.read_rosbag`, written by rosbags, one per container: ROS 1
+    plain, LZ4 and BZ2 chunks, ROS 2 sqlite3 and MCAP (bare files), each an Imu and a PoseStamped
+    topic, so that mutations reach the chunk, index and message data (issue 17), not only the headers.
+    """
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
     index = [name for name, _ in READERS].index("read_rosbag")
-    return [bytes([index, 0]) + b"#ROSBAG V2.0\n", bytes([index, 2]) + b"\x89MCAP0\r\n"]
+    found = []
+    with tempfile.TemporaryDirectory() as folder:
+        for container, option in (("ros1", 0), ("lz4", 0), ("bz2", 0), ("sqlite3", 4), ("mcap", 2)):
+            ros1 = option == 0
+            store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+            path = Path(folder, container + (".bag" if ros1 else ""))
+            plugin = None if ros1 else StoragePlugin[container.upper()]
+            writer = Writer1(path) if ros1 else Writer2(path, version=9, storage_plugin=plugin)
+            if container in ("lz4", "bz2"):
+                writer.set_compression(Writer1.CompressionFormat[container.upper()])
+            serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+            with writer:
+                for topic, msgtype, make in (("/imu0", "sensor_msgs/msg/Imu", _imu_msg), ("/pose", _POSE, _pose_msg)):
+                    connection = writer.add_connection(topic, msgtype, typestore=store)
+                    for k in range(4):
+                        stamp = 1_403_636_579_758_555_392 + k * 5_000_000
+                        writer.write(connection, stamp, serialize(make(store, stamp, k, ros1), msgtype))
+            data = path if ros1 else next(p for p in path.iterdir() if p.suffix in (".db3", ".mcap"))
+            found.append(bytes([index, option]) + data.read_bytes())
+    return found
+
+
+_POSE = "geometry_msgs/msg/PoseStamped"
+
+
+def _header(store: Any, stamp: int, ros1: bool) -> Any:
+    time = store.types["builtin_interfaces/msg/Time"](sec=stamp // 10**9, nanosec=stamp % 10**9)
+    return store.types["std_msgs/msg/Header"](**({"seq": 0} if ros1 else {}), stamp=time, frame_id="imu")
+
+
+def _imu_msg(store: Any, stamp: int, k: int, ros1: bool) -> Any:
+    t = store.types
+    vector, quat = t["geometry_msgs/msg/Vector3"], t["geometry_msgs/msg/Quaternion"]
+    return t["sensor_msgs/msg/Imu"](
+        header=_header(store, stamp, ros1),
+        orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0),
+        orientation_covariance=np.zeros(9),
+        angular_velocity=vector(x=0.1 * k, y=-0.2, z=0.3),
+        angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=vector(x=0.0, y=0.1, z=9.81),
+        linear_acceleration_covariance=np.zeros(9),
+    )
+
+
+def _pose_msg(store: Any, stamp: int, k: int, ros1: bool) -> Any:
+    t = store.types
+    pose = t["geometry_msgs/msg/Pose"](
+        position=t["geometry_msgs/msg/Point"](x=float(k), y=0.0, z=1.0),
+        orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+    )
+    return t[_POSE](header=_header(store, stamp, ros1), pose=pose)
 
 
 def signature(error: BaseException) -> str:
@@ -342,7 +402,7 @@ def main(argv: list[str]) -> None:
     corpora = [Path(a) for a in argv[1:] if not a.startswith("-")]
     if corpora and not any(corpora[0].glob("*")):
         corpora[0].mkdir(parents=True, exist_ok=True)
-        for i, seed in enumerate(seeds() + rosbag_starts()):
+        for i, seed in enumerate(seeds() + rosbag_seeds()):
             (corpora[0] / f"seed-{i:02d}").write_bytes(seed)
     _instrument_imukit(atheris)
     atheris.Setup(argv, _test_one_input)

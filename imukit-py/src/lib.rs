@@ -15,6 +15,7 @@ mod preint_glue;
 mod robust_glue;
 mod sim_glue;
 mod strapdown_glue;
+mod text_glue;
 mod threads;
 
 // The helpers the domain files import from the crate root.
@@ -87,6 +88,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_default, m)?)?;
+    m.add_function(wrap_pyfunction!(text_glue::text_parse_block, m)?)?;
     let [gx, gy, gz] = imukit::imu::GRAVITY;
     m.add("GRAVITY", (gx, gy, gz))?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -70,6 +70,7 @@ __all__ = [
     "so3_vee",
     "strapdown_integrate",
     "strapdown_propagate",
+    "text_parse_block",
 ]
 
 _Rows = NDArray[np.float64]
@@ -202,6 +203,25 @@ def strapdown_propagate(
 def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool, threads: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...  # (M, C) variances, (M,) term counts
+def text_parse_block(
+    block: bytes,
+    first_line: int,
+    separator: int | None,
+    width: int,
+    columns: list[int],
+    stamp_column: int,
+    stamp: str,
+    stamp_required: bool,
+) -> tuple[
+    NDArray[np.uint64],
+    NDArray[np.uint64],
+    NDArray[np.float64],
+    NDArray[np.int64],
+    bool,
+    NDArray[np.uint64],
+    NDArray[np.uint64],
+    int,
+]: ...  # rows' lines, offsets, (N, C) values, exact stamps, all exact, deferred lines, offsets, line count
 
 # Attitude filters: option values (a field left out or None takes the Rust Default), the state
 # by field name, and one filter class per law.

@@ -18,6 +18,7 @@ noise                  continuous-time densities, Kalibr style (row 11); :meth:`
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -34,6 +35,38 @@ __all__ = ["GRAVITY", "DiscreteNoise", "DiscreteSigmas", "ImuBias", "ImuData", "
 GRAVITY: tuple[float, float, float] = _core.GRAVITY
 """The default world-frame gravity [m/s²], z up: ``(0, 0, −9.81)``, the core's ``imukit::imu::GRAVITY``
 (written there only); every ``gravity=`` default refers to it."""
+
+
+# Integer stamps are nanoseconds; microseconds passed as such show a rate 1000x too high and, for epoch
+# stamps, an epoch 1000x too early: the µs of 2001-2100 fall 11.6-47 days after 1970 as ns (issue 17).
+_NS_RATE_WARN_HZ = 20_000.0
+_US_EPOCH_AS_NS = (10**15, 4 * 10**15)
+
+
+def _plausible_ns(t_ns: NDArray[np.int64] | None) -> None:
+    """Refuse integer stamps that look like microseconds (an epoch 11.6-47 days after 1970 and a rate over
+    20 kHz), warn about a rate over 20 kHz alone (a relative µs clock; a real IMU rarely samples so fast)."""
+    if t_ns is None or len(t_ns) < 2:
+        return
+    step = float(np.median(np.diff(t_ns)))
+    rate = 1e9 / step
+    if rate <= _NS_RATE_WARN_HZ:
+        return
+    days = float(t_ns[0]) / 86_400e9
+    as_us = f"read as microseconds they would be {rate / 1000:.4g} Hz"
+    if _US_EPOCH_AS_NS[0] <= t_ns[0] < _US_EPOCH_AS_NS[1]:
+        raise TimestampError(
+            f"integer stamps are nanoseconds, but these start {days:.3g} days after 1970 with a median step of "
+            f"{step:g} ns ({rate:.4g} Hz): they look like microseconds ({as_us} from "
+            f"{np.datetime64(int(t_ns[0]), 'us')}); pass t * 1000",
+            argument="t",
+        )
+    warnings.warn(
+        f"t: integer stamps are nanoseconds, but their median step is {step:g} ns ({rate:.4g} Hz); if they are "
+        f"microseconds ({as_us}), pass t * 1000",
+        UserWarning,
+        stacklevel=3,
+    )
 
 
 class ImuData(Frozen):
@@ -111,6 +144,7 @@ class ImuData(Frozen):
         mag: ArrayLike | None = None,
     ) -> None:
         stamps = as_stamps(t)
+        _plausible_ns(stamps.t_ns)
         seconds = stamps.seconds - stamps.seconds[0]
         n = len(seconds)
         gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")

@@ -39,6 +39,7 @@ pub mod quat;
 pub mod sim;
 pub mod so3;
 pub mod strapdown;
+pub mod text;
 pub mod time;
 
 pub use error::{try_vec, Cancel, Error, Result};

@@ -111,8 +111,8 @@ def walk_choices(fits: dict[str, AllanFit], args: argparse.Namespace) -> tuple[d
 
 
 def run(args: argparse.Namespace) -> int:
-    png = output_path(args.out, (".png",), "--out")
-    yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml") if args.yaml else png.with_suffix(".yaml")
+    png = output_path(args.out, (".png",), "--out", args)
+    yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml", args) if args.yaml else png.with_suffix(".yaml")
     imu, _ = read_imu(args)
     with err.status(f"Allan deviation of {len(imu)} samples"):
         rate = mean_rate_hz(imu)

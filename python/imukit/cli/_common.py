@@ -284,13 +284,39 @@ def read_trajectory(path: str, *, skip_bad_lines: bool, csv: dict[str, Any] | No
     return result
 
 
-def output_path(path: str, suffixes: tuple[str, ...], option: str) -> Path:
-    """``path`` as a file to write: its suffix one of ``suffixes``, its folder existing."""
+# The arguments of the commands that name files or folders they read (every one --out must spare).
+INPUT_ARGUMENTS = ("path", "noise", "trajectory", "estimate", "groundtruth")
+# The files the readers read inside an input folder (EuRoC, TUM-VI, ROS 2 bag folders).
+_READ_IN_FOLDERS = ("data.csv", "sensor.yaml", "metadata.yaml", "*.db3", "*.mcap")
+
+
+def output_path(path: str, suffixes: tuple[str, ...], option: str, args: argparse.Namespace) -> Path:
+    """``path`` as a file to write: its suffix one of ``suffixes``, its folder existing, and not an input.
+
+    An input is any of ``args``' :data:`INPUT_ARGUMENTS` that is given: ``path`` must not resolve to it
+    (``os.path.samefile``, so another relative spelling, a symlink or a hard link of it is refused too)
+    nor, for an input folder (a dataset), to a file inside it that the readers read (``data.csv``,
+    ``sensor.yaml``, ``metadata.yaml``, ``*.db3``, ``*.mcap``).
+    """
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise CliError(f"expected a file name ending in {' or '.join(suffixes)}, got {path!r}", argument=option)
     if not p.parent.is_dir():
         raise CliError(f"folder {os.fspath(p.parent)!r} does not exist", argument=option)
+    if p.exists():
+        target = p.resolve()
+        for name in INPUT_ARGUMENTS:
+            given = getattr(args, name, None)
+            if not isinstance(given, str) or not os.path.exists(given):
+                continue
+            inside = (
+                Path(given).is_dir()
+                and Path(given).resolve() in target.parents
+                and any(target.match(name) for name in _READ_IN_FOLDERS)
+            )
+            if inside or os.path.samefile(p, given):
+                what = "is a file inside the input folder" if inside else "is the input file"
+                raise CliError(f"{path!r} {what} {given!r}: refusing to overwrite what is read", argument=option)
     return p
 
 

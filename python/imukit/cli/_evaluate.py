@@ -80,7 +80,7 @@ def _row(table: Table, name: str, stats: ErrorStats, unit: str, scale: float) ->
 
 
 def run(args: argparse.Namespace) -> int:
-    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
+    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot", args)
     estimate = read_trajectory(args.estimate, skip_bad_lines=args.skip_bad_lines)
     truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=groundtruth_csv(args))
     absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt, offset=args.offset)

@@ -97,8 +97,8 @@ def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, 
 
 
 def run(args: argparse.Namespace) -> int:
-    target = None if args.out is None else output_path(args.out, (".txt", ".tum", ".csv"), "--out")
-    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
+    target = None if args.out is None else output_path(args.out, (".txt", ".tum", ".csv"), "--out", args)
+    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot", args)
     data = read_attitude_input(args)
     if args.mag and data.mag is None:
         raise CliError(

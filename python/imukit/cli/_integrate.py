@@ -98,8 +98,8 @@ def add(commands: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    tum = None if args.out is None else output_path(args.out, (".txt", ".tum"), "--out")
-    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot")
+    tum = None if args.out is None else output_path(args.out, (".txt", ".tum"), "--out", args)
+    png = None if args.plot is None else output_path(args.plot, (".png",), "--plot", args)
     imu, truth = read_imu(args)
     bias = None
     if truth is not None:

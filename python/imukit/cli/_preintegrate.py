@@ -241,17 +241,18 @@ def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
-    calibrated = None if args.calibrate is None else output_path(args.calibrate, (".yaml", ".yml"), "--calibrate")
+    target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out", args)
+    calibrated = (
+        None if args.calibrate is None else output_path(args.calibrate, (".yaml", ".yml"), "--calibrate", args)
+    )
     imu, truth = read_imu(args)
     if args.bias_from_groundtruth and truth is not None:
         imu = trim_to_truth(imu, truth)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
     if calibrated is not None:
-        _calibrate.write(
-            calibrated, _calibrate.calibrate(imu, truth, edges, noise, args.scheme, args.max_dt), imu, args.window, args.scheme
-        )
+        calibration = _calibrate.calibrate(imu, truth, edges, noise, args.scheme, args.max_dt)
+        _calibrate.write(calibrated, calibration, imu, args.window, args.scheme)
     biases = window_biases(args, truth, edges)
     table = arrays(windows(imu, edges, noise, args.scheme, biases))
     if biases is not None:

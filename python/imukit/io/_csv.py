@@ -72,7 +72,9 @@ def read_imu_csv(  # type: ignore[empty-body]
     ----------
     path
         The text file. Its header is its leading lines that are ``#`` lines or whose first field is
-        not a number (or ``header_lines`` of them); the last of them names the columns (a leading
+        not a number (or ``header_lines`` of them), judged against the next line (``docs/io.md``: a
+        first line with text in the same fields as the next one's is data, a text column; pandas'
+        ``0,1,2,…`` header is taken and reported; other integer lines above float data are refused); the last of them names the columns (a leading
         ``#`` is dropped, as in EuRoC's ``#timestamp [ns],…``), and a name not found there is looked
         up in the header lines above it (an exporter's group line). Every data line must have as
         many fields as the header (without one, as the first data line); a header or data lines
@@ -137,7 +139,7 @@ def _read(
     header_lines: int | None,
 ) -> ImuData:
     """:func:`imu_csv` with checked arguments."""
-    table = read_table(path, delimiter, header_lines)
+    table = read_table(path, bad, delimiter, header_lines)
     index = {name: [table.column(c, name) for c in columns] for name, columns in wanted.items()}
     columns = [c for name in wanted for c in index[name]]  # time, gyro, accel, then mag if wanted
 

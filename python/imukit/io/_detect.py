@@ -46,7 +46,7 @@ def detect_imu(
             raise ParameterError(f"{value!r} is for ROS bags, not for a CSV file read by its columns", argument=name)
         return read_into(bad, read_imu_csv, path, **csv), None
     fmt = _first(source, head, "imu")
-    if fmt is None and not source.exists():
+    if fmt is None and not os.path.lexists(source):
         raise FileNotFoundError(f"path: {os.fspath(path)} does not exist")
     extra = [name for name in given if fmt is None or name not in fmt.options]
     if extra:  # nothing but the ROS bag reader would use them
@@ -201,7 +201,7 @@ def _refuse(path: str | os.PathLike[str], head: Head, kind: Literal["imu", "traj
     without data lines (a header only)."""
     where = os.fspath(path)
     source = Path(path)
-    if not source.exists():
+    if not os.path.lexists(source):  # a symlink loop or a dangling link exists, and is refused below
         raise FileNotFoundError(f"path: {where} does not exist")
     if source.is_dir():
         raise FileFormatError(f"{where}: a folder of no known layout; tried {listing(kind)}", argument="path")

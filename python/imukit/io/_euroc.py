@@ -10,7 +10,7 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,24 +19,22 @@ from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
 from imukit.io._format import Format, Head
-from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, yaml_float
+from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, shown, yaml_float
 from imukit.io._lines import (
     INT64_MAX,
     INT64_MIN,
     Problem,
     as_file_error,
-    data_lines,
-    increasing,
+    atomic,
     integer_stamp,
-    parse_rows,
     public_reader,
-    require_rows,
     rotations_from_rows,
     write_rows,
     zero_quaternion,
 )
 from imukit.io._mag import with_mag
 from imukit.io._report import BadLines, OnBadLine, ReadReport
+from imukit.io._blocks import Layout, increasing_table, read_table, zero_quaternions
 from imukit.state import Trajectory
 
 __all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "read_euroc_sensor", "write_euroc"]
@@ -146,15 +144,18 @@ def write_euroc(
 
     root = Path(folder)
     (root / IMU_CSV).parent.mkdir(parents=True, exist_ok=True)
-    write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
+    # Each file under a temporary name, renamed when complete; imu0/data.csv, which makes the folder a
+    # dataset, last: an interrupted write (Ctrl-C in `imukit simulate`) never reads back as a valid,
+    # shorter dataset without its ground truth.
+    if noise is not None and rate is not None:
+        _write_sensor_yaml(root / SENSOR_YAML, noise, rate)
     if imu.mag is not None:
         (root / MAG_CSV).parent.mkdir(parents=True, exist_ok=True)
         write_rows(root / MAG_CSV, MAG_HEADER, map(str, imu_ns.tolist()), imu.mag, ",")
     if gt_rows is not None:
         (root / GROUNDTRUTH_CSV).parent.mkdir(parents=True, exist_ok=True)
         write_rows(root / GROUNDTRUTH_CSV, GROUNDTRUTH_HEADER, map(str, gt_rows[0].tolist()), gt_rows[1], ",")
-    if noise is not None and rate is not None:
-        _write_sensor_yaml(root / SENSOR_YAML, noise, rate)
+    write_rows(root / IMU_CSV, IMU_HEADER, map(str, imu_ns.tolist()), np.hstack([imu.gyro, imu.accel]), ",")
 
 
 def _write_sensor_yaml(path: Path, noise: ImuNoise, rate: float) -> None:
@@ -163,7 +164,7 @@ def _write_sensor_yaml(path: Path, noise: ImuNoise, rate: float) -> None:
     keys = ["gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density"]
     body = [f"rate_hz: {rate_text}", "", "# inertial sensor noise model parameters (static)"]
     body += noise_lines(noise, [*keys, "accelerometer_random_walk"])
-    with open(path, "w", encoding="ascii", newline="\n") as f:
+    with atomic(path) as temporary, open(temporary, "w", encoding="ascii", newline="\n") as f:
         f.write(_SENSOR_YAML_HEAD + "\n".join(body) + "\n")
 
 
@@ -233,10 +234,11 @@ def euroc_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData
     root = mav0_root(folder)
     truth, mag = root / GROUNDTRUTH_CSV, root / MAG_CSV
     imu = euroc_imu(root / IMU_CSV, bad)
-    if mag.is_file():
+    # lexists: a dangling link or a folder where the file should be is an error, not "no ground truth".
+    if os.path.lexists(mag):
         t_ns, values, _ = read_stamped_csv(mag, bad, MAG_HEADER, f"imukit {MAG_CSV.as_posix()}")
         imu = with_mag(imu, t_ns, values, os.fspath(mag), f"move {MAG_CSV.parent} away to read without it")
-    return imu, euroc_groundtruth(truth, bad) if truth.is_file() else None
+    return imu, euroc_groundtruth(truth, bad) if os.path.lexists(truth) else None
 
 
 @public_reader(euroc_folder)
@@ -347,7 +349,7 @@ def euroc_extrinsics(sensor: KalibrImu, *, where: str = "sensor.yaml") -> FloatA
     numbers = [_finite(x) for x in data] if isinstance(data, list) else []
     if shape != (4, 4) or len(numbers) != 16 or None in numbers:
         raise FileFormatError(
-            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {entry!r}",
+            f"{where}, key 'T_BS': expected rows: 4, cols: 4 and 16 finite numbers in data, got {shown(entry)}",
             argument="path",
         )
     return np.array(numbers, dtype=np.float64).reshape(4, 4)
@@ -454,7 +456,7 @@ def read_euroc_groundtruth(  # type: ignore[empty-body]
 
 def read_stamped_csv(
     path: str | os.PathLike[str], bad: BadLines, header: str, what: str, *, quaternion: int | None = None
-) -> tuple[NDArray[np.int64], FloatArray, list[int]]:
+) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.int64]]:
     """Integer stamps, ``(N, columns - 1)`` floats and line numbers of an EuRoC-style CSV file with
     ``header``'s columns.
 
@@ -469,27 +471,25 @@ def read_stamped_csv(
             return "malformed", f"timestamp {stamp!r} is not an integer number of nanoseconds (int64)"
         return None if quaternion is None else zero_quaternion(row[quaternion : quaternion + 4])
 
-    rows = parse_rows(
-        data_lines(path),
-        path,
-        bad,
-        split=_split_comma,
-        width=width,
-        expected=f"comma-separated fields ({what})",
-        columns=range(1, width),
-        check=check,
+    layout = Layout(
+        ",",
+        width,
+        f"comma-separated fields ({what})",
+        range(1, width),
+        0,
+        "integer",
+        integer_stamp,
+        True,
+        check,
+        None if quaternion is None else zero_quaternions(quaternion),
     )
-    stamps = [f[0].strip() for f in rows.fields]
-    ns = [int(s) for s in stamps]  # integers in int64: checked above
-    keep = increasing(rows, ns, stamps, path, bad)
-    rows = rows.take(keep)
-    require_rows(rows, path, bad)
-    t_ns = np.array([ns[k] for k in keep], dtype=np.int64)
-    return t_ns, np.array(rows.values, dtype=np.float64), rows.lines
-
-
-def _split_comma(text: str) -> list[str]:
-    return text.split(",")
+    table = read_table(path, bad, layout)
+    # Integer stamps are required (a line without one is a bad line), so every row has one.
+    stamps = cast(NDArray[np.int64], table.stamps)
+    table = increasing_table(table, stamps, path, bad, layout)
+    if not len(table.lines):
+        raise FileFormatError(f"{os.fspath(path)}: no data lines{bad.skipped_in(path)}", argument="path")
+    return cast(NDArray[np.int64], table.stamps), table.values, table.lines
 
 
 def dataset_root(path: str | os.PathLike[str]) -> Path | None:

@@ -11,13 +11,15 @@ import codecs
 import math
 import os
 import re
-from collections.abc import Mapping
+import reprlib
+from collections.abc import Hashable, Mapping
 from typing import Any, NamedTuple
 
 import yaml
 
 from imukit._errors import FileFormatError, ParameterError
 from imukit.imu import ImuNoise, _rate
+from imukit.io._lines import regular_file
 
 __all__ = ["KalibrImu", "read_kalibr_imu", "write_kalibr_imu"]
 
@@ -31,6 +33,8 @@ _NOISE_KEYS = {
 # Kalibr names the rate update_rate, EuRoC's sensor.yaml rate_hz.
 _RATE_KEYS = ("update_rate", "rate_hz")
 # OpenCV's FileStorage writes this first line (EuRoC-derived files carry it); PyYAML refuses it.
+_SHOWN = reprlib.Repr()  # bounded: 16 elements a level (T_BS in full), 6 levels, 30 characters a string
+_SHOWN.maxlist = _SHOWN.maxtuple = 16
 _OPENCV_DIRECTIVE = re.compile(r"\A%YAML:1\.[0-9]+[^\n]*")
 
 
@@ -72,7 +76,7 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
         is not a finite number ≥ 0 (a rate must be > 0); naming the line for bytes that are not UTF-8.
     """
     where = os.fspath(path)
-    with open(path, "rb") as f:
+    with open(regular_file(path), "rb") as f:
         # Without a byte order mark (Excel, Notepad): it would hide an OpenCV directive from the pattern's \A.
         raw = f.read().removeprefix(codecs.BOM_UTF8)
     try:
@@ -82,10 +86,14 @@ def read_kalibr_imu(path: str | os.PathLike[str], *, section: str | None = None)
         raise FileFormatError(
             f"{where}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})", argument="path"
         ) from None
+    if section is not None and not isinstance(section, str):
+        raise ParameterError(f"expected a top-level key (str) or None, got {shown(section)}", argument="section")
     try:
-        doc = yaml.safe_load(text)
+        doc = yaml.load(text, Loader=_KalibrLoader)  # a SafeLoader, stricter still
     except yaml.YAMLError as exc:
         raise FileFormatError(f"{where}{_yaml_problem(exc)}", argument="path") from None
+    except RecursionError:
+        raise FileFormatError(f"{where}: not valid YAML: nested too deeply", argument="path") from None
     if section is not None:
         if not isinstance(doc, dict) or section not in doc:
             raise FileFormatError(f"{where}: no section {section!r} at the top level", argument="path")
@@ -194,7 +202,7 @@ def _number(doc: dict[Any, Any], key: str, where: str, *, positive: bool) -> flo
             pass
     if not (math.isfinite(x) and (x > 0 if positive else x >= 0)):
         what = "a positive, finite number" if positive else "a finite number ≥ 0"
-        raise FileFormatError(f"{where}, key {key!r}: expected {what}, got {value!r}", argument="path")
+        raise FileFormatError(f"{where}, key {key!r}: expected {what}, got {shown(value)}", argument="path")
     return x
 
 
@@ -203,6 +211,35 @@ def _section_hint(doc: dict[Any, Any], section: str | None) -> str:
         return ""
     nested = [key for key, value in doc.items() if isinstance(value, dict) and "gyroscope_noise_density" in value]
     return f" (found under {nested[0]!r}: pass section={nested[0]!r})" if nested else ""
+
+
+class _KalibrLoader(yaml.SafeLoader):
+    """PyYAML's safe loader without aliases and duplicate keys.
+
+    A Kalibr file is a flat mapping of numbers: an alias (``*a``) there only serves to multiply a
+    small file into gigabytes (a "billion laughs" document of 600 bytes took 8 s and 1.6 GB), and a
+    repeated key would silently take the last value.
+    """
+
+    def compose_node(self, parent: yaml.Node | None, index: int) -> yaml.Node | None:
+        if self.check_event(yaml.AliasEvent):
+            mark = self.peek_event().start_mark  # type: ignore[no-untyped-call]
+            raise yaml.composer.ComposerError(None, None, "aliases (*name) are not accepted in a Kalibr file", mark)
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if isinstance(key, Hashable) and key in seen:
+                raise yaml.constructor.ConstructorError(None, None, f"duplicate key {shown(key)}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+def shown(value: object) -> str:
+    """``repr(value)`` cut to a few elements and characters: messages quote values of any size."""
+    return _SHOWN.repr(value)
 
 
 def _yaml_problem(exc: yaml.YAMLError) -> str:

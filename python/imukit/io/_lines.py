@@ -22,11 +22,14 @@ import inspect
 import math
 import os
 import re
+import stat
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import Any, NamedTuple, TypeVar, Union
+from contextlib import contextmanager
+from typing import Any, NamedTuple, TextIO, TypeVar, Union
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, rotation_from_unit_quat
@@ -79,11 +82,47 @@ def data_lines(path: str | os.PathLike[str]) -> Iterator[tuple[int, str]]:
     (not a number), not a ``UnicodeDecodeError`` for the whole file. A UTF-8 byte order mark (as Excel
     writes) is dropped, so a first ``#`` line stays a comment.
     """
-    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
+    with open_text(path) as f:
         for number, line in enumerate(f, start=1):
             text = line.strip()
             if text and not text.startswith("#"):
                 yield number, text
+
+
+def open_text(path: str | os.PathLike[str]) -> TextIO:
+    """``path`` opened as UTF-8 text (byte order mark dropped, other bytes as lone surrogates), if it is a
+    regular file (:func:`regular_file`)."""
+    return open(regular_file(path), encoding="utf-8-sig", errors="surrogateescape")
+
+
+def regular_file(path: str | os.PathLike[str]) -> int:
+    """A read-only descriptor of ``path``, if it is a regular file.
+
+    A FIFO, socket or device would block or never end, a folder or a symlink loop fails with an
+    ``OSError`` deep in the reader: each is a :class:`FileFormatError` naming the path, found before a
+    byte is read (the FIFO opened non-blocking so the check itself cannot hang). A missing file stays
+    ``FileNotFoundError``, as the readers document.
+    """
+    where = os.fspath(path)
+    try:
+        fd = os.open(where, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError as exc:
+        if os.path.islink(where):  # there, but pointing nowhere: not the same as absent
+            target = os.readlink(where)
+            raise FileFormatError(
+                f"{where}: a symbolic link to {target!r}, which does not exist", argument="path"
+            ) from exc
+        raise
+    except OSError as exc:
+        raise FileFormatError(f"{where}: cannot be opened as a file ({exc.strerror})", argument="path") from exc
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        kind = "a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "not a regular file"
+        raise FileFormatError(f"{where}: expected a regular file, got {kind}", argument="path")
+    if hasattr(os, "set_blocking"):
+        os.set_blocking(fd, True)
+    return fd
 
 
 def parse_rows(
@@ -246,7 +285,7 @@ def zero_quaternion(quat: Sequence[float]) -> Problem | None:
     return ("zero quaternion", "zero quaternion") if not any(quat) else None
 
 
-def rotations_from_rows(quat: FloatArray, lines: Sequence[int], where: str) -> Rotation:
+def rotations_from_rows(quat: FloatArray, lines: Sequence[int] | NDArray[np.int64], where: str) -> Rotation:
     """A ``Rotation`` from ``(N, 4)`` xyzw rows read from a file (modified in place).
 
     Rows that are unit to 1e-15 are kept bit for bit (so written rotations come back exactly);
@@ -280,12 +319,28 @@ def all_exact(stamps: Sequence[str], exact: Callable[[str], int | None]) -> list
 def write_rows(
     path: str | os.PathLike[str], header: str | None, stamps: Iterable[str], values: FloatArray, sep: str
 ) -> None:
-    """Write ``stamp<sep>v0<sep>v1…`` per row (floats as ``repr``), after ``header`` when given."""
-    with open(path, "w", encoding="ascii", newline="\n") as f:
+    """Write ``stamp<sep>v0<sep>v1…`` per row (floats as ``repr``), after ``header`` when given; all or
+    nothing (:func:`atomic`)."""
+    with atomic(path) as temporary, open(temporary, "w", encoding="ascii", newline="\n") as f:
         if header is not None:
             f.write(header + "\n")
         for stamp, row in zip(stamps, values.tolist()):
             f.write(stamp + sep + sep.join(map(repr, row)) + "\n")
+
+
+@contextmanager
+def atomic(path: str | os.PathLike[str]) -> Iterator[str]:
+    """A temporary name beside ``path`` to write to, renamed to ``path`` when the block ends normally and
+    removed when it raises (Ctrl-C included): a reader never sees a half-written file under ``path``."""
+    final = os.fspath(path)
+    folder, name = os.path.split(final)
+    temporary = os.path.join(folder, f".{name}.{os.getpid()}.imukit-partial")
+    try:
+        yield temporary
+        os.replace(temporary, final)
+    finally:
+        if os.path.lexists(temporary):
+            os.unlink(temporary)
 
 
 def as_file_error(path: str | os.PathLike[str], make: Callable[[], _T]) -> _T:

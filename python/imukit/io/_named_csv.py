@@ -152,7 +152,7 @@ def detected(path: str | os.PathLike[str], detect: Callable[[list[str]], _T | No
     """``path`` as a table with a one-line header, and what ``detect`` finds in its names; a
     FileFormatError saying ``what`` the header does not name when it finds nothing (the reader called
     directly, or the file changed since the sniff)."""
-    table = read_table(path, None, 1)
+    table = read_table(path, BadLines("raise", None), None, 1)  # one header line: nothing to report
     found = detect(table.headers[0][1]) if table.headers else None
     if found is None:
         raise FileFormatError(f"{os.fspath(path)}: its header does not name {what} columns", argument="path")

@@ -34,6 +34,8 @@ KINDS = {
     "unpaired": "unpaired",
     "missing field": "missing fields",
     "zero stamp": "zero stamps",
+    "truncated": "truncated",
+    "header": "headers",
 }
 
 
@@ -59,7 +61,11 @@ class SkippedLine(NamedTuple):
     - ``zero quaternion``; ``not a rotation`` (KITTI: a rotation block that is not orthonormal);
     - ``unpaired``: a line whose partner in another file was skipped (KITTI poses and times);
     - ``missing field``: a ROS message flagging a field absent (covariance element 0 = -1);
-    - ``zero stamp``: a ROS message with an unset (zero) header stamp.
+    - ``zero stamp``: a ROS message with an unset (zero) header stamp;
+    - ``header``: a first line of numbers taken as the header (``0,1,2,…`` as pandas writes), reported
+      in both modes;
+    - ``truncated``: a last line without newline whose last field has fewer decimals than the line
+      before it (a writer cut off mid-number, ``9.81`` → ``9.``).
 
     Which stamps are kept: the longest strictly increasing subsequence of the stamps of the lines that
     are otherwise valid, the earliest lines among equally long ones."""
@@ -138,7 +144,9 @@ class BadLines:
     def __init__(self, on_bad_line: object, report: object) -> None:
         self.skip = check_on_bad_line(on_bad_line) == "skip"
         if report is not None and not isinstance(report, ReadReport):
-            raise TypeError(f"report: expected an imukit.io.ReadReport or None, got {type(report).__name__}")
+            raise ParameterError(
+                f"expected an imukit.io.ReadReport or None, got {type(report).__name__}", argument="report"
+            )
         self.report = report
         self.records: list[SkippedLine] = []
 
@@ -148,6 +156,10 @@ class BadLines:
         if not self.skip:
             raise FileFormatError(f"{where}, line {line}: {detail}", argument="path")
         self.records.append(SkippedLine(where, line, f"{kind}: {detail}", text))
+
+    def note(self, path: str | os.PathLike[str], line: int, kind: str, detail: str, text: str) -> None:
+        """Record line ``line`` of ``path``, read as something other than data, in either mode."""
+        self.records.append(SkippedLine(os.fspath(path), line, f"{kind}: {detail}", text))
 
     def skipped_in(self, path: str | os.PathLike[str]) -> str:
         """``" (N lines skipped: …)"`` for the records of ``path`` so far, or ``""``: for an error saying

@@ -7,7 +7,11 @@ delimiter          given, or detected from the first non-blank line: ``;`` if it
 header lines       ``header_lines=N``: the first N non-blank lines; None: the leading lines that are
                    ``#`` lines or whose first field is not a number (an exporter's two-line header,
                    a group line over a names line). The names are the last of them; a later ``#``
-                   line is a comment, unless it is the first (EuRoC's ``#timestamp [ns],…``)
+                   line is a comment, unless it is the first (EuRoC's ``#timestamp [ns],…``).
+                   Never guessed silently: a first line with text in the same fields as the next
+                   line's is data (a text column, no header); a first line of integers only above a
+                   line with decimals is pandas' ``0,1,2,…`` (or ``1,2,…``) header, taken and
+                   reported as ``header``, or else refused as ambiguous
 names              by exact text after stripping white space, looked up in the names line, then in
                    the other header lines (``"Time [s]"`` on a group line above ``";w;x;y;z"``)
 trailing delimiter a names line or data lines ending in the delimiter (``a;b;c;``) have one empty
@@ -32,6 +36,7 @@ from imukit._errors import FileFormatError, ParameterError
 from imukit.io._format import is_number
 from imukit.io._lines import (
     Problem,
+    open_text,
     RowCheck,
     Rows,
     Split,
@@ -186,18 +191,20 @@ def check_header_lines(value: object) -> int | None:
     return value
 
 
-def read_table(path: str | os.PathLike[str], delimiter: str | None, header_lines: int | None) -> Table:
-    """``path`` split into header and data lines (module doc). FileFormatError: no data lines, or a
-    header whose field count differs from the data lines'."""
+def read_table(
+    path: str | os.PathLike[str], bad: BadLines, delimiter: str | None, header_lines: int | None
+) -> Table:
+    """``path`` split into header and data lines (module doc); a header taken from integers is noted in
+    ``bad``. FileFormatError: no data lines, an ambiguous first line, or a header whose field count
+    differs from the data lines'."""
     if delimiter is not None:
         choice(delimiter, "delimiter", DELIMITERS)
     where = os.fspath(path)
-    # utf-8-sig: a byte order mark (Excel's "CSV UTF-8") would otherwise start the header's first name.
-    with open(path, encoding="utf-8-sig", errors="surrogateescape") as f:
+    with open_text(path) as f:
         numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
     d = delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else "")
     plain = str.split if d == " " else (lambda text: text.split(d))
-    count = header_lines if header_lines is not None else _leading_header(numbered, plain)
+    count = header_lines if header_lines is not None else _leading_header(numbered, plain, where, bad)
     head, body = numbered[:count], numbered[count:]
     data = [(n, text) for n, text in body if not text.startswith("#")]
     if not data:
@@ -225,14 +232,37 @@ def read_table(path: str | os.PathLike[str], delimiter: str | None, header_lines
     return Table(where, data, plain, headers, width)
 
 
-def _leading_header(numbered: list[tuple[int, str]], split: Split) -> int:
-    """How many leading lines are header: ``#`` lines, or lines whose first field is not a number.
-    When that is every line, the first line alone (its data lines' numbers are unreadable, e.g. decimal
-    commas, and each is reported as such)."""
+def _leading_header(numbered: list[tuple[int, str]], split: Split, where: str, bad: BadLines) -> int:
+    """How many leading lines are header: ``#`` lines, or lines whose first field is not a number, each
+    first line judged against the next line (module doc). When every line would be header, the first
+    alone (its data lines' numbers are unreadable, e.g. decimal commas, and each is reported as such)."""
+    data = [(n, text) for n, text in numbered if not text.startswith("#")]
+    if data and data[0] == numbered[0] and len(data) > 1:
+        (line, text), (_, below) = data[0], data[1]
+        kinds, below_kinds = [_kind(f) for f in split(text)], [_kind(f) for f in split(below)]
+        if "text" in kinds and kinds == below_kinds and kinds.count("text") < len(kinds):
+            return 0  # a text column (a sensor name): the first line is a sample like the next
+        if set(kinds) == {"int"} and "float" in below_kinds:
+            if [int(f) for f in split(text)] not in (list(range(len(kinds))), list(range(1, len(kinds) + 1))):
+                raise FileFormatError(
+                    f"{where}, line {line}: {text!r} is integers only while the next line is not: a header or the "
+                    "first sample? Start a header with '#', or write the sample's numbers with a decimal point",
+                    argument="path",
+                )
+            detail = f"taken as the header: the column numbers {text!r}, above line {data[1][0]} of other numbers"
+            bad.note(where, line, "header", detail, text)
+            return 1
     for k, (_, text) in enumerate(numbered):
         if not text.startswith("#") and is_number(split(text)[0] if split(text) else ""):
             return k
     return min(len(numbered), 1)
+
+
+def _kind(field: str) -> str:
+    """``int``, ``float`` or ``text``: how a field reads."""
+    if integer_stamp(field.strip()) is not None:
+        return "int"
+    return "float" if is_number(field.strip()) else "text"
 
 
 def _drop_trailing(fields: list[str], d: str, text: str) -> list[str]:

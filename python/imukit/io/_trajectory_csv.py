@@ -52,7 +52,7 @@ def trajectory_csv(
     wanted["quaternion_columns"] = quaternion_columns
     for name, given in wanted.items():
         check_columns(given, name, {"time_column": 1, "position_columns": 3, "quaternion_columns": 4}[name])
-    table = read_table(path, delimiter, header_lines)
+    table = read_table(path, bad, delimiter, header_lines)
     columns = [table.column(c, name) for name, names in wanted.items() for c in names]
 
     def check(fields: list[str], row: list[float]) -> Problem | None:

@@ -32,7 +32,7 @@ def tumvi_folder(folder: str | os.PathLike[str], bad: BadLines) -> tuple[ImuData
     """:func:`read_tumvi` reporting to ``bad``."""
     root = mav0_root(folder)
     mocap = root / MOCAP_CSV
-    return euroc_imu(root / IMU_CSV, bad), tumvi_mocap(mocap, bad) if mocap.is_file() else None
+    return euroc_imu(root / IMU_CSV, bad), tumvi_mocap(mocap, bad) if os.path.lexists(mocap) else None
 
 
 @public_reader(tumvi_folder)
