@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from imukit._errors import ParameterError
 from imukit.cli._common import (
@@ -34,6 +33,7 @@ from imukit.preint import (
     concatenate,
     preintegrate_windows,
     regular_boundaries,
+    window_arrays,
 )
 
 WINDOWS_PER_CALL = 2_000  # a progress step; each window is computed alone, so the split changes nothing
@@ -138,30 +138,12 @@ def windows(imu: ImuData, edges: NDArray[Any], noise: ImuNoise, scheme: str) -> 
     return concatenate(pieces)
 
 
-def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
-    """The windows as named arrays (what the ``.npz`` holds); ``t_start_ns``, ``t_end_ns`` (int64,
-    exact) when the stamps are ns."""
-    start, end = record.t_start_ns, record.t_end_ns
-    exact = {} if start is None or end is None else {"t_start_ns": start, "t_end_ns": end}
-    return {
-        **exact,
-        "t_start": record.t_start,
-        "t_end": record.t_end,
-        "delta_t": record.delta_t,
-        "dR_xyzw": Rotation.from_matrix(record.delta_rotation).as_quat(),
-        "dv": record.delta_velocity,
-        "dp": record.delta_position,
-        "covariance": record.covariance,
-        "bias_jacobian": record.bias_jacobian,
-    }
-
-
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out")
     imu, _ = read_imu(args)
     noise = noise_for(args.path, args.noise)
     edges = boundaries(imu, args.window)
-    table = arrays(windows(imu, edges, noise, args.scheme))
+    table = window_arrays(windows(imu, edges, noise, args.scheme))
     dp = np.linalg.norm(table["dp"], axis=1)
     largest = int(np.argmax(dp))
     out.print(

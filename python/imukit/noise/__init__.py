@@ -1,4 +1,5 @@
-"""Allan-variance identification of IMU noise: :func:`allan_deviation`, :func:`fit_allan`, :func:`plot_allan`.
+"""Allan-variance identification of IMU noise: :func:`allan_deviation`, :func:`fit_allan`, :func:`plot_allan`;
+:func:`mean_rate_hz` (the rate they take).
 
 =====================  ===========================================================================
 input                  a rate signal sampled at a constant ``rate`` [Hz]: a gyro at rest [rad/s] or an
@@ -19,8 +20,17 @@ units                  N and K are the continuous densities of :class:`imukit.Im
 0.001
 """
 
-from imukit.noise._allan import AllanDeviation, allan_deviation
+from imukit.noise._allan import AllanDeviation, allan_deviation, mean_rate_hz
 from imukit.noise._fit import FLICKER_FACTOR, AllanFit, fit_allan, to_imu_noise
 from imukit.noise._plot import plot_allan
 
-__all__ = ["FLICKER_FACTOR", "AllanDeviation", "AllanFit", "allan_deviation", "fit_allan", "plot_allan", "to_imu_noise"]
+__all__ = [
+    "FLICKER_FACTOR",
+    "AllanDeviation",
+    "AllanFit",
+    "allan_deviation",
+    "fit_allan",
+    "mean_rate_hz",
+    "plot_allan",
+    "to_imu_noise",
+]
