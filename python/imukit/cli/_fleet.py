@@ -117,7 +117,9 @@ def run(args: argparse.Namespace) -> int:
     failed = [row for row in rows if row["status"] == "failed"]
     out.print(f"{len(rows)} recordings: {len(rows) - len(failed)} ok, {len(failed)} failed", markup=False)
     if failed:
-        listing = Table("path", "error", title="failed recordings")
+        listing = Table(title="failed recordings")
+        listing.add_column("path", no_wrap=True)  # whole, to be copied; the error wraps
+        listing.add_column("error")
         for row in failed:
             listing.add_row(row["path"], row["error"])
         out.print(listing)
