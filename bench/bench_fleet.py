@@ -65,9 +65,8 @@ def main() -> None:
     ok = table.column("status").to_pylist().count("ok")
     print(f"# imukit.fleet report: {args.logs} logs of {args.seconds:g} s at {args.rate:g} Hz ({samples} samples)")
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores; logs written in {written:.1f} s")
-    print(
-        f"serial loop, 1 process : {wall_serial:8.2f} s  {args.logs / wall_serial:8.2f} logs/s  {samples / wall_serial:12.0f} samples/s"
-    )
+    rates = f"{args.logs / wall_serial:8.2f} logs/s  {samples / wall_serial:12.0f} samples/s"
+    print(f"serial loop, 1 process : {wall_serial:8.2f} s  {rates}")
     print(
         f"LocalCluster, {args.workers} workers: {wall_cluster:8.2f} s  {args.logs / wall_cluster:8.2f} logs/s  "
         f"{samples / wall_cluster:12.0f} samples/s  ({ok} ok; cluster start-up {up:.1f} s, not counted)"
