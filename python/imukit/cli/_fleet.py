@@ -21,7 +21,8 @@ job's numbers with units in the column names) and, for jobs with rows, a dataset
 log (DIR/JOB/log=<id>/part-0.parquet).
 
 Jobs: report (duration, rate and jitter, gaps, skipped lines, saturation, rest segments, bias and
-noise density at rest, Allan fit), preintegrate (windows of --window-s seconds as rows).
+noise density at rest, Allan fit), filter (attitude per sample as rows, RMSE against the log's
+ground truth), preintegrate (windows of --window-s seconds as rows).
 INPUTS: recording files or folders, globs ('logs/*.csv'), folders of recordings (every recording
 found under them), or a manifest (.parquet, or .csv with a `path` column; its other columns are
 copied into the summary). Bad lines in inputs are skipped and counted.
@@ -41,6 +42,9 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
         "--allan-min-s",
         {"type": positive, "metavar": "S", "help": "report: shortest rest segment given an Allan fit (default 60)"},
     ),
+    "method": ("--method", {"choices": ("mahony", "madgwick"), "help": "filter: the filter (default mahony)"}),
+    "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
+    "max_dt": ("--max-dt", {"type": positive, "metavar": "S", "help": "filter: longest truth gap bridged (0.02)"}),
     "window_s": ("--window-s", {"type": positive, "metavar": "S", "help": "preintegrate: window length (default 0.1)"}),
     "scheme": ("--scheme", {"metavar": "NAME", "help": "preintegrate: the scheme (default: the core's)"}),
     "noise_yaml": ("--noise", {"metavar": "YAML", "help": "preintegrate: Kalibr imu.yaml (default: sensor.yaml)"}),
@@ -50,7 +54,7 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
 def add(commands: Any) -> argparse.ArgumentParser:
     p: argparse.ArgumentParser = commands.add_parser(
         "fleet",
-        help="run a job (report, preintegrate) over many recordings on Dask; Parquet results",
+        help="run a job (report, filter, preintegrate) over many recordings on Dask; Parquet results",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -1,41 +1,19 @@
-"""The ground truth at the IMU's stamps, by one rule for every command: :func:`imukit.eval.associate`
-(position and velocity linear, rotation slerp, never across a truth gap longer than ``max_dt``)."""
+"""The ground truth at the IMU's stamps (:func:`imukit.eval.truth_at_imu`), its failure as an option."""
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.spatial.transform import Rotation
-
 from imukit._errors import ParameterError
 from imukit.cli._common import CliError
-from imukit.eval import Association, associate
+from imukit.eval import Association, truth_at_imu
 from imukit.imu import ImuData
 from imukit.state import Trajectory
 
 
 def truth_at(truth: Trajectory, imu: ImuData, *, max_dt: float, option: str) -> Association:
-    """``truth`` at ``imu``'s stamps where :func:`imukit.eval.associate` pairs them with ``max_dt``;
-    ``.mask`` marks the IMU samples that have it and ``.n_outside_span`` / ``.n_in_gaps`` count the
-    others. A truth without velocity gets it from its positions' central differences. No sample
-    paired: a CliError naming ``option`` (the command's option that sets ``max_dt``)."""
-    if truth.velocity is None and len(truth) > 1:
-        velocity = np.gradient(truth.position, truth.t, axis=0)
-        t = None if truth.t_ns is not None else truth.t
-        truth = Trajectory(
-            t,
-            truth.position,
-            velocity,
-            truth.rotation,
-            t_ns=truth.t_ns,
-            gyro_bias=truth.gyro_bias,
-            accel_bias=truth.accel_bias,
-        )
-    n = len(imu)
-    stamps = Trajectory(
-        None if imu.t_ns is not None else imu.t, np.zeros((n, 3)), None, Rotation.identity(n), t_ns=imu.t_ns
-    )
+    """:func:`imukit.eval.truth_at_imu`; no sample paired: a CliError naming ``option`` (the command's
+    option that sets ``max_dt``)."""
     try:
-        return associate(stamps, truth, max_dt=max_dt)
+        return truth_at_imu(truth, imu, max_dt=max_dt)
     except ParameterError as exc:
         raise CliError(
             f"{option}: no IMU sample lies where the ground truth can be interpolated (truth "

@@ -1,4 +1,4 @@
-"""The jobs :func:`imukit.fleet.run` knows by name (:data:`JOBS`), and ``preintegrate``.
+"""The jobs :func:`imukit.fleet.run` knows by name (:data:`JOBS`): ``filter`` and ``preintegrate``.
 
 A job is ``job(path, **options) -> JobOutput``: a plain function of one recording. ``preintegrate``
 cuts the log into windows of ``window_s`` seconds (:func:`imukit.preint.regular_boundaries`),
@@ -6,6 +6,14 @@ preintegrates them (:func:`imukit.preintegrate_windows`, the noise from ``noise_
 EuRoC ``sensor.yaml`` beside the log: :func:`imukit.io.find_noise_model`) and returns one row per
 window (:func:`imukit.preint.window_arrays`; the 9×9 covariance and 9×6 bias Jacobian flattened
 row-major), for learning datasets.
+
+``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"`` or ``"madgwick"``,
+default options) over the log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s``
+per sample and, where the log has ground truth, the errors against it
+(:func:`imukit.eval.attitude_error` with the truth at the IMU's stamps,
+:func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters cannot observe
+heading): ``total_deg``, ``heading_deg``, ``inclination_deg`` per sample (NaN where the truth has
+none) and their RMSE as scalars.
 """
 
 from __future__ import annotations
@@ -16,13 +24,19 @@ from typing import Any
 
 import numpy as np
 
-from imukit.fleet._load import JobOutput, load
+from imukit._errors import ParameterError
+from imukit.eval import attitude_error, truth_at_imu
+from imukit.filters import Madgwick, Mahony
+from imukit.fleet._load import JobOutput, Scalar, load
 from imukit.fleet._report import report
 from imukit.io import find_noise_model
 from imukit.io._report import OnBadLine
 from imukit.preint import PreintParams, preintegrate_windows, regular_boundaries, window_arrays
 
-__all__ = ["JOBS", "preintegrate"]
+__all__ = ["FILTERS", "JOBS", "attitude", "preintegrate"]
+
+FILTERS = {"mahony": Mahony, "madgwick": Madgwick}
+"""The filters the ``filter`` job runs, by ``method`` name."""
 
 
 def preintegrate(
@@ -54,5 +68,41 @@ def preintegrate(
     )
 
 
-JOBS: dict[str, Callable[..., JobOutput]] = {"report": report, "preintegrate": preintegrate}
+def attitude(
+    path: str | os.PathLike[str],
+    *,
+    method: str = "mahony",
+    world: str = "ENU",
+    max_dt: float = 0.02,
+    on_bad_line: OnBadLine = "skip",
+    csv: Mapping[str, Any] | None = None,
+) -> JobOutput:
+    """The ``filter`` job: attitude of the recording at ``path`` and its error against the log's ground
+    truth (module doc); ``max_dt`` [s]: the longest truth gap interpolated across."""
+    if method not in FILTERS:
+        raise ParameterError(f"expected one of {', '.join(FILTERS)}, got {method!r}", argument="method")
+    imu, truth, _ = load(path, on_bad_line=on_bad_line, csv=csv)
+    result = FILTERS[method](world=world).run(imu)
+    rows = {"t_s": imu.t, "q_xyzw": result.rotation.as_quat(), "gyro_bias_rad_s": result.gyro_bias}
+    scalars: dict[str, Scalar] = {
+        "samples": len(imu),
+        "final_gyro_bias_rad_s": float(np.linalg.norm(result.gyro_bias[-1])),
+    }
+    if truth is not None:
+        paired = truth_at_imu(truth, imu, max_dt=max_dt)
+        reference = np.full((len(imu), 4), np.nan)  # NaN: no truth there, not scored
+        reference[paired.mask] = paired.reference.rotation.as_quat()
+        error = attitude_error(result.rotation, reference, world=world, align_heading=True)
+        rmse = error.rmse(degrees=True)
+        scalars |= {
+            "rmse_total_deg": rmse.total,
+            "rmse_heading_deg": rmse.heading,
+            "rmse_inclination_deg": rmse.inclination,
+            "scored_samples": rmse.n_samples,
+        }
+        rows |= {name: np.degrees(getattr(error, name)) for name in ("total", "heading", "inclination")}
+    return JobOutput(scalars, rows)
+
+
+JOBS: dict[str, Callable[..., JobOutput]] = {"report": report, "filter": attitude, "preintegrate": preintegrate}
 """The jobs by name, as ``imukit fleet JOB`` and :func:`imukit.fleet.run` take them."""
