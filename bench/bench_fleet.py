@@ -3,10 +3,12 @@
 Usage: ``python bench/bench_fleet.py [--logs 1000] [--seconds 60] [--rate 200] [--workers N]``.
 Writes ``--logs`` simulated static logs (EuRoC folders, the noise of an ADIS-class IMU) to a
 temporary folder, then times (1) ``imukit.fleet.report`` over all of them in a loop in this
-process and (2) ``imukit.fleet.run`` on a ``LocalCluster`` of ``--workers`` processes started
-beforehand (its start-up is printed apart). Prints logs/s and samples/s of each, the speed-up, the
+process, before and after (the faster counts: other load on a shared machine only slows), and
+(2) ``imukit.fleet.run`` on a ``LocalCluster`` of ``--workers`` processes started beforehand (its
+start-up is printed apart). Prints logs/s and samples/s of each, the speed-up, the
 Dask overhead per log, ``(wall_cluster * workers - wall_serial) / logs`` (the time a worker spent
-on a log beyond the job itself), and the peak RSS of each worker and of this process.
+on a log beyond the job itself), the wall time per task of as many no-op tasks (Dask's own cost,
+free of the job), and the peak RSS of each worker and of this process.
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ from imukit import fleet, sim
 
 def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
+
+
+def _noop(k: int) -> int:
+    return k
 
 
 def main() -> None:
@@ -47,9 +53,15 @@ def main() -> None:
         written = time.perf_counter() - start
         samples = args.logs * (int(args.seconds * args.rate) + 1)
 
-        start = time.perf_counter()
-        serial = [fleet.report(path) for path in sorted(folder.iterdir())]
-        wall_serial = time.perf_counter() - start
+        paths = sorted(folder.iterdir())
+
+        def serial_loop() -> float:
+            start = time.perf_counter()
+            for path in paths:
+                fleet.report(path)
+            return time.perf_counter() - start
+
+        before = serial_loop()
 
         start = time.perf_counter()
         with LocalCluster(
@@ -61,6 +73,10 @@ def main() -> None:
                 table = fleet.run("report", str(folder / "log*"), out=folder / "out", client=client)
                 wall_cluster = time.perf_counter() - start
                 rss = client.run(_peak_rss_mb)
+                start = time.perf_counter()
+                client.gather(client.map(_noop, range(args.logs)))
+                per_task = (time.perf_counter() - start) / args.logs
+        wall_serial = min(before, serial_loop())  # before and after: other load on a shared machine
 
     ok = table.column("status").to_pylist().count("ok")
     print(f"# imukit.fleet report: {args.logs} logs of {args.seconds:g} s at {args.rate:g} Hz ({samples} samples)")
@@ -73,8 +89,8 @@ def main() -> None:
     )
     print(f"speed-up: {wall_serial / wall_cluster:.2f}x")
     print(f"Dask overhead per log: {1e3 * (wall_cluster * args.workers - wall_serial) / args.logs:.1f} ms")
+    print(f"Dask round trip of a no-op task: {1e3 * per_task:.2f} ms per task ({args.logs} tasks)")
     print(f"peak RSS: workers {', '.join(f'{v:.0f}' for v in rss.values())} MB; this process {_peak_rss_mb():.0f} MB")
-    assert len(serial) == args.logs
 
 
 if __name__ == "__main__":

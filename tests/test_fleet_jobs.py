@@ -52,3 +52,16 @@ def test_preintegrate_job_rows_are_the_windows(moving: tuple[Path, ik.ImuData, i
     assert output.scalars["windows"] == 20 and output.rows is not None
     np.testing.assert_array_equal(output.rows["dp"], record.delta_position)
     np.testing.assert_array_equal(output.rows["covariance"], record.covariance.reshape(20, 81))
+
+
+def test_integrate_job_is_dead_reckoning_from_the_truth(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
+    folder, imu, truth = moving
+    scalars = JOBS["integrate"](folder, bias_from_truth=True).scalars
+    # The same integration started from the simulated truth's first state with its true bias.
+    direct = ik.integrate(imu, initial=truth.state(0), bias=ik.ImuBias(truth.gyro_bias[0], truth.accel_bias[0]))
+    final = float(np.linalg.norm(direct.position[-1] - truth.position[-1]))
+    assert scalars["samples"] == len(imu) and scalars["scored_samples"] == len(imu)
+    assert scalars["final_position_error_m"] == pytest.approx(final, rel=1e-6)
+    assert 0.0 < final < 5.0  # white noise and a bias random walk over 20 s, true initial bias
+    with pytest.raises(ik.ParameterError, match="no ground truth"):
+        JOBS["integrate"](next(folder.rglob("imu0/data.csv")))

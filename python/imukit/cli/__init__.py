@@ -34,7 +34,7 @@ _COMMANDS = (add_integrate, add_preintegrate, add_filter, add_simulate, add_alla
 _DESCRIPTION = """\
 IMU kinematics from the command line: integrate a recording into a trajectory, preintegrate it
 into windows, run an attitude filter, simulate a sensor, identify its noise (Allan), score a
-trajectory against ground truth, or run the demo.
+trajectory against ground truth, run a job over a fleet of logs on Dask, or run the demo.
 
 {inputs}
 Frames and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity

@@ -22,7 +22,8 @@ log (DIR/JOB/log=<id>/part-0.parquet).
 
 Jobs: report (duration, rate and jitter, gaps, skipped lines, saturation, rest segments, bias and
 noise density at rest, Allan fit), filter (attitude per sample as rows, RMSE against the log's
-ground truth), preintegrate (windows of --window-s seconds as rows).
+ground truth), integrate (dead reckoning from the log's ground truth, ATE / RPE against it; the
+trajectory as rows), preintegrate (windows of --window-s seconds as rows).
 INPUTS: recording files or folders, globs ('logs/*.csv'), folders of recordings (every recording
 found under them), or a manifest (.parquet, or .csv with a `path` column; its other columns are
 copied into the summary). Bad lines in inputs are skipped and counted.
@@ -44,9 +45,17 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
     ),
     "method": ("--method", {"choices": ("mahony", "madgwick"), "help": "filter: the filter (default mahony)"}),
     "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
-    "max_dt": ("--max-dt", {"type": positive, "metavar": "S", "help": "filter: longest truth gap bridged (0.02)"}),
+    "max_dt": (
+        "--max-dt",
+        {"type": positive, "metavar": "S", "help": "filter, integrate: longest truth gap bridged (0.02)"},
+    ),
     "window_s": ("--window-s", {"type": positive, "metavar": "S", "help": "preintegrate: window length (default 0.1)"}),
-    "scheme": ("--scheme", {"metavar": "NAME", "help": "preintegrate: the scheme (default: the core's)"}),
+    "scheme": ("--scheme", {"metavar": "NAME", "help": "integrate, preintegrate: the scheme (default: the core's)"}),
+    "bias_from_truth": (
+        "--bias-from-truth",
+        {"action": "store_const", "const": True, "help": "integrate: correct by the truth's initial biases"},
+    ),
+    "rpe_delta_s": ("--rpe-delta-s", {"type": positive, "metavar": "S", "help": "integrate: RPE interval (default 1)"}),
     "noise_yaml": ("--noise", {"metavar": "YAML", "help": "preintegrate: Kalibr imu.yaml (default: sensor.yaml)"}),
 }
 
@@ -54,7 +63,7 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
 def add(commands: Any) -> argparse.ArgumentParser:
     p: argparse.ArgumentParser = commands.add_parser(
         "fleet",
-        help="run a job (report, filter, preintegrate) over many recordings on Dask; Parquet results",
+        help="run a job (report, filter, integrate, preintegrate) over many recordings on Dask; Parquet results",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -4,7 +4,8 @@
 jobs                   plain functions on one recording (a path), usable without Dask, returning
                        :class:`JobOutput` (scalars with units in their names, optional row arrays):
                        :func:`report` (timing, gaps, skipped lines, saturation, rest, bias, noise),
-                       :func:`preintegrate` (windows as rows); :data:`JOBS` maps names to them
+                       ``filter``, ``integrate`` and :func:`preintegrate` (rows per sample or
+                       window); :data:`JOBS` maps names to them
 :func:`run`            ``run(job, inputs, *, out, client=None, **job_options)`` → ``pyarrow.Table``:
                        one Dask task per log, ``summary.parquet`` and a dataset partitioned by log
                        under ``out``; failures become rows, a re-run skips the logs already done

@@ -1,4 +1,5 @@
-"""The jobs :func:`imukit.fleet.run` knows by name (:data:`JOBS`): ``filter`` and ``preintegrate``.
+"""The jobs :func:`imukit.fleet.run` knows by name (:data:`JOBS`): ``filter``, ``integrate``,
+``preintegrate`` (``report``: :mod:`imukit.fleet._report`).
 
 A job is ``job(path, **options) -> JobOutput``: a plain function of one recording. ``preintegrate``
 cuts the log into windows of ``window_s`` seconds (:func:`imukit.preint.regular_boundaries`),
@@ -25,15 +26,17 @@ from typing import Any
 import numpy as np
 
 from imukit._errors import ParameterError
-from imukit.eval import attitude_error, truth_at_imu
+from imukit.eval import ape, attitude_error, rpe, truth_at_imu
 from imukit.filters import Madgwick, Mahony
 from imukit.fleet._load import JobOutput, Scalar, load
 from imukit.fleet._report import report
+from imukit.imu import ImuBias
 from imukit.io import find_noise_model
 from imukit.io._report import OnBadLine
 from imukit.preint import PreintParams, preintegrate_windows, regular_boundaries, window_arrays
+from imukit.strapdown import integrate
 
-__all__ = ["FILTERS", "JOBS", "attitude", "preintegrate"]
+__all__ = ["FILTERS", "JOBS", "attitude", "dead_reckoning", "preintegrate"]
 
 FILTERS = {"mahony": Mahony, "madgwick": Madgwick}
 """The filters the ``filter`` job runs, by ``method`` name."""
@@ -104,5 +107,55 @@ def attitude(
     return JobOutput(scalars, rows)
 
 
-JOBS: dict[str, Callable[..., JobOutput]] = {"report": report, "filter": attitude, "preintegrate": preintegrate}
+def dead_reckoning(
+    path: str | os.PathLike[str],
+    *,
+    scheme: str | None = None,
+    bias_from_truth: bool = False,
+    rpe_delta_s: float = 1.0,
+    max_dt: float = 0.02,
+    on_bad_line: OnBadLine = "skip",
+    csv: Mapping[str, Any] | None = None,
+) -> JobOutput:
+    """The ``integrate`` job: dead reckoning of the recording at ``path`` from its ground truth's state
+    at the first IMU sample inside it (with the truth's biases when ``bias_from_truth``), scored
+    against that truth without alignment: ATE (:func:`imukit.eval.ape`) and RPE over ``rpe_delta_s``
+    seconds (:func:`imukit.eval.rpe`). Rows: ``t_s``, ``position_m``, ``velocity_m_s``, ``q_xyzw``."""
+    imu, truth, _ = load(path, on_bad_line=on_bad_line, csv=csv)
+    if truth is None:
+        raise ParameterError(f"{os.fspath(path)} has no ground truth to start from and score against", argument="path")
+    paired = truth_at_imu(truth, imu, max_dt=max_dt)
+    first = int(np.argmax(paired.mask))  # the first IMU sample the truth covers
+    start = paired.reference.state(0)
+    bias = None
+    if bias_from_truth:
+        if paired.reference.gyro_bias is None or paired.reference.accel_bias is None:
+            raise ParameterError(f"{os.fspath(path)}: the ground truth has no biases", argument="bias_from_truth")
+        bias = ImuBias(paired.reference.gyro_bias[0], paired.reference.accel_bias[0])
+    samples = imu[first:]
+    schemes = {} if scheme is None else {"scheme": scheme}
+    trajectory = integrate(samples, initial=start, bias=bias, **schemes)
+    ate = ape(trajectory, truth, align="none", max_dt=max_dt)
+    drift = rpe(trajectory, truth, delta=rpe_delta_s, unit="s", max_dt=max_dt)
+    scalars: dict[str, Scalar] = {
+        "samples": len(samples),
+        "final_position_error_m": float(np.linalg.norm(ate.estimate.position[-1] - ate.reference.position[-1])),
+        "ate_rmse_m": ate.translation_stats.rmse,
+        "ate_max_m": ate.translation_stats.max,
+        "ate_rotation_rmse_deg": ate.rotation_stats.rmse,
+        "rpe_rmse_m": drift.translation_stats.rmse,
+        "scored_samples": ate.translation_stats.n,
+    }
+    rows = {"t_s": trajectory.t, "position_m": trajectory.position, "q_xyzw": trajectory.rotation.as_quat()}
+    if trajectory.velocity is not None:
+        rows["velocity_m_s"] = trajectory.velocity
+    return JobOutput(scalars, rows)
+
+
+JOBS: dict[str, Callable[..., JobOutput]] = {
+    "report": report,
+    "filter": attitude,
+    "integrate": dead_reckoning,
+    "preintegrate": preintegrate,
+}
 """The jobs by name, as ``imukit fleet JOB`` and :func:`imukit.fleet.run` take them."""
