@@ -30,7 +30,8 @@ copied into the summary). Bad lines in inputs are skipped and counted.
 Without --scheduler a local cluster of --workers worker processes runs the tasks; with it, an
 existing Dask cluster (a `dask scheduler`, dask-jobqueue on SLURM, Kubernetes) does.
 Re-running with the same --out skips the recordings already done (same path, size and mtime).
-Exit code 1 when some recording failed (they are listed).
+Writes: DIR/summary.parquet, DIR/JOB/log=<id>/part-0.parquet. Prints the counts and a table of the
+failed recordings; exit code 1 when some recording failed.
 
 Example:
   imukit fleet report 'logs/*' --out fleet_report --gyro-range 34.9"""
