@@ -60,7 +60,8 @@ def _detected(path: Path) -> bool:
 
 
 def _recordings(folder: Path) -> Iterator[Path]:
-    """Paths under ``folder`` that a format detects; a detected folder is not searched further."""
+    """Paths under ``folder`` that a format detects, folder by folder from the top (its recording
+    folders, then its recording files, each sorted); a detected folder is not searched further."""
     for root, dirs, files in os.walk(folder):
         dirs.sort()
         for name in list(dirs):
