@@ -23,7 +23,7 @@ NOISE = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
 RATE = 200.0  # 1e9 / RATE is a whole number of ns: float and integer stamps agree exactly
 DURATION = 20.0
 SEED = 3
-COMMANDS = ("integrate", "preintegrate", "filter", "simulate", "allan", "evaluate", "demo")
+COMMANDS = ("integrate", "preintegrate", "filter", "simulate", "allan", "evaluate", "fleet", "demo")
 
 
 def cli(*args: str | os.PathLike[str], code: int = 0) -> subprocess.CompletedProcess[str]:

@@ -24,6 +24,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
+import imukit.fleet
 from imukit.io import ReadReport, SkippedLine
 
 MODULES = [
@@ -32,6 +33,7 @@ MODULES = [
     "imukit.euler",
     "imukit.eval",
     "imukit.filters",
+    "imukit.fleet",
     "imukit.imu",
     "imukit.io",
     "imukit.noise",
@@ -211,6 +213,11 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "FilterResult": _filter_result,
     "RobustState": lambda: _robust_result().state,
     "RobustResult": _robust_result,
+    # imukit.fleet: what a Dask task takes and returns
+    "Input": lambda: ik.fleet.Input("logs/unit7.csv", {"unit_id": "unit-7", "km": 12.5}),
+    "JobOutput": lambda: ik.fleet.JobOutput({"samples": 3, "rate_hz": 200.0, "error": None}, {"dp": np.eye(3)}),
+    "RestSegment": lambda: ik.fleet.RestSegment(10, 250, 1.195),
+    "Recording": lambda: ik.fleet.Recording(*_sim(), _report()),
     # Exceptions carry their fields.
     **{
         name: _error(getattr(ik, name))
@@ -311,6 +318,13 @@ def test_pickle_round_trip(name: str) -> None:
     assert type(original).__name__ == name
     for protocol in (2, pickle.HIGHEST_PROTOCOL):
         assert_same(original, pickle.loads(pickle.dumps(original, protocol=protocol)))
+
+
+def test_merged_preintegration_round_trip() -> None:
+    imu = _sim()[0]
+    merged = ik.preintegrate(imu[:150], noise=NOISE).merge(ik.preintegrate(imu[149:], noise=NOISE))
+    assert_same(merged, pickle.loads(pickle.dumps(merged)))
+    assert_same(merged, copy.deepcopy(merged), copied=True)
 
 
 @pytest.mark.parametrize("name", _cases())

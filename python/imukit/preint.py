@@ -72,6 +72,7 @@ __all__ = [
     "reintegrate",
     "residual",
     "residual_jacobians",
+    "window_arrays",
 ]
 
 corrected = _preint_math.corrected
@@ -653,3 +654,22 @@ def regular_boundaries(imu: ImuData, period: float) -> NDArray[Any]:
     if imu.t_ns is not None:
         return np.asarray(imu.t_ns[0] + np.arange(count + 1, dtype=np.int64) * step, dtype=np.int64)
     return np.asarray(imu.t[0] + np.arange(count + 1) * window_s)
+
+
+def window_arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
+    """The windows as named arrays (what ``imukit preintegrate --out x.npz`` writes,
+    the rows of the fleet job ``preintegrate``); ``t_start_ns``, ``t_end_ns`` (int64,
+    exact) when the stamps are ns."""
+    start, end = record.t_start_ns, record.t_end_ns
+    exact = {} if start is None or end is None else {"t_start_ns": start, "t_end_ns": end}
+    return {
+        **exact,
+        "t_start": record.t_start,
+        "t_end": record.t_end,
+        "delta_t": record.delta_t,
+        "dR_xyzw": Rotation.from_matrix(record.delta_rotation).as_quat(),
+        "dv": record.delta_velocity,
+        "dp": record.delta_position,
+        "covariance": record.covariance,
+        "bias_jacobian": record.bias_jacobian,
+    }

@@ -21,6 +21,7 @@ from imukit.cli._common import OTHER_LAYOUTS, error_line
 from imukit.cli._demo import add as add_demo
 from imukit.cli._evaluate import add as add_evaluate
 from imukit.cli._filter import add as add_filter
+from imukit.cli._fleet import add as add_fleet
 from imukit.cli._integrate import add as add_integrate
 from imukit.cli._preintegrate import add as add_preintegrate
 from imukit.cli._simulate import add as add_simulate
@@ -28,12 +29,12 @@ from imukit.cli._simulate import add as add_simulate
 __all__ = ["build_parser", "main"]
 
 # Each adds its parser, with `run` as the default of `args.run`; in the order `imukit --help` lists them.
-_COMMANDS = (add_integrate, add_preintegrate, add_filter, add_simulate, add_allan, add_evaluate, add_demo)
+_COMMANDS = (add_integrate, add_preintegrate, add_filter, add_simulate, add_allan, add_evaluate, add_fleet, add_demo)
 
 _DESCRIPTION = """\
 IMU kinematics from the command line: integrate a recording into a trajectory, preintegrate it
 into windows, run an attitude filter, simulate a sensor, identify its noise (Allan), score a
-trajectory against ground truth, or run the demo.
+trajectory against ground truth, run a job over a fleet of logs on Dask, or run the demo.
 
 {inputs}
 Frames and units are imukit's everywhere (docs/conventions.md): SI units, world z up, gravity

@@ -10,7 +10,16 @@ from typing import Any
 from imukit.cli._common import add_input_options, err, note, out, output_path, positive, read_imu, wrote
 from imukit.imu import ImuData
 from imukit.io import write_kalibr_imu
-from imukit.noise import UNRESOLVED, AllanDeviation, AllanFit, allan_deviation, fit_allan, plot_allan, to_imu_noise
+from imukit.noise import (
+    UNRESOLVED,
+    AllanDeviation,
+    AllanFit,
+    allan_deviation,
+    fit_allan,
+    mean_rate_hz,
+    plot_allan,
+    to_imu_noise,
+)
 
 DESCRIPTION = """\
 Allan deviation of the gyro and accelerometer of PATH (all three axes), and the white noise N,
@@ -59,14 +68,6 @@ def add(commands: Any) -> argparse.ArgumentParser:
     add_input_options(p)
     p.set_defaults(run=run)
     return p
-
-
-def mean_rate_hz(imu: ImuData) -> float:
-    """Intervals per second over the recording; from integer nanoseconds when there are some, so
-    that 60000 intervals over 600 s give 100 Hz exactly."""
-    if imu.t_ns is not None:
-        return (len(imu) - 1) * 1e9 / float(imu.t_ns[-1] - imu.t_ns[0])
-    return imu.rate_hz
 
 
 def allan_fits(imu: ImuData, rate_hz: float) -> dict[str, tuple[AllanDeviation, AllanFit]]:

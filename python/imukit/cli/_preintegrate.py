@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from imukit._errors import ParameterError
 from imukit.cli import _calibrate
@@ -38,6 +37,7 @@ from imukit.preint import (
     concatenate,
     preintegrate_windows,
     regular_boundaries,
+    window_arrays,
 )
 from imukit.state import Trajectory
 
@@ -222,24 +222,6 @@ def windows(
     return concatenate(pieces)
 
 
-def arrays(record: Preintegration) -> dict[str, NDArray[Any]]:
-    """The windows as named arrays (what the ``.npz`` holds); ``t_start_ns``, ``t_end_ns`` (int64,
-    exact) when the stamps are ns."""
-    start, end = record.t_start_ns, record.t_end_ns
-    exact = {} if start is None or end is None else {"t_start_ns": start, "t_end_ns": end}
-    return {
-        **exact,
-        "t_start": record.t_start,
-        "t_end": record.t_end,
-        "delta_t": record.delta_t,
-        "dR_xyzw": Rotation.from_matrix(record.delta_rotation).as_quat(),
-        "dv": record.delta_velocity,
-        "dp": record.delta_position,
-        "covariance": record.covariance,
-        "bias_jacobian": record.bias_jacobian,
-    }
-
-
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out", args)
     calibrated = (
@@ -254,7 +236,7 @@ def run(args: argparse.Namespace) -> int:
         calibration = _calibrate.calibrate(imu, truth, edges, noise, args.scheme, args.max_dt)
         _calibrate.write(calibrated, calibration, imu, args.window, args.scheme)
     biases = window_biases(args, truth, edges)
-    table = arrays(windows(imu, edges, noise, args.scheme, biases))
+    table = window_arrays(windows(imu, edges, noise, args.scheme, biases))
     if biases is not None:
         table["bias_gyro"], table["bias_accel"] = biases
         note(_bias_note(biases, args.bias_from_groundtruth))

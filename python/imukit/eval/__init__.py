@@ -9,6 +9,7 @@
 :func:`ape`              absolute trajectory error (ATE; evo's APE) after association + alignment
 :func:`rpe`              relative pose error over a travelled distance, a time or a frame count
 :func:`attitude_error`   total / heading / inclination split of orientation errors (BROAD)
+:func:`truth_at_imu`     a ground truth at an IMU's stamps (the ``filter`` / ``integrate`` commands')
 =======================  =========================================================================
 
 Definitions, the choice of alignment and the comparison with ``evo`` are in
@@ -30,6 +31,7 @@ from __future__ import annotations
 from imukit.eval._align import Alignment, align
 from imukit.eval._ape import AbsoluteError, ape
 from imukit.eval._associate import Association, associate
+from imukit.eval._at_imu import truth_at_imu
 from imukit.eval._attitude import AttitudeError, AttitudeRmse, attitude_error
 from imukit.eval._rpe import RelativeError, rpe
 from imukit.eval._stats import ErrorStats
@@ -47,4 +49,5 @@ __all__ = [
     "associate",
     "attitude_error",
     "rpe",
+    "truth_at_imu",
 ]

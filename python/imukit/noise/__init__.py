@@ -1,6 +1,7 @@
 """Identification of IMU noise: Allan variance (:func:`allan_deviation`, :func:`fit_allan`,
-:func:`plot_allan`) and density inflation from preintegration residuals against ground truth
-(:func:`calibrate_from_residuals`, ``docs/noise.md`` § Calibration from residuals).
+:func:`plot_allan`, :func:`mean_rate_hz`: the rate they take) and density inflation from
+preintegration residuals against ground truth (:func:`calibrate_from_residuals`, ``docs/noise.md``
+§ Calibration from residuals).
 
 =====================  ===========================================================================
 input                  a rate signal sampled at a constant ``rate`` [Hz]: a gyro at rest [rad/s] or an
@@ -21,7 +22,7 @@ units                  N and K are the continuous densities of :class:`imukit.Im
 0.001
 """
 
-from imukit.noise._allan import AllanDeviation, allan_deviation
+from imukit.noise._allan import AllanDeviation, allan_deviation, mean_rate_hz
 from imukit.noise._calibrate import NoiseCalibration, calibrate_from_residuals
 from imukit.noise._fit import FLICKER_FACTOR, UNRESOLVED, AllanFit, fit_allan, to_imu_noise
 from imukit.noise._plot import plot_allan
@@ -35,6 +36,7 @@ __all__ = [
     "allan_deviation",
     "calibrate_from_residuals",
     "fit_allan",
+    "mean_rate_hz",
     "plot_allan",
     "to_imu_noise",
 ]

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array
 from imukit._errors import ParameterError, ShapeError
-from imukit.imu import _number
+from imukit.imu import ImuData, _number
 from imukit.threads import checked
 
 
@@ -144,3 +144,11 @@ def allan_deviation(
         samples=n,
         overlapping=bool(overlapping),
     )
+
+
+def mean_rate_hz(imu: ImuData) -> float:
+    """Intervals per second over the recording; from integer nanoseconds when there are some, so
+    that 60000 intervals over 600 s give 100 Hz exactly."""
+    if imu.t_ns is not None:
+        return (len(imu) - 1) * 1e9 / float(imu.t_ns[-1] - imu.t_ns[0])
+    return imu.rate_hz

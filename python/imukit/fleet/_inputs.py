@@ -1,0 +1,102 @@
+"""What :func:`imukit.fleet.run` processes: :func:`find_inputs` and the resume key :func:`stamp`.
+
+An input is one of: a path (a recording file or folder), a glob (``logs/*.csv``), a folder holding
+recordings (every path under it that a registered :class:`imukit.io.Format` detects, a recording
+folder such as EuRoC's counted once), or a manifest: a ``.parquet`` file, or a ``.csv`` whose
+header has a ``path`` column, one recording per row with its other columns (``unit_id`` …) carried
+into the summary. Relative paths in a manifest are relative to the manifest's folder.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from imukit._errors import ParameterError
+from imukit.fleet._load import Scalar
+from imukit.io import formats
+from imukit.io._format import Head
+
+__all__ = ["Input", "find_inputs", "stamp"]
+
+_GLOB = set("*?[")
+
+
+class Input(NamedTuple):
+    """One recording to process and the metadata its manifest row gave it."""
+
+    path: str
+    metadata: dict[str, Scalar]
+
+
+def find_inputs(inputs: str | os.PathLike[str] | Iterable[str | os.PathLike[str]]) -> list[Input]:
+    """The recordings ``inputs`` name (module doc), each once, in the order given (a folder's and a
+    glob's sorted)."""
+    items = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
+    found: dict[str, Input] = {}
+    for item in items:
+        for one in _expand(os.fspath(item)):
+            found.setdefault(one.path, one)
+    return list(found.values())
+
+
+def _expand(item: str) -> Iterator[Input]:
+    if _GLOB & set(item):
+        yield from (Input(p, {}) for p in sorted(glob.glob(item, recursive=True)))
+    elif _is_manifest(Path(item)):
+        yield from _manifest(Path(item))
+    elif Path(item).is_dir() and not _detected(Path(item)):
+        yield from (Input(os.fspath(p), {}) for p in _recordings(Path(item)))
+    else:
+        yield Input(item, {})
+
+
+def _detected(path: Path) -> bool:
+    head = Head(path)
+    return any(fmt.sniff(path, head) for fmt in formats("imu"))
+
+
+def _recordings(folder: Path) -> Iterator[Path]:
+    """Paths under ``folder`` that a format detects, folder by folder from the top (its recording
+    folders, then its recording files, each sorted); a detected folder is not searched further."""
+    for root, dirs, files in os.walk(folder):
+        dirs.sort()
+        for name in list(dirs):
+            if _detected(Path(root, name)):
+                dirs.remove(name)
+                yield Path(root, name)
+        yield from (Path(root, name) for name in sorted(files) if _detected(Path(root, name)))
+
+
+def _is_manifest(path: Path) -> bool:
+    if not path.is_file():
+        return False
+    if path.suffix.lower() == ".parquet":
+        return True
+    return path.suffix.lower() == ".csv" and "path" in Head(path).fields(",")
+
+
+def _manifest(path: Path) -> Iterator[Input]:
+    import pyarrow.csv
+    import pyarrow.parquet
+
+    table = pyarrow.parquet.read_table(path) if path.suffix.lower() == ".parquet" else pyarrow.csv.read_csv(path)
+    if "path" not in table.column_names:
+        raise ParameterError(f"{path}: a manifest needs a 'path' column, got {table.column_names}", argument="inputs")
+    for row in table.to_pylist():
+        recording = Path(str(row.pop("path")))
+        yield Input(os.fspath(recording if recording.is_absolute() else path.parent / recording), row)
+
+
+def stamp(path: str) -> tuple[int, int]:
+    """``(size in bytes, latest mtime in ns)`` of a file, or of every file under a folder: a changed
+    recording changes it (the resume key, with the path)."""
+    target = Path(path)
+    files: Iterable[Path] = [target]
+    if target.is_dir():
+        files = (Path(root, name) for root, _, names in os.walk(target) for name in names)
+    stats: list[Any] = [f.stat() for f in files]
+    return sum(s.st_size for s in stats), max((s.st_mtime_ns for s in stats), default=0)

@@ -1,0 +1,232 @@
+""":func:`run`: a job over many recordings on Dask distributed, results in Parquet (``docs/fleet.md``).
+
+One task per recording. The task runs the job, writes the log's rows (if the job has any) to
+``out/<job>/log=<id>/part-0.parquet`` through a temporary file renamed into place, and returns
+only the log's summary row, so the client never holds per-sample data and a task run twice (Dask
+re-runs the tasks of a worker that died) leaves the same files. Any exception in the job becomes a
+``failed`` row with a one-line error; so does a task Dask gives up on (a log that kills every
+worker it lands on). ``summary.parquet`` has each input exactly once.
+
+Resume: rows of a previous ``summary.parquet`` in ``out`` whose ``path``, ``size_bytes`` and
+``mtime_ns`` (:func:`imukit.fleet._inputs.stamp`) still match are kept, failed ones too unless
+``retry_failed``; only the other inputs are processed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import time
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from imukit._core import __version__
+from imukit._errors import ParameterError
+from imukit.fleet._inputs import Input, find_inputs, stamp
+from imukit.fleet._jobs import JOBS
+from imukit.fleet._load import Scalar
+
+if TYPE_CHECKING:
+    import pyarrow
+    from distributed import Client
+
+__all__ = ["SUMMARY", "log_id", "run"]
+
+SUMMARY = "summary.parquet"
+Progress = Callable[[int, int, int], None]
+"""``progress(done, total, failed)``, called after each log."""
+
+# What the schema metadata says about the columns (b"imukit" key, JSON).
+_CONVENTIONS = {
+    "units": "SI, in each column's name: _s seconds, _hz, _rad_s, _m_s2, _sqrt_hz densities, _m, _m_s",
+    "frames": "body frame of the IMU; world z up, gravity (0, 0, -9.81) m/s^2; rotations R_wb, quaternions xyzw",
+}
+
+
+def log_id(path: str) -> str:
+    """The partition key of a recording: 16 hex digits of the SHA-1 of its path."""
+    return hashlib.sha1(path.encode()).hexdigest()[:16]
+
+
+def run(
+    job: str,
+    inputs: str | os.PathLike[str] | Iterable[str | os.PathLike[str]],
+    *,
+    out: str | os.PathLike[str],
+    client: Client | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    progress: Progress | None = None,
+    **job_options: Any,
+) -> pyarrow.Table:
+    """Run ``job`` (a name in :data:`imukit.fleet.JOBS`) on every recording of ``inputs``
+    (:func:`imukit.fleet.find_inputs`) and return the summary, also written to ``out/summary.parquet``.
+
+    ``client``: a ``dask.distributed.Client``; without one a ``LocalCluster`` of ``workers`` worker
+    processes (default: one per core), one thread each, is started and closed again.
+    ``job_options`` go to the job function.
+    """
+
+    if job not in JOBS:
+        raise ParameterError(f"expected one of {', '.join(JOBS)}, got {job!r}", argument="job")
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    todo = [(item, _stamp(item.path)) for item in find_inputs(inputs)]
+    kept = _previous(folder, job, retry_failed)
+    rows: dict[str, dict[str, Scalar]] = {}
+    pending = []
+    for item, key in todo:
+        old = kept.get(item.path)
+        if old is not None and (old["size_bytes"], old["mtime_ns"]) == key:
+            rows[item.path] = old
+        else:
+            pending.append((item, key))
+    if pending:
+        with _client(client, workers) as dask:
+            for row in _compute(dask, job, pending, folder, job_options, progress, len(todo) - len(pending), len(todo)):
+                rows[str(row["path"])] = row
+    ordered = [rows[item.path] for item, _ in todo]
+    table = _table(ordered, job, job_options)
+    _write_atomically(table, folder / SUMMARY)
+    return table
+
+
+def _stamp(path: str) -> tuple[int, int]:
+    try:
+        return stamp(path)
+    except OSError:
+        return -1, -1  # the task's read fails and says why
+
+
+def _previous(folder: Path, job: str, retry_failed: bool) -> dict[str, dict[str, Scalar]]:
+    """Rows of ``folder``'s summary that a re-run may keep, by path."""
+    import pyarrow.parquet
+
+    path = folder / SUMMARY
+    if not path.exists():
+        return {}
+    table = pyarrow.parquet.read_table(path)
+    done = json.loads((table.schema.metadata or {}).get(b"imukit", b"{}")).get("job")
+    if done != job:
+        raise ParameterError(f"{folder} holds the results of job {done!r}, not {job!r}: choose another", argument="out")
+    return {row["path"]: row for row in table.to_pylist() if row["status"] == "ok" or not retry_failed}
+
+
+@contextlib.contextmanager
+def _client(client: Client | None, workers: int | None) -> Iterator[Client]:
+    if client is not None:
+        yield client
+        return
+    from distributed import Client, LocalCluster
+
+    n = workers if workers is not None else os.cpu_count() or 1
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:  # type: ignore[no-untyped-call]
+        with Client(cluster) as local:  # type: ignore[no-untyped-call]
+            yield local
+
+
+def _compute(
+    client: Client,
+    job: str,
+    pending: list[tuple[Input, tuple[int, int]]],
+    folder: Path,
+    options: dict[str, Any],
+    progress: Progress | None,
+    done: int,
+    total: int,
+) -> Iterator[dict[str, Scalar]]:
+    from distributed import as_completed
+
+    keys = [f"imukit-{job}-{log_id(item.path)}-{key[0]}-{key[1]}-{uuid.uuid4().hex[:8]}" for item, key in pending]
+    futures = client.map(
+        _task,
+        [item for item, _ in pending],
+        [key for _, key in pending],
+        job=job,
+        out=str(folder),
+        options=options,
+        key=keys,
+    )
+    by_future = {f.key: item for f, (item, _) in zip(futures, pending)}
+    failed = 0
+    for future in as_completed(futures):  # type: ignore[no-untyped-call]
+        try:
+            row = future.result()
+        except Exception as exc:  # Dask gave up on it (e.g. KilledWorker): still one row
+            item = by_future[future.key]
+            row = _row(item, _stamp(item.path), "failed", _one_line(exc), 0.0, {})
+        future.release()
+        done += 1
+        failed += row["status"] == "failed"
+        if progress is not None:
+            progress(done, total, failed)
+        yield row
+
+
+def _task(item: Input, key: tuple[int, int], *, job: str, out: str, options: dict[str, Any]) -> dict[str, Scalar]:
+    """One recording: the job, its rows written, its summary row (module doc)."""
+    start = time.perf_counter()
+    try:
+        result = JOBS[job](item.path, **options)
+        if result.rows is not None:
+            _write_rows(result.rows, Path(out) / job, log_id(item.path))
+        status, error, scalars = "ok", None, result.scalars
+    except Exception as exc:  # a failed row, never an aborted run
+        status, error, scalars = "failed", _one_line(exc), {}
+    return _row(item, key, status, error, time.perf_counter() - start, scalars)
+
+
+def _row(
+    item: Input, key: tuple[int, int], status: str, error: str | None, elapsed: float, scalars: dict[str, Scalar]
+) -> dict[str, Scalar]:
+    return {
+        "path": item.path,
+        "log": log_id(item.path),
+        "size_bytes": key[0],
+        "mtime_ns": key[1],
+        "status": status,
+        "error": error,
+        "elapsed_s": elapsed,
+        **item.metadata,
+        **scalars,
+    }
+
+
+def _one_line(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+
+
+def _write_rows(rows: dict[str, Any], dataset: Path, log: str) -> None:
+    """The log's rows as ``dataset/log=<log>/part-0.parquet``, renamed into place (the dataset's
+    readers skip the ``.``-prefixed temporary)."""
+    import numpy as np
+    import pyarrow
+
+    columns = {}
+    for name, values in rows.items():
+        array = np.asarray(values)
+        columns[name] = pyarrow.array(list(array)) if array.ndim > 1 else pyarrow.array(array)
+    partition = dataset / f"log={log}"
+    partition.mkdir(parents=True, exist_ok=True)
+    _write_atomically(pyarrow.table(columns), partition / "part-0.parquet")
+
+
+def _table(rows: list[dict[str, Scalar]], job: str, options: dict[str, Any]) -> pyarrow.Table:
+    import pyarrow
+
+    names = list(dict.fromkeys(name for row in rows for name in row)) or ["path", "status", "error"]
+    table = pyarrow.table({name: [row.get(name) for row in rows] for name in names})
+    meta = {"imukit_version": __version__, "job": job, "options": options, **_CONVENTIONS}
+    return table.replace_schema_metadata({b"imukit": json.dumps(meta, default=str).encode()})
+
+
+def _write_atomically(table: pyarrow.Table, target: Path) -> None:
+    import pyarrow.parquet
+
+    temporary = target.with_name(f".{target.name}.{uuid.uuid4().hex}")
+    pyarrow.parquet.write_table(table, temporary)
+    os.replace(temporary, target)

@@ -1,0 +1,138 @@
+"""imukit.fleet.run on a real LocalCluster (2 worker processes over loopback): rows, failures,
+agreement with the in-process job, a worker killed mid-run, resume."""
+
+from __future__ import annotations
+
+import os
+import signal
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+pytest.importorskip("distributed", reason="imukit.fleet needs dask[distributed] (pip install 'imukit[fleet]')")
+pytest.importorskip("pyarrow", reason="imukit.fleet needs pyarrow (pip install 'imukit[fleet]')")
+
+import pyarrow.dataset
+import pyarrow.parquet
+from distributed import Client, LocalCluster
+
+from fleet_logs import write_broken, write_logs
+from imukit import fleet
+
+# Columns that differ between two runs of the same work.
+_VOLATILE = {"elapsed_s"}
+
+
+@pytest.fixture(scope="module")
+def client() -> Iterator[Client]:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        with Client(cluster) as c:
+            yield c
+
+
+@pytest.fixture(scope="module")
+def fleet_logs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Path], dict[Path, str]]:
+    folder = tmp_path_factory.mktemp("logs")
+    return folder, write_logs(folder, 40), write_broken(folder)
+
+
+@pytest.fixture(scope="module")
+def undisturbed(client: Client, fleet_logs: Any, tmp_path_factory: pytest.TempPathFactory) -> Any:
+    folder, _, _ = fleet_logs
+    return fleet.run("report", str(folder / "*"), out=tmp_path_factory.mktemp("out"), client=client)
+
+
+def _stable(table: Any) -> dict[str, dict[str, Any]]:
+    return {row["path"]: {k: v for k, v in row.items() if k not in _VOLATILE} for row in table.to_pylist()}
+
+
+def test_forty_logs_a_corrupt_and_an_empty_one(undisturbed: Any, fleet_logs: Any) -> None:
+    _, logs, broken = fleet_logs
+    rows = {row["path"]: row for row in undisturbed.to_pylist()}
+    assert len(undisturbed) == 42 and len(rows) == 42
+    assert sum(row["status"] == "ok" for row in rows.values()) == 40
+    for path, reason in broken.items():
+        row = rows[str(path)]
+        assert row["status"] == "failed" and reason in row["error"] and "\n" not in row["error"]
+    # The same numbers as the job called in this process, to the bit.
+    for path in logs[:3] + logs[-2:]:
+        row = rows[str(path)]
+        assert row["status"] == "ok" and row["error"] is None
+        expected = fleet.report(path).scalars
+        assert {k: row[k] for k in expected} == expected
+    meta = undisturbed.schema.metadata[b"imukit"].decode()
+    assert '"job": "report"' in meta and "imukit_version" in meta and "R_wb" in meta
+
+
+def test_summary_file_is_the_returned_table(undisturbed: Any, client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    _, logs, _ = fleet_logs
+    table = fleet.run("report", [str(p) for p in logs[:4]], out=tmp_path, client=client)
+    assert pyarrow.parquet.read_table(tmp_path / "summary.parquet").equals(table)
+    assert not list(tmp_path.glob(".*"))  # no temporary left behind
+
+
+def test_killed_worker_every_input_once_same_results(
+    undisturbed: Any, client: Client, fleet_logs: Any, tmp_path: Path
+) -> None:
+    folder, _, _ = fleet_logs
+    pids = client.run(os.getpid)
+    victim = sorted(pids.values())[0]
+    killed = []
+
+    def progress(done: int, total: int, failed: int) -> None:
+        if done == 3 and not killed:
+            os.kill(victim, signal.SIGKILL)
+            killed.append(victim)
+
+    table = fleet.run("report", str(folder / "*"), out=tmp_path, client=client, progress=progress)
+    assert killed
+    assert victim not in client.run(os.getpid).values()  # the nanny started a new process
+    paths = table.column("path").to_pylist()
+    assert len(paths) == 42 and len(set(paths)) == 42
+    assert _stable(table) == _stable(undisturbed)
+
+
+def test_resume_processes_only_new_logs(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    folder = tmp_path / "logs"
+    folder.mkdir()
+    write_logs(folder, 6)
+    out = tmp_path / "out"
+    first = fleet.run("report", str(folder / "*"), out=out, client=client)
+    new = write_logs(folder, 5, first=6)
+    calls: list[tuple[int, int, int]] = []
+    second = fleet.run("report", str(folder / "*"), out=out, client=client, progress=lambda *a: calls.append(a))
+    assert len(second) == 11 and set(second.column("status").to_pylist()) == {"ok"}
+    assert [c[0] for c in calls] == list(range(7, 12)) and {c[1] for c in calls} == {11}
+    # Old rows kept as they were (their elapsed_s too: not recomputed); the new ones present.
+    old = {row["path"]: row for row in first.to_pylist()}
+    rows = {row["path"]: row for row in second.to_pylist()}
+    assert all(rows[path] == row for path, row in old.items())
+    assert {str(p) for p in new} == set(rows) - set(old)
+    # A changed log is processed again.
+    os.utime(new[1], ns=(1, 1))  # a CSV file
+    calls.clear()
+    fleet.run("report", str(folder / "*"), out=out, client=client, progress=lambda *a: calls.append(a))
+    assert len(calls) == 1
+
+
+def test_preintegrate_rows_partitioned_by_log(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    _, logs, _ = fleet_logs
+    table = fleet.run("preintegrate", [str(p) for p in logs[:4:2]], out=tmp_path, client=client, window_s=0.5)
+    assert table.column("status").to_pylist() == ["ok", "ok"]
+    rows = pyarrow.dataset.dataset(tmp_path / "preintegrate", partitioning="hive").to_table()
+    assert rows.num_rows == 2 * 10 and set(rows.column("log").to_pylist()) == set(table.column("log").to_pylist())
+    local = fleet.preintegrate(logs[0], window_s=0.5).rows
+    assert local is not None
+    mine = rows.filter(pyarrow.compute.equal(rows.column("log"), table.column("log")[0]))
+    assert mine.column("dp").to_pylist() == local["dp"].tolist()
+
+
+def test_manifest_metadata_carried(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    _, logs, _ = fleet_logs
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text("path,unit_id\n" + "".join(f"{p},unit-{k}\n" for k, p in enumerate(logs[:3])))
+    table = fleet.run("report", manifest, out=tmp_path / "out", client=client)
+    assert table.column("unit_id").to_pylist() == ["unit-0", "unit-1", "unit-2"]
+    assert table.column("path").to_pylist() == [str(p) for p in logs[:3]]
