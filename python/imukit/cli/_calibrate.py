@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from imukit.cli._allan import digits, mean_rate_hz
+from imukit.cli._allan import digits
 from imukit.cli._common import CliError, note, out, wrote
 from imukit.cli._truth import truth_at
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.io import write_kalibr_imu
-from imukit.noise import NoiseCalibration, calibrate_from_residuals
+from imukit.noise import NoiseCalibration, calibrate_from_residuals, mean_rate_hz
 from imukit.preint import PreintParams, States, concatenate, preintegrate_windows
 from imukit.state import Trajectory
 
@@ -89,4 +89,3 @@ def write(path: Path, cal: NoiseCalibration, imu: ImuData, window_s: float, sche
     }
     write_kalibr_imu(path, rounded, rate_hz=digits(mean_rate_hz(imu), 6), comments=comments, header=header)
     wrote("calibrated Kalibr imu.yaml", path)
-

@@ -48,7 +48,11 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
     "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
     "max_dt": (
         "--max-dt",
-        {"type": positive, "metavar": "S", "help": "filter, integrate: longest truth gap bridged (default: 2.5 x its median step)"},
+        {
+            "type": positive,
+            "metavar": "S",
+            "help": "filter, integrate: longest truth gap bridged (default: 2.5 x its median step)",
+        },
     ),
     "window_s": ("--window-s", {"type": positive, "metavar": "S", "help": "preintegrate: window length (default 0.1)"}),
     "scheme": ("--scheme", {"metavar": "NAME", "help": "integrate, preintegrate: the scheme (default: the core's)"}),

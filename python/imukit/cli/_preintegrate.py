@@ -224,9 +224,7 @@ def windows(
 
 def run(args: argparse.Namespace) -> int:
     target = None if args.out is None else output_path(args.out, (".csv", ".npz"), "--out", args)
-    calibrated = (
-        None if args.calibrate is None else output_path(args.calibrate, (".yaml", ".yml"), "--calibrate", args)
-    )
+    calibrated = None if args.calibrate is None else output_path(args.calibrate, (".yaml", ".yml"), "--calibrate", args)
     imu, truth = read_imu(args)
     if args.bias_from_groundtruth and truth is not None:
         imu = trim_to_truth(imu, truth)

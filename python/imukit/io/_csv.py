@@ -10,7 +10,6 @@ from typing import Literal
 import numpy as np
 
 from imukit._arrays import choice, real_scalar
-from imukit._errors import ParameterError
 from imukit.imu import ImuData
 from imukit.io._lines import Problem, as_file_error, public_reader
 from imukit.io._report import BadLines, OnBadLine, ReadReport
@@ -74,13 +73,13 @@ def read_imu_csv(  # type: ignore[empty-body]
         The text file. Its header is its leading lines that are ``#`` lines or whose first field is
         not a number (or ``header_lines`` of them), judged against the next line (``docs/io.md``: a
         first line with text in the same fields as the next one's is data, a text column; pandas'
-        ``0,1,2,…`` header is taken and reported; other integer lines above float data are refused); the last of them names the columns (a leading
-        ``#`` is dropped, as in EuRoC's ``#timestamp [ns],…``), and a name not found there is looked
-        up in the header lines above it (an exporter's group line). Every data line must have as
-        many fields as the header (without one, as the first data line); a header or data lines
-        ending in the delimiter (``a;b;c;``) lose that empty field where it makes them agree, and a
-        header whose count still differs is one error naming both counts. Later ``#`` lines and
-        blank lines are skipped. UTF-8, with or without a byte order mark.
+        ``0,1,2,…`` header is taken and reported; other integer lines above float data are refused).
+        The last header line names the columns (a leading ``#`` is dropped, as in EuRoC's
+        ``#timestamp [ns],…``), and a name not found there is looked up in the header lines above it
+        (an exporter's group line). Every data line must have as many fields as the header (without
+        one, as the first data line); a header or data lines ending in the delimiter (``a;b;c;``)
+        lose that empty field where it makes them agree, and a header whose count still differs is
+        one error naming both counts. Later ``#`` lines and blank lines are skipped. UTF-8, with or without a byte order mark.
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
         header name (exact, after stripping white space) or a 0-based index. Other columns

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from imukit._arrays import FloatArray
 from imukit._errors import FileFormatError, ParameterError, TimestampError
 from imukit.imu import ImuBias, ImuData, ImuNoise, _rate
+from imukit.io._blocks import Layout, increasing_table, read_table, zero_quaternions
 from imukit.io._format import Format, Head
 from imukit.io._kalibr import KalibrImu, noise_lines, read_kalibr_imu, shown, yaml_float
 from imukit.io._lines import (
@@ -34,7 +35,6 @@ from imukit.io._lines import (
 )
 from imukit.io._mag import with_mag
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._blocks import Layout, increasing_table, read_table, zero_quaternions
 from imukit.state import Trajectory
 
 __all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "read_euroc_sensor", "write_euroc"]

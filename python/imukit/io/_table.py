@@ -36,13 +36,13 @@ from imukit._errors import FileFormatError, ParameterError
 from imukit.io._format import is_number
 from imukit.io._lines import (
     Problem,
-    open_text,
     RowCheck,
     Rows,
     Split,
     all_exact,
     increasing,
     integer_stamp,
+    open_text,
     parse_rows,
     require_rows,
 )
@@ -191,9 +191,7 @@ def check_header_lines(value: object) -> int | None:
     return value
 
 
-def read_table(
-    path: str | os.PathLike[str], bad: BadLines, delimiter: str | None, header_lines: int | None
-) -> Table:
+def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | None, header_lines: int | None) -> Table:
     """``path`` split into header and data lines (module doc); a header taken from integers is noted in
     ``bad``. FileFormatError: no data lines, an ambiguous first line, or a header whose field count
     differs from the data lines'."""

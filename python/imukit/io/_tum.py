@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from imukit._errors import FileFormatError
+from imukit.io._blocks import Layout, increasing_table, read_table, zero_quaternions
 from imukit.io._format import Format, Head
 from imukit.io._lines import (
     INT64_MAX,
@@ -20,7 +21,6 @@ from imukit.io._lines import (
     zero_quaternion,
 )
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._blocks import Layout, increasing_table, read_table, zero_quaternions
 from imukit.state import Trajectory
 
 __all__ = ["read_tum", "write_tum"]
