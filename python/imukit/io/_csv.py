@@ -79,7 +79,8 @@ def read_imu_csv(  # type: ignore[empty-body]
         (an exporter's group line). Every data line must have as many fields as the header (without
         one, as the first data line); a header or data lines ending in the delimiter (``a;b;c;``)
         lose that empty field where it makes them agree, and a header whose count still differs is
-        one error naming both counts. Later ``#`` lines and blank lines are skipped. UTF-8, with or without a byte order mark.
+        one error naming both counts. Later ``#`` lines and blank lines are skipped. UTF-8, with or
+        without a byte order mark.
     time_column, gyro_columns, accel_columns
         The time column and the x, y, z columns of the angular rate and the specific force, each a
         header name (exact, after stripping white space) or a 0-based index. Other columns
