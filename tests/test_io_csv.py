@@ -126,7 +126,7 @@ COLS = {"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
         ),
         ("t,gx,gy,gz,ax,ay,az\n", {}, r": no data lines$"),
         ("", {}, r": no data lines$"),
-        ("0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6,7\n", {}, r", line 2: expected 7 fields .*got 8$"),
+        ("0.0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6,7\n", {}, r", line 2: expected 7 fields .*got 8$"),
         ("0,1,2,3,4,5,6\n0.1,1,2,x,4,5,6\n", {}, r", line 2: not a number in '0\.1,1,2,x,4,5,6'$"),
         ("0,1,2,3,4,5,nan\n", {}, r", line 1: non-finite value in '0,1,2,3,4,5,nan'$"),
         ("0,1,2,3,4,5,6\n0,1,2,3,4,5,6\n", {}, r", line 2: time must increase strictly, but 0 follows 0 \(line 1\)$"),

@@ -681,6 +681,11 @@ def _simulate_errors(rng: np.random.Generator) -> Any:
 # -- noise
 
 
+@entry("noise.mean_rate_hz", ("noise.mean_rate_hz",), IMU_ARGS)
+def _mean_rate(rng: np.random.Generator) -> Any:
+    return imu_values(rng), lambda v: noise.mean_rate_hz(imu_of(v))
+
+
 @entry(
     "noise.allan_deviation",
     ("noise.allan_deviation",),
@@ -1008,8 +1013,8 @@ def _attitude_error(rng: np.random.Generator) -> Any:
 if hasattr(ik.eval, "ape"):  # imukit.eval's trajectory metrics (issue 8)
 
     @entry(
-        "eval.associate / align / ape / rpe",
-        tuple(f"eval.{n}" for n in ("associate", "align", "ape", "rpe", "Alignment.apply")),
+        "eval.associate / align / ape / rpe / truth_at_imu",
+        tuple(f"eval.{n}" for n in ("associate", "align", "ape", "rpe", "Alignment.apply", "truth_at_imu")),
         {
             **_traj_args("estimate_"),
             **_traj_args("reference_"),
@@ -1038,6 +1043,7 @@ if hasattr(ik.eval, "ape"):  # imukit.eval's trajectory metrics (issue 8)
                 alignment.apply(est),
                 ik.eval.ape(est, ref, max_dt=v["max_dt"], offset=v["offset"]),
                 ik.eval.rpe(est, ref, delta=v["delta"], unit="s", max_dt=v["max_dt"]),
+                ik.eval.truth_at_imu(ref, est.t, max_dt=v["max_dt"]),
             )
 
         return values, call

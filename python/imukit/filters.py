@@ -189,6 +189,14 @@ class _Filter:
             rest_detection=_option(rest_detection, RestDetection, "rest_detection"),
         )
 
+    def __getstate__(self) -> dict[str, Any]:
+        # A lock is this object's, not its data: a copy (pickle, copy, deepcopy) gets a new one.
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
     def _setup(self, core_filter: Any) -> None:
         self._core_filter = core_filter
         self.reset()

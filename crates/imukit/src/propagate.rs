@@ -297,7 +297,9 @@ pub fn propagate_cancellable(
     }
     strapdown::check_finite_result(&x, states.as_ref(), (samples, initial, bias, options))?;
     if !last.iter().all(|v| v.is_finite()) {
-        // The mean is finite: the initial covariance grew past f64, or the noise added to it.
+        // The mean is finite: the covariance ends near (P₀ + Q)·(1 + D)², D the largest
+        // |ω − b_g|·T or |a − b_a|·T of the error-state Jacobian (Sola 2017, eq. 269). Blame the larger
+        // factor, in logarithms: the rates or biases that D comes from, else P₀ or the noise Q.
         let span = samples.t[n - 1] - samples.t[0];
         let densities = [
             noise.gyro_density,
@@ -306,7 +308,17 @@ pub fn propagate_cancellable(
             noise.accel_random_walk,
         ];
         let added = densities.iter().fold(0.0_f64, |m, d| m.max(d * d * span));
-        let name = if added > covariance.amax() {
+        let largest = |rows: &[[f64; 3]]| rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let readings = largest(samples.gyro).max(largest(samples.accel));
+        let biases = bias.gyro.amax().max(bias.accel.amax());
+        let growth = 2.0 * (1.0 + readings.max(biases) * span).log10();
+        let name = if growth > covariance.amax().max(added).log10().max(0.0) {
+            if biases > readings {
+                "bias"
+            } else {
+                "imu"
+            }
+        } else if added > covariance.amax() {
             "noise"
         } else {
             "covariance"

@@ -313,22 +313,23 @@ pub(crate) fn check_finite_result(
     let (samples, initial, bias, options) = run;
     let n = samples.t.len();
     let index = out.and_then(StatesOut::first_non_finite).unwrap_or(n - 1);
-    Err(Error::Overflow { index }.in_argument(overflow_culprit(samples, initial, bias, options, finite)))
+    Err(Error::Overflow { index }.in_argument(overflow_culprit(samples, initial, bias, options, unit)))
 }
 
-/// The input to blame for an overflow of the mean: the largest term of
-/// `p = p₀ + v₀T + ½(R(a − b_a) + g)T²` over the span T when position or velocity overflowed,
-/// else (the attitude: `|ω − b_g|`) the rates or the gyro bias. Errors in Python then name the
-/// argument the user can change (`initial`, `imu`, `bias`, `gravity`), not "imu / bias".
+/// The input to blame for an overflow of the mean: when the attitude left the unit sphere (a
+/// rotation overflowed by `|ω − b_g|`, which then spoils position and velocity too) the rates or the
+/// gyro bias, whichever is larger; else the largest term of `p = p₀ + v₀T + ½(R(a − b_a) + g)T²`
+/// over the span T. Errors in Python then name the argument the user can change (`initial`, `imu`,
+/// `bias`, `gravity`), not "imu / bias".
 fn overflow_culprit(
     samples: &Samples<'_>,
     initial: &NavState,
     bias: &Bias,
     options: &Options,
-    finite: bool,
+    unit: bool,
 ) -> &'static str {
     let largest = |rows: &[[f64; 3]]| rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if !finite {
+    if unit {
         let n = samples.t.len();
         let span = (samples.t[n - 1] - samples.t[0]).max(f64::MIN_POSITIVE);
         let reach = span.max(span * span);

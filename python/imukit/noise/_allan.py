@@ -149,6 +149,8 @@ def allan_deviation(
 def mean_rate_hz(imu: ImuData) -> float:
     """Intervals per second over the recording; from integer nanoseconds when there are some, so
     that 60000 intervals over 600 s give 100 Hz exactly."""
+    if not isinstance(imu, ImuData):
+        raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
     if imu.t_ns is not None:
         return (len(imu) - 1) * 1e9 / float(imu.t_ns[-1] - imu.t_ns[0])
     return imu.rate_hz

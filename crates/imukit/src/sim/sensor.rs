@@ -290,8 +290,12 @@ fn overflow_culprit(t: &[f64], model: &SensorModel) -> &'static str {
 }
 
 fn quantise(v: f64, resolution: f64) -> f64 {
-    if resolution > 0.0 {
-        (v / resolution).round() * resolution
+    // From 2^52 steps on every f64 quotient is a whole number: v is on the grid as f64 can hold it
+    // (and v / resolution may overflow for a subnormal resolution).
+    const WHOLE: f64 = 4_503_599_627_370_496.0;
+    let steps = v / resolution;
+    if resolution > 0.0 && steps.abs() < WHOLE {
+        steps.round() * resolution
     } else {
         v
     }
