@@ -191,8 +191,8 @@ def test_odometry_twist_is_rotated_from_body_to_world(tmp_path: Path) -> None:
 def test_transform_stamped_is_the_body_pose_in_its_parent_frame(tmp_path: Path) -> None:
     bag = Bag("mcap")
     h = math.sqrt(0.5)
-    tf = [(k, bag.transform((1, k * 1000), (1.0 + k, 2.0, 3.0), (0.0, 0.0, h, h))) for k in range(1, 3)]
-    imu = [(k, bag.imu((1, k * 1000), (0.0, 0.0, 0.0), (0.0, 0.0, 9.81))) for k in range(1, 3)]
+    tf = [(k, bag.transform((1, k * 10**7), (1.0 + k, 2.0, 3.0), (0.0, 0.0, h, h))) for k in range(1, 3)]
+    imu = [(k, bag.imu((1, k * 10**7), (0.0, 0.0, 0.0), (0.0, 0.0, 9.81))) for k in range(1, 3)]
     path = bag.write(tmp_path / "b", {"/imu": (IMU, imu), "/vicon/body": (TF, tf)})
 
     _, truth = read_rosbag(path)
@@ -278,7 +278,7 @@ def _topics_bag(tmp_path: Path, topics: dict[str, str]) -> Path:
         "std_msgs/msg/String": lambda k, v: bag.store.types["std_msgs/msg/String"](data="x"),
     }
     content = {
-        topic: (msgtype, [(k, make[msgtype](k * 1000, float(i))) for k in range(1, 3)])
+        topic: (msgtype, [(k, make[msgtype](k * 10**7, float(i))) for k in range(1, 3)])
         for i, (topic, msgtype) in enumerate(topics.items())
     }
     return bag.write(tmp_path / "b", content)
