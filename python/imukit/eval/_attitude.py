@@ -105,6 +105,10 @@ def _quats(q: Rotation | ArrayLike, name: str, scalar_first: bool) -> FloatArray
         arr = arr[..., [1, 2, 3, 0]]
     if np.isinf(arr).any():
         raise NonFiniteError("holds ±inf", argument=name)
+    # Scale first (a quaternion's scale carries no rotation): rows near 1e154 would overflow when squared.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        largest = np.max(np.abs(arr), axis=-1, keepdims=True)
+        arr = arr / np.where(largest > 0, largest, 1.0)
     norm = np.linalg.norm(arr, axis=-1, keepdims=True)
     zero = (norm == 0).ravel()
     if zero.any():
