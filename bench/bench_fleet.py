@@ -11,6 +11,14 @@ time a worker slot spent on a log outside the job: scheduling, transfer, the sum
 time per task of as many no-op tasks (Dask's own cost, free of the job), the peak RSS of each worker
 and of this process, and the load average before and after each phase (the machine may be shared).
 
+On a shared machine the wall times measure the share of the CPU the run got: Linux's autogroup
+scheduler gives each session (this script with its workers) a fair share of the cores however
+many processes it runs. So the CPU seconds of each phase are printed too (this process's for the
+serial loop; the workers', the scheduler's and the client's for the cluster), the cores each phase
+got on average (CPU / wall), Dask's CPU cost per log (cluster CPU − serial CPU, per log: free of the
+load), and the speed-up the cluster would reach with ``--workers`` cores to itself, CPU-bound:
+``workers × serial CPU / cluster CPU``.
+
 BLAS threads: Dask's nanny starts every worker with ``OMP_NUM_THREADS=OPENBLAS_NUM_THREADS=
 MKL_NUM_THREADS=1`` (``distributed.nanny.pre-spawn-environ``); this script gives the serial loop
 the same (``--blas-threads`` to change it), so that the two compare the scheduling, not BLAS's
@@ -53,6 +61,12 @@ def _noop(k: int) -> int:
     return k
 
 
+def _cpu_s() -> float:
+    """CPU seconds (user + system) this process has used, all its threads."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def _load() -> str:
     return "/".join(f"{v:.1f}" for v in os.getloadavg())
 
@@ -82,10 +96,10 @@ def main() -> None:
 
         fleet.report(paths[0])  # warm-up (lazy imports), like the workers' below
         loads["serial"] = [_load()]
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), _cpu_s()
         for path in paths:
             fleet.report(path)
-        wall_serial = time.perf_counter() - start
+        wall_serial, cpu_serial = time.perf_counter() - start, _cpu_s() - cpu
         loads["serial"].append(_load())
 
         start = time.perf_counter()
@@ -96,9 +110,11 @@ def main() -> None:
                 client.run(fleet.report, os.fspath(paths[0]))  # warm-up: imports in every worker
                 up = time.perf_counter() - start
                 loads["cluster"] = [_load()]
-                start = time.perf_counter()
+                before = client.run(_cpu_s)
+                start, cpu = time.perf_counter(), _cpu_s()
                 table = fleet.run("report", str(folder / "log*"), out=folder / "out", client=client)
-                wall_cluster = time.perf_counter() - start
+                wall_cluster, cpu_here = time.perf_counter() - start, _cpu_s() - cpu
+                cpu_workers = sum(client.run(_cpu_s).values()) - sum(before.values())
                 loads["cluster"].append(_load())
                 rss = client.run(_peak_rss_mb)
                 start = time.perf_counter()
@@ -126,6 +142,19 @@ def main() -> None:
         f"{1e3 * wall_serial / args.logs:.1f} ms in the serial loop)"
     )
     print(f"Dask round trip of a no-op task: {1e3 * per_task:.2f} ms per task ({args.logs} tasks)")
+    cpu_cluster = cpu_workers + cpu_here
+    print(
+        f"CPU: serial {cpu_serial:.1f} s ({cpu_serial / wall_serial:.2f} cores on average); cluster: workers "
+        f"{cpu_workers:.1f} s + scheduler and client {cpu_here:.1f} s ({cpu_cluster / wall_cluster:.2f} cores)"
+    )
+    print(
+        f"Dask CPU cost per log: {1e3 * (cpu_cluster - cpu_serial) / args.logs:.1f} ms "
+        f"({1e3 * cpu_serial / args.logs:.1f} ms per log serial, {1e3 * cpu_cluster / args.logs:.1f} ms on the cluster)"
+    )
+    print(
+        f"speed-up with {args.workers} cores to itself (CPU-bound, from the CPU seconds above): "
+        f"{args.workers * cpu_serial / cpu_cluster:.2f}x"
+    )
     print(f"peak RSS: workers {', '.join(f'{v:.0f}' for v in rss.values())} MB; this process {_peak_rss_mb():.0f} MB")
 
 

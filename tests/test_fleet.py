@@ -3,7 +3,9 @@ agreement with the in-process job, a worker killed mid-run, resume."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import signal
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,7 +20,8 @@ import pyarrow.dataset
 import pyarrow.parquet
 from distributed import Client, LocalCluster
 
-from fleet_logs import write_broken, write_logs
+import imukit as ik
+from fleet_logs import rigidly_moved, write_broken, write_logs
 from imukit import fleet
 
 # Columns that differ between two runs of the same work.
@@ -136,3 +139,41 @@ def test_manifest_metadata_carried(client: Client, fleet_logs: Any, tmp_path: Pa
     table = fleet.run("report", manifest, out=tmp_path / "out", client=client)
     assert table.column("unit_id").to_pylist() == ["unit-0", "unit-1", "unit-2"]
     assert table.column("path").to_pylist() == [str(p) for p in logs[:3]]
+
+
+def test_evaluate_takes_each_logs_reference_from_the_manifest(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    _, logs, _ = fleet_logs
+    reference = shutil.copytree(logs[0], tmp_path / "truth" / "log")  # a EuRoC folder: its ground truth
+    truth = ik.io.read_trajectory(reference)
+    offsets = {"a.txt": [0.5, 0.0, 0.0], "b.txt": [0.0, 0.0, 0.2], "c.txt": [0.0, 0.0, 0.0]}
+    for name, offset in offsets.items():
+        ik.io.write_tum(rigidly_moved(truth, 10, 0.0, offset), tmp_path / name)
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text("path,reference,unit_id\na.txt,truth/log,u1\nb.txt,truth/log,u2\nc.txt,missing.txt,u3\n")
+    out = tmp_path / "out"
+    calls: list[tuple[int, int, int]] = []
+
+    def evaluate() -> Any:
+        return fleet.run(
+            "evaluate", manifest, out=out, client=client, align="none", progress=lambda *a: calls.append(a)
+        )
+
+    rows = evaluate().to_pylist()
+    assert [(row["unit_id"], row["status"]) for row in rows] == [("u1", "ok"), ("u2", "ok"), ("u3", "failed")]
+    assert [row["reference"] for row in rows] == [str(reference)] * 2 + [str(tmp_path / "missing.txt")]
+    assert "missing.txt" in rows[2]["error"]
+    assert [row["ate_rmse_m"] for row in rows[:2]] == pytest.approx([0.5, 0.2], rel=1e-6)
+    parts = pyarrow.dataset.dataset(out / "evaluate", partitioning="hive")
+    assert parts.count_rows() == sum(row["scored_samples"] for row in rows[:2])
+    for piece in parts.files:  # every file a run writes says its version, units and frames
+        meta = json.loads(pyarrow.parquet.read_schema(piece).metadata[b"imukit"])
+        assert meta["imukit_version"] == ik.__version__ and meta["job"] == "evaluate"
+        assert "_deg degrees" in meta["units"] and "R_wb" in meta["frames"]
+    # The resume key covers the reference: a changed ground truth redoes the logs scored against it.
+    calls.clear()
+    evaluate()
+    assert calls == []
+    data = next(Path(reference).rglob("state_groundtruth_estimate0/data.csv"))
+    os.utime(data)  # rewritten now
+    evaluate()
+    assert [c[0] for c in calls] == [2, 3]  # two of three redone, the failed one kept
