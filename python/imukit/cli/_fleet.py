@@ -37,7 +37,7 @@ Re-running with the same --out skips the recordings already done (same path, siz
 Writes: DIR/summary.parquet, DIR/JOB/log=<id>/part-0.parquet. Prints the counts and a table of the
 failed recordings; exit code 1 when some recording failed.
 
-Examples:
+Example:
   imukit fleet report 'logs/*' --out fleet_report --gyro-range 34.9
   imukit fleet evaluate estimates.csv --out scores --align yaw   # columns path, reference"""
 
