@@ -55,6 +55,7 @@ import pyarrow  # noqa: E402
 
 import imukit as ik  # noqa: E402
 from imukit import fleet, sim  # noqa: E402
+from imukit.fleet._run import _client  # noqa: E402
 
 
 def _peak_rss_mb() -> float:
@@ -97,8 +98,6 @@ def main() -> None:
     parser.add_argument("--blas-threads", default="1", help="BLAS threads of the serial loop ('default': unset)")
     args = parser.parse_args()
 
-    from distributed import Client, LocalCluster
-
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.folder or Path(tmp)
         start = time.perf_counter()
@@ -108,38 +107,35 @@ def main() -> None:
         out = Path(tmp) / "out"
 
         start = time.perf_counter()
-        with LocalCluster(
-            n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=":0"
-        ) as cluster:
-            with Client(cluster) as client:
-                client.run(fleet.report, os.fspath(paths[0]))  # warm-up: imports in every worker
-                fleet.report(paths[0])  # and in this process
-                up = time.perf_counter() - start
-                wall_serial = cpu_serial = wall_cluster = cpu_here = cpu_workers = 0.0
-                tables = []
-                for r in range(args.rounds):
-                    block = paths[r * len(paths) // args.rounds : (r + 1) * len(paths) // args.rounds]
-                    load = _load()
-                    start, cpu = time.perf_counter(), _cpu_s()
-                    for path in block:
-                        fleet.report(path)
-                    wall, cpu = time.perf_counter() - start, _cpu_s() - cpu
-                    wall_serial, cpu_serial = wall_serial + wall, cpu_serial + cpu
-                    before = client.run(_cpu_s)
-                    start, cpu = time.perf_counter(), _cpu_s()
-                    tables.append(fleet.run("report", [str(p) for p in block], out=out / f"round{r}", client=client))
-                    wall_c, cpu_c = time.perf_counter() - start, _cpu_s() - cpu
-                    wall_cluster, cpu_here = wall_cluster + wall_c, cpu_here + cpu_c
-                    cpu_workers += sum(client.run(_cpu_s).values()) - sum(before.values())
-                    print(
-                        f"round {r + 1}/{args.rounds}: {len(block)} logs, serial {wall:.1f} s, cluster {wall_c:.1f} s "
-                        f"(load avg {load} -> {_load()})",
-                        flush=True,
-                    )
-                rss = client.run(_peak_rss_mb)
-                start = time.perf_counter()
-                client.gather(client.map(_noop, range(args.logs)))
-                per_task = (time.perf_counter() - start) / args.logs
+        with _client(None, args.workers) as client:  # the local cluster imukit.fleet.run starts
+            client.run(fleet.report, os.fspath(paths[0]))  # warm-up: imports in every worker
+            fleet.report(paths[0])  # and in this process
+            up = time.perf_counter() - start
+            wall_serial = cpu_serial = wall_cluster = cpu_here = cpu_workers = 0.0
+            tables = []
+            for r in range(args.rounds):
+                block = paths[r * len(paths) // args.rounds : (r + 1) * len(paths) // args.rounds]
+                load = _load()
+                start, cpu = time.perf_counter(), _cpu_s()
+                for path in block:
+                    fleet.report(path)
+                wall, cpu = time.perf_counter() - start, _cpu_s() - cpu
+                wall_serial, cpu_serial = wall_serial + wall, cpu_serial + cpu
+                before = client.run(_cpu_s)
+                start, cpu = time.perf_counter(), _cpu_s()
+                tables.append(fleet.run("report", [str(p) for p in block], out=out / f"round{r}", client=client))
+                wall_c, cpu_c = time.perf_counter() - start, _cpu_s() - cpu
+                wall_cluster, cpu_here = wall_cluster + wall_c, cpu_here + cpu_c
+                cpu_workers += sum(client.run(_cpu_s).values()) - sum(before.values())
+                print(
+                    f"round {r + 1}/{args.rounds}: {len(block)} logs, serial {wall:.1f} s, cluster {wall_c:.1f} s "
+                    f"(load avg {load} -> {_load()})",
+                    flush=True,
+                )
+            rss = client.run(_peak_rss_mb)
+            start = time.perf_counter()
+            client.gather(client.map(_noop, range(args.logs)))
+            per_task = (time.perf_counter() - start) / args.logs
 
     table = pyarrow.concat_tables(tables)
     ok = table.column("status").to_pylist().count("ok")

@@ -18,11 +18,12 @@ pytest.importorskip("pyarrow", reason="imukit.fleet needs pyarrow (pip install '
 
 import pyarrow.dataset
 import pyarrow.parquet
-from distributed import Client, LocalCluster
+from distributed import Client
 
 import imukit as ik
 from fleet_logs import rigidly_moved, write_broken, write_logs
 from imukit import fleet
+from imukit.fleet._run import _client
 
 # Columns that differ between two runs of the same work.
 _VOLATILE = {"elapsed_s"}
@@ -30,9 +31,8 @@ _VOLATILE = {"elapsed_s"}
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[Client]:
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
-        with Client(cluster) as c:
-            yield c
+    with _client(None, 2) as c:  # the local cluster run() starts without a client
+        yield c
 
 
 @pytest.fixture(scope="module")
@@ -92,6 +92,9 @@ def test_killed_worker_every_input_once_same_results(
     table = fleet.run("report", str(folder / "*"), out=tmp_path, client=client, progress=progress)
     assert killed
     assert victim not in client.run(os.getpid).values()  # the nanny started a new process
+    # The local cluster's workers, the restarted one too, keep glibc's adaptive malloc (_run._LOCAL_CONFIG).
+    client.wait_for_workers(2, timeout=60)
+    assert list(client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_").values()) == [None, None]
     paths = table.column("path").to_pylist()
     assert len(paths) == 42 and len(set(paths)) == 42
     assert _stable(table) == _stable(undisturbed)
