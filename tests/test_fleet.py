@@ -70,10 +70,16 @@ def test_forty_logs_a_corrupt_and_an_empty_one(undisturbed: Any, fleet_logs: Any
 
 
 def test_summary_file_is_the_returned_table(undisturbed: Any, client: Client, fleet_logs: Any, tmp_path: Path) -> None:
-    _, logs, _ = fleet_logs
-    table = fleet.run("report", [str(p) for p in logs[:4]], out=tmp_path, client=client)
+    _, logs, broken = fleet_logs
+    calls: list[tuple[int, int, int]] = []
+    inputs = [str(p) for p in [*logs[:4], *broken]]
+    table = fleet.run("report", inputs, out=tmp_path, client=client, progress=lambda *a: calls.append(a))
     assert pyarrow.parquet.read_table(tmp_path / "summary.parquet").equals(table)
     assert not list(tmp_path.glob(".*"))  # no temporary left behind
+    # The progress: each log once as it is done, out of all, with the failures so far.
+    assert [(done, total) for done, total, _ in calls] == [(k, 6) for k in range(1, 7)]
+    failed = [f for _, _, f in calls]
+    assert failed == sorted(failed) and failed[-1] == 2
 
 
 def test_killed_worker_every_input_once_same_results(
