@@ -24,12 +24,13 @@ def moving(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, ik.ImuData, 
     return folder, imu, truth
 
 
-def test_filter_job_scores_against_the_truth(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
+@pytest.mark.parametrize("method", ["madgwick", "robust"])
+def test_filter_job_scores_against_the_truth(method: str, moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
     folder, imu, truth = moving
-    output = JOBS["filter"](folder, method="madgwick")
+    output = JOBS["filter"](folder, method=method)
     # The same filter on the same samples, scored against the simulated truth at the same instants
     # (no interpolation): the job's association must reproduce it.
-    result = ik.filters.Madgwick().run(imu)
+    result = {"madgwick": ik.filters.Madgwick, "robust": ik.filters.Robust}[method]().run(imu)
     rmse = ik.eval.attitude_error(result.rotation, truth.rotation, align_heading=True).rmse(degrees=True)
     assert output.scalars["scored_samples"] == len(imu)
     assert output.scalars["rmse_inclination_deg"] == pytest.approx(rmse.inclination, rel=1e-6)
@@ -41,7 +42,7 @@ def test_filter_job_scores_against_the_truth(moving: tuple[Path, ik.ImuData, ik.
 
 
 def test_filter_job_refuses_an_unknown_method(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
-    with pytest.raises(ik.ParameterError, match="method: expected one of mahony, madgwick"):
+    with pytest.raises(ik.ParameterError, match="method: expected one of mahony, madgwick, robust"):
         JOBS["filter"](moving[0], method="kalman")
 
 

@@ -14,6 +14,7 @@ from imukit.cli._common import CliError, err, out, positive, wrote
 from imukit.cli._evaluate import ALIGNMENTS
 from imukit.fleet import JOBS
 from imukit.fleet import run as run_fleet
+from imukit.fleet._jobs import FILTERS
 
 DESCRIPTION = """\
 Run JOB on every recording of INPUTS, one Dask task per recording, and write the results under
@@ -49,7 +50,7 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
         "--allan-min-s",
         {"type": positive, "metavar": "S", "help": "report: shortest rest segment given an Allan fit (default 60)"},
     ),
-    "method": ("--method", {"choices": ("mahony", "madgwick"), "help": "filter: the filter (default mahony)"}),
+    "method": ("--method", {"choices": tuple(FILTERS), "help": "filter: the filter (default mahony)"}),
     "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
     "max_dt": (
         "--max-dt",

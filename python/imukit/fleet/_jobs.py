@@ -8,10 +8,11 @@ EuRoC ``sensor.yaml`` beside the log: :func:`imukit.io.find_noise_model`) and re
 window (:func:`imukit.preint.window_arrays`; the 9×9 covariance and 9×6 bias Jacobian flattened
 row-major), for learning datasets.
 
-``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"`` or ``"madgwick"``,
-default options) over the log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s``
-per sample and, where the log has ground truth, the errors against it
-(:func:`imukit.eval.attitude_error` with the truth at the IMU's stamps,
+``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"``, ``"madgwick"`` or
+``"robust"``, default options; 9D where the log has a magnetometer, ``imukit.ImuData.mag``) over the
+log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s`` per sample and, where the
+log has ground truth, the errors against it (:func:`imukit.eval.attitude_error` with the truth at
+the IMU's stamps,
 :func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters cannot observe
 heading): ``total_error_deg``, ``heading_error_deg``, ``inclination_error_deg`` per sample (NaN where
 the truth has none) and their RMSE as scalars.
@@ -27,7 +28,7 @@ import numpy as np
 
 from imukit._errors import ParameterError
 from imukit.eval import attitude_error, truth_at_imu
-from imukit.filters import Madgwick, Mahony
+from imukit.filters import Madgwick, Mahony, Robust
 from imukit.fleet._load import JobOutput, Scalar, load, per_axis
 from imukit.fleet._report import report
 from imukit.fleet._score import evaluate, scores
@@ -39,7 +40,7 @@ from imukit.strapdown import integrate
 
 __all__ = ["FILTERS", "JOBS", "attitude", "dead_reckoning", "preintegrate"]
 
-FILTERS = {"mahony": Mahony, "madgwick": Madgwick}
+FILTERS = {"mahony": Mahony, "madgwick": Madgwick, "robust": Robust}
 """The filters the ``filter`` job runs, by ``method`` name."""
 
 
@@ -87,7 +88,7 @@ def attitude(
     if method not in FILTERS:
         raise ParameterError(f"expected one of {', '.join(FILTERS)}, got {method!r}", argument="method")
     imu, truth, _ = load(path, on_bad_line=on_bad_line, csv=csv)
-    result = FILTERS[method](world=world).run(imu)
+    result = FILTERS[method](world=world).run(imu, mag=imu.mag)
     rows = {"t_s": imu.t, "q_xyzw": result.rotation.as_quat(), "gyro_bias_rad_s": result.gyro_bias}
     scalars: dict[str, Scalar] = {
         "samples": len(imu),
