@@ -12,9 +12,8 @@ row-major), for learning datasets.
 ``"robust"``, default options; 9D where the log has a magnetometer, ``imukit.ImuData.mag``) over the
 log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s`` per sample and, where the
 log has ground truth, the errors against it (:func:`imukit.eval.attitude_error` with the truth at
-the IMU's stamps,
-:func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters cannot observe
-heading): ``total_error_deg``, ``heading_error_deg``, ``inclination_error_deg`` per sample (NaN where
+the IMU's stamps, :func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters
+cannot observe heading): ``total_error_deg``, ``heading_error_deg``, ``inclination_error_deg`` per sample (NaN where
 the truth has none) and their RMSE as scalars.
 """
 
