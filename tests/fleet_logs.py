@@ -1,10 +1,13 @@
 """Simulated fleets for the imukit.fleet tests: EuRoC folders and EuRoC-layout CSV files, plus a
-corrupt and an empty file."""
+corrupt and an empty file; estimates in another world frame for the evaluate job."""
 
 from __future__ import annotations
 
 import shutil
 from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
 from imukit import sim
@@ -38,3 +41,17 @@ def write_broken(folder: Path) -> dict[Path, str]:
     corrupt.write_bytes(b"#timestamp,w_x\n\x00\x9f garbage \xff\n")
     empty.write_bytes(b"")
     return {corrupt: "not a text file", empty: "empty file"}
+
+
+def rigidly_moved(reference: ik.Trajectory, every: int, angle_deg: float, offset: list[float]) -> ik.Trajectory:
+    """Every ``every``-th pose of ``reference`` (an estimator's slower output) in a world frame turned
+    by ``angle_deg`` about z and shifted by ``offset``: the poses relative to each other unchanged."""
+    turn = Rotation.from_euler("z", angle_deg, degrees=True)
+    stamps = reference.t_ns
+    return ik.Trajectory(
+        None if stamps is not None else reference.t[::every],
+        turn.apply(np.array(reference.position[::every])) + offset,
+        None,
+        turn * reference.rotation[::every],
+        t_ns=None if stamps is None else stamps[::every],
+    )

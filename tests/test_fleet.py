@@ -3,7 +3,9 @@ agreement with the in-process job, a worker killed mid-run, resume."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import signal
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,10 +18,12 @@ pytest.importorskip("pyarrow", reason="imukit.fleet needs pyarrow (pip install '
 
 import pyarrow.dataset
 import pyarrow.parquet
-from distributed import Client, LocalCluster
+from distributed import Client
 
-from fleet_logs import write_broken, write_logs
+import imukit as ik
+from fleet_logs import rigidly_moved, write_broken, write_logs
 from imukit import fleet
+from imukit.fleet._run import _client
 
 # Columns that differ between two runs of the same work.
 _VOLATILE = {"elapsed_s"}
@@ -27,9 +31,8 @@ _VOLATILE = {"elapsed_s"}
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[Client]:
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
-        with Client(cluster) as c:
-            yield c
+    with _client(None, 2) as c:  # the local cluster run() starts without a client
+        yield c
 
 
 @pytest.fixture(scope="module")
@@ -67,10 +70,16 @@ def test_forty_logs_a_corrupt_and_an_empty_one(undisturbed: Any, fleet_logs: Any
 
 
 def test_summary_file_is_the_returned_table(undisturbed: Any, client: Client, fleet_logs: Any, tmp_path: Path) -> None:
-    _, logs, _ = fleet_logs
-    table = fleet.run("report", [str(p) for p in logs[:4]], out=tmp_path, client=client)
+    _, logs, broken = fleet_logs
+    calls: list[tuple[int, int, int]] = []
+    inputs = [str(p) for p in [*logs[:4], *broken]]
+    table = fleet.run("report", inputs, out=tmp_path, client=client, progress=lambda *a: calls.append(a))
     assert pyarrow.parquet.read_table(tmp_path / "summary.parquet").equals(table)
     assert not list(tmp_path.glob(".*"))  # no temporary left behind
+    # The progress: each log once as it is done, out of all, with the failures so far.
+    assert [(done, total) for done, total, _ in calls] == [(k, 6) for k in range(1, 7)]
+    failed = [f for _, _, f in calls]
+    assert failed == sorted(failed) and failed[-1] == 2
 
 
 def test_killed_worker_every_input_once_same_results(
@@ -89,6 +98,9 @@ def test_killed_worker_every_input_once_same_results(
     table = fleet.run("report", str(folder / "*"), out=tmp_path, client=client, progress=progress)
     assert killed
     assert victim not in client.run(os.getpid).values()  # the nanny started a new process
+    # The local cluster's workers, the restarted one too, keep glibc's adaptive malloc (_run._LOCAL_CONFIG).
+    client.wait_for_workers(2, timeout=60)
+    assert list(client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_").values()) == [None, None]
     paths = table.column("path").to_pylist()
     assert len(paths) == 42 and len(set(paths)) == 42
     assert _stable(table) == _stable(undisturbed)
@@ -136,3 +148,41 @@ def test_manifest_metadata_carried(client: Client, fleet_logs: Any, tmp_path: Pa
     table = fleet.run("report", manifest, out=tmp_path / "out", client=client)
     assert table.column("unit_id").to_pylist() == ["unit-0", "unit-1", "unit-2"]
     assert table.column("path").to_pylist() == [str(p) for p in logs[:3]]
+
+
+def test_evaluate_takes_each_logs_reference_from_the_manifest(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    _, logs, _ = fleet_logs
+    reference = shutil.copytree(logs[0], tmp_path / "truth" / "log")  # a EuRoC folder: its ground truth
+    truth = ik.io.read_trajectory(reference)
+    offsets = {"a.txt": [0.5, 0.0, 0.0], "b.txt": [0.0, 0.0, 0.2], "c.txt": [0.0, 0.0, 0.0]}
+    for name, offset in offsets.items():
+        ik.io.write_tum(rigidly_moved(truth, 10, 0.0, offset), tmp_path / name)
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text("path,reference,unit_id\na.txt,truth/log,u1\nb.txt,truth/log,u2\nc.txt,missing.txt,u3\n")
+    out = tmp_path / "out"
+    calls: list[tuple[int, int, int]] = []
+
+    def evaluate() -> Any:
+        return fleet.run(
+            "evaluate", manifest, out=out, client=client, align="none", progress=lambda *a: calls.append(a)
+        )
+
+    rows = evaluate().to_pylist()
+    assert [(row["unit_id"], row["status"]) for row in rows] == [("u1", "ok"), ("u2", "ok"), ("u3", "failed")]
+    assert [row["reference"] for row in rows] == [str(reference)] * 2 + [str(tmp_path / "missing.txt")]
+    assert "missing.txt" in rows[2]["error"]
+    assert [row["ate_rmse_m"] for row in rows[:2]] == pytest.approx([0.5, 0.2], rel=1e-6)
+    parts = pyarrow.dataset.dataset(out / "evaluate", partitioning="hive")
+    assert parts.count_rows() == sum(row["scored_samples"] for row in rows[:2])
+    for piece in parts.files:  # every file a run writes says its version, units and frames
+        meta = json.loads(pyarrow.parquet.read_schema(piece).metadata[b"imukit"])
+        assert meta["imukit_version"] == ik.__version__ and meta["job"] == "evaluate"
+        assert "_deg degrees" in meta["units"] and "R_wb" in meta["frames"]
+    # The resume key covers the reference: a changed ground truth redoes the logs scored against it.
+    calls.clear()
+    evaluate()
+    assert calls == []
+    data = next(Path(reference).rglob("state_groundtruth_estimate0/data.csv"))
+    os.utime(data)  # rewritten now
+    evaluate()
+    assert [c[0] for c in calls] == [2, 3]  # two of three redone, the failed one kept

@@ -6,8 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
+from fleet_logs import rigidly_moved
 from imukit import fleet, sim
 from imukit.fleet import JOBS
 
@@ -22,12 +24,13 @@ def moving(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, ik.ImuData, 
     return folder, imu, truth
 
 
-def test_filter_job_scores_against_the_truth(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
+@pytest.mark.parametrize("method", ["madgwick", "robust"])
+def test_filter_job_scores_against_the_truth(method: str, moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
     folder, imu, truth = moving
-    output = JOBS["filter"](folder, method="madgwick")
+    output = JOBS["filter"](folder, method=method)
     # The same filter on the same samples, scored against the simulated truth at the same instants
     # (no interpolation): the job's association must reproduce it.
-    result = ik.filters.Madgwick().run(imu)
+    result = {"madgwick": ik.filters.Madgwick, "robust": ik.filters.Robust}[method]().run(imu)
     rmse = ik.eval.attitude_error(result.rotation, truth.rotation, align_heading=True).rmse(degrees=True)
     assert output.scalars["scored_samples"] == len(imu)
     assert output.scalars["rmse_inclination_deg"] == pytest.approx(rmse.inclination, rel=1e-6)
@@ -39,7 +42,7 @@ def test_filter_job_scores_against_the_truth(moving: tuple[Path, ik.ImuData, ik.
 
 
 def test_filter_job_refuses_an_unknown_method(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
-    with pytest.raises(ik.ParameterError, match="method: expected one of mahony, madgwick"):
+    with pytest.raises(ik.ParameterError, match="method: expected one of mahony, madgwick, robust"):
         JOBS["filter"](moving[0], method="kalman")
 
 
@@ -62,6 +65,37 @@ def test_integrate_job_is_dead_reckoning_from_the_truth(moving: tuple[Path, ik.I
     final = float(np.linalg.norm(direct.position[-1] - truth.position[-1]))
     assert scalars["samples"] == len(imu) and scalars["scored_samples"] == len(imu)
     assert scalars["final_position_error_m"] == pytest.approx(final, rel=1e-6)
+    angles = (truth.rotation.inv() * direct.rotation).magnitude()
+    assert scalars["ate_rotation_rmse_deg"] == pytest.approx(np.degrees(np.sqrt(np.mean(angles**2))), rel=1e-6)
     assert 0.0 < final < 5.0  # white noise and a bias random walk over 20 s, true initial bias
     with pytest.raises(ik.ParameterError, match="no ground truth"):
         JOBS["integrate"](next(folder.rglob("imu0/data.csv")))
+
+
+def test_evaluate_job_scores_an_estimate_against_its_reference(
+    moving: tuple[Path, ik.ImuData, ik.Trajectory], tmp_path: Path
+) -> None:
+    folder, _, _ = moving
+    reference = ik.io.read_trajectory(folder)  # the recording folder's ground truth
+    offset = [0.3, -0.4, 0.1]
+    estimate = rigidly_moved(reference, 10, 10.0, offset)
+    ik.io.write_tum(estimate, tmp_path / "est.txt")
+    raw = JOBS["evaluate"](tmp_path / "est.txt", reference=folder, align="none")
+    s = raw.scalars
+    # Unaligned: each pose is off by the frame change. Translation: ‖(R_z − I) p + d‖ per pose; rotation:
+    # the angle of R⁻¹ R_z R, which is R_z's, 10°; relative motions T_i⁻¹ T_j are unchanged, RPE 0.
+    p = np.array(reference.position[::10])
+    expected = np.linalg.norm(Rotation.from_euler("z", 10.0, degrees=True).apply(p) + offset - p, axis=1)
+    assert s["estimate_samples"] == s["scored_samples"] == len(p)
+    assert s["ate_rmse_m"] == pytest.approx(np.sqrt(np.mean(expected**2)), rel=1e-6)
+    assert s["ate_max_m"] == pytest.approx(expected.max(), rel=1e-6)
+    assert s["final_position_error_m"] == pytest.approx(expected[-1], rel=1e-6)
+    assert s["ate_rotation_rmse_deg"] == pytest.approx(10.0, rel=1e-6)
+    assert s["rpe_rmse_m"] < 1e-6 and s["rpe_rotation_rmse_deg"] < 1e-4
+    assert raw.rows is not None
+    np.testing.assert_allclose(raw.rows["translation_error_m"], expected, rtol=1e-6)
+    # se3 alignment (the default) finds the frame change: nothing left.
+    aligned = JOBS["evaluate"](tmp_path / "est.txt", reference=folder).scalars
+    assert aligned["ate_rmse_m"] < 1e-6 and aligned["ate_rotation_rmse_deg"] < 1e-4
+    with pytest.raises(ik.ParameterError, match="reference: the evaluate job needs a reference"):
+        JOBS["evaluate"](tmp_path / "est.txt")

@@ -16,9 +16,11 @@ DURATION_S = 120.0
 NOISE = ik.ImuNoise(1.7e-4, 2.0e-3, 0.0, 0.0)  # white noise only: σ at rest is N·√rate exactly
 BIAS = ik.ImuBias([0.01, -0.02, 0.005], [0.05, 0.02, -0.03])
 GYRO_RANGE = 1.0
-# Steps removed (gaps) and saturated readings, all in the first 40 s, leaving one ~90 s rest segment.
+ACCEL_RANGE = 16.0
+# Steps removed (gaps) and saturated readings, all in the first 45 s, leaving one ~77 s rest segment.
 CUTS = [(1000, 1050), (3000, 3100), (5000, 5030)]
 SATURATED = {0: [6000, 6400, 6800], 1: [7000, 7200]}  # axis -> samples read at ±GYRO_RANGE
+ACCEL_SATURATED = {2: [7400, 8200, 8600]}  # axis -> samples read at ±ACCEL_RANGE
 
 
 @pytest.fixture(scope="module")
@@ -28,10 +30,14 @@ def log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     for axis, samples in SATURATED.items():
         gyro[samples, axis] = GYRO_RANGE * (-1) ** axis
     gyro[6600, 2] = 0.999 * GYRO_RANGE  # near the limit, not at it
+    accel = imu.accel.copy()
+    for axis, samples in ACCEL_SATURATED.items():
+        accel[samples, axis] = -ACCEL_RANGE
+    accel[7800, 0] = 0.999 * ACCEL_RANGE
     keep = np.ones(len(imu), dtype=bool)
     for a, b in CUTS:
         keep[a:b] = False
-    kept = ik.ImuData(np.asarray(imu.t)[keep], gyro[keep], imu.accel[keep])
+    kept = ik.ImuData(np.asarray(imu.t)[keep], gyro[keep], accel[keep])
     folder = tmp_path_factory.mktemp("report") / "log"
     ik.io.write_euroc(folder, kept, epoch_ns=10**18, noise=NOISE, rate_hz=RATE_HZ)
     csv = next(folder.rglob("imu0/data.csv"))
@@ -43,7 +49,7 @@ def log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def result(log: Path) -> dict[str, object]:
-    return fleet.report(log, gyro_range=GYRO_RANGE).scalars
+    return fleet.report(log, gyro_range=GYRO_RANGE, accel_range=ACCEL_RANGE).scalars
 
 
 def test_counts_are_exact(result: dict[str, object]) -> None:
@@ -53,7 +59,7 @@ def test_counts_are_exact(result: dict[str, object]) -> None:
     assert result["longest_gap_s"] == pytest.approx((100 + 1) / RATE_HZ, abs=1e-9)
     assert result["dt_jitter_s"] < 1e-9  # the steps that are not gaps are all 1/rate
     assert [result[f"gyro_saturated_{a}_samples"] for a in "xyz"] == [3, 2, 0]
-    assert result["accel_saturated_x_samples"] is None  # no range given: unknown, not 0
+    assert [result[f"accel_saturated_{a}_samples"] for a in "xyz"] == [0, 0, 3]
     assert result["skipped_duplicate_stamp_lines"] == 1
     assert result["skipped_malformed_lines"] == 1
     assert result["skipped_non_finite_lines"] == 0
@@ -80,15 +86,16 @@ def test_bias_gravity_and_noise_at_rest(result: dict[str, object]) -> None:
 
 def test_allan_fit_on_the_long_rest_segment(result: dict[str, object]) -> None:
     assert result["rest_segments"] >= 2  # type: ignore[operator]
-    # σ(τ₀) over the ~17,900 samples of the segment has relative standard error 1/√(2n) ≈ 0.5%; the
-    # fit spreads N over the τ it uses and shares it with B and K: 3% is six of those.
+    # σ(τ₀) over the ~15,400 samples of the segment has relative standard error 1/√(2n) ≈ 0.6%; the
+    # fit spreads N over the τ it uses and shares it with B and K: 3% is five of those.
     assert result["gyro_allan_N_rad_s_sqrt_hz"] == pytest.approx(NOISE.gyro_density, rel=0.03)
     assert result["accel_allan_N_m_s2_sqrt_hz"] == pytest.approx(NOISE.accel_density, rel=0.03)
 
 
 def test_no_allan_fit_below_its_minimum(log: Path) -> None:
     short = fleet.report(log, allan_min_s=DURATION_S).scalars
-    assert short["gyro_allan_N_rad_s_sqrt_hz"] is None and short["gyro_saturated_x_samples"] is None
+    assert short["gyro_allan_N_rad_s_sqrt_hz"] is None
+    assert short["gyro_saturated_x_samples"] is None  # no range given: unknown, not 0
 
 
 def test_rest_segments_split_at_motion() -> None:
@@ -98,3 +105,10 @@ def test_rest_segments_split_at_motion() -> None:
     segments = fleet.rest_segments(ik.ImuData(imu.t, gyro, imu.accel))
     assert [(s.start, s.stop) for s in segments] == [(0, 800), (1000, 2001)]
     assert segments[0].duration_s == pytest.approx(799 / RATE_HZ)
+
+
+def test_one_sample_is_refused_naming_the_argument() -> None:
+    from imukit.fleet._report import report_imu
+
+    with pytest.raises(ik.ShapeError, match=r"^imu: 1 sample, a report needs at least 2$"):
+        report_imu(ik.ImuData([0.0], [[0.0, 0.0, 0.0]], [[0.0, 0.0, 9.81]]))

@@ -11,8 +11,10 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from imukit.cli._common import CliError, err, out, positive, wrote
+from imukit.cli._evaluate import ALIGNMENTS
 from imukit.fleet import JOBS
 from imukit.fleet import run as run_fleet
+from imukit.fleet._jobs import FILTERS
 
 DESCRIPTION = """\
 Run JOB on every recording of INPUTS, one Dask task per recording, and write the results under
@@ -23,10 +25,13 @@ log (DIR/JOB/log=<id>/part-0.parquet).
 Jobs: report (duration, rate and jitter, gaps, skipped lines, saturation, rest segments, bias and
 noise density at rest, Allan fit), filter (attitude per sample as rows, RMSE against the log's
 ground truth), integrate (dead reckoning from the log's ground truth, ATE / RPE against it; the
-trajectory as rows), preintegrate (windows of --window-s seconds as rows).
+trajectory as rows), evaluate (an estimate, e.g. a VIO output per log, against its reference:
+ATE / RPE after --align; the errors per pose as rows), preintegrate (windows of --window-s seconds
+as rows).
 INPUTS: recording files or folders, globs ('logs/*.csv'), folders of recordings (every recording
 found under them), or a manifest (.parquet, or .csv with a `path` column; its other columns are
-copied into the summary). Bad lines in inputs are skipped and counted.
+copied into the summary, and a column named as a job option is that log's value of it: evaluate's
+`reference`). Bad lines in inputs are skipped and counted.
 Without --scheduler a local cluster of --workers worker processes runs the tasks; with it, an
 existing Dask cluster (a `dask scheduler`, dask-jobqueue on SLURM, Kubernetes) does.
 Re-running with the same --out skips the recordings already done (same path, size and mtime).
@@ -34,7 +39,8 @@ Writes: DIR/summary.parquet, DIR/JOB/log=<id>/part-0.parquet. Prints the counts 
 failed recordings; exit code 1 when some recording failed.
 
 Example:
-  imukit fleet report 'logs/*' --out fleet_report --gyro-range 34.9"""
+  imukit fleet report 'logs/*' --out fleet_report --gyro-range 34.9
+  imukit fleet evaluate estimates.csv --out scores --align yaw   # columns path, reference"""
 
 # Job option -> (flag, argparse keywords); each goes to the jobs whose signature takes it.
 _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -44,14 +50,14 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
         "--allan-min-s",
         {"type": positive, "metavar": "S", "help": "report: shortest rest segment given an Allan fit (default 60)"},
     ),
-    "method": ("--method", {"choices": ("mahony", "madgwick"), "help": "filter: the filter (default mahony)"}),
+    "method": ("--method", {"choices": tuple(FILTERS), "help": "filter: the filter (default mahony)"}),
     "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
     "max_dt": (
         "--max-dt",
         {
             "type": positive,
             "metavar": "S",
-            "help": "filter, integrate: longest truth gap bridged (default: 2.5 x its median step)",
+            "help": "filter, integrate, evaluate: longest truth gap bridged (default: 2.5 x its median step)",
         },
     ),
     "window_s": ("--window-s", {"type": positive, "metavar": "S", "help": "preintegrate: window length (default 0.1)"}),
@@ -60,7 +66,15 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
         "--bias-from-truth",
         {"action": "store_const", "const": True, "help": "integrate: correct by the truth's initial biases"},
     ),
-    "rpe_delta_s": ("--rpe-delta-s", {"type": positive, "metavar": "S", "help": "integrate: RPE interval (default 1)"}),
+    "rpe_delta_s": (
+        "--rpe-delta-s",
+        {"type": positive, "metavar": "S", "help": "integrate, evaluate: RPE interval (default 1)"},
+    ),
+    "reference": (
+        "--reference",
+        {"metavar": "GT", "help": "evaluate: the reference of every log (default: the manifest's reference column)"},
+    ),
+    "align": ("--align", {"choices": ALIGNMENTS, "help": "evaluate: alignment before scoring (default se3)"}),
     "noise_yaml": ("--noise", {"metavar": "YAML", "help": "preintegrate: Kalibr imu.yaml (default: sensor.yaml)"}),
 }
 
@@ -68,7 +82,7 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
 def add(commands: Any) -> argparse.ArgumentParser:
     p: argparse.ArgumentParser = commands.add_parser(
         "fleet",
-        help="run a job (report, filter, integrate, preintegrate) over many recordings on Dask; Parquet results",
+        help="run a job (report, filter, integrate, evaluate, preintegrate) over many recordings on Dask, to Parquet",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -4,13 +4,15 @@
 jobs                   plain functions on one recording (a path), usable without Dask, returning
                        :class:`JobOutput` (scalars with units in their names, optional row arrays):
                        :func:`report` (timing, gaps, skipped lines, saturation, rest, bias, noise),
-                       ``filter``, ``integrate`` and :func:`preintegrate` (rows per sample or
-                       window); :data:`JOBS` maps names to them
+                       ``filter``, ``integrate``, :func:`evaluate` (an estimate against its
+                       reference: ATE, RPE) and :func:`preintegrate` (rows per sample or window);
+                       :data:`JOBS` maps names to them
 :func:`run`            ``run(job, inputs, *, out, client=None, **job_options)`` → ``pyarrow.Table``:
                        one Dask task per log, ``summary.parquet`` and a dataset partitioned by log
                        under ``out``; failures become rows, a re-run skips the logs already done
 :func:`find_inputs`    a list of paths, a glob, a folder (every recording the Format registry
-                       detects under it) or a manifest (CSV / Parquet with ``path``, metadata)
+                       detects under it) or a manifest (CSV / Parquet with ``path``, metadata,
+                       per-log job options such as ``reference``)
 :func:`rest_segments`  the still stretches of a recording
 =====================  ===========================================================================
 
@@ -26,6 +28,7 @@ from imukit.fleet._load import JobOutput, Recording, load
 from imukit.fleet._report import ALLAN_MIN_S, report
 from imukit.fleet._rest import RestSegment, rest_segments
 from imukit.fleet._run import run
+from imukit.fleet._score import evaluate
 
 __all__ = [
     "ALLAN_MIN_S",
@@ -34,6 +37,7 @@ __all__ = [
     "JobOutput",
     "Recording",
     "RestSegment",
+    "evaluate",
     "find_inputs",
     "load",
     "preintegrate",

@@ -4,7 +4,9 @@ An input is one of: a path (a recording file or folder), a glob (``logs/*.csv``)
 recordings (every path under it that a registered :class:`imukit.io.Format` detects, a recording
 folder such as EuRoC's counted once), or a manifest: a ``.parquet`` file, or a ``.csv`` whose
 header has a ``path`` column, one recording per row with its other columns (``unit_id`` …) carried
-into the summary. Relative paths in a manifest are relative to the manifest's folder.
+into the summary; a column named as one of the job's options (``reference`` for ``evaluate``,
+``gyro_range`` for ``report`` …) is also that log's value of the option. Relative paths in a
+manifest's ``path`` and ``reference`` columns are relative to the manifest's folder.
 """
 
 from __future__ import annotations
@@ -20,7 +22,10 @@ from imukit.fleet._load import Scalar
 from imukit.io import formats
 from imukit.io._format import Head
 
-__all__ = ["Input", "find_inputs", "stamp"]
+__all__ = ["PATH_COLUMNS", "Input", "find_inputs", "stamp"]
+
+PATH_COLUMNS = ("path", "reference")
+"""The manifest columns that name files: relative paths in them are relative to the manifest."""
 
 _GLOB = set("*?[")
 
@@ -87,16 +92,25 @@ def _manifest(path: Path) -> Iterator[Input]:
     if "path" not in table.column_names:
         raise ParameterError(f"{path}: a manifest needs a 'path' column, got {table.column_names}", argument="inputs")
     for row in table.to_pylist():
-        recording = Path(str(row.pop("path")))
-        yield Input(os.fspath(recording if recording.is_absolute() else path.parent / recording), row)
+        for column in PATH_COLUMNS[1:]:
+            if row.get(column) is not None:
+                row[column] = _beside(path, row[column])
+        yield Input(_beside(path, row.pop("path")), row)
 
 
-def stamp(path: str) -> tuple[int, int]:
-    """``(size in bytes, latest mtime in ns)`` of a file, or of every file under a folder: a changed
+def _beside(manifest: Path, value: Any) -> str:
+    """A path named in ``manifest``: relative ones are relative to its folder."""
+    named = Path(str(value))
+    return os.fspath(named if named.is_absolute() else manifest.parent / named)
+
+
+def stamp(*paths: str) -> tuple[int, int]:
+    """``(size in bytes, latest mtime in ns)`` of files, or of every file under a folder: a changed
     recording changes it (the resume key, with the path)."""
-    target = Path(path)
-    files: Iterable[Path] = [target]
-    if target.is_dir():
-        files = (Path(root, name) for root, _, names in os.walk(target) for name in names)
-    stats: list[Any] = [f.stat() for f in files]
+    stats: list[Any] = []
+    for target in map(Path, paths):
+        files: Iterable[Path] = [target]
+        if target.is_dir():
+            files = (Path(root, name) for root, _, names in os.walk(target) for name in names)
+        stats += [f.stat() for f in files]
     return sum(s.st_size for s in stats), max((s.st_mtime_ns for s in stats), default=0)

@@ -1,5 +1,5 @@
 """The jobs :func:`imukit.fleet.run` knows by name (:data:`JOBS`): ``filter``, ``integrate``,
-``preintegrate`` (``report``: :mod:`imukit.fleet._report`).
+``preintegrate`` (``report``: :mod:`imukit.fleet._report`; ``evaluate``: :mod:`imukit.fleet._score`).
 
 A job is ``job(path, **options) -> JobOutput``: a plain function of one recording. ``preintegrate``
 cuts the log into windows of ``window_s`` seconds (:func:`imukit.preint.regular_boundaries`),
@@ -8,13 +8,13 @@ EuRoC ``sensor.yaml`` beside the log: :func:`imukit.io.find_noise_model`) and re
 window (:func:`imukit.preint.window_arrays`; the 9×9 covariance and 9×6 bias Jacobian flattened
 row-major), for learning datasets.
 
-``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"`` or ``"madgwick"``,
-default options) over the log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s``
-per sample and, where the log has ground truth, the errors against it
-(:func:`imukit.eval.attitude_error` with the truth at the IMU's stamps,
-:func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters cannot observe
-heading): ``total_deg``, ``heading_deg``, ``inclination_deg`` per sample (NaN where the truth has
-none) and their RMSE as scalars.
+``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"``, ``"madgwick"`` or
+``"robust"``, default options; 9D where the log has a magnetometer, ``imukit.ImuData.mag``) over the
+log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s`` per sample and, where the
+log has ground truth, the errors against it (:func:`imukit.eval.attitude_error` with the truth at
+the IMU's stamps, :func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters
+cannot observe heading): ``total_error_deg``, ``heading_error_deg``, ``inclination_error_deg`` per sample (NaN where
+the truth has none) and their RMSE as scalars.
 """
 
 from __future__ import annotations
@@ -26,10 +26,11 @@ from typing import Any
 import numpy as np
 
 from imukit._errors import ParameterError
-from imukit.eval import ape, attitude_error, rpe, truth_at_imu
-from imukit.filters import Madgwick, Mahony
-from imukit.fleet._load import JobOutput, Scalar, load
+from imukit.eval import attitude_error, truth_at_imu
+from imukit.filters import Madgwick, Mahony, Robust
+from imukit.fleet._load import JobOutput, Scalar, load, per_axis
 from imukit.fleet._report import report
+from imukit.fleet._score import evaluate, scores
 from imukit.imu import ImuBias
 from imukit.io import find_noise_model
 from imukit.io._report import OnBadLine
@@ -38,7 +39,7 @@ from imukit.strapdown import integrate
 
 __all__ = ["FILTERS", "JOBS", "attitude", "dead_reckoning", "preintegrate"]
 
-FILTERS = {"mahony": Mahony, "madgwick": Madgwick}
+FILTERS = {"mahony": Mahony, "madgwick": Madgwick, "robust": Robust}
 """The filters the ``filter`` job runs, by ``method`` name."""
 
 
@@ -86,11 +87,11 @@ def attitude(
     if method not in FILTERS:
         raise ParameterError(f"expected one of {', '.join(FILTERS)}, got {method!r}", argument="method")
     imu, truth, _ = load(path, on_bad_line=on_bad_line, csv=csv)
-    result = FILTERS[method](world=world).run(imu)
+    result = FILTERS[method](world=world).run(imu, mag=imu.mag)
     rows = {"t_s": imu.t, "q_xyzw": result.rotation.as_quat(), "gyro_bias_rad_s": result.gyro_bias}
     scalars: dict[str, Scalar] = {
         "samples": len(imu),
-        "final_gyro_bias_rad_s": float(np.linalg.norm(result.gyro_bias[-1])),
+        **per_axis("final_gyro_bias", "rad_s", result.gyro_bias[-1]),
     }
     if truth is not None:
         paired = truth_at_imu(truth, imu, max_dt=max_dt)
@@ -104,7 +105,7 @@ def attitude(
             "rmse_inclination_deg": rmse.inclination,
             "scored_samples": rmse.n_samples,
         }
-        rows |= {name: np.degrees(getattr(error, name)) for name in ("total", "heading", "inclination")}
+        rows |= {f"{name}_error_deg": np.degrees(getattr(error, name)) for name in ("total", "heading", "inclination")}
     return JobOutput(scalars, rows)
 
 
@@ -120,8 +121,8 @@ def dead_reckoning(
 ) -> JobOutput:
     """The ``integrate`` job: dead reckoning of the recording at ``path`` from its ground truth's state
     at the first IMU sample inside it (with the truth's biases when ``bias_from_truth``), scored
-    against that truth without alignment: ATE (:func:`imukit.eval.ape`) and RPE over ``rpe_delta_s``
-    seconds (:func:`imukit.eval.rpe`). Rows: ``t_s``, ``position_m``, ``velocity_m_s``, ``q_xyzw``."""
+    against that truth without alignment (:func:`imukit.fleet._score.scores`: ATE, RPE over
+    ``rpe_delta_s`` seconds). Rows: ``t_s``, ``position_m``, ``velocity_m_s``, ``q_xyzw``."""
     imu, truth, _ = load(path, on_bad_line=on_bad_line, csv=csv)
     if truth is None:
         raise ParameterError(f"{os.fspath(path)} has no ground truth to start from and score against", argument="path")
@@ -136,17 +137,8 @@ def dead_reckoning(
     samples = imu[first:]
     schemes = {} if scheme is None else {"scheme": scheme}
     trajectory = integrate(samples, initial=start, bias=bias, **schemes)
-    ate = ape(trajectory, truth, align="none", max_dt=max_dt)
-    drift = rpe(trajectory, truth, delta=rpe_delta_s, unit="s", max_dt=max_dt)
-    scalars: dict[str, Scalar] = {
-        "samples": len(samples),
-        "final_position_error_m": float(np.linalg.norm(ate.estimate.position[-1] - ate.reference.position[-1])),
-        "ate_rmse_m": ate.translation_stats.rmse,
-        "ate_max_m": ate.translation_stats.max,
-        "ate_rotation_rmse_deg": ate.rotation_stats.rmse,
-        "rpe_rmse_m": drift.translation_stats.rmse,
-        "scored_samples": ate.translation_stats.n,
-    }
+    scored, _ = scores(trajectory, truth, align="none", rpe_delta_s=rpe_delta_s, max_dt=max_dt)
+    scalars: dict[str, Scalar] = {"samples": len(samples), **scored}
     rows = {"t_s": trajectory.t, "position_m": trajectory.position, "q_xyzw": trajectory.rotation.as_quat()}
     if trajectory.velocity is not None:
         rows["velocity_m_s"] = trajectory.velocity
@@ -157,6 +149,7 @@ JOBS: dict[str, Callable[..., JobOutput]] = {
     "report": report,
     "filter": attitude,
     "integrate": dead_reckoning,
+    "evaluate": evaluate,
     "preintegrate": preintegrate,
 }
 """The jobs by name, as ``imukit fleet JOB`` and :func:`imukit.fleet.run` take them."""

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from imukit._errors import ShapeError
 from imukit.fleet._load import JobOutput, Scalar, load, per_axis, skipped_counts
 from imukit.fleet._rest import RestSegment, rest_segments
 from imukit.imu import GRAVITY, ImuData
@@ -68,7 +69,7 @@ def report_imu(
 ) -> dict[str, Scalar]:
     """The columns of :func:`report` that come from the samples alone."""
     if len(imu) < 2:
-        raise ValueError(f"imu: {len(imu)} sample, a report needs at least 2")
+        raise ShapeError(f"{len(imu)} sample, a report needs at least 2", argument="imu")
     gaps = find_gaps(imu)
     steps = np.delete(imu.dt, [gap.sample - 1 for gap in gaps])
     segments = rest_segments(imu)

@@ -8,14 +8,19 @@ re-runs the tasks of a worker that died) leaves the same files. Any exception in
 worker it lands on). ``summary.parquet`` has each input exactly once.
 
 Resume: rows of a previous ``summary.parquet`` in ``out`` whose ``path``, ``size_bytes`` and
-``mtime_ns`` (:func:`imukit.fleet._inputs.stamp`) still match are kept, failed ones too unless
-``retry_failed``; only the other inputs are processed.
+``mtime_ns`` (:func:`imukit.fleet._inputs.stamp`, over the recording and the manifest's
+``reference``) still match are kept, failed ones too unless ``retry_failed``; only the other inputs
+are processed.
+
+Per-log options: a manifest column named as one of the job's keyword options is that log's value of
+it (over ``job_options``): ``reference`` for ``evaluate``, ``gyro_range`` per unit type for ``report``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import hashlib
+import inspect
 import json
 import os
 import time
@@ -26,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 from imukit._core import __version__
 from imukit._errors import ParameterError
-from imukit.fleet._inputs import Input, find_inputs, stamp
+from imukit.fleet._inputs import PATH_COLUMNS, Input, find_inputs, stamp
 from imukit.fleet._jobs import JOBS
 from imukit.fleet._load import Scalar
 
@@ -42,8 +47,10 @@ Progress = Callable[[int, int, int], None]
 
 # What the schema metadata says about the columns (b"imukit" key, JSON).
 _CONVENTIONS = {
-    "units": "SI, in each column's name: _s seconds, _hz, _rad_s, _m_s2, _sqrt_hz densities, _m, _m_s",
-    "frames": "body frame of the IMU; world z up, gravity (0, 0, -9.81) m/s^2; rotations R_wb, quaternions xyzw",
+    "units": "SI, in each column's name: _s seconds, _ns, _hz, _rad_s, _m_s2, _sqrt_hz densities, _m, _m_s, "
+    "_deg degrees; preintegrate's rows are imukit.preint.window_arrays' (seconds, m/s, m)",
+    "frames": "body frame of the IMU; world ENU, z up, gravity (0, 0, -9.81) m/s^2 (NED with the filter job's "
+    "world='NED'); rotations R_wb (body to world), quaternions xyzw",
 }
 
 
@@ -75,7 +82,7 @@ def run(
         raise ParameterError(f"expected one of {', '.join(JOBS)}, got {job!r}", argument="job")
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    todo = [(item, _stamp(item.path)) for item in find_inputs(inputs)]
+    todo = [(item, _stamp(item)) for item in find_inputs(inputs)]
     kept = _previous(folder, job, retry_failed)
     rows: dict[str, dict[str, Scalar]] = {}
     pending = []
@@ -95,9 +102,10 @@ def run(
     return table
 
 
-def _stamp(path: str) -> tuple[int, int]:
+def _stamp(item: Input) -> tuple[int, int]:
+    """The resume key of the files the log's task reads: the recording and its manifest's reference."""
     try:
-        return stamp(path)
+        return stamp(item.path, *(str(item.metadata[c]) for c in PATH_COLUMNS[1:] if item.metadata.get(c) is not None))
     except OSError:
         return -1, -1  # the task's read fails and says why
 
@@ -116,17 +124,29 @@ def _previous(folder: Path, job: str, retry_failed: bool) -> dict[str, dict[str,
     return {row["path"]: row for row in table.to_pylist() if row["status"] == "ok" or not retry_failed}
 
 
+# Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which also pins glibc's mmap
+# threshold at 128 kB: every array of a 60 s log is then mmap'd and unmapped, ~4,900 page faults
+# and +12 ms of system CPU per log, +26% worker CPU in all (bench/bench_fleet.py); without it the
+# workers' peak RSS was lower too (155 vs 210 MB over 100 logs). A None leaves it out (distributed's
+# rule); a process that started a cluster with the default before has it in its environment already.
+_LOCAL_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+
+
 @contextlib.contextmanager
 def _client(client: Client | None, workers: int | None) -> Iterator[Client]:
+    """``client``, or a local cluster of ``workers`` worker processes (default one per core) and its
+    client, closed on exit."""
     if client is not None:
         yield client
         return
+    import dask
     from distributed import Client, LocalCluster
 
     n = workers if workers is not None else os.cpu_count() or 1
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:  # type: ignore[no-untyped-call]
-        with Client(cluster) as local:  # type: ignore[no-untyped-call]
-            yield local
+    with dask.config.set(_LOCAL_CONFIG):  # read as each nanny is made, for its worker and its restarts
+        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:  # type: ignore[no-untyped-call]
+            with Client(cluster) as local:  # type: ignore[no-untyped-call]
+                yield local
 
 
 def _compute(
@@ -158,7 +178,7 @@ def _compute(
             row = future.result()
         except Exception as exc:  # Dask gave up on it (e.g. KilledWorker): still one row
             item = by_future[future.key]
-            row = _row(item, _stamp(item.path), "failed", _one_line(exc), 0.0, {})
+            row = _row(item, _stamp(item), "failed", _one_line(exc), 0.0, {})
         future.release()
         done += 1
         failed += row["status"] == "failed"
@@ -170,10 +190,13 @@ def _compute(
 def _task(item: Input, key: tuple[int, int], *, job: str, out: str, options: dict[str, Any]) -> dict[str, Scalar]:
     """One recording: the job, its rows written, its summary row (module doc)."""
     start = time.perf_counter()
+    function = JOBS[job]
+    accepted = inspect.signature(function).parameters
+    own = {k: v for k, v in item.metadata.items() if k in accepted and v is not None}  # a null: the run's option
     try:
-        result = JOBS[job](item.path, **options)
+        result = function(item.path, **{**options, **own})
         if result.rows is not None:
-            _write_rows(result.rows, Path(out) / job, log_id(item.path))
+            _write_rows(result.rows, Path(out) / job, log_id(item.path), _metadata(job, options))
         status, error, scalars = "ok", None, result.scalars
     except Exception as exc:  # a failed row, never an aborted run
         status, error, scalars = "failed", _one_line(exc), {}
@@ -200,9 +223,9 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
 
-def _write_rows(rows: dict[str, Any], dataset: Path, log: str) -> None:
+def _write_rows(rows: dict[str, Any], dataset: Path, log: str, metadata: dict[bytes, bytes]) -> None:
     """The log's rows as ``dataset/log=<log>/part-0.parquet``, renamed into place (the dataset's
-    readers skip the ``.``-prefixed temporary)."""
+    readers skip the ``.``-prefixed temporary), with the summary's schema metadata."""
     import numpy as np
     import pyarrow
 
@@ -212,7 +235,7 @@ def _write_rows(rows: dict[str, Any], dataset: Path, log: str) -> None:
         columns[name] = pyarrow.array(list(array)) if array.ndim > 1 else pyarrow.array(array)
     partition = dataset / f"log={log}"
     partition.mkdir(parents=True, exist_ok=True)
-    _write_atomically(pyarrow.table(columns), partition / "part-0.parquet")
+    _write_atomically(pyarrow.table(columns).replace_schema_metadata(metadata), partition / "part-0.parquet")
 
 
 def _table(rows: list[dict[str, Scalar]], job: str, options: dict[str, Any]) -> pyarrow.Table:
@@ -220,8 +243,13 @@ def _table(rows: list[dict[str, Scalar]], job: str, options: dict[str, Any]) -> 
 
     names = list(dict.fromkeys(name for row in rows for name in row)) or ["path", "status", "error"]
     table = pyarrow.table({name: [row.get(name) for row in rows] for name in names})
+    return table.replace_schema_metadata(_metadata(job, options))
+
+
+def _metadata(job: str, options: dict[str, Any]) -> dict[bytes, bytes]:
+    """The schema metadata of every file a run writes: key ``imukit``, JSON."""
     meta = {"imukit_version": __version__, "job": job, "options": options, **_CONVENTIONS}
-    return table.replace_schema_metadata({b"imukit": json.dumps(meta, default=str).encode()})
+    return {b"imukit": json.dumps(meta, default=str).encode()}
 
 
 def _write_atomically(table: pyarrow.Table, target: Path) -> None:
