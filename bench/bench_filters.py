@@ -5,6 +5,8 @@ Usage: ``python bench/bench_filters.py [--n 1000000] [--repeats 5] [--loop-n 500
 median time per sample (including the array copies and building the returned ``Rotation``) and the
 ratio peer / imukit (> 1: imukit faster). Peers that are not installed are skipped; imufusion is
 timed on ``--loop-n`` samples and reported per sample. Targets: 6D ≤ 40 ns, 9D ≤ 60 ns per sample.
+``imukit.filters.Robust`` online and offline against ``vqf.VQF.updateBatch`` and ``vqf.offlineVQF``
+(issue 15's targets: ≥ 3× faster than each).
 """
 
 from __future__ import annotations
@@ -83,6 +85,29 @@ def main() -> None:
         dim = "9D" if "9D" in peer else "6D"
         ratios = ", ".join(f"{ns / ours[f'{name} {dim}']:.1f}x vs {name}" for name in ("Mahony", "Madgwick"))
         print(f"{peer:<24} {ns:10.1f} ns/sample   ({ratios})")
+    robust_vs_vqf(imu, mag, args.repeats)
+
+
+def robust_vs_vqf(imu: ik.ImuData, mag: np.ndarray, repeats: int) -> None:
+    """``Robust`` online / offline against vqf's online / offline filter, same data, same run."""
+    if importlib.util.find_spec("vqf") is None:
+        return
+    import vqf
+
+    g, a, mg = (np.ascontiguousarray(x) for x in (imu.gyro, imu.accel, mag))
+    dt, n, f = float(imu.t[1] - imu.t[0]), len(imu.t), ik.filters.Robust()
+    for dim, m in (("6D", None), ("9D", mg)):
+        for offline in (False, True):
+            ours = median_s(lambda m=m, o=offline: f.run(imu, mag=m, offline=o), repeats)
+            if offline:
+                peer = median_s(lambda m=m: vqf.offlineVQF(g, a, m, dt), repeats)
+            else:
+                peer = median_s(lambda m=m: vqf.VQF(dt).updateBatch(g, a, *(() if m is None else (m,))), repeats)
+            name = f"Robust {'offline' if offline else 'online'} {dim}"
+            ratio = peer / ours
+            flag = "ok" if ratio >= 3.0 else "MISSED"
+            times = f"{ours / n * 1e9:8.1f} ns/sample, vqf {peer / n * 1e9:8.1f}"
+            print(f"{name:<20} {times}: {ratio:.1f}x (target 3x) {flag}")
 
 
 if __name__ == "__main__":

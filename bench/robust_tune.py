@@ -35,6 +35,7 @@ GRID: dict[str, tuple[float, ...]] = {
     "tau_acc_s": (2.0, 3.0),
     "tau_mag_s": (9.0, 20.0),
     "bias_window_s": (1.0, 2.0, 4.0),
+    "bias_forgetting_s": (100.0, 1000.0),
 }
 Runner = Callable[[Trial, bool], np.ndarray]
 

@@ -170,17 +170,22 @@ fn figure_eight_accelerations_cancel() {
         .map(|k| tilt_deg(&quat(&out, k), &r.truth[k]))
         .fold(0.0, f64::max);
     // A filter correcting towards the raw accelerometer tilts by up to atan(3√2/g) ≈ 23°; the
-    // Butterworth (τ = 2 s) passes 10% at 0.25 Hz, so about 1.7° plus the bias loop's share. The
-    // issue's 0.5° needs τ ≈ 4 s, which costs accuracy on BROAD (docs/filters_robust.md).
-    assert!(worst < 3.0, "worst tilt {worst}°");
+    // Butterworth (τ = 2 s) passes 10% at 0.25 Hz: 2.14° measured. The issue's 0.5° needs τ ≈ 4 s,
+    // which costs accuracy on BROAD (docs/filters_robust.md, limits); 20% worse fails.
+    assert!(worst < 2.55, "worst tilt {worst}°");
 }
 
 #[test]
 fn sustained_acceleration_leaks_in_bounded_and_leaves() {
-    // 5 m/s² east for 10 s: a low pass of τ = 2 s cannot tell it from gravity for that long
-    // (docs/filters_robust.md, limits: the issue's 0.5° is not met); the tilt stays near the
-    // raw-accelerometer error atan(5/g) = 27° (Butterworth overshoot 4%, and the bias loop takes
-    // part of the tilt for drift: 32.7° measured) and returns within 15 s.
+    // 5 m/s² east for 10 s. An accelerometer sees a tilt θ and a horizontal acceleration g tan θ
+    // alike; what tells them apart is the gyro (no rotation) and the norm (√(g² + a²) ≠ g, but
+    // an acceleration (R − I) g keeps the norm). A low pass of time constant τ lets a step in
+    // through its step response s(t/τ): below 0.5° of atan(5/g) = 27° after 10 s needs
+    // s(10/τ) < 0.019, i.e. τ > 52 s for the 2nd-order Butterworth (s ≈ (t/τ)²/2), whose lag
+    // √2 τ ε then turns a bias residual ε = 0.02 °/s into 1.5° of tilt; a norm gate reaches 0.4°
+    // here but tilts BROAD (6D 0.67° → 1.9°). So the tilt reaches the low pass's own peak,
+    // atan(1.043 · 5/g) = 28.0° (4.3% Butterworth overshoot; 28.02° measured: the bias loop adds
+    // nothing), and leaves within 15 s (docs/filters_robust.md, limits).
     let acc = |t: f64| {
         if (10.0..20.0).contains(&t) {
             Vector3::new(5.0, 0.0, 0.0)
@@ -202,8 +207,8 @@ fn sustained_acceleration_leaks_in_bounded_and_leaves() {
     let during = tilt[..(20.0 * RATE) as usize].iter().fold(0.0, |a: f64, &b| a.max(b));
     let after = tilt[(35.0 * RATE) as usize..].iter().fold(0.0, |a: f64, &b| a.max(b));
     assert!(tilt[(10.0 * RATE) as usize - 1] < 1e-6);
-    assert!(during < 35.0 && during > 5.0, "{during}");
-    assert!(after < 0.5, "{after}");
+    assert!(during < 28.5 && during > 27.0, "{during}");
+    assert!(after < 0.07, "{after}"); // 0.057° measured
 }
 
 #[test]
@@ -220,6 +225,7 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
     };
     let mut covered = 0;
     let mut total = 0;
+    let (mut worst, mut sum_sq) = ([0.0f64; 3], [0.0f64; 3]);
     for nine in [false, true] {
         for seed in 0..8 {
             let r = simulate(
@@ -233,16 +239,12 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
             );
             let out = run(&filter(), &r, nine, false);
             let k = (124.9 * RATE) as usize; // the end of a rest phase
+                                             // The error in the world: horizontal (x, y) and vertical (z) axes.
+            let err = r.truth[k] * (Vector3::from(out.bias[k]) - bias);
             for i in 0..3 {
-                let err = out.bias[k][i] - bias[i];
-                // The issue asks 0.02 °/s; measured up to 0.041 over these seeds with the 4 s bias
-                // window (0.031 with 1 s, which is worse on BROAD 9D): docs/filters_robust.md.
-                assert!(
-                    err.abs() < 0.05 * deg,
-                    "nine {nine} seed {seed} axis {i}: {}°/s",
-                    err / deg
-                );
-                assert!(out.bias_sigma[k][i] < 0.2 * deg && out.bias_sigma[k][i] > 0.0);
+                assert!(out.bias_sigma[k][i] < 0.06 * deg && out.bias_sigma[k][i] > 0.0);
+                worst[i] = worst[i].max(err[i].abs() / deg);
+                sum_sq[i] += (err[i] / deg).powi(2);
                 // σ over the second half, sampled every 5 s
                 for m in (r.t.len() / 2..r.t.len()).step_by(500) {
                     total += 1;
@@ -255,6 +257,14 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
     }
     // 2σ covers 95% of a Gaussian error; a σ too small by half would cover about 68%.
     assert!(covered as f64 >= 0.9 * total as f64, "{covered} of {total}");
+    // The issue asks 0.02 °/s. Measured over these 16 runs: RMS 0.010 (x, y), worst 0.026 (x,
+    // seed 1) and 0.014 (vertical); RMS 0.012 / 0.008 (x / y). The limit is the rest data: a 5 s rest phase leaves about 3 s
+    // after detection, whose mean gyro has σ = 0.17 °/s / √300 = 0.010 °/s per axis
+    // (docs/filters_robust.md); 20% worse fails.
+    let rms = |i: usize| (sum_sq[i] / 16.0).sqrt();
+    assert!(rms(0).max(rms(1)) < 0.0145, "RMS {} {}", rms(0), rms(1));
+    assert!(worst[0].max(worst[1]) < 0.031, "worst horizontal {worst:?}");
+    assert!(worst[2] < 0.017, "worst vertical {worst:?}");
 }
 
 #[test]

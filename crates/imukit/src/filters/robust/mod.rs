@@ -14,7 +14,7 @@
 //! | inclination | `q_incl ← q_c ⊗ q_incl`, `q_c` the smallest rotation taking `R(q_incl) ā_I` to up: applied in full every sample, so the estimate's up is the filtered specific force |
 //! | heading (9D) | `ψ ← ψ + k e`, `e` the angle of the horizontal field from north (+y) in `E'`, `k = 1 − exp(−dt/τ_mag)`: about the vertical only, so the field never tilts the estimate |
 //! | magnetic disturbance | norm `|‖m‖ − m₀| ≤ f m₀` and dip `|δ − δ₀| ≤ θ` against the reference learned at the first sample; rejected at most `mag_max_rejection_s`, then used at `mag_slow_factor × τ_mag`; a homogeneous field held while turning for `mag_new_field_s` becomes the reference |
-//! | bias | Kalman filter on `b` (random walk): per window of `bias_window_s`, at rest the mean gyro (`H = I`), in motion the mean correction rate (`H = −Σ R dt / T`, x, y from inclination, z from heading); clipped to `±bias_clip_rad_s` |
+//! | bias | Kalman filter on `b` (random walk): at rest the mean gyro of the rest segment (`H = I`, noise `σ_rest²/T`) every `bias_rest_window_s` and at its end; in motion per window of `bias_window_s` the mean correction rate (`H = −Σ R dt / T`, x, y from inclination, z from heading); clipped to `±bias_clip_rad_s` |
 //! | rest | `‖ω − ω̄‖`, `‖ω̄‖ < rest_gyro_rad_s` and `‖a − ā‖ < rest_accel` (first-order low passes, `rest_tau_s`) for `rest_duration_s` |
 //! | first sample | initialises: tilt from the accelerometer, yaw 0 (6D) or heading from the field (9D), unless an initial attitude is given; output as is |
 //! | outputs per sample | `q_wb`, `b̂`, `σ_b = √diag P`, rest flag, magnetic-disturbance flag, after that sample |

@@ -24,8 +24,11 @@ pub struct RobustParams {
     /// Standard deviation of a window's mean correction rate as a bias measurement in motion
     /// [rad/s].
     pub bias_sigma_motion_rad_s: f64,
-    /// Standard deviation of a window's mean gyro as a bias measurement at rest [rad/s].
+    /// Standard deviation of one second's mean gyro at rest as a bias measurement [rad/s] (a rest
+    /// segment of `T` seconds counts with `σ/√T`).
     pub bias_sigma_rest_rad_s: f64,
+    /// At rest, one bias update per this much rest (and one when the rest ends) [s].
+    pub bias_rest_window_s: f64,
     /// The bias estimate is clipped to ± this per axis [rad/s].
     pub bias_clip_rad_s: f64,
     /// Rest: `‖ω − ω̄‖` and `‖ω̄‖` below this [rad/s] (`ω̄` the first-order low pass of the gyro).
@@ -60,9 +63,10 @@ impl Default for RobustParams {
             tau_mag_s: 20.0,
             bias_window_s: 4.0,
             bias_sigma_init_rad_s: 0.5 * deg,
-            bias_forgetting_s: 100.0,
+            bias_forgetting_s: 1000.0,
             bias_sigma_motion_rad_s: 0.2 * deg,
-            bias_sigma_rest_rad_s: 0.03 * deg,
+            bias_sigma_rest_rad_s: 0.06 * deg,
+            bias_rest_window_s: 1.0,
             bias_clip_rad_s: 2.0 * deg,
             rest_gyro_rad_s: 2.0 * deg,
             rest_accel: 0.5,
@@ -114,6 +118,7 @@ named!(
     bias_forgetting_s,
     bias_sigma_motion_rad_s,
     bias_sigma_rest_rad_s,
+    bias_rest_window_s,
     bias_clip_rad_s,
     rest_gyro_rad_s,
     rest_accel,

@@ -124,8 +124,12 @@ state!(
     loop_head_bias: f64 = ["lh_b"],
     /// Seconds in the current bias window.
     win_time: f64 = ["win_time"],
-    /// Whether the whole current window was at rest.
-    win_rest: bool = ["win_rest"],
+    /// Sum of the gyro over the current rest segment, `Σ ω dt` [rad].
+    rest_sum: Vector3<f64> = ["rest_sum_x", "rest_sum_y", "rest_sum_z"],
+    /// Seconds in the current rest segment.
+    rest_sum_time: f64 = ["rest_sum_time"],
+    /// Whether the current still segment has been declared rest.
+    rest_segment: bool = ["rest_segment"],
     /// Sum of the gyro over the window, `Σ ω dt` [rad].
     win_gyro: Vector3<f64> = ["win_gyro_x", "win_gyro_y", "win_gyro_z"],
     /// Sum of the corrections over the window (x, y: inclination; z: heading) [rad].
@@ -175,7 +179,9 @@ impl Default for RobustState {
             rest_accel: Vector3::zeros(),
             rest_time: 0.0,
             win_time: 0.0,
-            win_rest: true,
+            rest_sum: Vector3::zeros(),
+            rest_sum_time: 0.0,
+            rest_segment: false,
             win_gyro: Vector3::zeros(),
             win_corr: Vector3::zeros(),
             win_rot: Matrix3::zeros(),

@@ -164,26 +164,7 @@ pub(super) fn step(
         s.lp_s1 = a_i * (c.b1 - c.a1) + s.lp_s2;
         s.lp_ready = true;
     }
-    let a_f = c.butter(a_i, &mut s.lp_s1, &mut s.lp_s2);
-
-    // Inclination: rotate E' so that the filtered specific force points up. The rotation taking
-    // the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0) (half-angle identity).
-    let a_e = s.q_incl * a_f;
-    let an = a_e.norm();
-    let mut corr = Vector3::zeros();
-    // A zero or overflowing (finite but huge) specific force has no direction.
-    if an > 1e-9 && an.is_finite() {
-        let n = a_e / an;
-        let w = 1.0 + n.z;
-        let qc = if w > 1e-9 {
-            let k = 1.0 / (2.0 * w).sqrt();
-            Quaternion::new(w * k, n.y * k, -n.x * k, 0.0)
-        } else {
-            Quaternion::new(0.0, 1.0, 0.0, 0.0)
-        };
-        corr = Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0);
-        s.q_incl = compose(&UnitQuaternion::new_unchecked(qc), &s.q_incl);
-    }
+    let mut corr = inclination(c, s, &a_i);
     let q6 = compose(&s.q_incl, &s.q_gyro);
     let r6 = *q6.to_rotation_matrix().matrix();
 
@@ -204,6 +185,31 @@ pub(super) fn step(
         q6
     };
     s.q = to_world(world, &q);
+}
+
+/// Feeds `a_i` (specific force in `I`) to the low pass and rotates `E'` so that its output points
+/// up; returns the correction's x, y [rad] (z 0).
+#[inline(always)]
+fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector3<f64> {
+    let a_f = c.butter(*a_i, &mut s.lp_s1, &mut s.lp_s2);
+    // The rotation taking the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0)
+    // (half-angle identity).
+    let a_e = s.q_incl * a_f;
+    let an = a_e.norm();
+    // A zero or overflowing (finite but huge) specific force has no direction.
+    if an > 1e-9 && an.is_finite() {
+        let n = a_e / an;
+        let w = 1.0 + n.z;
+        let qc = if w > 1e-9 {
+            let k = 1.0 / (2.0 * w).sqrt();
+            Quaternion::new(w * k, n.y * k, -n.x * k, 0.0)
+        } else {
+            Quaternion::new(0.0, 1.0, 0.0, 0.0)
+        };
+        s.q_incl = compose(&UnitQuaternion::new_unchecked(qc), &s.q_incl);
+        return Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0);
+    }
+    Vector3::zeros()
 }
 
 /// First-order low passes of gyro and accelerometer; rest once both stay close to them (and the
@@ -280,8 +286,11 @@ fn magnetometer(
 /// Butterworth, for small angles, x and y) and the heading loop with `c_z = −F∗(R ε)_z` (`F` its
 /// first-order loop, while the field is used). Running the same loops on `R` and on `R b̂` gives
 /// `S = Σ L∗R dt` and `O = Σ L∗(R b̂) dt`, and `C = Σ c = −S b + O`: a measurement of `b` itself
-/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length). At rest: the
-/// mean gyro, `H = I`.
+/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length).
+///
+/// At rest: the mean gyro over each rest segment (`H = I`), updated every `bias_rest_window_s` and
+/// when the rest ends, its variance `σ_rest² / T` (white noise averaged over `T` seconds);
+/// a rest update restarts the motion window (no sample counts twice).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // one sample's pieces, all needed
 fn bias_window(
@@ -315,31 +324,46 @@ fn bias_window(
         }
     }
     s.win_time += dt;
-    s.win_rest &= s.rest;
-    s.win_gyro += gyro * dt;
     s.win_corr += corr;
-    if s.win_time < p.bias_window_s {
+    // The still samples before rest is declared are rest too: they count once it is.
+    let still = s.rest_time > 0.0;
+    if still {
+        s.rest_sum += gyro * dt;
+        s.rest_sum_time += dt;
+    } else if !s.rest_segment {
+        s.rest_sum = Vector3::zeros();
+        s.rest_sum_time = 0.0;
+    }
+    let t_rest = s.rest_sum_time;
+    let ended = !still && s.rest_segment && t_rest > 0.0;
+    s.rest_segment = s.rest || (still && s.rest_segment);
+    if (s.rest && t_rest >= p.bias_rest_window_s) || ended {
+        let r = p.bias_sigma_rest_rad_s.powi(2) / t_rest;
+        let innovation = s.rest_sum / t_rest - s.bias;
+        kalman(p, s, &Matrix3::identity(), &innovation, r, s.win_time);
+        s.rest_sum = Vector3::zeros();
+        s.rest_sum_time = 0.0;
+        restart_window(s);
         return;
     }
     let t = s.win_time;
+    if t < p.bias_window_s {
+        return;
+    }
+    let mut h = -s.win_rot / t;
+    let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
+    if s.win_mag_time < 0.5 * t {
+        h.row_mut(2).fill(0.0);
+        innovation.z = 0.0;
+    }
+    kalman(p, s, &h, &innovation, p.bias_sigma_motion_rad_s.powi(2), t);
+    restart_window(s);
+}
+
+/// One Kalman update of the bias with measurement matrix `h`, innovation and noise variance `r`
+/// per component, after `t` seconds of random walk; the estimate clipped to `±bias_clip_rad_s`.
+fn kalman(p: &RobustParams, s: &mut RobustState, h: &Matrix3<f64>, innovation: &Vector3<f64>, r: f64, t: f64) {
     s.bias_cov += Matrix3::identity() * (p.bias_sigma_init_rad_s.powi(2) / p.bias_forgetting_s * t);
-    let (h, innovation, r) = if s.win_rest {
-        (
-            Matrix3::identity(),
-            s.win_gyro / t - s.bias,
-            p.bias_sigma_rest_rad_s.powi(2),
-        )
-    } else {
-        let mut h = -s.win_rot / t;
-        if s.win_mag_time < 0.5 * t {
-            h.row_mut(2).fill(0.0);
-        }
-        let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
-        if s.win_mag_time < 0.5 * t {
-            innovation.z = 0.0;
-        }
-        (h, innovation, p.bias_sigma_motion_rad_s.powi(2))
-    };
     let pm = s.bias_cov;
     let innovation_cov = h * pm * h.transpose() + Matrix3::identity() * r;
     if let Some(inv) = innovation_cov.try_inverse() {
@@ -349,9 +373,11 @@ fn bias_window(
         let pn = (Matrix3::identity() - k * h) * pm;
         s.bias_cov = (pn + pn.transpose()) * 0.5;
     }
+}
+
+/// Empties the motion window.
+fn restart_window(s: &mut RobustState) {
     s.win_time = 0.0;
-    s.win_rest = true;
-    s.win_gyro = Vector3::zeros();
     s.win_corr = Vector3::zeros();
     s.win_rot = Matrix3::zeros();
     s.win_off = Vector3::zeros();
