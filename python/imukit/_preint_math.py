@@ -8,6 +8,8 @@ states                 arrays with the leading M: positions, velocities (M, 3), 
 corrected              ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb``, ``δb`` the bias change
 prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``,
                        ``p_j = p_i + v_i Δt + ½ g Δt² + R_i Δp``
+rotating frame         ``omega_coriolis`` (3,) [rad/s] with ``second_order_coriolis`` or
+                       ``exact_coriolis``: :mod:`imukit._preint_earth` (``predict``, ``residual``)
 residual (M, 9)        ``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``
 Jacobians              rows ``[θ, v, p]``; state columns ``[δp, δv, δθ]`` (``R Exp(δθ)``), bias
                        columns ``[δb_g, δb_a]`` (Forster et al. 2017, eqs. 44–45)
@@ -23,8 +25,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from imukit import so3
+from imukit import _preint_earth, so3
 from imukit._arrays import FloatArray
 from imukit._errors import NonFiniteError, ParameterError
 from imukit._preint_record import Preintegration
@@ -97,17 +100,31 @@ def _finite(arrays: tuple[FloatArray, ...], argument: str, what: str) -> None:
         raise NonFiniteError(f"too large in magnitude: {what} overflows float64", argument=argument)
 
 
-def predict(pre: Preintegration, state_i: States, bias: ImuBias | None = None) -> States:
-    """The states at the windows' ends from those at their starts (module docs)."""
-    dr, dv, dp = corrected(pre, bias)
+def predict(
+    pre: Preintegration,
+    state_i: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    second_order_coriolis: bool = False,
+    exact_coriolis: bool = False,
+) -> States:
+    """The states at the windows' ends from those at their starts (module docs); in a frame rotating
+    at ``omega_coriolis`` [rad/s] with the model the flags name (:mod:`imukit._preint_earth`)."""
+    rotating = _preint_earth.coriolis(omega_coriolis, second_order_coriolis, exact_coriolis)
+    deltas = corrected(pre, bias)
+    dr, dv, dp = deltas
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
     with np.errstate(over="ignore", invalid="ignore"):
-        out = States(
-            p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
-            v_i + g * dt + _mv(r_i, dv),
-            r_i @ dr,
-        )
+        if rotating is not None:
+            out = States(*_preint_earth.predict(rotating, deltas, g, dt, state_i))
+        else:
+            out = States(
+                p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
+                v_i + g * dt + _mv(r_i, dv),
+                r_i @ dr,
+            )
     _finite(out, "state_i", "the predicted state p_i + v_i Δt + ½ g Δt² + R_i Δp")
     return out
 
@@ -137,9 +154,29 @@ def _parts(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias 
     return _Parts(r, u_v, u_p, e)
 
 
-def residual(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None = None) -> FloatArray:
-    """The residuals (M, 9) of the windows between ``state_i`` and ``state_j`` (module docs)."""
-    return _parts(pre, state_i, state_j, bias).r
+def residual(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    second_order_coriolis: bool = False,
+    exact_coriolis: bool = False,
+) -> FloatArray:
+    """The residuals (M, 9) of the windows between ``state_i`` and ``state_j`` (module docs); in a
+    rotating frame, the deltas the states imply under that model minus the measured ones
+    (:mod:`imukit._preint_earth`), whose covariance is the preintegration's."""
+    rotating = _preint_earth.coriolis(omega_coriolis, second_order_coriolis, exact_coriolis)
+    if rotating is None:
+        return _parts(pre, state_i, state_j, bias).r
+    dr, dv, dp = corrected(pre, bias)
+    g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        er, ev, ep = _preint_earth.implied_deltas(rotating, g, dt, state_i, state_j)
+        r_v, r_p = ev - dv, ep - dp
+    _finite((er, r_v, r_p), "state_j", "its difference from state_i in the rotating frame")
+    return np.concatenate([so3.log(_t(dr) @ er), r_v, r_p], axis=-1)
 
 
 def residual_jacobians(

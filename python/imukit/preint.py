@@ -397,15 +397,54 @@ class PreintegratedImu:
         r, v, p = corrected(self.snapshot(), bias)
         return Rotation.from_matrix(r[0]), v[0], p[0]
 
-    def predict(self, state_i: NavState, bias: ImuBias | None = None) -> NavState:
-        """The state at j from the state at i (deltas corrected to ``bias`` when given)."""
-        p, v, r = predict(self.snapshot(), _states(state_i), bias)
+    def predict(
+        self,
+        state_i: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        second_order_coriolis: bool = False,
+        exact_coriolis: bool = False,
+    ) -> NavState:
+        """The state at j from the state at i (deltas corrected to ``bias`` when given).
+
+        ``omega_coriolis`` (3,) [rad/s]: the navigation frame's rotation rate in its own axes (the
+        Earth rate of a local-level frame, GTSAM's ``omegaCoriolis``); the Coriolis terms to first
+        order (GTSAM 4.2), ``second_order_coriolis`` adds the centrifugal ones, ``exact_coriolis``
+        the closed form of GTSAM 4.3 (``docs/navigation.md``)."""
+        p, v, r = predict(
+            self.snapshot(),
+            _states(state_i),
+            bias,
+            omega_coriolis=omega_coriolis,
+            second_order_coriolis=second_order_coriolis,
+            exact_coriolis=exact_coriolis,
+        )
         return NavState(p[0], v[0], Rotation.from_matrix(r[0]))
 
-    def residual(self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None) -> FloatArray:
+    def residual(
+        self,
+        state_i: NavState,
+        state_j: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        second_order_coriolis: bool = False,
+        exact_coriolis: bool = False,
+    ) -> FloatArray:
         """``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``,
-        the deltas corrected to ``bias`` when given (9,)."""
-        out: FloatArray = residual(self.snapshot(), _states(state_i), _states(state_j), bias)[0]
+        the deltas corrected to ``bias`` when given (9,). With ``omega_coriolis`` (as in
+        :meth:`predict`): the deltas the two states imply in the rotating frame minus the measured
+        ones, so :attr:`covariance` stays the residual's."""
+        out: FloatArray = residual(
+            self.snapshot(),
+            _states(state_i),
+            _states(state_j),
+            bias,
+            omega_coriolis=omega_coriolis,
+            second_order_coriolis=second_order_coriolis,
+            exact_coriolis=exact_coriolis,
+        )[0]
         return out
 
     def residual_jacobians(
