@@ -8,6 +8,7 @@
 mod allan_glue;
 mod attitude_glue;
 mod convert;
+mod earth_glue;
 mod errors;
 mod filters_glue;
 mod math_glue;
@@ -86,6 +87,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_rotating_world, m)?)?;
+    m.add_function(wrap_pyfunction!(earth_glue::local_level, m)?)?;
+    convert::add_names::<imukit::earth::Axes>(m, "LOCAL_LEVEL_AXES", None)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_default, m)?)?;
     m.add_function(wrap_pyfunction!(text_glue::text_parse_block, m)?)?;

@@ -41,10 +41,12 @@ pub(crate) fn strapdown_integrate<'py>(
     bias: BiasFields,
     gravity: [f64; 3],
     scheme: Name<Scheme>,
+    earth_rate: [f64; 3],
 ) -> PyResult<States<'py>> {
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
+        earth_rate: Vector3::from(earth_rate),
     };
     let (initial, bias) = (NavState::from(initial), Bias::from(bias));
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
@@ -89,6 +91,7 @@ pub(crate) fn strapdown_propagate<'py>(
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
+        ..Options::default()
     };
     let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
     if covariance.shape() != [15, 15] {

@@ -24,6 +24,7 @@ from imukit._arrays import (
 )
 from imukit._errors import ParameterError, ShapeError
 from imukit._names import canonical
+from imukit.earth import LocalLevel, world
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
 
@@ -70,6 +71,7 @@ def integrate(
     gravity: ArrayLike = _DEFAULT_GRAVITY,
     bias: ImuBias | None = None,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
+    frame: LocalLevel | None = None,
 ) -> Trajectory:
     """Integrate IMU samples into positions, velocities and attitudes, one per sample.
 
@@ -88,9 +90,14 @@ def integrate(
 
     ``initial`` is the state at the first sample; ``bias`` (constant) is subtracted from the samples.
     Returns a :class:`Trajectory` with the IMU's timestamps (``t_ns`` kept when the IMU has it).
+
+    ``frame``: an :class:`imukit.earth.LocalLevel`: the world is that Earth-fixed frame, turning at
+    its Earth rate ``ω``: ``Ṙ = R[ω̂]× − [ω]×R``, ``v̇ = R â + g − 2ω×v`` with the frame's gravity
+    (leave ``gravity`` at its default); ``docs/navigation.md``.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, initial, b, g, scheme)
+    g, rate = world(frame, g)
+    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
 

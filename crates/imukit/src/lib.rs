@@ -24,6 +24,7 @@
 
 pub mod allan;
 pub mod attitude;
+pub mod earth;
 mod error;
 pub mod euler;
 pub mod ffi;
