@@ -51,6 +51,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(g::euler_rate_matrix_inv, m)?,
         wrap_pyfunction!(attitude_glue::attitude_integrate, m)?,
         wrap_pyfunction!(strapdown_glue::strapdown_integrate, m)?,
+        wrap_pyfunction!(strapdown_glue::body_readings, m)?,
         wrap_pyfunction!(strapdown_glue::strapdown_propagate, m)?,
         wrap_pyfunction!(threads::set_num_threads, m)?,
         wrap_pyfunction!(threads::get_num_threads, m)?,

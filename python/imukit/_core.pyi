@@ -44,6 +44,7 @@ __all__ = [
     "__version__",
     "allan_variance",
     "attitude_integrate",
+    "body_readings",
     "euler_from_matrix",
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
@@ -188,6 +189,16 @@ def strapdown_integrate(
     gravity: list[float],
     scheme: _StrapdownScheme | str,
     earth_rate: list[float],
+) -> tuple[_Rows, _Rows]: ...
+
+# (gyro, accel) (N, 3) at the body origin from a sensor at (R_bs rows, lever arm), biases removed.
+def body_readings(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    bias: _Bias,
+    rotation: list[list[float]],
+    lever_arm: list[float],
 ) -> tuple[_Rows, _Rows]: ...
 
 # As strapdown_integrate, plus (M, 225) row-major 15x15 covariances every `every` samples and at

@@ -12,6 +12,7 @@ import operator
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
 
 from imukit import _core
 from imukit._arrays import (
@@ -51,6 +52,18 @@ def _common(
     return bias or ImuBias(), [float(v) for v in g], scheme
 
 
+def sensor_pose(body_from_sensor: object) -> tuple[list[list[float]], list[float]]:
+    """``(R_bs rows, lever arm)`` of a ``(Rotation, (3,))`` pair; the core checks the values."""
+    if not (isinstance(body_from_sensor, tuple) and len(body_from_sensor) == 2):
+        raise ParameterError(
+            f"expected a pair (scipy Rotation, lever arm (3,)), got {body_from_sensor!r}", argument="body_from_sensor"
+        )
+    rotation, arm = body_from_sensor
+    if not (isinstance(rotation, Rotation) and rotation.single):
+        raise ParameterError(f"expected a single scipy Rotation, got {rotation!r}", argument="body_from_sensor")
+    return rotation.as_matrix().tolist(), [float(v) for v in vector3(arm, "body_from_sensor")]
+
+
 def _trajectory(
     imu: ImuData,
     position_velocity: FloatArray,
@@ -72,6 +85,7 @@ def integrate(
     bias: ImuBias | None = None,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     frame: LocalLevel | None = None,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> Trajectory:
     """Integrate IMU samples into positions, velocities and attitudes, one per sample.
 
@@ -94,10 +108,21 @@ def integrate(
     ``frame``: an :class:`imukit.earth.LocalLevel`: the world is that Earth-fixed frame, turning at
     its Earth rate ``ω``: ``Ṙ = R[ω̂]× − [ω]×R``, ``v̇ = R â + g − 2ω×v`` with the frame's gravity
     (leave ``gravity`` at its default); ``docs/navigation.md``.
+
+    ``body_from_sensor``: ``(R_bs, lever arm)``, a scipy ``Rotation`` and a (3,) offset [m]: the
+    IMU's pose in the body frame (GTSAM's ``body_P_sensor``); the trajectory is then the body
+    origin's. The readings become the body's, ``ω_b = R_bs (ω_s − b_g)``,
+    ``a_b = R_bs (a_s − b_a) − α × r − ω_b × (ω_b × r)``, with the angular acceleration ``α`` the
+    central difference of the gyro (one-sided at the ends); ``crates/imukit/src/extrinsics.rs``.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world(frame, g)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, initial, b, g, scheme, rate)
+    gyro, accel = imu.gyro, imu.accel
+    if body_from_sensor is not None:
+        rotation, arm = sensor_pose(body_from_sensor)
+        gyro, accel = _core.body_readings(imu.seconds, gyro, accel, b, rotation, arm)
+        b = ImuBias()
+    pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
 

@@ -27,6 +27,7 @@ pub mod attitude;
 pub mod earth;
 mod error;
 pub mod euler;
+pub mod extrinsics;
 pub mod ffi;
 pub mod filters;
 pub mod imu;

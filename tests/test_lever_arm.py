@@ -1,0 +1,68 @@
+"""``integrate(..., body_from_sensor=(R_bs, r))``: an IMU mounted 0.3 m off the body origin and
+rotated, on a spinning body (``sim.ConstantTwist``, 2 rad/s about a tilted axis). The sensor's
+readings are written here from rigid-body kinematics (Titterton & Weston 2004, eq. 3.48):
+``ω_s = R_bsᵀ ω_b``, ``f_s = R_bsᵀ (f_b + α × r + ω × (ω × r))`` with ``α = 0`` for a constant twist.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+import pytest
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+
+Array = npt.NDArray[np.float64]
+R_BS = Rotation.from_euler("ZYX", [90, 10, -20], degrees=True)
+ARM = np.array([0.3, 0.0, 0.0])
+RATE = np.array([0.1, -0.05, 2.0])
+
+
+def spinning(rate_hz: float, duration: float = 10.0) -> tuple[ik.ImuData, ik.Trajectory]:
+    """The sensor's readings and the body's truth."""
+    body, truth = ik.sim.simulate(
+        ik.sim.ConstantTwist(body_velocity=(1.0, 0.0, 0.2), body_rate=RATE), rate=rate_hz, duration=duration
+    )
+    centripetal = np.cross(body.gyro, np.cross(body.gyro, ARM))
+    sensor = ik.ImuData(body.t, R_BS.inv().apply(np.array(body.gyro)), R_BS.inv().apply(body.accel + centripetal))
+    return sensor, truth
+
+
+def start(truth: ik.Trajectory) -> ik.NavState:
+    return ik.NavState(truth.position[0], truth.velocity[0], truth.rotation[0])
+
+
+def test_body_trajectory_recovered_to_the_integrators_order() -> None:
+    """Measured at 200 / 400 Hz over 10 s: 8.1e-5 / 2.0e-5 m (midpoint: second order) and
+    attitude 1.5e-14 rad; without the lever-arm terms the error is 5.7 m (next test)."""
+    errors = []
+    for rate_hz in (200.0, 400.0):
+        sensor, truth = spinning(rate_hz)
+        out = ik.integrate(sensor, initial=start(truth), body_from_sensor=(R_BS, ARM))
+        errors.append(float(np.abs(out.position - truth.position).max()))
+        assert (out.rotation * truth.rotation.inv()).magnitude().max() < 1e-10
+    assert errors[0] < 1e-4
+    assert 3.5 < errors[0] / errors[1] < 4.5
+
+
+def test_without_the_lever_arm_the_error_is_the_predicted_centripetal_term() -> None:
+    """Rotation only (zero lever arm): the integrated point moves as ``p_b + R r − R₀ r −
+    t R₀ (ω × r)`` (the sensor's path, started with the body's velocity): the error matches that
+    prediction to the integrator's error (measured 8.5e-5 m of 5.7 m)."""
+    sensor, truth = spinning(200.0)
+    out = ik.integrate(sensor, initial=start(truth), body_from_sensor=(R_BS, np.zeros(3)))
+    t = truth.t[:, None]
+    r0 = truth.rotation[0]
+    predicted = truth.rotation.apply(ARM) - r0.apply(ARM) - t * r0.apply(np.cross(RATE, ARM))
+    error = out.position - truth.position
+    assert np.abs(error).max() > 5.0
+    assert np.abs(error - predicted).max() < 2e-4
+
+
+def test_body_from_sensor_is_checked() -> None:
+    sensor, truth = spinning(50.0, 1.0)
+    with pytest.raises(ik.ParameterError, match="body_from_sensor"):
+        ik.integrate(sensor, initial=start(truth), body_from_sensor=R_BS)  # type: ignore[arg-type]
+    with pytest.raises(ik.ShapeError, match="body_from_sensor"):
+        ik.integrate(sensor, initial=start(truth), body_from_sensor=(R_BS, [0.3, 0.0]))
