@@ -34,6 +34,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(g::so3_hat, m)?,
         wrap_pyfunction!(g::so3_vee, m)?,
         wrap_pyfunction!(g::so3_exp, m)?,
+        wrap_pyfunction!(g::so3_exp_double_integral, m)?,
         wrap_pyfunction!(g::so3_log, m)?,
         wrap_pyfunction!(g::so3_jacobian, m)?,
         wrap_pyfunction!(g::quat_multiply, m)?,

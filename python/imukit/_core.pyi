@@ -68,6 +68,7 @@ __all__ = [
     "sim_rotating_world",
     "sim_sensor_default",
     "so3_exp",
+    "so3_exp_double_integral",
     "so3_hat",
     "so3_jacobian",
     "so3_log",
@@ -140,6 +141,7 @@ def get_num_threads() -> int: ...
 def so3_hat(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
 def so3_vee(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
 def so3_exp(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_exp_double_integral(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
 def so3_log(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
 def so3_jacobian(
     x: _Rows, name: str, kind: _Jacobian | str, threads: int | None = None

@@ -46,10 +46,6 @@ from imukit._errors import NonFiniteError, ParameterError, ShapeError
 
 __all__ = ["Coriolis", "coriolis", "implied_deltas", "predict"]
 
-# Γ₂'s closed form loses digits to cancellation below this angle: the series to θ⁴ is used there
-# (its first omitted term, θ⁶/3.6e6, is below 1e-18).
-_SERIES_BELOW = 1e-2
-
 
 class Coriolis(NamedTuple):
     """The rotating frame: ``omega`` (3,) [rad/s] and the model's ``order`` (module docs)."""
@@ -84,20 +80,6 @@ def _mv(m: FloatArray, v: FloatArray) -> FloatArray:
     return out
 
 
-def gamma2(phi: FloatArray) -> FloatArray:
-    """``Γ₂(φ) = Σ_n [φ]×ⁿ / (n + 2)! = ½ I + (θ − sin θ)/θ³ [φ]× + (θ²/2 + cos θ − 1)/θ⁴ [φ]×²``
-    (M, 3, 3) for φ (M, 3); the series to θ⁴ for small θ."""
-    theta = np.linalg.norm(phi, axis=-1)
-    small = theta < _SERIES_BELOW
-    t = np.where(small, 1.0, theta)
-    t2 = theta * theta
-    a = np.where(small, 1 / 6 - t2 / 120 + t2 * t2 / 5040, (t - np.sin(t)) / t**3)
-    b = np.where(small, 1 / 24 - t2 / 720 + t2 * t2 / 40320, (t * t / 2 + np.cos(t) - 1) / t**4)
-    k = so3.hat(phi)
-    out: FloatArray = 0.5 * np.eye(3) + a[:, None, None] * k + b[:, None, None] * (k @ k)
-    return out
-
-
 class _Exact(NamedTuple):
     """What ``"exact"`` needs from state i: ``A = Exp(−ωΔt)``, ``v̄``, and gravity integrated once
     and twice in the rotating frame."""
@@ -111,7 +93,7 @@ class _Exact(NamedTuple):
 def _exact(w: FloatArray, g: FloatArray, dt: FloatArray, p_i: FloatArray, v_i: FloatArray) -> _Exact:
     phi = w * dt
     g_v = _mv(so3.left_jacobian(phi), np.broadcast_to(g, phi.shape)) * dt
-    g_p = _mv(gamma2(phi), np.broadcast_to(g, phi.shape)) * dt * dt
+    g_p = _mv(so3.exp_double_integral(phi), np.broadcast_to(g, phi.shape)) * dt * dt
     return _Exact(so3.exp(-phi), v_i + np.cross(w, p_i), g_v, g_p)
 
 
