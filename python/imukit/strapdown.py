@@ -24,6 +24,7 @@ from imukit._arrays import (
     vector3,
 )
 from imukit._errors import ParameterError, ShapeError
+from imukit._extrinsics import sensor_pose
 from imukit._names import canonical
 from imukit.earth import LocalLevel, world
 from imukit.imu import ImuBias, ImuData, ImuNoise
@@ -50,18 +51,6 @@ def _common(
     scheme = canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES)
     g = vector3(gravity, "gravity")
     return bias or ImuBias(), [float(v) for v in g], scheme
-
-
-def sensor_pose(body_from_sensor: object) -> tuple[list[list[float]], list[float]]:
-    """``(R_bs rows, lever arm)`` of a ``(Rotation, (3,))`` pair; the core checks the values."""
-    if not (isinstance(body_from_sensor, tuple) and len(body_from_sensor) == 2):
-        raise ParameterError(
-            f"expected a pair (scipy Rotation, lever arm (3,)), got {body_from_sensor!r}", argument="body_from_sensor"
-        )
-    rotation, arm = body_from_sensor
-    if not (isinstance(rotation, Rotation) and rotation.single):
-        raise ParameterError(f"expected a single scipy Rotation, got {rotation!r}", argument="body_from_sensor")
-    return rotation.as_matrix().tolist(), [float(v) for v in vector3(arm, "body_from_sensor")]
 
 
 def _trajectory(
@@ -119,8 +108,8 @@ def integrate(
     g, rate = world(frame, g)
     gyro, accel = imu.gyro, imu.accel
     if body_from_sensor is not None:
-        rotation, arm = sensor_pose(body_from_sensor)
-        gyro, accel = _core.body_readings(imu.seconds, gyro, accel, b, rotation, arm)
+        rows, arm = sensor_pose(body_from_sensor)
+        gyro, accel = _core.body_readings(imu.seconds, gyro, accel, b, [list(r) for r in rows], list(arm))
         b = ImuBias()
     pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
