@@ -66,3 +66,20 @@ def test_body_from_sensor_is_checked() -> None:
         ik.integrate(sensor, initial=start(truth), body_from_sensor=R_BS)  # type: ignore[arg-type]
     with pytest.raises(ik.ShapeError, match="body_from_sensor"):
         ik.integrate(sensor, initial=start(truth), body_from_sensor=(R_BS, [0.3, 0.0]))
+
+
+def test_propagate_takes_the_rotation() -> None:
+    """``propagate`` with a rotated sensor: the mean is ``integrate``'s (bit for bit) and the
+    covariance is that of the readings rotated by hand (isotropic noise); a lever arm is refused."""
+    sensor, truth = spinning(100.0, 2.0)
+    rotated_only = ik.ImuData(sensor.t, R_BS.apply(np.array(sensor.gyro)), R_BS.apply(np.array(sensor.accel)))
+    noise = ik.ImuNoise(gyro_density=1e-3, accel_density=1e-2, gyro_random_walk=1e-5, accel_random_walk=1e-4)
+    p0 = np.eye(15) * 1e-4
+    out = ik.propagate(sensor, initial=start(truth), covariance=p0, noise=noise, body_from_sensor=(R_BS, np.zeros(3)))
+    by_hand = ik.propagate(rotated_only, initial=start(truth), covariance=p0, noise=noise)
+    mean = ik.integrate(sensor, initial=start(truth), body_from_sensor=(R_BS, np.zeros(3)))
+    assert np.array_equal(out.position, mean.position)
+    assert out.covariance is not None and by_hand.covariance is not None
+    assert np.abs(out.covariance - by_hand.covariance).max() < 1e-12 * np.abs(by_hand.covariance).max()
+    with pytest.raises(ik.ParameterError, match="lever arm"):
+        ik.propagate(sensor, initial=start(truth), covariance=p0, noise=noise, body_from_sensor=(R_BS, ARM))

@@ -53,6 +53,22 @@ def _common(
     return bias or ImuBias(), [float(v) for v in g], scheme
 
 
+def _in_body(
+    imu: ImuData, bias: ImuBias, body_from_sensor: object, *, lever_arm: bool
+) -> tuple[FloatArray, FloatArray, ImuBias]:
+    """The readings and bias to integrate: the IMU's own, or the body origin's (bias removed)."""
+    if body_from_sensor is None:
+        return imu.gyro, imu.accel, bias
+    rows, arm = sensor_pose(body_from_sensor)
+    if not lever_arm and any(v != 0.0 for v in arm):
+        raise ParameterError(
+            "a lever arm is not supported by propagate yet (its noise terms are not in the covariance)",
+            argument="body_from_sensor",
+        )
+    gyro, accel = _core.body_readings(imu.seconds, imu.gyro, imu.accel, bias, [list(r) for r in rows], list(arm))
+    return gyro, accel, ImuBias()
+
+
 def _trajectory(
     imu: ImuData,
     position_velocity: FloatArray,
@@ -106,11 +122,7 @@ def integrate(
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world(frame, g)
-    gyro, accel = imu.gyro, imu.accel
-    if body_from_sensor is not None:
-        rows, arm = sensor_pose(body_from_sensor)
-        gyro, accel = _core.body_readings(imu.seconds, gyro, accel, b, [list(r) for r in rows], list(arm))
-        b = ImuBias()
+    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
     pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
@@ -125,6 +137,7 @@ def propagate(
     gravity: ArrayLike = _DEFAULT_GRAVITY,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     covariance_every: int = 1,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> Trajectory:
     """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).
 
@@ -136,6 +149,11 @@ def propagate(
     ``docs/strapdown.md``. The covariance is kept at samples ``0, covariance_every, 2·covariance_every,
     …`` and at the last sample (``Trajectory.covariance`` with times ``covariance_t``), so memory stays
     bounded for long recordings.
+
+    ``body_from_sensor``: ``(R_bs, 0)``, as in :func:`integrate`, rotation only (a lever arm is
+    refused: its gyro-noise terms are not in the covariance); the readings are turned into body
+    axes with ``bias`` removed, so the covariance's bias blocks are in body axes (isotropic noise:
+    the same densities).
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     if not isinstance(noise, ImuNoise):
@@ -154,9 +172,8 @@ def propagate(
         raise ParameterError(f"expected an integer ≥ 1, got {covariance_every!r}", argument="covariance_every")
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
-    pv, quaternions, covs = _core.strapdown_propagate(
-        imu.seconds, imu.gyro, imu.accel, initial, p0, b, noise, g, scheme, every
-    )
+    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=False)
+    pv, quaternions, covs = _core.strapdown_propagate(imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every)
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)
     return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))
