@@ -266,3 +266,42 @@ def test_batched_predict_matches_single(powered: tuple[ik.NavState, ik.NavState,
     one = pim.predict(state_i, omega_coriolis=omega, exact_coriolis=True)
     assert np.array_equal(r[0], one.rotation.as_matrix()) or np.abs(r[0] - one.rotation.as_matrix()).max() < 1e-15
     assert np.array_equal(p[0], one.position) and np.array_equal(v[0], one.velocity)
+
+
+def test_exact_residual_jacobians_equal_central_differences(powered: tuple[ik.NavState, ik.NavState, Array]) -> None:
+    """Jacobians of the exact rotating-frame residual against central differences of ``residual``
+    in imukit's charts (``p + δp``, ``v + δv``, ``R Exp(δθ)``; bias through the correction), with a
+    1000× Earth rate so that the lift's terms show (the plain Jacobians differ by > 1e-3)."""
+    state_i, state_j, _ = powered
+    omega = 1e3 * enu_earth_rate(45.0)
+    imu = noisy_imu(np.random.default_rng(4), 1e-4, 1e-3)
+    pim = ik.preintegrate(imu, noise=TACTICAL, bias=ik.ImuBias(gyro=[1e-3, 0, -1e-3], accel=[0.01, 0.02, 0]))
+    bias = ik.ImuBias(gyro=[2e-3, 1e-3, -1e-3], accel=[0.0, 0.03, 0.01])
+    kw = {"omega_coriolis": omega, "exact_coriolis": True}
+    jac = pim.residual_jacobians(state_i, state_j, bias, **kw)
+
+    def moved(s: ik.NavState, d: Array) -> ik.NavState:
+        return ik.NavState(s.position + d[0:3], s.velocity + d[3:6], s.rotation * Rotation.from_rotvec(d[6:9]))
+
+    h = 1e-4  # measured: 1.7e-9 (i), 9e-9 (j) relative; truncation and rounding balance here
+    for which, expected in (("i", jac.state_i), ("j", jac.state_j)):
+        numeric = np.zeros((9, 9))
+        for k in range(9):
+            d = np.zeros(9)
+            d[k] = h
+            plus = (moved(state_i, d), state_j) if which == "i" else (state_i, moved(state_j, d))
+            minus = (moved(state_i, -d), state_j) if which == "i" else (state_i, moved(state_j, -d))
+            numeric[:, k] = (pim.residual(*plus, bias, **kw) - pim.residual(*minus, bias, **kw)) / (2 * h)
+        assert np.abs(numeric - expected).max() < 1e-7 * np.abs(expected).max()
+    numeric = np.zeros((9, 6))
+    for k in range(6):
+        d = np.zeros(6)
+        d[k] = h
+        up = ik.ImuBias(gyro=bias.gyro + d[0:3], accel=bias.accel + d[3:6])
+        down = ik.ImuBias(gyro=bias.gyro - d[0:3], accel=bias.accel - d[3:6])
+        numeric[:, k] = (pim.residual(state_i, state_j, up, **kw) - pim.residual(state_i, state_j, down, **kw)) / (
+            2 * h
+        )
+    assert np.abs(numeric - jac.bias).max() < 1e-6 * np.abs(jac.bias).max()
+    plain = pim.residual_jacobians(state_i, state_j, bias)
+    assert np.abs(plain.state_j - jac.state_j).max() > 1e-3 * np.abs(jac.state_j).max()

@@ -44,7 +44,7 @@ from imukit import so3
 from imukit._arrays import FloatArray, as_float_array
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 
-__all__ = ["Coriolis", "coriolis", "implied_deltas", "predict"]
+__all__ = ["Coriolis", "coriolis", "implied_deltas", "lift", "predict"]
 
 
 class Coriolis(NamedTuple):
@@ -154,3 +154,35 @@ def implied_deltas(
     dp = _mv(ri_t, p_j - p_i - v_i * dt - 0.5 * g * dt * dt - cp)
     dr = so3.exp(so3.log(ri_t @ r_j) + _mv(ri_t, c.omega * dt))
     return dr, dv, dp
+
+
+Lifted = tuple[FloatArray, FloatArray, FloatArray]
+
+
+def lift(
+    c: Coriolis,
+    g: FloatArray,
+    dt: FloatArray,
+    state_i: tuple[FloatArray, FloatArray, FloatArray],
+    state_j: tuple[FloatArray, FloatArray, FloatArray],
+) -> tuple[Lifted, Lifted, tuple[FloatArray, FloatArray], FloatArray, FloatArray]:
+    """The states in the inertial frame that coincides with the navigation frame at i: i as
+    ``(p_i, v_i + ω×p_i, R_i)``, j as ``(Aᵀp_j, Aᵀ(v_j + ω×p_j), AᵀR_j)``; the gravity terms
+    ``(Δt Γ₁ g, Δt² Γ₂ g)``; and the Jacobians (M, 9, 9) of each lift, columns and rows
+    ``[δp, δv, δθ]`` (``R Exp(δθ)`` lifts to ``AᵀR Exp(δθ)``): ``[[I, 0, 0], [[ω]×, I, 0], [0, 0, I]]``
+    at i, ``[[Aᵀ, 0, 0], [Aᵀ[ω]×, Aᵀ, 0], [0, 0, I]]`` at j. In those states the exact residual is
+    the inertial one with these gravity terms."""
+    p_i, v_i, r_i = state_i
+    p_j, v_j, r_j = state_j
+    e = _exact(c.omega, g, dt, p_i, v_i)
+    a_t = np.swapaxes(e.a, -1, -2)
+    wx = so3.hat(c.omega)
+    m = len(dt)
+    l_i = np.broadcast_to(np.eye(9), (m, 9, 9)).copy()
+    l_i[:, 3:6, 0:3] = wx
+    l_j = np.broadcast_to(np.eye(9), (m, 9, 9)).copy()
+    l_j[:, 0:3, 0:3] = a_t
+    l_j[:, 3:6, 0:3] = a_t @ wx
+    l_j[:, 3:6, 3:6] = a_t
+    lifted_j = (_mv(a_t, p_j), _mv(a_t, v_j + np.cross(c.omega, p_j)), a_t @ r_j)
+    return (p_i, e.v_bar, r_i), lifted_j, (e.g_v, e.g_p), l_i, l_j

@@ -136,15 +136,23 @@ class _Parts(NamedTuple):
     e: FloatArray
 
 
-def _parts(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None) -> _Parts:
-    """The residual and the world-frame differences it rotates."""
+def _parts(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None,
+    gravity_terms: tuple[FloatArray, FloatArray] | None = None,
+) -> _Parts:
+    """The residual and the world-frame differences it rotates; ``gravity_terms`` are gravity
+    integrated once and twice over the windows (default ``g Δt``, ``½ g Δt²``)."""
     dr, dv, dp = corrected(pre, bias)
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
     p_j, v_j, r_j = state_j
     with np.errstate(over="ignore", invalid="ignore"):
-        u_v = v_j - v_i - g * dt
-        u_p = p_j - p_i - v_i * dt - 0.5 * g * dt * dt
+        g_v, g_p = (g * dt, 0.5 * g * dt * dt) if gravity_terms is None else gravity_terms
+        u_v = v_j - v_i - g_v
+        u_p = p_j - p_i - v_i * dt - g_p
         ri_t = _t(r_i)
         e = _t(dr) @ ri_t @ r_j
         r_v, r_p = _mv(ri_t, u_v) - dv, _mv(ri_t, u_p) - dp
@@ -180,11 +188,37 @@ def residual(
 
 
 def residual_jacobians(
-    pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None = None
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    exact_coriolis: bool = False,
 ) -> ResidualJacobians:
     """Jacobians of :func:`residual` w.r.t. the states at i and j (M, 9, 9) and the bias (M, 9, 6),
-    the bias through the first-order correction."""
-    r, u_v, u_p, e = _parts(pre, state_i, state_j, bias)
+    the bias through the first-order correction. With ``omega_coriolis`` (``exact_coriolis=True``
+    only): the exact residual is the plain one between the states lifted to the inertial frame at i
+    (:func:`imukit._preint_earth.lift`), so these are the plain Jacobians times the lift's."""
+    rotating = _preint_earth.coriolis(omega_coriolis, False, exact_coriolis)
+    if rotating is None:
+        return _jacobians(pre, state_i, state_j, bias)
+    if rotating.order != "exact":
+        raise ParameterError("the Jacobians are for exact_coriolis=True only", argument="exact_coriolis")
+    g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
+    lifted_i, lifted_j, terms, l_i, l_j = _preint_earth.lift(rotating, g, dt, state_i, state_j)
+    d_i, d_j, d_b = _jacobians(pre, States(*lifted_i), States(*lifted_j), bias, terms)
+    return ResidualJacobians(d_i @ l_i, d_j @ l_j, d_b)
+
+
+def _jacobians(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None,
+    gravity_terms: tuple[FloatArray, FloatArray] | None = None,
+) -> ResidualJacobians:
+    r, u_v, u_p, e = _parts(pre, state_i, state_j, bias, gravity_terms)
     jac = pre.bias_jacobian
     m = len(pre)
     r_i, r_j = state_i.rotation, state_j.rotation

@@ -456,12 +456,25 @@ class PreintegratedImu:
         return out
 
     def residual_jacobians(
-        self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None
+        self,
+        state_i: NavState,
+        state_j: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        exact_coriolis: bool = False,
     ) -> ResidualJacobians:
         """Jacobians of :meth:`residual` (Forster et al. 2017, eqs. 44–45, in imukit's charts):
         w.r.t. state i and j (columns ``[δp, δv, δθ]``, ``R Exp(δθ)``) and the bias (``[δb_g, δb_a]``,
-        through the first-order correction)."""
-        jac = residual_jacobians(self.snapshot(), _states(state_i), _states(state_j), bias)
+        through the first-order correction); in a rotating frame for ``exact_coriolis=True``."""
+        jac = residual_jacobians(
+            self.snapshot(),
+            _states(state_i),
+            _states(state_j),
+            bias,
+            omega_coriolis=omega_coriolis,
+            exact_coriolis=exact_coriolis,
+        )
         return ResidualJacobians(*(j[0] for j in jac))
 
 
