@@ -160,6 +160,8 @@ def test_keywords_are_checked() -> None:
         pim.predict(s, omega_coriolis=[0.0, 0.0, 1e-4], second_order_coriolis=True, exact_coriolis=True)
     with pytest.raises(ik.ParameterError, match="second_order_coriolis: needs omega_coriolis"):
         pim.residual(s, s, second_order_coriolis=True)
+    with pytest.raises(ik.ParameterError, match="exact_coriolis=True only"):
+        pim.residual_jacobians(s, s, omega_coriolis=[0.0, 0.0, 1e-4])
 
 
 # ---- a 60 s powered trajectory in a rotating frame: the mechanisation integrated by RK4 ----------
