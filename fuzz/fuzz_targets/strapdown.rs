@@ -48,6 +48,7 @@ fuzz_target!(|input: Input| {
     let options = Options {
         scheme: SCHEMES[usize::from(input.scheme) % SCHEMES.len()],
         gravity: vector(input.gravity),
+        ..Options::default()
     };
     let noise = noise(input.noise);
     let mut p = Covariance::from_diagonal(&nalgebra::SVector::<f64, 15>::from(input.variances));

@@ -8,6 +8,7 @@
 mod allan_glue;
 mod attitude_glue;
 mod convert;
+mod earth_glue;
 mod errors;
 mod filters_glue;
 mod math_glue;
@@ -33,6 +34,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(g::so3_hat, m)?,
         wrap_pyfunction!(g::so3_vee, m)?,
         wrap_pyfunction!(g::so3_exp, m)?,
+        wrap_pyfunction!(g::so3_exp_double_integral, m)?,
         wrap_pyfunction!(g::so3_log, m)?,
         wrap_pyfunction!(g::so3_jacobian, m)?,
         wrap_pyfunction!(g::quat_multiply, m)?,
@@ -50,6 +52,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(g::euler_rate_matrix_inv, m)?,
         wrap_pyfunction!(attitude_glue::attitude_integrate, m)?,
         wrap_pyfunction!(strapdown_glue::strapdown_integrate, m)?,
+        wrap_pyfunction!(strapdown_glue::body_readings, m)?,
         wrap_pyfunction!(strapdown_glue::strapdown_propagate, m)?,
         wrap_pyfunction!(threads::set_num_threads, m)?,
         wrap_pyfunction!(threads::get_num_threads, m)?,
@@ -86,6 +89,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_rotating_world, m)?)?;
+    m.add_function(wrap_pyfunction!(earth_glue::local_level, m)?)?;
+    convert::add_names::<imukit::earth::Axes>(m, "LOCAL_LEVEL_AXES", None)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_default, m)?)?;
     m.add_function(wrap_pyfunction!(text_glue::text_parse_block, m)?)?;

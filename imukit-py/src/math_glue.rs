@@ -57,6 +57,7 @@ macro_rules! kernel {
 kernel!(so3_hat, 3, 9, ffi::so3_hat);
 kernel!(so3_vee, 9, 3, ffi::so3_vee);
 kernel!(so3_exp, 3, 9, ffi::so3_exp);
+kernel!(so3_exp_double_integral, 3, 9, ffi::so3_exp_double_integral);
 kernel!(so3_log, 9, 3, ffi::so3_log);
 kernel!(so3_jacobian, 3, 9, move |i, o| ffi::so3_jacobian(kind.0, i, o), kind: Name<Jacobian>);
 kernel!(quat_conjugate, 4, 4, ffi::quat_conjugate);

@@ -3,7 +3,7 @@
 
 use imukit::sim::{self, Motion, MotionKind, SensorModel};
 use nalgebra::{Matrix3, Rotation3, Vector3};
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray2};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -256,4 +256,33 @@ pub(crate) fn sim_measure<'py>(
             .map_err(|e| raise(py, crate::class_name(&e), argument(&e), e.root()))?;
     }
     Ok(bias)
+}
+
+/// [`sim::in_rotating_world`] on `simulate`'s own fresh `gyro` and `accel` arrays, in place.
+#[pyfunction]
+pub(crate) fn sim_rotating_world<'py>(
+    py: Python<'py>,
+    earth_rate: [f64; 3],
+    rotation: PyReadonlyArray2<'py, f64>,
+    velocity: PyReadonlyArray2<'py, f64>,
+    gyro: &Bound<'py, PyArray2<f64>>,
+    accel: &Bound<'py, PyArray2<f64>>,
+) -> PyResult<()> {
+    let (q, v) = (
+        contiguous(py, "rotation", &rotation)?,
+        contiguous(py, "velocity", &velocity)?,
+    );
+    let (mut wg, mut ag) = (gyro.readwrite(), accel.readwrite());
+    let (w, a) = (wg.as_slice_mut()?, ag.as_slice_mut()?);
+    let w_rate = Vector3::from(earth_rate);
+    py.detach(|| {
+        sim::in_rotating_world(
+            &w_rate,
+            q.as_chunks().0,
+            v.as_chunks().0,
+            w.as_chunks_mut().0,
+            a.as_chunks_mut().0,
+        )
+    })
+    .map_err(|e| to_py(py, "simulate", e))
 }

@@ -3,10 +3,11 @@
 //! biases and the noise cross by field name ([`NavStateFields`], [`BiasFields`],
 //! [`NoiseFields`]).
 
+use imukit::extrinsics::{self, SensorPose};
 use imukit::imu::{Bias, NavState, Noise};
 use imukit::strapdown::{Options, Scheme, StatesOut};
 use imukit::{propagate, strapdown};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
@@ -15,6 +16,8 @@ use crate::{raise, to_py};
 
 /// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
 type States<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+/// `(N, 3)` gyro and accelerometer readings.
+type Readings<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 /// States and `(M, 225)` covariances.
 type StatesAndCovariances<'py> = (
     Bound<'py, PyArray2<f64>>,
@@ -41,10 +44,12 @@ pub(crate) fn strapdown_integrate<'py>(
     bias: BiasFields,
     gravity: [f64; 3],
     scheme: Name<Scheme>,
+    earth_rate: [f64; 3],
 ) -> PyResult<States<'py>> {
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
+        earth_rate: Vector3::from(earth_rate),
     };
     let (initial, bias) = (NavState::from(initial), Bias::from(bias));
     let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
@@ -89,6 +94,7 @@ pub(crate) fn strapdown_propagate<'py>(
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
+        ..Options::default()
     };
     let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
     if covariance.shape() != [15, 15] {
@@ -125,4 +131,41 @@ pub(crate) fn strapdown_propagate<'py>(
         .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot, covariances))
+}
+
+/// `(gyro, accel)` `(N, 3)` at the body origin from the readings of a sensor at
+/// `(rotation R_bs, lever_arm)` in the body frame, biases removed ([`imukit::extrinsics`]).
+#[pyfunction]
+pub(crate) fn body_readings<'py>(
+    py: Python<'py>,
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    bias: BiasFields,
+    rotation: [[f64; 3]; 3],
+    lever_arm: [f64; 3],
+) -> PyResult<Readings<'py>> {
+    let pose = SensorPose::new(Matrix3::from(rotation).transpose(), Vector3::from(lever_arm))
+        .map_err(|e| to_py(py, "body_from_sensor", e))?;
+    let bias = Bias::from(bias);
+    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    let samples = copies.samples(py)?;
+    let n = samples.len();
+    let demand = Demand {
+        argument: "imu",
+        what: "samples",
+        count: n,
+        bytes: n as u128 * 48,
+    };
+    let (w, a) = (zeros(py, &demand, [n, 3])?, zeros(py, &demand, [n, 3])?);
+    {
+        let (mut wg, mut ag) = (w.readwrite(), a.readwrite());
+        let (wo, ao) = (
+            wg.as_slice_mut()?.as_chunks_mut().0,
+            ag.as_slice_mut()?.as_chunks_mut().0,
+        );
+        py.detach(|| extrinsics::to_body(&samples, &bias, &pose, wo, ao))
+            .map_err(|e| to_py(py, "imu", e))?;
+    }
+    Ok((w, a))
 }

@@ -10,7 +10,7 @@ right perturbations, intrinsic ZYX Euler angles, SI units) are tabulated with wo
 array([0., 1., 0.])
 """
 
-from imukit import euler, filters, io, noise, quat, sim, so3
+from imukit import earth, euler, filters, io, noise, quat, sim, so3
 from imukit import eval as eval  # the module imukit.eval (ATE / RPE / attitude errors); shadows the builtin here only
 from imukit._core import GRAVITY, __version__
 from imukit._errors import (
@@ -28,6 +28,7 @@ from imukit._errors import (
     TimestampError,
 )
 from imukit.attitude import integrate_attitude
+from imukit.earth import LocalLevel
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.preint import (
     PreintegratedImu,
@@ -52,6 +53,7 @@ __all__ = [
     "ImukitError",
     "InvalidQuaternionError",
     "InvalidRotationError",
+    "LocalLevel",
     "MissingDependencyError",
     "NavState",
     "NonFiniteError",
@@ -65,6 +67,7 @@ __all__ = [
     "TimestampError",
     "Trajectory",
     "__version__",
+    "earth",
     "euler",
     "eval",
     "filters",

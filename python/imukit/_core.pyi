@@ -18,6 +18,7 @@ __all__ = [
     "DEFAULT_SATURATION_NOISE_FACTOR",
     "FILTER_WORLDS",
     "GRAVITY",
+    "LOCAL_LEVEL_AXES",
     "PREINT_DEFAULT_SCHEME",
     "PREINT_SCHEMES",
     "PREINT_SCHEME_ALIASES",
@@ -43,11 +44,13 @@ __all__ = [
     "__version__",
     "allan_variance",
     "attitude_integrate",
+    "body_readings",
     "euler_from_matrix",
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
     "euler_to_matrix",
     "get_num_threads",
+    "local_level",
     "preint_windows",
     "preint_windows_record",
     "quat_conjugate",
@@ -62,8 +65,10 @@ __all__ = [
     "set_num_threads",
     "sim_measure",
     "sim_motion",
+    "sim_rotating_world",
     "sim_sensor_default",
     "so3_exp",
+    "so3_exp_double_integral",
     "so3_hat",
     "so3_jacobian",
     "so3_log",
@@ -136,6 +141,7 @@ def get_num_threads() -> int: ...
 def so3_hat(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
 def so3_vee(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
 def so3_exp(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
+def so3_exp_double_integral(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 3) -> (n, 9)
 def so3_log(x: _Rows, name: str, threads: int | None = None) -> _Rows: ...  # (n, 9) -> (n, 3)
 def so3_jacobian(
     x: _Rows, name: str, kind: _Jacobian | str, threads: int | None = None
@@ -184,6 +190,17 @@ def strapdown_integrate(
     bias: _Bias,
     gravity: list[float],
     scheme: _StrapdownScheme | str,
+    earth_rate: list[float],
+) -> tuple[_Rows, _Rows]: ...
+
+# (gyro, accel) (N, 3) at the body origin from a sensor at (R_bs rows, lever arm), biases removed.
+def body_readings(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    bias: _Bias,
+    rotation: list[list[float]],
+    lever_arm: list[float],
 ) -> tuple[_Rows, _Rows]: ...
 
 # As strapdown_integrate, plus (M, 225) row-major 15x15 covariances every `every` samples and at
@@ -515,6 +532,25 @@ def sim_motion(
     threads: int | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 def sim_sensor_default() -> dict[str, Any]: ...
+
+# Adds the Earth rate (R^T w) to `gyro` and the Coriolis term (R^T (2 w x v)) to `accel`, in place.
+def sim_rotating_world(
+    earth_rate: list[float],
+    rotation: NDArray[np.float64],
+    velocity: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+) -> None: ...
+
+class _LocalLevel(Protocol):
+    latitude: float
+    height: float
+    axes: str
+
+LOCAL_LEVEL_AXES: tuple[str, ...]
+
+# (earth_rate, gravity) of a local-level frame read by field name; the core checks the values.
+def local_level(frame: _LocalLevel) -> tuple[list[float], list[float]]: ...
 def sim_measure(
     t: NDArray[np.float64],
     ideal: NDArray[np.float64],

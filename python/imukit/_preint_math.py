@@ -8,6 +8,8 @@ states                 arrays with the leading M: positions, velocities (M, 3), 
 corrected              ``ΔR Exp(J_θ δb_g)``, ``Δv + J_v δb``, ``Δp + J_p δb``, ``δb`` the bias change
 prediction             ``R_j = R_i ΔR``, ``v_j = v_i + g Δt + R_i Δv``,
                        ``p_j = p_i + v_i Δt + ½ g Δt² + R_i Δp``
+rotating frame         ``omega_coriolis`` (3,) [rad/s] with ``second_order_coriolis`` or
+                       ``exact_coriolis``: :mod:`imukit._preint_earth` (``predict``, ``residual``)
 residual (M, 9)        ``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``
 Jacobians              rows ``[θ, v, p]``; state columns ``[δp, δv, δθ]`` (``R Exp(δθ)``), bias
                        columns ``[δb_g, δb_a]`` (Forster et al. 2017, eqs. 44–45)
@@ -23,8 +25,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from imukit import so3
+from imukit import _preint_earth, so3
 from imukit._arrays import FloatArray
 from imukit._errors import NonFiniteError, ParameterError
 from imukit._preint_record import Preintegration
@@ -97,17 +100,31 @@ def _finite(arrays: tuple[FloatArray, ...], argument: str, what: str) -> None:
         raise NonFiniteError(f"too large in magnitude: {what} overflows float64", argument=argument)
 
 
-def predict(pre: Preintegration, state_i: States, bias: ImuBias | None = None) -> States:
-    """The states at the windows' ends from those at their starts (module docs)."""
-    dr, dv, dp = corrected(pre, bias)
+def predict(
+    pre: Preintegration,
+    state_i: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    second_order_coriolis: bool = False,
+    exact_coriolis: bool = False,
+) -> States:
+    """The states at the windows' ends from those at their starts (module docs); in a frame rotating
+    at ``omega_coriolis`` [rad/s] with the model the flags name (:mod:`imukit._preint_earth`)."""
+    rotating = _preint_earth.coriolis(omega_coriolis, second_order_coriolis, exact_coriolis)
+    deltas = corrected(pre, bias)
+    dr, dv, dp = deltas
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
     with np.errstate(over="ignore", invalid="ignore"):
-        out = States(
-            p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
-            v_i + g * dt + _mv(r_i, dv),
-            r_i @ dr,
-        )
+        if rotating is not None:
+            out = States(*_preint_earth.predict(rotating, deltas, g, dt, state_i))
+        else:
+            out = States(
+                p_i + v_i * dt + 0.5 * g * dt * dt + _mv(r_i, dp),
+                v_i + g * dt + _mv(r_i, dv),
+                r_i @ dr,
+            )
     _finite(out, "state_i", "the predicted state p_i + v_i Δt + ½ g Δt² + R_i Δp")
     return out
 
@@ -119,15 +136,23 @@ class _Parts(NamedTuple):
     e: FloatArray
 
 
-def _parts(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None) -> _Parts:
-    """The residual and the world-frame differences it rotates."""
+def _parts(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None,
+    gravity_terms: tuple[FloatArray, FloatArray] | None = None,
+) -> _Parts:
+    """The residual and the world-frame differences it rotates; ``gravity_terms`` are gravity
+    integrated once and twice over the windows (default ``g Δt``, ``½ g Δt²``)."""
     dr, dv, dp = corrected(pre, bias)
     g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
     p_i, v_i, r_i = state_i
     p_j, v_j, r_j = state_j
     with np.errstate(over="ignore", invalid="ignore"):
-        u_v = v_j - v_i - g * dt
-        u_p = p_j - p_i - v_i * dt - 0.5 * g * dt * dt
+        g_v, g_p = (g * dt, 0.5 * g * dt * dt) if gravity_terms is None else gravity_terms
+        u_v = v_j - v_i - g_v
+        u_p = p_j - p_i - v_i * dt - g_p
         ri_t = _t(r_i)
         e = _t(dr) @ ri_t @ r_j
         r_v, r_p = _mv(ri_t, u_v) - dv, _mv(ri_t, u_p) - dp
@@ -137,17 +162,63 @@ def _parts(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias 
     return _Parts(r, u_v, u_p, e)
 
 
-def residual(pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None = None) -> FloatArray:
-    """The residuals (M, 9) of the windows between ``state_i`` and ``state_j`` (module docs)."""
-    return _parts(pre, state_i, state_j, bias).r
+def residual(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    second_order_coriolis: bool = False,
+    exact_coriolis: bool = False,
+) -> FloatArray:
+    """The residuals (M, 9) of the windows between ``state_i`` and ``state_j`` (module docs); in a
+    rotating frame, the deltas the states imply under that model minus the measured ones
+    (:mod:`imukit._preint_earth`), whose covariance is the preintegration's."""
+    rotating = _preint_earth.coriolis(omega_coriolis, second_order_coriolis, exact_coriolis)
+    if rotating is None:
+        return _parts(pre, state_i, state_j, bias).r
+    dr, dv, dp = corrected(pre, bias)
+    g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        er, ev, ep = _preint_earth.implied_deltas(rotating, g, dt, state_i, state_j)
+        r_v, r_p = ev - dv, ep - dp
+    _finite((er, r_v, r_p), "state_j", "its difference from state_i in the rotating frame")
+    return np.concatenate([so3.log(_t(dr) @ er), r_v, r_p], axis=-1)
 
 
 def residual_jacobians(
-    pre: Preintegration, state_i: States, state_j: States, bias: ImuBias | None = None
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None = None,
+    *,
+    omega_coriolis: ArrayLike | None = None,
+    exact_coriolis: bool = False,
 ) -> ResidualJacobians:
     """Jacobians of :func:`residual` w.r.t. the states at i and j (M, 9, 9) and the bias (M, 9, 6),
-    the bias through the first-order correction."""
-    r, u_v, u_p, e = _parts(pre, state_i, state_j, bias)
+    the bias through the first-order correction. With ``omega_coriolis`` (``exact_coriolis=True``
+    only): the exact residual is the plain one between the states lifted to the inertial frame at i
+    (:func:`imukit._preint_earth.lift`), so these are the plain Jacobians times the lift's."""
+    rotating = _preint_earth.coriolis(omega_coriolis, False, exact_coriolis)
+    if rotating is None:
+        return _jacobians(pre, state_i, state_j, bias)
+    if rotating.order != "exact":
+        raise ParameterError("the Jacobians are for exact_coriolis=True only", argument="exact_coriolis")
+    g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
+    lifted_i, lifted_j, terms, l_i, l_j = _preint_earth.lift(rotating, g, dt, state_i, state_j)
+    d_i, d_j, d_b = _jacobians(pre, States(*lifted_i), States(*lifted_j), bias, terms)
+    return ResidualJacobians(d_i @ l_i, d_j @ l_j, d_b)
+
+
+def _jacobians(
+    pre: Preintegration,
+    state_i: States,
+    state_j: States,
+    bias: ImuBias | None,
+    gravity_terms: tuple[FloatArray, FloatArray] | None = None,
+) -> ResidualJacobians:
+    r, u_v, u_p, e = _parts(pre, state_i, state_j, bias, gravity_terms)
     jac = pre.bias_jacobian
     m = len(pre)
     r_i, r_j = state_i.rotation, state_j.rotation

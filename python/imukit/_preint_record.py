@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
+from imukit._extrinsics import Pose, check_preint_pose, sensor_pose
 from imukit._names import canonical
 from imukit.imu import ImuBias, ImuNoise
 
@@ -68,6 +69,10 @@ class PreintParams:
     scheme: str = _core.PREINT_DEFAULT_SCHEME
     combined: bool = False
     saturation_noise_factor: float = _core.DEFAULT_SATURATION_NOISE_FACTOR
+    body_from_sensor: Any = None
+    """``(R_bs, lever arm)``, the IMU's pose in the body frame (``(Rotation, (3,))``), kept as
+    ``(R_bs rows, lever arm)`` tuples; the deltas are then the body's (:mod:`imukit._extrinsics`:
+    rotation only so far)."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.noise, ImuNoise):
@@ -88,6 +93,7 @@ class PreintParams:
             "scheme": scheme_name(self.scheme),
             "combined": bool(self.combined),
             "saturation_noise_factor": factor,
+            "body_from_sensor": _pose(self.body_from_sensor),
         }
         for name, value in fields.items():
             object.__setattr__(self, name, value)
@@ -104,7 +110,16 @@ class PreintParams:
         b = self.bias
         return (
             _params,
-            (self.noise, b.gyro, b.accel, self.gravity, self.scheme, self.combined, self.saturation_noise_factor),
+            (
+                self.noise,
+                b.gyro,
+                b.accel,
+                self.gravity,
+                self.scheme,
+                self.combined,
+                self.saturation_noise_factor,
+                self.body_from_sensor,
+            ),
         )
 
     def replace(self, **changes: Any) -> PreintParams:
@@ -124,8 +139,21 @@ def _params(
     scheme: str,
     combined: bool,
     factor: float,
+    pose: Pose | None = None,
 ) -> PreintParams:
-    return PreintParams(noise, ImuBias(gyro, accel), gravity, scheme, combined, factor)
+    return PreintParams(noise, ImuBias(gyro, accel), gravity, scheme, combined, factor, pose)
+
+
+def _pose(value: object) -> Pose | None:
+    """A ``(Rotation, lever arm)`` pair as tuples, or already such tuples (a copy, a pickle)."""
+    if value is None:
+        return None
+    if isinstance(value, tuple) and len(value) == 2 and isinstance(value[0], tuple):
+        pose: Pose = value
+    else:
+        pose = sensor_pose(value)
+    check_preint_pose(pose)
+    return pose
 
 
 _SHAPES = {

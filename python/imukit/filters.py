@@ -44,7 +44,8 @@ from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, real_scalar, rotation_from_unit_quat, vector3
 from imukit._deprecation import deprecated
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
-from imukit.imu import ImuData
+from imukit._extrinsics import sensor_pose
+from imukit.imu import ImuBias, ImuData
 
 __all__ = [
     "AccelLowPass",
@@ -237,7 +238,12 @@ class _Filter:
         return rotation_from_unit_quat(state.quaternion)
 
     def run(
-        self, imu: ImuData, *, mag: ArrayLike | bool | None = None, initial: Rotation | FilterState | None = None
+        self,
+        imu: ImuData,
+        *,
+        mag: ArrayLike | bool | None = None,
+        initial: Rotation | FilterState | None = None,
+        body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
     ) -> FilterResult:
         """Filter a whole recording in one native call (GIL released); the streaming state is not
         touched.
@@ -254,6 +260,11 @@ class _Filter:
             None: the first sample initialises. A ``Rotation``: the attitude at ``imu.t[0]`` (zero
             bias). A :class:`FilterState` (e.g. ``run(...).state`` of the previous chunk): continue
             from it, the first sample being a step of ``imu.t[0] − state.time``.
+        body_from_sensor
+            ``(R_bs, lever arm)``: the IMU's pose in the body frame; the filter estimates the body's
+            attitude from the readings turned into body axes (rotation only: an attitude filter
+            has no use for the lever arm, which must be zero). The estimated gyro bias is then in
+            body axes.
         """
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
@@ -273,7 +284,17 @@ class _Filter:
             start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds
         else:
             start = _core.FilterState._initial(_initial_quat(initial))
-        q, bias, final = self._core_filter.run(imu.seconds, imu.gyro, imu.accel, mags, start, continued)
+        gyro, accel = imu.gyro, imu.accel
+        if body_from_sensor is not None:
+            rows, arm = sensor_pose(body_from_sensor)
+            if any(v != 0.0 for v in arm):
+                raise ParameterError(
+                    "expected a zero lever arm: the filters use the rotation only", argument="body_from_sensor"
+                )
+            gyro, accel = _core.body_readings(imu.seconds, gyro, accel, ImuBias(), [list(r) for r in rows], list(arm))
+            if mags is not None:
+                mags = np.ascontiguousarray(body_from_sensor[0].apply(mags))
+        q, bias, final = self._core_filter.run(imu.seconds, gyro, accel, mags, start, continued)
         return FilterResult(rotation_from_unit_quat(q), bias, FilterState(final._at_time(float(imu.t[-1]))))
 
 

@@ -48,6 +48,7 @@ from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar,
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._errors import ParameterError, ShapeError
+from imukit._extrinsics import in_body
 from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
@@ -93,13 +94,14 @@ def _params(
     scheme: str,
     combined: bool,
     saturation_noise_factor: float,
+    body_from_sensor: object = None,
 ) -> PreintParams:
     """``params``, or the one the keyword options describe."""
     if params is not None:
         if not isinstance(params, PreintParams):
             raise ParameterError(f"expected an imukit.PreintParams, got {type(params).__name__}", argument="params")
         return params
-    return PreintParams(noise, bias, gravity, scheme, combined, saturation_noise_factor)  # type: ignore[arg-type]
+    return PreintParams(noise, bias, gravity, scheme, combined, saturation_noise_factor, body_from_sensor)  # type: ignore[arg-type]
 
 
 class _Measurement(NamedTuple):
@@ -143,8 +145,9 @@ class PreintegratedImu:
         scheme: str = _DEFAULT_SCHEME,
         combined: bool = False,
         saturation_noise_factor: float = _DEFAULT_FACTOR,
+        body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
     ) -> None:
-        self.params = _params(params, noise, bias, gravity, scheme, combined, saturation_noise_factor)
+        self.params = _params(params, noise, bias, gravity, scheme, combined, saturation_noise_factor, body_from_sensor)
         # The name as given: "euler" stays "euler" for code that compares it.
         self._scheme = self.params.scheme if params is not None else scheme
         self._core = self.params._template()
@@ -267,9 +270,12 @@ class PreintegratedImu:
 
     def _read_snapshot(self) -> Preintegration:
         if self._snapshot is None:
-            r, v, p, dt, cov, jac, combined = self._core.state()
+            state = self._core.state()
+            if self.params.body_from_sensor is not None:
+                state = in_body(state, self.params.body_from_sensor)
+            r, v, p, dt, cov, jac, combined = state
             self._snapshot = Preintegration._owning(
-                delta_rotation=r[None],
+                delta_rotation=np.asarray(r)[None],
                 delta_velocity=v[None],
                 delta_position=p[None],
                 delta_t=np.array([dt]),
@@ -333,6 +339,8 @@ class PreintegratedImu:
             raise ParameterError(f"expected an imukit.PreintegratedImu, got {type(other).__name__}", argument="other")
         if self.params.gravity != other.params.gravity:
             raise ParameterError("expected the same gravity", argument="other")
+        if self.params.body_from_sensor != other.params.body_from_sensor:
+            raise ParameterError("expected the same body_from_sensor", argument="other")
         params = self.params.replace(combined=False)
         # Both locks, taken in one global order (a.merge(b) and b.merge(a) at once cannot deadlock).
         with contextlib.ExitStack() as held:
@@ -397,24 +405,76 @@ class PreintegratedImu:
         r, v, p = corrected(self.snapshot(), bias)
         return Rotation.from_matrix(r[0]), v[0], p[0]
 
-    def predict(self, state_i: NavState, bias: ImuBias | None = None) -> NavState:
-        """The state at j from the state at i (deltas corrected to ``bias`` when given)."""
-        p, v, r = predict(self.snapshot(), _states(state_i), bias)
+    def predict(
+        self,
+        state_i: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        second_order_coriolis: bool = False,
+        exact_coriolis: bool = False,
+    ) -> NavState:
+        """The state at j from the state at i (deltas corrected to ``bias`` when given).
+
+        ``omega_coriolis`` (3,) [rad/s]: the navigation frame's rotation rate in its own axes (the
+        Earth rate of a local-level frame, GTSAM's ``omegaCoriolis``); the Coriolis terms to first
+        order (GTSAM 4.2), ``second_order_coriolis`` adds the centrifugal ones, ``exact_coriolis``
+        the closed form of GTSAM 4.3 (``docs/navigation.md``)."""
+        p, v, r = predict(
+            self.snapshot(),
+            _states(state_i),
+            bias,
+            omega_coriolis=omega_coriolis,
+            second_order_coriolis=second_order_coriolis,
+            exact_coriolis=exact_coriolis,
+        )
         return NavState(p[0], v[0], Rotation.from_matrix(r[0]))
 
-    def residual(self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None) -> FloatArray:
+    def residual(
+        self,
+        state_i: NavState,
+        state_j: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        second_order_coriolis: bool = False,
+        exact_coriolis: bool = False,
+    ) -> FloatArray:
         """``[Log(ΔR̃ᵀ R_iᵀ R_j), R_iᵀ(v_j − v_i − g Δt) − Δṽ, R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²) − Δp̃]``,
-        the deltas corrected to ``bias`` when given (9,)."""
-        out: FloatArray = residual(self.snapshot(), _states(state_i), _states(state_j), bias)[0]
+        the deltas corrected to ``bias`` when given (9,). With ``omega_coriolis`` (as in
+        :meth:`predict`): the deltas the two states imply in the rotating frame minus the measured
+        ones, so :attr:`covariance` stays the residual's."""
+        out: FloatArray = residual(
+            self.snapshot(),
+            _states(state_i),
+            _states(state_j),
+            bias,
+            omega_coriolis=omega_coriolis,
+            second_order_coriolis=second_order_coriolis,
+            exact_coriolis=exact_coriolis,
+        )[0]
         return out
 
     def residual_jacobians(
-        self, state_i: NavState, state_j: NavState, bias: ImuBias | None = None
+        self,
+        state_i: NavState,
+        state_j: NavState,
+        bias: ImuBias | None = None,
+        *,
+        omega_coriolis: ArrayLike | None = None,
+        exact_coriolis: bool = False,
     ) -> ResidualJacobians:
         """Jacobians of :meth:`residual` (Forster et al. 2017, eqs. 44–45, in imukit's charts):
         w.r.t. state i and j (columns ``[δp, δv, δθ]``, ``R Exp(δθ)``) and the bias (``[δb_g, δb_a]``,
-        through the first-order correction)."""
-        jac = residual_jacobians(self.snapshot(), _states(state_i), _states(state_j), bias)
+        through the first-order correction); in a rotating frame for ``exact_coriolis=True``."""
+        jac = residual_jacobians(
+            self.snapshot(),
+            _states(state_i),
+            _states(state_j),
+            bias,
+            omega_coriolis=omega_coriolis,
+            exact_coriolis=exact_coriolis,
+        )
         return ResidualJacobians(*(j[0] for j in jac))
 
 
@@ -449,6 +509,7 @@ def preintegrate(
     combined: bool = False,
     saturation_noise_factor: float = _DEFAULT_FACTOR,
     threads: int | None = None,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> PreintegratedImu:
     """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
 
@@ -458,6 +519,10 @@ def preintegrate(
     its ``gyro_range`` / ``accel_range``) have that sensor's white-noise density multiplied by
     ``saturation_noise_factor`` (finite, ≥ 1; 1 ignores the flags); see the module docs for which
     intervals that covers.
+
+    ``body_from_sensor``: ``(R_bs, lever arm)``, the IMU's pose in the body frame (GTSAM's
+    ``body_P_sensor``): the deltas, covariance and bias Jacobian are the body's (biases stay the
+    sensor's); the rotation only so far, a non-zero lever arm is refused (:mod:`imukit._extrinsics`).
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
@@ -469,6 +534,7 @@ def preintegrate(
         scheme=scheme,
         combined=combined,
         saturation_noise_factor=saturation_noise_factor,
+        body_from_sensor=body_from_sensor,
     )
     pim.integrate(imu, threads=threads)
     return pim

@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation, RotationSpline
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
+from imukit.earth import LocalLevel, world
 from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
 from imukit.threads import checked
@@ -305,6 +306,7 @@ def simulate(
     seed: int = 0,
     start: float = 0.0,
     threads: int | None = None,
+    frame: LocalLevel | None = None,
 ) -> tuple[ImuData, Trajectory]:
     """Simulate ``trajectory`` at ``rate`` [Hz] for ``duration`` [s] from time ``start``: samples
     ``t_k = start + k / rate``, ``k = 0 … floor(duration·rate)``. Returns the readings as
@@ -314,6 +316,10 @@ def simulate(
     ImuData's ``gyro_range`` / ``accel_range``, so the clipped samples are flagged
     (``ImuData.gyro_saturated``, ``accel_saturated``). ``gravity`` is the world-frame ``g`` [m/s²] in
     ``R_wbᵀ (a − g)``, by default :data:`imukit.GRAVITY`.
+
+    ``frame``: an :class:`imukit.earth.LocalLevel`: the trajectory is given in that Earth-fixed
+    frame, so the gyro also reads the Earth rate ``R_wbᵀ ω_ie`` and the accelerometer
+    ``R_wbᵀ (a − g + 2 ω_ie × v)`` with the frame's gravity (leave ``gravity`` at its default).
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
@@ -336,7 +342,8 @@ def simulate(
     ):
         if value is not None and not isinstance(value, kind):
             raise ParameterError(f"expected an {shown} or None, got {type(value).__name__}", argument=name)
-    g = vector3(gravity, "gravity")
+    world_g, rotating = world(frame, [float(v) for v in vector3(gravity, "gravity")])
+    g = np.asarray(world_g)
     n = math.floor(span * rate_hz + 1e-9) + 1
     if n > _MAX_SAMPLES:
         raise ParameterError(
@@ -352,6 +359,8 @@ def simulate(
         names = " / ".join(_parameter_names(trajectory))
         raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
     position, velocity, quat, gyro, accel = truth
+    if frame is not None:
+        _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
     n = len(t)
     bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))
     perfect = noise is None and bias is None and gyro_errors is None and accel_errors is None

@@ -30,6 +30,7 @@ from imukit._arrays import FloatArray, batched
 
 __all__ = [
     "exp",
+    "exp_double_integral",
     "hat",
     "left_jacobian",
     "left_jacobian_inv",
@@ -72,6 +73,12 @@ def log(rotation: Rotation | ArrayLike, *, threads: int | None = None) -> FloatA
     """
     matrices = rotation.as_matrix() if isinstance(rotation, Rotation) else rotation
     return batched(_core.so3_log, [(matrices, "rotation", (3, 3))], (3,), threads=threads)
+
+
+def exp_double_integral(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:
+    """``Γ₂(φ) = ∫₀¹ (1 − s) Exp(s φ) ds = Σ_n [φ]×ⁿ / (n + 2)!``; ``(..., 3)`` → ``(..., 3, 3)``.
+    With ``left_jacobian`` (``Γ₁``) it integrates a constant rotation rate twice (``docs/so3.md``)."""
+    return batched(_core.so3_exp_double_integral, [(phi, "phi", (3,))], (3, 3), threads=threads)
 
 
 def right_jacobian(phi: ArrayLike, *, threads: int | None = None) -> FloatArray:

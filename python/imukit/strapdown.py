@@ -12,6 +12,7 @@ import operator
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
 
 from imukit import _core
 from imukit._arrays import (
@@ -23,7 +24,9 @@ from imukit._arrays import (
     vector3,
 )
 from imukit._errors import ParameterError, ShapeError
+from imukit._extrinsics import sensor_pose
 from imukit._names import canonical
+from imukit.earth import LocalLevel, world
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
 
@@ -50,6 +53,22 @@ def _common(
     return bias or ImuBias(), [float(v) for v in g], scheme
 
 
+def _in_body(
+    imu: ImuData, bias: ImuBias, body_from_sensor: object, *, lever_arm: bool
+) -> tuple[FloatArray, FloatArray, ImuBias]:
+    """The readings and bias to integrate: the IMU's own, or the body origin's (bias removed)."""
+    if body_from_sensor is None:
+        return imu.gyro, imu.accel, bias
+    rows, arm = sensor_pose(body_from_sensor)
+    if not lever_arm and any(v != 0.0 for v in arm):
+        raise ParameterError(
+            "a lever arm is not supported by propagate yet (its noise terms are not in the covariance)",
+            argument="body_from_sensor",
+        )
+    gyro, accel = _core.body_readings(imu.seconds, imu.gyro, imu.accel, bias, [list(r) for r in rows], list(arm))
+    return gyro, accel, ImuBias()
+
+
 def _trajectory(
     imu: ImuData,
     position_velocity: FloatArray,
@@ -70,6 +89,8 @@ def integrate(
     gravity: ArrayLike = _DEFAULT_GRAVITY,
     bias: ImuBias | None = None,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
+    frame: LocalLevel | None = None,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> Trajectory:
     """Integrate IMU samples into positions, velocities and attitudes, one per sample.
 
@@ -88,9 +109,21 @@ def integrate(
 
     ``initial`` is the state at the first sample; ``bias`` (constant) is subtracted from the samples.
     Returns a :class:`Trajectory` with the IMU's timestamps (``t_ns`` kept when the IMU has it).
+
+    ``frame``: an :class:`imukit.earth.LocalLevel`: the world is that Earth-fixed frame, turning at
+    its Earth rate ``ω``: ``Ṙ = R[ω̂]× − [ω]×R``, ``v̇ = R â + g − 2ω×v`` with the frame's gravity
+    (leave ``gravity`` at its default); ``docs/navigation.md``.
+
+    ``body_from_sensor``: ``(R_bs, lever arm)``, a scipy ``Rotation`` and a (3,) offset [m]: the
+    IMU's pose in the body frame (GTSAM's ``body_P_sensor``); the trajectory is then the body
+    origin's. The readings become the body's, ``ω_b = R_bs (ω_s − b_g)``,
+    ``a_b = R_bs (a_s − b_a) − α × r − ω_b × (ω_b × r)``, with the angular acceleration ``α`` the
+    central difference of the gyro (one-sided at the ends); ``crates/imukit/src/extrinsics.rs``.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, imu.gyro, imu.accel, initial, b, g, scheme)
+    g, rate = world(frame, g)
+    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
+    pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
 
@@ -104,6 +137,7 @@ def propagate(
     gravity: ArrayLike = _DEFAULT_GRAVITY,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     covariance_every: int = 1,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> Trajectory:
     """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).
 
@@ -115,6 +149,11 @@ def propagate(
     ``docs/strapdown.md``. The covariance is kept at samples ``0, covariance_every, 2·covariance_every,
     …`` and at the last sample (``Trajectory.covariance`` with times ``covariance_t``), so memory stays
     bounded for long recordings.
+
+    ``body_from_sensor``: ``(R_bs, 0)``, as in :func:`integrate`, rotation only (a lever arm is
+    refused: its gyro-noise terms are not in the covariance); the readings are turned into body
+    axes with ``bias`` removed, so the covariance's bias blocks are in body axes (isotropic noise:
+    the same densities).
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     if not isinstance(noise, ImuNoise):
@@ -133,9 +172,8 @@ def propagate(
         raise ParameterError(f"expected an integer ≥ 1, got {covariance_every!r}", argument="covariance_every")
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
-    pv, quaternions, covs = _core.strapdown_propagate(
-        imu.seconds, imu.gyro, imu.accel, initial, p0, b, noise, g, scheme, every
-    )
+    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=False)
+    pv, quaternions, covs = _core.strapdown_propagate(imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every)
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)
     return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))

@@ -146,6 +146,11 @@ pub fn so3_exp(input: &[f64], out: &mut [f64]) -> Result<()> {
     map_rows::<3, 9, _>(input, out, |x| Ok(flat9(so3::exp(&vec3(x)).matrix())))
 }
 
+/// `(n, 3)` → `(n, 3, 3)`: [`so3::exp_double_integral`] (`Γ₂`).
+pub fn so3_exp_double_integral(input: &[f64], out: &mut [f64]) -> Result<()> {
+    map_rows::<3, 9, _>(input, out, |x| Ok(flat9(&so3::exp_double_integral(&vec3(x)))))
+}
+
 /// `(n, 3, 3)` → `(n, 3)`: [`so3::log`]; rows must be rotations within [`ROTATION_TOLERANCE`].
 pub fn so3_log(input: &[f64], out: &mut [f64]) -> Result<()> {
     map_rows::<9, 3, _>(input, out, |x| Ok(flat3(so3::log(&rotation(x)?))))

@@ -24,8 +24,10 @@
 
 pub mod allan;
 pub mod attitude;
+pub mod earth;
 mod error;
 pub mod euler;
+pub mod extrinsics;
 pub mod ffi;
 pub mod filters;
 pub mod imu;

@@ -234,6 +234,15 @@ pub fn propagate_cancellable(
 ) -> Result<(NavState, Covariance)> {
     noise.check()?;
     strapdown::check_parameters(initial, bias, options)?;
+    if options.earth_rate != Vector3::zeros() {
+        // The error-state Jacobians have no rotating-world terms: a mean with them and a
+        // covariance without them would be inconsistent.
+        return Err(Error::Parameter {
+            name: "earth_rate",
+            expected: "zero (propagate models an inertial world only)",
+            got: format!("{:?}", options.earth_rate.as_slice()),
+        });
+    }
     let n = samples.t.len();
     let Outputs {
         mut states,

@@ -19,6 +19,14 @@
 //! `Γ₁ = J_l(ω̂ h)` and `Γ₂` = [`so3::exp_double_integral`]`(ω̂ h)`. The seed's discrete model
 //! omits the ½ on the position term; with it, the lie_euler scheme is the exact solution for a
 //! world-frame acceleration held over the step.
+//!
+//! **Rotating world** ([`Options::earth_rate`] `ω` non-zero, e.g. a [`crate::earth::LocalLevel`]
+//! frame): the world turns at `ω` (in world axes), so `Ṙ = R [ω̂]× − [ω]× R` and
+//! `v̇ = R â + g − 2 ω × v` (Titterton & Weston 2004, eq. 3.33, without the centrifugal change
+//! across the frame). Every rotation the scheme forms is left-multiplied by `Exp(−ω τ)` for its
+//! time τ into the step (exact for constant ω), and the Coriolis acceleration `−2 ω × v` is added to
+//! `g`, evaluated at the step's start (lie_euler, exp) or at its mid-point estimate (midpoint) and
+//! inside each stage (rk4). With `ω = 0` (the default) the loops are those without these terms.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
@@ -60,6 +68,9 @@ pub struct Options {
     pub scheme: Scheme,
     /// Gravity in the world frame [m/s²], added to the rotated specific force.
     pub gravity: Vector3<f64>,
+    /// Rotation rate of the world frame relative to inertial space, in world axes [rad/s] (module
+    /// docs); zero for an inertial world.
+    pub earth_rate: Vector3<f64>,
 }
 
 impl Default for Options {
@@ -67,6 +78,7 @@ impl Default for Options {
         Self {
             scheme: Scheme::Midpoint,
             gravity: imu::gravity(),
+            earth_rate: Vector3::zeros(),
         }
     }
 }
@@ -133,16 +145,21 @@ impl<'a> Stepper<'a> {
         x0: NavState,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
-        match self.options.scheme {
-            Scheme::LieEuler => self.drive::<EULER>(x0, visit),
-            Scheme::Midpoint => self.drive::<MIDPOINT>(x0, visit),
-            Scheme::Rk4 => self.drive::<RK4>(x0, visit),
-            Scheme::Exp => self.drive::<EXP>(x0, visit),
+        let rotating = self.options.earth_rate != Vector3::zeros();
+        match (self.options.scheme, rotating) {
+            (Scheme::LieEuler, false) => self.drive::<EULER, false>(x0, visit),
+            (Scheme::Midpoint, false) => self.drive::<MIDPOINT, false>(x0, visit),
+            (Scheme::Rk4, false) => self.drive::<RK4, false>(x0, visit),
+            (Scheme::Exp, false) => self.drive::<EXP, false>(x0, visit),
+            (Scheme::LieEuler, true) => self.drive::<EULER, true>(x0, visit),
+            (Scheme::Midpoint, true) => self.drive::<MIDPOINT, true>(x0, visit),
+            (Scheme::Rk4, true) => self.drive::<RK4, true>(x0, visit),
+            (Scheme::Exp, true) => self.drive::<EXP, true>(x0, visit),
         }
     }
 
     #[inline(always)]
-    fn drive<const S: u8>(
+    fn drive<const S: u8, const E: bool>(
         &self,
         x0: NavState,
         mut visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
@@ -157,7 +174,7 @@ impl<'a> Stepper<'a> {
             if !samples.step_ok(k) {
                 return Err(samples.value_error());
             }
-            let mut next = self.step::<S>(&x, k, &mut rotated);
+            let mut next = self.step::<S, E>(&x, k, &mut rotated);
             if (k + 1).is_multiple_of(RENORMALIZE_EVERY) {
                 // One Newton step on 1/|q| (|q| is 1 to rounding): no square root needed.
                 let q = next.rotation.quaternion();
@@ -170,12 +187,30 @@ impl<'a> Stepper<'a> {
     }
 
     /// The state at sample k+1 from the state at sample k. `rotated` carries `R_k â_k` from the
-    /// previous midpoint step (its `R⁺ â_{k+1}`), so each specific force is rotated once.
+    /// previous midpoint step (its `R⁺ â_{k+1}`), so each specific force is rotated once. `E`: the
+    /// rotating-world terms (module docs).
     #[inline(always)]
-    fn step<const S: u8>(&self, x: &NavState, k: usize, rotated: &mut Option<Vector3<f64>>) -> NavState {
+    fn step<const S: u8, const E: bool>(&self, x: &NavState, k: usize, rotated: &mut Option<Vector3<f64>>) -> NavState {
         let s = &self.samples;
         let h = s.t[k + 1] - s.t[k];
-        let g = self.options.gravity;
+        let omega = self.options.earth_rate;
+        // The world's turn over τ, applied on the left of a body attitude.
+        let turn = |q: UnitQuaternion<f64>, tau: f64| {
+            if E {
+                UnitQuaternion::new_unchecked(quat::multiply(quat::exp(&(omega * -tau)).quaternion(), q.quaternion()))
+            } else {
+                q
+            }
+        };
+        // Gravity plus the Coriolis acceleration at velocity `v`.
+        let g_at = |v: &Vector3<f64>| {
+            if E {
+                self.options.gravity - omega.cross(v) * 2.0
+            } else {
+                self.options.gravity
+            }
+        };
+        let g = g_at(&x.velocity);
         let w0 = s.gyro_at(k) - self.bias.gyro;
         let a0 = s.accel_at(k) - self.bias.accel;
         let (p, v, q) = (x.position, x.velocity, x.rotation);
@@ -185,17 +220,23 @@ impl<'a> Stepper<'a> {
                 NavState {
                     position: p + v * h + acc * (0.5 * h * h),
                     velocity: v + acc * h,
-                    rotation: compose(&q, &(w0 * h)),
+                    rotation: turn(compose(&q, &(w0 * h)), h),
                 }
             }
             MIDPOINT => {
                 let w1 = s.gyro_at(k + 1) - self.bias.gyro;
                 let a1 = s.accel_at(k + 1) - self.bias.accel;
-                let q1 = compose(&q, &((w0 + w1) * (0.5 * h)));
+                let q1 = turn(compose(&q, &((w0 + w1) * (0.5 * h))), h);
                 let r0 = rotated.unwrap_or_else(|| quat::rotate_unit(&q, &a0));
                 let r1 = quat::rotate_unit(&q1, &a1);
                 *rotated = Some(r1);
-                let acc = (r0 + r1) * 0.5 + g;
+                let force = (r0 + r1) * 0.5;
+                // Coriolis at the step's mid-point velocity, so the scheme stays second order.
+                let acc = if E {
+                    force + g_at(&(v + (force + g) * (0.5 * h)))
+                } else {
+                    force + g
+                };
                 NavState {
                     position: p + v * h + acc * (0.5 * h * h),
                     velocity: v + acc * h,
@@ -209,7 +250,7 @@ impl<'a> Stepper<'a> {
                 NavState {
                     position: p + v * h + dp + g * (0.5 * h * h),
                     velocity: v + dv + g * h,
-                    rotation: compose(&q, &phi),
+                    rotation: turn(compose(&q, &phi), h),
                 }
             }
             _ => {
@@ -222,11 +263,11 @@ impl<'a> Stepper<'a> {
                 // y = (p, v, q) with q unnormalised inside the step; R(q) uses q/|q|.
                 let f = |v: &Vector3<f64>, q: &Quaternion<f64>, w: &Vector3<f64>, a: &Vector3<f64>| {
                     let rot = UnitQuaternion::new_normalize(*q);
-                    (
-                        *v,
-                        quat::rotate_unit(&rot, a) + g,
-                        quat::multiply(q, &Quaternion::from_imag(*w)) * 0.5,
-                    )
+                    let mut dq = quat::multiply(q, &Quaternion::from_imag(*w)) * 0.5;
+                    if E {
+                        dq -= quat::multiply(&Quaternion::from_imag(omega), q) * 0.5;
+                    }
+                    (*v, quat::rotate_unit(&rot, a) + g_at(v), dq)
                 };
                 let q0 = q.into_inner();
                 let (dp1, dv1, dq1) = f(&v, &q0, &w0, &a0);

@@ -94,6 +94,7 @@ fn deltas_equal_strapdown_from_rest_without_gravity() {
     let options = Options {
         scheme: Scheme::LieEuler,
         gravity: Vector3::zeros(),
+        ..Options::default()
     };
     let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let x = integrate(&samples, &x0, &Bias::default(), &options, None).unwrap();

@@ -138,6 +138,7 @@ fn deltas_equal_strapdown_midpoint_without_gravity() {
     let options = Options {
         scheme: imukit::strapdown::Scheme::Midpoint,
         gravity: Vector3::zeros(),
+        ..Options::default()
     };
     let samples = Samples::new(&t, gyro.as_chunks().0, accel.as_chunks().0).unwrap();
     let b = Bias {

@@ -143,6 +143,7 @@ fn block_propagation_equals_the_dense_product() {
     let options = Options {
         scheme: Scheme::LieEuler,
         gravity: G,
+        ..Options::default()
     };
     let mut covs = vec![[0.0; 225]; 2];
     let outputs = Outputs {

@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
+from imukit._extrinsics import in_body
 from imukit._preint_record import Preintegration, PreintParams
 
 
@@ -24,6 +25,8 @@ class Windows(NamedTuple):
 def record(arrays: tuple[Any, ...], windows: Windows, params: PreintParams) -> Preintegration:
     """The record of ``arrays`` ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian, combined or None)``."""
     ns = windows.t_ns
+    if params.body_from_sensor is not None:
+        arrays = in_body(arrays, params.body_from_sensor)
     r, v, p, dt, cov, jac, combined = arrays
     t = np.array(windows.t, dtype=np.float64)  # a copy: the edges may be the caller's array
     return Preintegration._owning(

@@ -135,8 +135,10 @@ def dead_reckoning(
             raise ParameterError(f"{os.fspath(path)}: the ground truth has no biases", argument="bias_from_truth")
         bias = ImuBias(paired.reference.gyro_bias[0], paired.reference.accel_bias[0])
     samples = imu[first:]
-    schemes = {} if scheme is None else {"scheme": scheme}
-    trajectory = integrate(samples, initial=start, bias=bias, **schemes)
+    if scheme is None:
+        trajectory = integrate(samples, initial=start, bias=bias)
+    else:
+        trajectory = integrate(samples, initial=start, bias=bias, scheme=scheme)
     scored, _ = scores(trajectory, truth, align="none", rpe_delta_s=rpe_delta_s, max_dt=max_dt)
     scalars: dict[str, Scalar] = {"samples": len(samples), **scored}
     rows = {"t_s": trajectory.t, "position_m": trajectory.position, "q_xyzw": trajectory.rotation.as_quat()}

@@ -70,3 +70,41 @@ pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'
         });
     Ok(())
 }
+
+/// Turns the ideal readings of a trajectory given in a world frame that rotates at `earth_rate`
+/// (world axes, rad/s; e.g. [`crate::earth::LocalLevel::earth_rate`]) into what the sensor reads,
+/// in place: the gyro adds the world's rate seen in the body, `Rᵀ ω`, and the specific force the
+/// Coriolis term, `Rᵀ (2 ω × v)` (with the frame's gravity already in `accel`). Rows: `rotation`
+/// `[x, y, z, w]` quaternions of `R_wb`, `velocity`, `gyro`, `accel` (the same count).
+pub fn in_rotating_world(
+    earth_rate: &Vector3<f64>,
+    rotation: &[[f64; 4]],
+    velocity: &[[f64; 3]],
+    gyro: &mut [[f64; 3]],
+    accel: &mut [[f64; 3]],
+) -> Result<()> {
+    let n = rotation.len();
+    for (name, len) in [
+        ("velocity", velocity.len()),
+        ("gyro", gyro.len()),
+        ("accel", accel.len()),
+    ] {
+        if len != n {
+            return Err(Error::RowCount { input: n, output: len }.in_argument(name));
+        }
+    }
+    let coriolis = |q: &[f64; 4], v: &[f64; 3], w: &mut [f64; 3], a: &mut [f64; 3]| {
+        let r = UnitQuaternion::new_normalize(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
+        let to_body = |x: Vector3<f64>| r.inverse_transform_vector(&x);
+        let dw = to_body(*earth_rate);
+        let da = to_body(earth_rate.cross(&Vector3::from(*v)) * 2.0);
+        *w = (Vector3::from(*w) + dw).into();
+        *a = (Vector3::from(*a) + da).into();
+    };
+    rotation
+        .par_iter()
+        .zip(velocity.par_iter())
+        .zip(gyro.par_iter_mut().zip(accel.par_iter_mut()))
+        .for_each(|((q, v), (w, a))| coriolis(q, v, w, a));
+    Ok(())
+}
