@@ -113,10 +113,18 @@ def gpu(batch: int, n: int, repeats: int) -> None:
     for dtype in (torch.float32, torch.float64):
         for cov in (False, True):
             for backward in (False, True):
-                args = inputs(batch, n, dtype, "cuda", backward)
-                s = time_case(ours("lie_euler", cov), args, backward, repeats, "cuda")
                 label = f"lie_euler {dtype}, {'fwd+bwd' if backward else 'fwd'}, {'cov' if cov else 'deltas only'}"
-                print(f"{label:<52} {batch * n / s:>14.3e} samples/s", flush=True)
+                try:
+                    args = inputs(batch, n, dtype, "cuda", backward)
+                    s = time_case(ours("lie_euler", cov), args, backward, repeats, "cuda")
+                except torch.cuda.OutOfMemoryError:
+                    print(f"{label:<52} out of GPU memory", flush=True)
+                    continue
+                finally:
+                    torch.cuda.empty_cache()
+                peak = torch.cuda.max_memory_allocated() / 2**30
+                torch.cuda.reset_peak_memory_stats()
+                print(f"{label:<52} {batch * n / s:>14.3e} samples/s, peak {peak:.1f} GiB", flush=True)
 
 
 def main() -> None:
