@@ -80,6 +80,7 @@ bench: build
 	$(VPY) bench/bench_allan.py
 	$(VPY) bench/bench_sim.py
 	$(VPY) bench/bench_filters.py
+	$(VPY) bench/bench_torch.py
 	cargo bench --locked -p imukit
 
 # Re-pin the Python closure after editing requirements/dev.in.

@@ -21,10 +21,12 @@ from typing import Any
 
 import numpy as np
 import pytest
+import torch
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
 import imukit.fleet
+import imukit.torch
 from imukit.io import ReadReport, SkippedLine
 
 MODULES = [
@@ -38,6 +40,7 @@ MODULES = [
     "imukit.io",
     "imukit.noise",
     "imukit.preint",
+    "imukit.torch",
     "imukit.quat",
     "imukit.sim",
     "imukit.so3",
@@ -163,7 +166,18 @@ def _error(cls: type[ik.ImukitError]) -> Callable[[], ik.ImukitError]:
     return lambda: cls("expected shape (N, 3), got (2,)", argument="gyro", index=4)
 
 
+def _torch_preintegrated() -> imukit.torch.Preintegrated:
+    g = torch.Generator().manual_seed(1)
+    w, a = (
+        torch.randn(2, 5, 3, generator=g, dtype=torch.float64),
+        torch.randn(2, 5, 3, generator=g, dtype=torch.float64),
+    )
+    return imukit.torch.preintegrate(0.005, w, a, noise=NOISE, return_covariance=True, return_jacobian=True)
+
+
 FACTORIES: dict[str, Callable[[], Any]] = {
+    "Preintegrated": _torch_preintegrated,
+    "State": lambda: imukit.torch.State(torch.eye(3), torch.tensor([1.0, 2.0, 3.0]), torch.zeros(3)),
     "ImuData": lambda: _sim()[0],
     "ImuBias": lambda: ik.ImuBias([1e-3, -2e-3, 3e-3], [0.05, -0.02, 0.01]),
     "ImuNoise": lambda: NOISE,
@@ -264,7 +278,13 @@ def _bits(x: float) -> bytes:
 def assert_same(a: Any, b: Any, path: str = "x", *, copied: bool = False) -> None:
     """``a`` and ``b`` equal field by field, bit for bit; with ``copied``, no array shared."""
     assert type(a) is type(b), f"{path}: {type(a).__name__} != {type(b).__name__}"
-    if isinstance(a, np.ndarray):
+    if isinstance(a, torch.Tensor):
+        assert (a.dtype, a.shape, a.device) == (b.dtype, b.shape, b.device), (
+            f"{path}: {a.dtype}{a.shape} != {b.dtype}{b.shape}"
+        )
+        assert torch.equal(a, b), f"{path}: tensors differ"
+        assert not (copied and a.untyped_storage().data_ptr() == b.untyped_storage().data_ptr()), f"{path}: shared"
+    elif isinstance(a, np.ndarray):
         assert (a.dtype, a.shape) == (b.dtype, b.shape), f"{path}: {a.dtype}{a.shape} != {b.dtype}{b.shape}"
         assert a.flags.writeable == b.flags.writeable, f"{path}: writeable {a.flags.writeable} != {b.flags.writeable}"
         assert a.tobytes() == b.tobytes(), f"{path}: the bytes differ"

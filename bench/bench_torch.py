@@ -1,0 +1,145 @@
+"""Speed of ``imukit.torch.preintegrate`` against pypose's ``IMUPreintegrator`` (issue 19).
+
+CPU: batch ``--batch`` (256) × ``--samples`` (1023) windows, float64 and float32, forward and
+forward + backward, with and without the 9×9 covariance, in ns per sample (median of
+``--repeats``), both libraries in the same run on the same inputs. 1023 samples, not 1000: pypose
+0.9.5's ``cumops`` asks torch for ``arange(2^k, L)`` with ``2^k > L`` unless ``L = samples + 1``
+is a power of two, which torch 2.15 refuses. pypose has one scheme (lie_euler, the sample held
+over its step); imukit.torch is timed in both. pypose's covariance takes densities; ours per-sample
+covariances: the same noise either way.
+
+CUDA (when a GPU is present): batch ``--gpu-batch`` (4096) × 1000 samples, float32 and float64,
+forward and forward + backward, deltas without covariance and with it; samples per second and the
+device name. Self-contained: ``python bench/bench_torch.py [--gpu-only]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from collections.abc import Callable
+
+import torch
+
+import imukit.torch as it
+
+warnings.filterwarnings("ignore", category=FutureWarning)  # pypose uses torch.jit.script at import
+
+
+def inputs(batch: int, n: int, dtype: torch.dtype, device: str, grad: bool) -> tuple[torch.Tensor, ...]:
+    g = torch.Generator().manual_seed(0)
+    gyro = torch.randn(batch, n, 3, generator=g, dtype=dtype)
+    accel = torch.randn(batch, n, 3, generator=g, dtype=dtype) + torch.tensor([0.0, 0.0, 9.81], dtype=dtype)
+    dt = torch.full((batch, n), 0.005, dtype=dtype)
+    return tuple(x.to(device).requires_grad_(grad) for x in (dt, gyro, accel))
+
+
+def median_s(f: Callable[[], object], repeats: int, sync: Callable[[], None]) -> float:
+    f()
+    sync()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        f()
+        sync()
+        times.append(time.perf_counter() - start)
+    return sorted(times)[len(times) // 2]
+
+
+def ours(scheme: str, cov: bool) -> Callable[..., torch.Tensor]:
+    def run(dt: torch.Tensor, gyro: torch.Tensor, accel: torch.Tensor) -> torch.Tensor:
+        if not cov:
+            d = it.preintegrate(dt, gyro, accel, scheme=scheme)
+            return d.delta_rotation.sum() + d.delta_velocity.sum() + d.delta_position.sum()
+        per_sample = (1e-4 / dt)[..., None].expand(*dt.shape, 3)
+        d = it.preintegrate(
+            dt, gyro, accel, scheme=scheme, gyro_cov=per_sample, accel_cov=per_sample, return_covariance=True
+        )
+        return d.delta_velocity.sum() + d.covariance.sum()  # type: ignore[union-attr]
+
+    return run
+
+
+def pypose(cov: bool) -> Callable[..., torch.Tensor]:
+    import pypose as pp
+
+    def run(dt: torch.Tensor, gyro: torch.Tensor, accel: torch.Tensor) -> torch.Tensor:
+        integ = pp.module.IMUPreintegrator(reset=True, prop_cov=cov, gravity=0.0, gyro_cov=1e-4, acc_cov=1e-4)
+        out = integ.to(dt.dtype).to(dt.device)(dt[..., None], gyro, accel)
+        total = out["vel"].sum() + out["pos"].sum()
+        return total + out["cov"].sum() if cov else total
+
+    return run
+
+
+def time_case(
+    f: Callable[..., torch.Tensor], args: tuple[torch.Tensor, ...], backward: bool, repeats: int, device: str
+) -> float:
+    def go() -> None:
+        loss = f(*args)
+        if backward:
+            loss.backward()  # type: ignore[no-untyped-call]
+
+    sync = torch.cuda.synchronize if device == "cuda" else (lambda: None)
+    return median_s(go, repeats, sync)
+
+
+def cpu(batch: int, n: int, repeats: int) -> None:
+    print(f"CPU, {torch.get_num_threads()} threads, batch {batch} × {n} samples, ns per sample (median of {repeats})")
+    print(f"{'case':<44} {'float64':>10} {'float32':>10}")
+    for cov in (False, True):
+        rows: list[tuple[str, Callable[..., torch.Tensor]]] = [
+            ("imukit.torch lie_euler", ours("lie_euler", cov)),
+            ("imukit.torch midpoint", ours("midpoint", cov)),
+            ("pypose IMUPreintegrator", pypose(cov)),
+        ]
+        for backward in (False, True):
+            for name, f in rows:
+                label = f"{name}, {'fwd+bwd' if backward else 'fwd'}, {'cov' if cov else 'no cov'}"
+                cells = []
+                for dtype in (torch.float64, torch.float32):
+                    args = inputs(batch, n, dtype, "cpu", backward)
+                    cells.append(time_case(f, args, backward, repeats, "cpu") / (batch * n) * 1e9)
+                print(f"{label:<44} {cells[0]:>10.0f} {cells[1]:>10.0f}", flush=True)
+
+
+def gpu(batch: int, n: int, repeats: int) -> None:
+    if not torch.cuda.is_available():
+        print("CUDA: no GPU here, section skipped")
+        return
+    name = torch.cuda.get_device_name()
+    print(f"CUDA: {name}, batch {batch} × {n} samples, samples per second (median of {repeats})")
+    for dtype in (torch.float32, torch.float64):
+        for cov in (False, True):
+            for backward in (False, True):
+                label = f"lie_euler {dtype}, {'fwd+bwd' if backward else 'fwd'}, {'cov' if cov else 'deltas only'}"
+                try:
+                    args = inputs(batch, n, dtype, "cuda", backward)
+                    s = time_case(ours("lie_euler", cov), args, backward, repeats, "cuda")
+                except torch.cuda.OutOfMemoryError:
+                    print(f"{label:<52} out of GPU memory", flush=True)
+                    continue
+                finally:
+                    torch.cuda.empty_cache()
+                peak = torch.cuda.max_memory_allocated() / 2**30
+                torch.cuda.reset_peak_memory_stats()
+                print(f"{label:<52} {batch * n / s:>14.3e} samples/s, peak {peak:.1f} GiB", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--batch", type=int, default=256)
+    parser.add_argument("--samples", type=int, default=1023)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--gpu-batch", type=int, default=4096)
+    parser.add_argument("--gpu-only", action="store_true")
+    a = parser.parse_args()
+    print(f"torch {torch.__version__}")
+    if not a.gpu_only:
+        cpu(a.batch, a.samples, a.repeats)
+    gpu(a.gpu_batch, 1000, a.repeats)
+
+
+if __name__ == "__main__":
+    main()
