@@ -77,8 +77,9 @@ def test_mahony_holds_tilt_under_sustained_and_periodic_acceleration(
 
 @pytest.mark.xfail(
     strict=True,
-    reason="Madgwick's normalised step corrects at 2β rad/s whatever the error, so it follows the "
-    "low-passed vector below the 3° gate: 5.5° sustained, 5.6° figure-eight (docs/filters.md)",
+    reason="Madgwick's normalised step turns the estimate at 2β = 4.7°/s whatever the gap, so the "
+    "gap to the low-passed vector (27° (1 − (1 + t) e^−t) under 5 m/s²) reaches the 3° gate only "
+    "with the estimate ≈ 5° over: 5.5° sustained, 5.6° figure-eight (docs/filters.md, Limits)",
 )
 def test_madgwick_holds_tilt_under_sustained_and_periodic_acceleration(
     accelerating: tuple[ik.ImuData, Rotation, np.ndarray],
@@ -183,7 +184,7 @@ def test_a_steady_turn_is_not_taken_for_a_bias() -> None:
 @requires_euroc
 def test_euroc_mav_holds_inclination_at_the_defaults() -> None:
     """The EuRoC MAV excerpt (6D against its ground truth): gyro bias 0.08 rad/s, rotor vibration.
-    Measured 4.26° (Mahony) and 3.02° (Madgwick); the former defaults 7.8° / 8.1°, vqf's VQF 6.4°.
+    Measured 4.93° (Mahony) and 3.02° (Madgwick); the former defaults 7.8° / 8.1°, vqf's VQF 6.4°.
     Without rest detection and the drift rule, the 3° angle gate held the drifting estimate on the
     gyro until each 15 s recovery: 30.5° / 26.5°."""
     import euroc
@@ -197,7 +198,7 @@ def test_euroc_mav_holds_inclination_at_the_defaults() -> None:
         err = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=True, world="ENU")
         return float(err.rmse(degrees=True).inclination)
 
-    assert inclination(Mahony()) < 5.0
+    assert inclination(Mahony()) < 5.5
     assert inclination(Madgwick()) < 3.5
     stuck = AccelRejection(drift_s=1e9)
     assert inclination(Mahony(rest_detection=None, acc_rejection=stuck)) > 20.0
