@@ -161,9 +161,17 @@ def test_rejection_recovers_after_timeout() -> None:
     accel = np.tile(UP_READING["ENU"], (len(t), 1))
     accel[t >= 5.0] = r.T @ UP_READING["ENU"]
     imu = ik.ImuData(t, np.zeros((len(t), 3)), accel)
-    tilt = np.degrees(Mahony(acc_rejection=STRICT, **RAW).run(imu).rotation.magnitude())
+    no_drift = AccelRejection(norm=1.0, angle_rad=np.radians(10.0), recovery_s=5.0, drift_s=1e9)
+    tilt = np.degrees(Mahony(acc_rejection=no_drift, **RAW).run(imu).rotation.magnitude())
     assert tilt[(t > 5.5) & (t < 9.9)].max() < 0.5  # rejected (20° > 10°), before the 5 s timeout
-    assert abs(tilt[-1] - 20.0) < 0.1  # recovered
+    assert tilt[(t > 10.5) & (t < 11.0)].min() > 5.0  # recovered (the ramp's 10× gain)
+    assert abs(tilt[-1] - 20.0) < 0.1
+    # The drift rule (default 2 s) takes the unchanged norm for a drift and corrects sooner, at the
+    # nominal gain (no ramp)
+    tilt = np.degrees(Mahony(acc_rejection=STRICT, **RAW).run(imu).rotation.magnitude())
+    assert tilt[(t > 5.5) & (t < 6.9)].max() < 0.5
+    assert tilt[(t > 7.5) & (t < 9.9)].min() > 1.0
+    assert abs(tilt[-1] - 20.0) < 0.1
 
 
 def turning_with_rejected_accel() -> tuple[ik.ImuData, np.ndarray, Rotation]:
@@ -224,7 +232,7 @@ def test_rest_detection_bias() -> None:
     imu = ik.ImuData(imu_still.t, np.tile(BIAS * 0.5, (n, 1)), imu_still.accel)
     est = Madgwick(rest_detection=ik.filters.RestDetection()).run(imu).gyro_bias[-1]
     np.testing.assert_allclose(est, BIAS * 0.5, rtol=1e-6)
-    assert np.all(Madgwick().run(imu).gyro_bias[-1] == 0.0)
+    assert np.all(Madgwick(rest_detection=None).run(imu).gyro_bias[-1] == 0.0)
 
 
 @pytest.fixture(scope="module")

@@ -108,9 +108,15 @@ def test_filters_round_trip_with_their_streaming_state(
 DOCUMENTED = {
     GainRamp: {"duration_s": 3.0, "factor": 10.0},
     AccelLowPass: {"tau_s": 1.0},
-    AccelRejection: {"norm": 2.0, "angle_rad": math.radians(3.0), "recovery_s": 15.0},
+    AccelRejection: {
+        "norm": 2.0,
+        "angle_rad": math.radians(3.0),
+        "recovery_s": 15.0,
+        "filtered_norm": 0.3,
+        "drift_s": 2.0,
+    },
     MagRejection: {"norm_fraction": 0.1, "dip_rad": math.radians(10.0), "recovery_s": 10.0},
-    RestDetection: {"gyro": 0.05, "accel": 0.2, "duration_s": 1.0, "tau_s": 1.0},
+    RestDetection: {"gyro": 0.05, "accel": 1.0, "duration_s": 1.0, "tau_s": 1.0, "max_bias": 0.1},
     _core.MahonyGains: {"kp": 0.3, "ki": 0.01},
     _core.MadgwickGains: {"beta": 0.041},
 }
@@ -128,7 +134,7 @@ def test_python_defaults_are_the_rust_defaults(cls: type) -> None:
 
 def test_filter_keyword_defaults_come_from_the_core() -> None:
     core = _core.FilterOptions.default()
-    assert (core.world, core.gravity, core.rest_detection) == ("ENU", 9.81, None)
+    assert (core.world, core.gravity, core.rest_detection) == ("ENU", 9.81, RestDetection())
     assert (core.gain_ramp, core.acc_rejection, core.mag_rejection) == (GainRamp(), AccelRejection(), MagRejection())
     assert core.acc_lowpass == AccelLowPass()
     for f in (Mahony(), Madgwick()):
@@ -156,8 +162,9 @@ def test_deprecated_flat_layout_still_works(moving: tuple[ik.ImuData, np.ndarray
     assert values.shape == (16,) and not values.flags.writeable
     with pytest.warns(DeprecationWarning, match="deprecated"):
         rebuilt = FilterState(values)
-    # the flat layout predates the accelerometer low pass: it restarts at the next sample
-    lp = ("acc_lp1", "acc_lp2")
+    # the flat layout predates the accelerometer low pass, rest detection's means and the drift
+    # rule's clock: they restart at the next sample
+    lp = ("acc_lp1", "acc_lp2", "gyro_lp", "rest_gyro_ms", "rest_accel_lp", "rest_accel_ms", "accel_calm")
     assert {k: v for k, v in rebuilt.fields().items() if k not in lp} == {
         k: v for k, v in state.fields().items() if k not in lp
     }

@@ -1,16 +1,23 @@
 """Mahony and Madgwick under motion the gravity-only assumption does not cover (issue 15): a
-sustained acceleration, a figure-eight, handheld motion (bias wind-up), and the accelerometer low
-pass itself. Trajectories are analytic; the gyro is the exact body-rate increment between samples
-(``log(R_{k−1}ᵀ R_k)/dt``), so every error left is the accelerometer's."""
+sustained acceleration, a figure-eight, handheld motion (bias wind-up), the accelerometer low
+pass itself, rest detection of a large gyro bias, and the real recordings that showed the failures
+(EuRoC's MAV: a 0.08 rad/s bias; the x-io handheld example: a re-learned magnetic field).
+Trajectories are analytic; the gyro is the exact body-rate increment between samples
+(``log(R_{k−1}ᵀ R_k)/dt``), so every error left is the accelerometer's (or the bias added)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-from imukit.filters import AccelLowPass, Madgwick, Mahony
+from euroc import requires_euroc
+from imukit.filters import AccelLowPass, AccelRejection, Madgwick, Mahony
+
+XIO = Path(__file__).resolve().parents[2] / "shared" / "data" / "xio_fusion_example" / "sensor_data.csv"
 
 G = 9.81
 RATE = 100.0
@@ -70,8 +77,9 @@ def test_mahony_holds_tilt_under_sustained_and_periodic_acceleration(
 
 @pytest.mark.xfail(
     strict=True,
-    reason="Madgwick's normalised step corrects at 2β rad/s whatever the error, so it follows the "
-    "low-passed vector below the 3° gate: 5.5° sustained, 5.6° figure-eight (docs/filters.md)",
+    reason="Madgwick's normalised step turns the estimate at 2β = 4.7°/s whatever the gap, so the "
+    "gap to the low-passed vector (27° (1 − (1 + t) e^−t) under 5 m/s²) reaches the 3° gate only "
+    "with the estimate ≈ 5° over: 5.5° sustained, 5.6° figure-eight (docs/filters.md, Limits)",
 )
 def test_madgwick_holds_tilt_under_sustained_and_periodic_acceleration(
     accelerating: tuple[ik.ImuData, Rotation, np.ndarray],
@@ -117,14 +125,15 @@ def handheld(seed: int) -> tuple[ik.ImuData, Rotation]:
 
 
 def test_mahony_bias_does_not_wind_up_on_handheld_motion() -> None:
-    """The true bias is zero: the default integral stays below 1e-3 rad/s (measured ≤ 2e-4), where
-    the textbook law at the same gains winds up on the accelerations it takes for gravity."""
+    """The true bias is zero: the default integral stays below 2e-3 rad/s (measured ≤ 1.3e-3; 2e-4
+    with the drift rule off: the samples around its switching still carry a little acceleration),
+    where the textbook law at the same gains winds up on the accelerations it takes for gravity."""
     ours, textbook = [], []
     for seed in range(3):
         imu, _ = handheld(seed)
         ours.append(np.abs(Mahony().run(imu).gyro_bias).max())
         textbook.append(np.abs(Mahony(acc_lowpass=None, acc_rejection=None).run(imu).gyro_bias).max())
-    assert max(ours) < 1e-3, ours
+    assert max(ours) < 2e-3, ours
     assert max(textbook) > 5 * max(ours) and max(textbook) > 2.5e-3, textbook
 
 
@@ -133,3 +142,77 @@ def test_low_pass_option_is_checked() -> None:
         Mahony(acc_lowpass=AccelLowPass(tau_s=0.0))
     with pytest.raises(ik.ParameterError, match=r"^acc_lowpass: expected a AccelLowPass"):
         Madgwick(acc_lowpass="1 s")  # type: ignore[arg-type]
+
+
+def biased_turn(bias: np.ndarray, rest_s: float, seed: int = 0) -> tuple[ik.ImuData, Rotation, np.ndarray]:
+    """``rest_s`` seconds still, then the slow turn of :func:`turning` for 60 s; the gyro reads
+    ``bias`` [rad/s] plus 0.02 rad/s of white noise and the accelerometer 0.5 m/s² (a MAV's
+    rotors: both far above a still bench's)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int((rest_s + 60.0) * RATE)) / RATE
+    rot = turning(np.maximum(t - rest_s, 0.0))
+    imu = imu_from(t, rot, np.zeros((len(t), 3)))
+    gyro = imu.gyro + bias + 0.02 * rng.standard_normal(imu.gyro.shape)
+    return ik.ImuData(t, gyro, imu.accel + 0.5 * rng.standard_normal(imu.accel.shape)), rot, t
+
+
+@pytest.mark.parametrize("cls", [Mahony, Madgwick])
+def test_rest_detection_finds_a_bias_above_its_threshold(cls: type[Mahony]) -> None:
+    """A 0.085 rad/s bias (above the 0.05 rad/s steadiness threshold: the test is on the gyro's
+    deviation from its own low pass, not on ‖ω‖) is found during 6 s of rest among vibration."""
+    bias = np.array([0.08, 0.0, 0.03])
+    imu, _, _ = biased_turn(bias, rest_s=6.0)
+    found = cls().run(imu).gyro_bias[int(6.0 * RATE) - 1]
+    # 5 s of rest after the 1 s the test must hold: e^-5 of the bias left (5e-4 rad/s), plus the
+    # low pass's noise, 0.02 √(dt / 2τ) = 1.4e-3 rad/s per axis: 3.5 σ
+    assert np.abs(found - bias).max() < 5e-3, found
+    # ... and without rest detection nothing learns it in 6 s (Madgwick has no other bias estimate)
+    assert np.abs(cls(rest_detection=None).run(imu).gyro_bias[int(6.0 * RATE) - 1] - bias).max() > 0.02
+
+
+def test_a_steady_turn_is_not_taken_for_a_bias() -> None:
+    """A steady 0.2 rad/s turn about the vertical has a still accelerometer and a steady gyro: only
+    ``max_bias`` (0.1 rad/s) keeps rest detection from learning it."""
+    t = np.arange(int(20 * RATE)) / RATE
+    rot = Rotation.from_rotvec(np.outer(0.2 * t, [0.0, 0.0, 1.0]))
+    imu = imu_from(t, rot, np.zeros((len(t), 3)))
+    assert np.abs(Madgwick().run(imu).gyro_bias).max() == 0.0
+    learned = Madgwick(rest_detection=ik.filters.RestDetection(max_bias=0.3)).run(imu).gyro_bias[-1]
+    assert learned[2] == pytest.approx(0.2, abs=1e-3)
+
+
+@requires_euroc
+def test_euroc_mav_holds_inclination_at_the_defaults() -> None:
+    """The EuRoC MAV excerpt (6D against its ground truth): gyro bias 0.08 rad/s, rotor vibration.
+    Measured 4.93° (Mahony) and 3.02° (Madgwick); the former defaults 7.8° / 8.1°, vqf's VQF 6.4°.
+    Without rest detection and the drift rule, the 3° angle gate held the drifting estimate on the
+    gyro until each 15 s recovery: 30.5° / 26.5°."""
+    import euroc
+
+    d = euroc.load()
+    imu = ik.ImuData(d.seconds, d.gyro, d.accel)
+    truth = d.rotation.as_quat(scalar_first=True)
+
+    def inclination(f: Mahony | Madgwick) -> float:
+        q = f.run(imu).rotation.as_quat(scalar_first=True)
+        err = ik.eval.attitude_error(q, truth, scalar_first=True, align_heading=True, world="ENU")
+        return float(err.rmse(degrees=True).inclination)
+
+    assert inclination(Mahony()) < 5.5
+    assert inclination(Madgwick()) < 3.5
+    stuck = AccelRejection(drift_s=1e9)
+    assert inclination(Mahony(rest_detection=None, acc_rejection=stuck)) > 20.0
+
+
+@pytest.mark.skipif(not XIO.exists(), reason=f"x-io example not found at {XIO} (the team's shared/ folder)")
+def test_mahony_9d_bias_does_not_wind_up_on_the_xio_example() -> None:
+    """135 s handheld with a magnetic disturbance at 100–120 s whose field the gate re-learns after
+    10 s: a 60–75° heading step. Its true bias is below 6e-4 rad/s (the gyro's mean at rest).
+    Integrated at k_I the step wound the vertical bias up to 0.044 rad/s; the integral now skips
+    heading errors beyond 5°: measured 1.8e-3 rad/s at most."""
+    raw = np.loadtxt(XIO, delimiter=",", skiprows=1)
+    imu = ik.ImuData(raw[:, 0] - raw[0, 0], np.radians(raw[:, 1:4]), raw[:, 4:7] * 9.80665)
+    bias = Mahony().run(imu, mag=raw[:, 7:10]).gyro_bias
+    assert np.abs(bias).max() < 3e-3, np.abs(bias).max(axis=0)
+    # the same without rest detection (the integral alone), measured 2.5e-3
+    assert np.abs(Mahony(rest_detection=None).run(imu, mag=raw[:, 7:10]).gyro_bias).max() < 4e-3

@@ -19,9 +19,9 @@ struct Input {
     gravity: f64,
     ramp: [f64; 2],
     accel_lowpass: Option<f64>,
-    accel_rejection: Option<[f64; 3]>,
+    accel_rejection: Option<[f64; 5]>,
     mag_rejection: Option<[f64; 3]>,
-    rest: Option<[f64; 4]>,
+    rest: Option<[f64; 5]>,
     restore: Option<Restore>,
     continued: bool,
     mag: Option<Vec<f64>>,
@@ -75,10 +75,12 @@ fuzz_target!(|input: Input| {
         acc_lowpass: input.accel_lowpass.map(|tau_s| AccelLowPass { tau_s }),
         acc_rejection: input
             .accel_rejection
-            .map(|[norm, angle_rad, recovery_s]| AccelRejection {
+            .map(|[norm, angle_rad, recovery_s, filtered_norm, drift_s]| AccelRejection {
                 norm,
                 angle_rad,
                 recovery_s,
+                filtered_norm,
+                drift_s,
             }),
         mag_rejection: input
             .mag_rejection
@@ -87,11 +89,12 @@ fuzz_target!(|input: Input| {
                 dip_rad,
                 recovery_s,
             }),
-        rest_detection: input.rest.map(|[gyro, accel, duration_s, tau_s]| RestDetection {
+        rest_detection: input.rest.map(|[gyro, accel, duration_s, tau_s, max_bias]| RestDetection {
             gyro,
             accel,
             duration_s,
             tau_s,
+            max_bias,
         }),
     };
     if input.madgwick {

@@ -103,7 +103,7 @@ value_class!(
 value_class!(
     /// Acceleration rejection (`imukit::filters::AccelRejection`).
     PyAccelRejection = AccelRejection as "AccelRejection", errors "acc_rejection." {
-        norm: "norm", angle_rad: "angle", recovery_s: "recovery"
+        norm: "norm", angle_rad: "angle", recovery_s: "recovery", filtered_norm: "filtered_norm", drift_s: "drift"
     }
 );
 value_class!(
@@ -115,7 +115,7 @@ value_class!(
 value_class!(
     /// Rest detection (`imukit::filters::RestDetection`).
     PyRestDetection = RestDetection as "RestDetection", errors "rest_detection." {
-        gyro: "gyro", accel: "accel", duration_s: "duration", tau_s: "tau"
+        gyro: "gyro", accel: "accel", duration_s: "duration", tau_s: "tau", max_bias: "max_bias"
     }
 );
 value_class!(
@@ -279,7 +279,7 @@ impl PyFilterState {
 impl PyFilterState {
     /// A state from its fields by name (what pickling stores); checked and normalised by the core.
     #[new]
-    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], extra=None))]
+    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], gyro_lp=[0.0; 3], rest_gyro_ms=0.0, rest_accel_lp=[0.0; 3], rest_accel_ms=0.0, accel_calm=0.0, accel_drift=false, extra=None))]
     #[allow(clippy::too_many_arguments)] // one keyword per field of the state
     fn new(
         py: Python<'_>,
@@ -296,6 +296,12 @@ impl PyFilterState {
         mag_dip_cos: f64,
         acc_lp1: [f64; 3],
         acc_lp2: [f64; 3],
+        gyro_lp: [f64; 3],
+        rest_gyro_ms: f64,
+        rest_accel_lp: [f64; 3],
+        rest_accel_ms: f64,
+        accel_calm: f64,
+        accel_drift: bool,
         extra: Option<Vec<(String, f64)>>,
     ) -> PyResult<Self> {
         let common = CommonState {
@@ -311,6 +317,12 @@ impl PyFilterState {
             mag_dip_cos,
             acc_lp1: Vector3::from(acc_lp1),
             acc_lp2: Vector3::from(acc_lp2),
+            gyro_lp: Vector3::from(gyro_lp),
+            rest_gyro_ms,
+            rest_accel_lp: Vector3::from(rest_accel_lp),
+            rest_accel_ms,
+            accel_calm,
+            accel_drift,
             ..CommonState::default()
         }
         .restored(quaternion)
@@ -361,6 +373,12 @@ impl PyFilterState {
             cos,
             [0.0; 3],
             [0.0; 3],
+            [0.0; 3],
+            0.0,
+            [0.0; 3],
+            0.0,
+            0.0,
+            false,
             None,
         )
     }
@@ -396,6 +414,12 @@ impl PyFilterState {
         d.set_item("mag_dip_cos", s.mag_dip_cos)?;
         d.set_item("acc_lp1", <[f64; 3]>::from(s.acc_lp1))?;
         d.set_item("acc_lp2", <[f64; 3]>::from(s.acc_lp2))?;
+        d.set_item("gyro_lp", <[f64; 3]>::from(s.gyro_lp))?;
+        d.set_item("rest_gyro_ms", s.rest_gyro_ms)?;
+        d.set_item("rest_accel_lp", <[f64; 3]>::from(s.rest_accel_lp))?;
+        d.set_item("rest_accel_ms", s.rest_accel_ms)?;
+        d.set_item("accel_calm", s.accel_calm)?;
+        d.set_item("accel_drift", s.accel_drift)?;
         d.set_item("extra", self.extra.clone())?;
         Ok(d)
     }
@@ -480,6 +504,42 @@ impl PyFilterState {
     #[getter]
     fn acc_lp2<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, self.common.acc_lp2.as_slice())
+    }
+
+    /// The gyro low pass of rest detection, body axes [rad/s].
+    #[getter]
+    fn gyro_lp<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.gyro_lp.as_slice())
+    }
+
+    /// Rest detection's mean square of the gyro's deviation [rad²/s²].
+    #[getter]
+    fn rest_gyro_ms(&self) -> f64 {
+        self.common.rest_gyro_ms
+    }
+
+    /// The accelerometer low pass of rest detection, body axes [m/s²].
+    #[getter]
+    fn rest_accel_lp<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.rest_accel_lp.as_slice())
+    }
+
+    /// Rest detection's mean square of `‖a − ā‖` [m²/s⁴].
+    #[getter]
+    fn rest_accel_ms(&self) -> f64 {
+        self.common.rest_accel_ms
+    }
+
+    /// Seconds the filtered specific force's norm has stayed near gravity.
+    #[getter]
+    fn accel_calm(&self) -> f64 {
+        self.common.accel_calm
+    }
+
+    /// Whether the accelerometer's angle test is off for a drift.
+    #[getter]
+    fn accel_drift(&self) -> bool {
+        self.common.accel_drift
     }
 
     /// The law's own state by field name (empty for Mahony and Madgwick).

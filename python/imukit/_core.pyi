@@ -262,8 +262,15 @@ class AccelRejection:
     norm: float
     angle_rad: float
     recovery_s: float
+    filtered_norm: float
+    drift_s: float
     def __new__(
-        cls, norm: _Number | None = None, angle_rad: _Number | None = None, recovery_s: _Number | None = None
+        cls,
+        norm: _Number | None = None,
+        angle_rad: _Number | None = None,
+        recovery_s: _Number | None = None,
+        filtered_norm: _Number | None = None,
+        drift_s: _Number | None = None,
     ) -> AccelRejection: ...
     def __getnewargs__(self) -> tuple[float, ...]: ...
 
@@ -283,12 +290,14 @@ class RestDetection:
     accel: float
     duration_s: float
     tau_s: float
+    max_bias: float
     def __new__(
         cls,
         gyro: _Number | None = None,
         accel: _Number | None = None,
         duration_s: _Number | None = None,
         tau_s: _Number | None = None,
+        max_bias: _Number | None = None,
     ) -> RestDetection: ...
     def __getnewargs__(self) -> tuple[float, ...]: ...
 
@@ -347,6 +356,12 @@ class FilterState:
         mag_dip_cos: float,
         acc_lp1: list[float] = ...,
         acc_lp2: list[float] = ...,
+        gyro_lp: list[float] = ...,
+        rest_gyro_ms: float = ...,
+        rest_accel_lp: list[float] = ...,
+        rest_accel_ms: float = ...,
+        accel_calm: float = ...,
+        accel_drift: bool = ...,
         extra: list[tuple[str, float]] | None = None,
     ) -> Self: ...
     @staticmethod
@@ -383,6 +398,18 @@ class FilterState:
     def acc_lp1(self) -> NDArray[np.float64]: ...
     @property
     def acc_lp2(self) -> NDArray[np.float64]: ...
+    @property
+    def gyro_lp(self) -> NDArray[np.float64]: ...
+    @property
+    def rest_gyro_ms(self) -> float: ...
+    @property
+    def rest_accel_lp(self) -> NDArray[np.float64]: ...
+    @property
+    def rest_accel_ms(self) -> float: ...
+    @property
+    def accel_calm(self) -> float: ...
+    @property
+    def accel_drift(self) -> bool: ...
     @property
     def extra(self) -> list[tuple[str, float]]: ...
 

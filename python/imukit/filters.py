@@ -334,8 +334,11 @@ class Mahony(_Filter):
         the raw sample (the textbook law).
     acc_rejection, mag_rejection
         :class:`AccelRejection` / :class:`MagRejection` (defaults on), or None to use every sample.
+        The accelerometer's drift rule switches its angle test off while the filtered norm says the
+        estimate drifts on an unlearned gyro bias rather than accelerates (docs/filters.md).
     rest_detection
-        :class:`RestDetection`, or None (default) for none.
+        :class:`RestDetection` (default on: the bias follows the gyro at rest, found from the gyro's
+        and the accelerometer's deviations from their own low passes), or None for none.
 
     Every default is the Rust core's (``imukit._core.MahonyGains()``, ``FilterOptions.default()``).
     """

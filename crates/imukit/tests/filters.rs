@@ -103,10 +103,11 @@ fn converges_at_24_attitudes_enu_and_ned() {
                     "{world:?} {:?} 6D inclination {inclination}",
                     f.law()
                 );
-                // 9D: fully.
+                // 9D: fully, in 30 s: rest detection holds Mahony's integral at the true (zero)
+                // bias, so the heading converges at k_P alone (0.13° left after 20 s).
                 let mut s = State::at(offset * truth, Vector3::zeros(), 0.0);
-                let q = run(&f, &mut s, 2000, a, Some(mag));
-                let est = quaternion(&q[1999]);
+                let q = run(&f, &mut s, 3000, a, Some(mag));
+                let est = quaternion(&q[2999]);
                 assert!(
                     est.angle_to(&truth) < 2e-3,
                     "{world:?} 9D error {}",

@@ -26,20 +26,20 @@ enum Verdict {
 }
 
 /// The gate proper: `rejected` is its clock [s], `recovery_s` None when no rejection is
-/// configured, `passes` the sample's test (only evaluated when it matters).
+/// configured, `passes` the sample's test given the clock (only evaluated when it matters).
 #[inline(always)]
 fn decide(
     rejected: &mut f64,
     recovery_s: Option<f64>,
     ramping: bool,
     dt: f64,
-    passes: impl FnOnce() -> bool,
+    passes: impl FnOnce(f64) -> bool,
 ) -> Verdict {
     let Some(recovery_s) = recovery_s else {
         *rejected = 0.0;
         return Verdict::Accept;
     };
-    if ramping || passes() {
+    if ramping || passes(*rejected) {
         *rejected = 0.0;
         Verdict::Accept
     } else {
@@ -105,9 +105,18 @@ impl Gates {
             self.accel.map(|r| r.recovery_s),
             ramping,
             dt,
-            || {
-                self.accel
-                    .is_some_and(|r| (raw_norm - self.gravity).abs() <= r.norm && dir.dot(up_pred) >= self.cos_angle)
+            |rejected| {
+                self.accel.is_some_and(|r| {
+                    let calm = (accel_norm - self.gravity).abs() <= r.filtered_norm;
+                    s.accel_calm = if calm { s.accel_calm + dt } else { 0.0 };
+                    if dir.dot(up_pred) >= self.cos_angle {
+                        s.accel_drift = false;
+                    } else if rejected >= r.drift_s && s.accel_calm >= r.drift_s {
+                        s.accel_drift = true;
+                    }
+                    let angle = s.accel_drift || dir.dot(up_pred) >= self.cos_angle;
+                    (raw_norm - self.gravity).abs() <= r.norm && calm && angle
+                })
             },
         );
         match verdict {
@@ -141,7 +150,7 @@ impl Gates {
             learn(s, norm, dip_sin, dip_cos);
         }
         let (reference, ref_sin, ref_cos) = (s.mag_norm, s.mag_dip_sin, s.mag_dip_cos);
-        let verdict = decide(&mut s.mag_rejected, self.mag.map(|r| r.recovery_s), ramping, dt, || {
+        let verdict = decide(&mut s.mag_rejected, self.mag.map(|r| r.recovery_s), ramping, dt, |_| {
             self.mag.is_some_and(|r| {
                 (norm - reference).abs() <= r.norm_fraction * reference
                     && dip_cos * ref_cos + dip_sin * ref_sin >= self.cos_dip

@@ -32,6 +32,12 @@ impl Default for Mahony {
     }
 }
 
+/// `sin²` of the heading error (5°) beyond which the integral takes it for a step of the field
+/// rather than a bias: a vertical bias `b` holds the heading `b / k_P` off, so at the default
+/// `k_P = 0.3` the integral learns vertical biases up to 0.026 rad/s from the field; a larger one
+/// only at rest ([`super::RestDetection`]).
+const HEADING_STEP_SIN2: f64 = 0.007_596_123_493_895_969;
+
 impl Law for Mahony {
     type Extra = ();
 
@@ -43,7 +49,7 @@ impl Law for Mahony {
     /// `ω_c dt = k_P ρ ω_mes dt`, and `b̂ ← b̂ − k_I ω_mes dt`.
     #[inline(always)]
     fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
-        let e = error(
+        let (e_acc, e_mag) = errors(
             &step.north_pred,
             &step.up_pred,
             step.accel_dir.as_ref(),
@@ -51,37 +57,46 @@ impl Law for Mahony {
         );
         // The integral only learns while gravity is observed: the magnetometer alone measures
         // heading about the estimated vertical, and integrating that (in body axes, while the
-        // body turns) into the bias would tilt the estimate.
-        if !step.ramping && step.accel_dir.is_some() {
+        // body turns) into the bias would tilt the estimate. Nor from a sample let through by the
+        // drift rule: handheld accelerations keep the filtered vector beyond the angle gate for
+        // seconds with its norm near g (the integral wound up to 7e-3 rad/s on `handheld`).
+        // Nor from a heading error beyond 5°:
+        // that is a step of the field (a re-learned reference after a disturbance), not a bias,
+        // and integrated at k_I it wound the vertical bias up to 0.044 rad/s on the x-io handheld
+        // example ([`HEADING_STEP_SIN2`]).
+        if !step.ramping && !step.drifting && step.accel_dir.is_some() {
+            let e = if e_mag.norm_squared() > HEADING_STEP_SIN2 {
+                e_acc
+            } else {
+                e_acc + e_mag
+            };
             *bias -= e * (self.ki * step.dt);
         }
-        e * (self.kp * step.gain * step.dt)
+        (e_acc + e_mag) * (self.kp * step.gain * step.dt)
     }
 }
 
-/// `Σ v_i × v̂_i` for the accepted measurements (body frame). `north_pred`, `up_pred` are the
-/// world north and up in body axes (`R̂ᵀ n_w`, `R̂ᵀ u_w`).
+/// `v × v̂` of the accepted accelerometer and magnetometer samples (body frame), zero for one not
+/// accepted. `north_pred`, `up_pred` are the world north and up in body axes (`R̂ᵀ n_w`, `R̂ᵀ u_w`).
 ///
 /// Magnetometer: with `h = R̂ m̂`, its east and north parts are `m̂·ê_pred`, `m̂·n_pred`
 /// (`ê = n × u`), and `ĥ_horizontal × n_w = u_w h_e / √(h_e² + h_n²)`; in body axes `u_pred h_e/…`.
 #[inline(always)]
-fn error(
+fn errors(
     north_pred: &Vector3<f64>,
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,
     mag_dir: Option<&Vector3<f64>>,
-) -> Vector3<f64> {
-    let mut e = Vector3::zeros();
-    if let Some(s) = accel_dir {
-        e += s.cross(up_pred);
-    }
+) -> (Vector3<f64>, Vector3<f64>) {
+    let e_acc = accel_dir.map_or_else(Vector3::zeros, |s| s.cross(up_pred));
+    let mut e_mag = Vector3::zeros();
     if let Some(m) = mag_dir {
         let h_north = m.dot(north_pred);
         let h_east = m.dot(&north_pred.cross(up_pred));
         let r2 = h_north * h_north + h_east * h_east;
         if r2 > 1e-18 {
-            e += up_pred * (h_east / r2.sqrt());
+            e_mag = up_pred * (h_east / r2.sqrt());
         }
     }
-    e
+    (e_acc, e_mag)
 }

@@ -110,6 +110,10 @@ pub struct Step<'a> {
     pub mag_dir: Option<Vector3<f64>>,
     /// Whether the gain ramp is running (the gates are open meanwhile).
     pub ramping: bool,
+    /// Whether the accelerometer sample passed only by the drift rule ([`AccelRejection`]): its
+    /// angle is beyond the gate's, so it may hold an acceleration; a law should correct with it
+    /// but not learn a bias from it.
+    pub drifting: bool,
     /// The ramp multiplier `ρ` of the correction gain (1 after the ramp).
     pub gain: f64,
     /// The step [s].
@@ -243,7 +247,7 @@ impl<L: Law> Filter<L> {
         if !s.initialized {
             s.q = initial_attitude(o.world, accel, mag);
             s.initialized = true;
-            (s.acc_lp1, s.acc_lp2) = (*accel, *accel);
+            (s.acc_lp1, s.acc_lp2, s.gyro_lp, s.rest_accel_lp) = (*accel, *accel, *gyro, *accel);
             if let Some(m) = mag {
                 let norm = m.norm();
                 if norm > 0.0 {
@@ -269,9 +273,23 @@ impl<L: Law> Filter<L> {
         };
         let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
 
-        // Rest detection: bias low pass towards the raw gyro.
         if let Some(r) = o.rest_detection {
-            if gyro.norm() < r.gyro && (accel_norm - o.gravity).abs() < r.accel {
+            let alpha = dt / (r.tau_s + dt);
+            s.gyro_lp += (gyro - s.gyro_lp) * alpha;
+            s.rest_accel_lp += (accel - s.rest_accel_lp) * alpha;
+            // Capped: a finite 1e300 m/s² sample must not make the state infinite.
+            let gyro_dev = (gyro - s.gyro_lp).norm_squared().min(f64::MAX);
+            let accel_dev = (accel - s.rest_accel_lp).norm_squared().min(f64::MAX);
+            let (g2, a2) = (r.gyro * r.gyro, r.accel * r.accel);
+            // The means lag the start of a motion by about tau_s: one sample beyond 4× the rms
+            // deviation seen so far (floored at a tenth of the threshold) ends the rest at once,
+            // before the bias learns the motion.
+            let still =
+                gyro_dev < 16.0 * s.rest_gyro_ms.max(g2 / 100.0) && accel_dev < 16.0 * s.rest_accel_ms.max(a2 / 100.0);
+            s.rest_gyro_ms += (gyro_dev - s.rest_gyro_ms) * alpha;
+            s.rest_accel_ms += (accel_dev - s.rest_accel_ms) * alpha;
+            let steady = s.rest_gyro_ms < g2 && s.rest_accel_ms < a2;
+            if still && steady && s.gyro_lp.norm_squared() < r.max_bias * r.max_bias {
                 s.rest += dt;
             } else {
                 s.rest = 0.0;
@@ -291,6 +309,7 @@ impl<L: Law> Filter<L> {
             accel_dir,
             mag_dir,
             ramping,
+            drifting: s.accel_drift,
             gain,
             dt,
         };

@@ -21,6 +21,10 @@ pub struct CommonState {
     pub ramp_elapsed: f64,
     /// Seconds of uninterrupted accelerometer rejection.
     pub accel_rejected: f64,
+    /// Seconds the filtered specific force's norm has stayed near gravity (see [`super::AccelRejection`]).
+    pub accel_calm: f64,
+    /// The angle test is off until the estimate is back within its angle (a drift, not an acceleration).
+    pub accel_drift: bool,
     /// Seconds of uninterrupted magnetometer rejection.
     pub mag_rejected: f64,
     /// Seconds the rest thresholds have held.
@@ -35,6 +39,14 @@ pub struct CommonState {
     pub acc_lp1: Vector3<f64>,
     /// Second stage, the filtered specific force the law sees [m/s²] (zero: not started).
     pub acc_lp2: Vector3<f64>,
+    /// Low pass of the gyro for rest detection, `ω̄` [rad/s].
+    pub gyro_lp: Vector3<f64>,
+    /// Rest detection's mean square of `‖ω − ω̄‖` [rad²/s²].
+    pub rest_gyro_ms: f64,
+    /// Low pass of the accelerometer for rest detection, body axes, `ā` [m/s²].
+    pub rest_accel_lp: Vector3<f64>,
+    /// Rest detection's mean square of `‖a − ā‖` [m²/s⁴].
+    pub rest_accel_ms: f64,
 }
 
 impl Default for CommonState {
@@ -46,6 +58,8 @@ impl Default for CommonState {
             time: 0.0,
             ramp_elapsed: 0.0,
             accel_rejected: 0.0,
+            accel_calm: 0.0,
+            accel_drift: false,
             mag_rejected: 0.0,
             rest: 0.0,
             mag_norm: 0.0,
@@ -53,6 +67,10 @@ impl Default for CommonState {
             mag_dip_cos: 1.0,
             acc_lp1: Vector3::zeros(),
             acc_lp2: Vector3::zeros(),
+            gyro_lp: Vector3::zeros(),
+            rest_gyro_ms: 0.0,
+            rest_accel_lp: Vector3::zeros(),
+            rest_accel_ms: 0.0,
         }
     }
 }
@@ -77,17 +95,22 @@ impl CommonState {
             self.time,
             self.ramp_elapsed,
             self.accel_rejected,
+            self.accel_calm,
             self.mag_rejected,
             self.rest,
             self.mag_norm,
             self.mag_dip_sin,
             self.mag_dip_cos,
+            self.rest_gyro_ms,
+            self.rest_accel_ms,
         ];
         let finite = xyzw
             .iter()
             .chain(self.bias.iter())
             .chain(self.acc_lp1.iter())
             .chain(self.acc_lp2.iter())
+            .chain(self.gyro_lp.iter())
+            .chain(self.rest_accel_lp.iter())
             .chain(&scalars)
             .all(|x| x.is_finite());
         if !finite {
