@@ -240,6 +240,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "Input": lambda: ik.fleet.Input("logs/unit7.csv", {"unit_id": "unit-7", "km": 12.5}),
     "JobOutput": lambda: ik.fleet.JobOutput({"samples": 3, "rate_hz": 200.0, "error": None}, {"dp": np.eye(3)}),
     "RestSegment": lambda: ik.fleet.RestSegment(10, 250, 1.195),
+    "RestRule": lambda: ik.fleet.RestRule(0.02, 0.1, 2.0),
     "Recording": lambda: ik.fleet.Recording(*_sim(), _report()),
     # Exceptions carry their fields.
     **{

@@ -26,7 +26,7 @@ from imukit.fleet._inputs import Input, find_inputs
 from imukit.fleet._jobs import JOBS, preintegrate
 from imukit.fleet._load import JobOutput, Recording, load
 from imukit.fleet._report import ALLAN_MIN_S, report
-from imukit.fleet._rest import RestSegment, rest_segments
+from imukit.fleet._rest import RestRule, RestSegment, rest_segments
 from imukit.fleet._run import run
 from imukit.fleet._score import evaluate
 
@@ -36,6 +36,7 @@ __all__ = [
     "Input",
     "JobOutput",
     "Recording",
+    "RestRule",
     "RestSegment",
     "evaluate",
     "find_inputs",
