@@ -169,11 +169,12 @@ impl PyPreintegrator {
         let samples = copies.samples(py)?;
         let flags = FlagCopies::new(py, &gyro_saturated, &accel_saturated)?;
         let inner = &mut self.inner;
-        py.detach(|| {
+        let mask = flags.mask();
+        crate::threads::interruptible(py, samples.t().len(), |cancel| {
             crate::threads::run_in_pool(threads, || {
-                inner.integrate_samples_at(&samples, flags.mask().as_ref(), clock)
+                inner.integrate_samples_cancellable(&samples, mask.as_ref(), clock, cancel)
             })
-        })?
+        })??
         .map_err(|e| as_argument(py, "imu", "imu / bias", e))
     }
 
