@@ -336,7 +336,7 @@ def relative_seconds(seconds: FloatArray, name: str) -> FloatArray:
     ``[-1e16, 0.5, 0.75]``), else a :class:`TimestampError` naming ``name``, never a later kernel
     blaming a step that the input does not have."""
     with np.errstate(over="ignore", invalid="ignore"):
-        relative = seconds - seconds[0]
+        relative: FloatArray = seconds - seconds[0]
     if not np.isfinite(relative[-1]):  # increasing: the last is the largest
         k = int(np.argmax(~np.isfinite(relative)))
         raise TimestampError(
