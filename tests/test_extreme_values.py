@@ -145,3 +145,11 @@ def test_stamps_whose_relative_clock_breaks_are_refused_at_construction(t: list[
         ik.ImuData(np.array(t), np.zeros((len(t), 3)), np.zeros((len(t), 3)))
     assert info.value.argument == "t"
     assert expected in str(info.value)
+
+
+def test_discrete_sigmas_beyond_float64_are_refused() -> None:
+    noise = ik.ImuNoise(1e300, 1e300, 1e300, 1e300)
+    with pytest.raises(ik.NonFiniteError) as info:
+        noise.to_discrete_sigmas(1e300)
+    assert info.value.argument == "rate_hz"
+    assert noise.to_discrete_sigmas(1e10).gyro_walk_sigma == pytest.approx(1e295, rel=1e-15)  # finite: kept

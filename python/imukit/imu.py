@@ -434,13 +434,21 @@ class ImuNoise:
 
         ``gyro_sigma = σ_g √rate_hz``, ``gyro_walk_sigma = σ_bg / √rate_hz`` (same for accel).
         """
-        root = math.sqrt(_rate(rate_hz))
-        return DiscreteSigmas(
+        rate = _rate(rate_hz)
+        root = math.sqrt(rate)
+        sigmas = DiscreteSigmas(
             gyro_sigma=self.gyro_density * root,
             accel_sigma=self.accel_density * root,
             gyro_walk_sigma=self.gyro_random_walk / root,
             accel_walk_sigma=self.accel_random_walk / root,
         )
+        if not all(map(math.isfinite, sigmas)):
+            density = max(self.gyro_density, self.accel_density)
+            raise NonFiniteError(
+                f"a density of {density!r} at {rate!r} Hz gives a per-sample sigma beyond float64",
+                argument="rate_hz",
+            )
+        return sigmas
 
     def discrete(self, dt: float) -> DiscreteNoise:
         """Per-sample variances for a step ``dt`` [s] (> 0), per axis.

@@ -5,9 +5,8 @@
 //! number of fields, every field read a finite decimal number, the stamp field an exact integer
 //! (or seconds with nine decimals) when asked. Blank lines and `#` lines are passed over. Every
 //! other line is *deferred*: handed back by number and offset for the Python reader, whose rules
-//! and messages are the reference. The grammar accepted here is a subset of Python's `float()` and
-//! of the readers' integer stamps (ASCII only, no `_`, no Unicode digits or spaces), and Rust's
-//! float parsing is correctly rounded as Python's is, so a line read here gives the same numbers,
+//! and messages are the reference. The grammar accepted here is a subset of the readers' (Python's
+//! `float()` on ASCII fields without `_`, and the integer stamps), and Rust's float parsing is correctly rounded as Python's is, so a line read here gives the same numbers,
 //! bit for bit, as the Python reader would.
 
 /// How fields are separated.
