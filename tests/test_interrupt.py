@@ -2,7 +2,8 @@
 deferred a KeyboardInterrupt for 11.6 s, until it returned. Long kernels (strapdown, propagation,
 preintegration, attitude integration, the filters' ``run``, the simulator) now run on a thread of
 their own while the calling thread runs the signal handlers every 20 ms; the kernel polls a cancel
-flag every 65,536 samples (the simulator: every chunk of rows).
+flag every 65,536 samples (the simulator: every chunk of rows; ``preintegrate_windows``: every block of
+4096 windows).
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ CHILD = textwrap.dedent(
                                               covariance_every=1000),
             "integrate": lambda: ik.integrate(imu, initial=rest),
             "preintegrate": lambda: ik.preintegrate(imu, noise=noise, combined=True),
+            "preintegrate_windows": lambda: ik.preintegrate_windows(
+                imu, np.linspace(imu.t[0], imu.t[-1], 40_001), ik.PreintParams(noise, combined=True)),
             "integrate_attitude": lambda: ik.integrate_attitude(imu.t, imu.gyro, scheme="rk4",
                                                                 representation="euler"),
             "mahony": lambda: ik.filters.Mahony().run(imu),
@@ -52,7 +55,8 @@ CHILD = textwrap.dedent(
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 @pytest.mark.parametrize(
-    "kernel", ["propagate", "integrate", "preintegrate", "integrate_attitude", "mahony", "simulate"]
+    "kernel",
+    ["propagate", "integrate", "preintegrate", "preintegrate_windows", "integrate_attitude", "mahony", "simulate"],
 )
 def test_ctrl_c_stops_a_long_kernel_promptly(kernel: str) -> None:
     child = subprocess.Popen(
