@@ -96,3 +96,60 @@ def test_pure_yaw_with_a_huge_step_is_no_gimbal_lock() -> None:
     # A real singularity still is one: pitch driven through 90°.
     with pytest.raises(ik.GimbalLockError):
         ik.integrate_attitude(np.arange(200) * 0.01, np.tile([0.0, 1.0, 0.0], (200, 1)), representation="euler")
+
+
+@pytest.mark.parametrize("scale", [1e154, 1e-200, 1e300])
+@pytest.mark.parametrize("method", ["se3", "sim3"])
+def test_alignment_is_scale_safe(scale: float, method: str) -> None:
+    """``align`` / ``ape`` with se3 and sim3 at positions ~1e154 (the cross-covariance overflowed and the
+    SVD of an inf matrix ran for over 10 min) and ~1e-200 (σx² underflowed to 0): the known rotation and
+    scale come back, the errors as at scale 1, scaled."""
+    n = 20
+    k = np.arange(n)
+    unit = np.column_stack([k, np.sin(k), np.cos(0.7 * k)])
+    turn = Rotation.from_rotvec([0.1, 0.2, 0.3])
+
+    def pair(s: float) -> tuple[ik.Trajectory, ik.Trajectory]:
+        ref = ik.Trajectory(k * 0.1, unit * s, None, Rotation.identity(n))
+        return ik.Trajectory(k * 0.1, turn.apply(unit * s) * 0.5 + 3 * s, None, Rotation.identity(n)), ref
+
+    alignment = ik.eval.align(*pair(scale), method=method)
+    assert (alignment.rotation * turn).magnitude() < 1e-14
+    assert alignment.scale == pytest.approx(2.0 if method == "sim3" else 1.0, rel=1e-14)
+    rmse = ik.eval.ape(*pair(scale), align=method).translation_stats.rmse
+    assert rmse / scale == pytest.approx(ik.eval.ape(*pair(1.0), align=method).translation_stats.rmse, rel=1e-12)
+
+
+def test_sim3_scale_beyond_float64_is_refused_naming_the_trajectories() -> None:
+    n = 10
+    k = np.arange(n)
+    p = np.column_stack([k, np.sin(k), np.cos(0.7 * k)])
+    est = ik.Trajectory(k * 0.1, p * 1e-300, None, Rotation.identity(n))
+    ref = ik.Trajectory(k * 0.1, p * 1e300, None, Rotation.identity(n))
+    with pytest.raises(ik.NonFiniteError) as info:
+        ik.eval.align(est, ref, method="sim3")
+    assert info.value.argument == "estimate / reference"
+
+
+@pytest.mark.parametrize(
+    ("t", "expected"),
+    [
+        ([-1e308, 1e308], "the span from the first stamp (-1e+308 s) to sample 1 (1e+308 s) overflows float64"),
+        ([-1e16, 0.5, 0.75], "samples 1 and 2 (0.5 s, 0.75 s) are 0.25 s apart, but relative to the first stamp"),
+    ],
+)
+def test_stamps_whose_relative_clock_breaks_are_refused_at_construction(t: list[float], expected: str) -> None:
+    """Strictly increasing, finite stamps whose offsets from the first overflow (duration inf) or round
+    two steps together (later calls then blamed ``t`` for a step the input does not have)."""
+    with pytest.raises(ik.TimestampError) as info:
+        ik.ImuData(np.array(t), np.zeros((len(t), 3)), np.zeros((len(t), 3)))
+    assert info.value.argument == "t"
+    assert expected in str(info.value)
+
+
+def test_discrete_sigmas_beyond_float64_are_refused() -> None:
+    noise = ik.ImuNoise(1e300, 1e300, 1e300, 1e300)
+    with pytest.raises(ik.NonFiniteError) as info:
+        noise.to_discrete_sigmas(1e300)
+    assert info.value.argument == "rate_hz"
+    assert noise.to_discrete_sigmas(1e10).gyro_walk_sigma == pytest.approx(1e295, rel=1e-15)  # finite: kept

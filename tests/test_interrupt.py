@@ -1,7 +1,9 @@
 """Ctrl-C during a long kernel returns promptly (issue 17, item 15): ``propagate`` of 25 M samples
-deferred a KeyboardInterrupt for 11.6 s, until it returned. Long strapdown kernels now run on a
-thread of their own while the calling thread runs the signal handlers every 20 ms; the kernel polls
-a cancel flag every 65,536 samples.
+deferred a KeyboardInterrupt for 11.6 s, until it returned. Long kernels (strapdown, propagation,
+preintegration, attitude integration, the filters' ``run``, the simulator) now run on a thread of
+their own while the calling thread runs the signal handlers every 20 ms; the kernel polls a cancel
+flag every 65,536 samples (the simulator: every chunk of rows; ``preintegrate_windows``: every block of
+4096 windows).
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ CHILD = textwrap.dedent(
     import numpy as np
     from scipy.spatial.transform import Rotation
     import imukit as ik
+    import imukit.filters
+    import imukit.sim
 
     n = 4_000_000  # about 2 s of propagate on an idle core
     imu = ik.ImuData(np.arange(n) * 0.005, np.tile([0.01, 0.02, 0.03], (n, 1)), np.tile([0.0, 0.0, 9.81], (n, 1)))
@@ -28,7 +32,15 @@ CHILD = textwrap.dedent(
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
     call = {"propagate": lambda: ik.propagate(imu, initial=rest, covariance=np.eye(15), noise=noise,
                                               covariance_every=1000),
-            "integrate": lambda: ik.integrate(imu, initial=rest)}[sys.argv[1]]
+            "integrate": lambda: ik.integrate(imu, initial=rest),
+            "preintegrate": lambda: ik.preintegrate(imu, noise=noise, combined=True),
+            "preintegrate_windows": lambda: ik.preintegrate_windows(
+                imu, np.linspace(imu.t[0], imu.t[-1], 40_001), ik.PreintParams(noise, combined=True)),
+            "integrate_attitude": lambda: ik.integrate_attitude(imu.t, imu.gyro, scheme="rk4",
+                                                                representation="euler"),
+            "mahony": lambda: ik.filters.Mahony().run(imu),
+            "simulate": lambda: ik.sim.simulate(ik.sim.FigureEight(), rate=1000.0, duration=n / 1000.0,
+                                                noise=noise)}[sys.argv[1]]
     print("start", flush=True)
     start = time.perf_counter()
     try:
@@ -42,7 +54,10 @@ CHILD = textwrap.dedent(
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
-@pytest.mark.parametrize("kernel", ["propagate", "integrate"])
+@pytest.mark.parametrize(
+    "kernel",
+    ["propagate", "integrate", "preintegrate", "preintegrate_windows", "integrate_attitude", "mahony", "simulate"],
+)
 def test_ctrl_c_stops_a_long_kernel_promptly(kernel: str) -> None:
     child = subprocess.Popen(
         [sys.executable, "-c", CHILD, kernel], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True

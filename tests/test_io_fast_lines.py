@@ -14,6 +14,7 @@ import imukit as ik
 from euroc import GT_CSV, IMU_CSV, requires_euroc
 from imukit import io
 from imukit.io import _blocks, _euroc, _tum
+from imukit.io._lines import ns_text
 from imukit.io._report import ReadReport
 
 JUNK = [
@@ -59,7 +60,8 @@ def _messy(rng: np.random.Generator, n: int) -> bytes:
 
 
 def _both(path: Path, read: Callable[..., object], module: object, monkeypatch: pytest.MonkeyPatch) -> list[object]:
-    """What ``read`` gives (result or error text, and the report) by the fast path and by the reference."""
+    """What ``read`` gives (result or error text, and the report) by the fast path and by the reference
+    (``module``'s ``read_table`` replaced by the pure-Python one)."""
     outcomes = []
     for fast in (True, False):
         if not fast:
@@ -122,6 +124,52 @@ def test_tum_fast_path_equals_the_reference(tmp_path: Path, monkeypatch: pytest.
     monkeypatch.setattr(_blocks, "BLOCK_BYTES", 256)
     outcomes = _both(path, io.read_tum, _tum, monkeypatch)
     assert outcomes[:2] == outcomes[2:]
+
+
+# The generic reader's stamp texts per time unit, from nanoseconds.
+_STAMPS: dict[str, Callable[[int], str]] = {
+    "ns": str,
+    "us": lambda ns: str(ns // 1000),
+    "ms": lambda ns: repr(ns / 1e6),
+    "s": ns_text,
+}
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_generic_csv_fast_path_equals_the_reference(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, seed: int) -> None:
+    """read_imu_csv / read_trajectory_csv (headers, trailing delimiters, units, ``g`` overflowing, zero
+    quaternions): the blocks read by the core give what the reference parser gives, bit for bit."""
+    rng = np.random.default_rng(200 + seed)
+    unit, sep = ["ns", "us", "ms", "s"][seed % 4], [",", ";", "\t", " "][seed // 2 % 4]
+    trailing = sep in ",;" and seed % 3 == 0
+    header = ["# exported by a logger", "time" + sep + sep.join("abcdefg")][seed % 2 :]
+    lines, t = [*header], 1_403_636_579_758_555_392
+    for _ in range(300):
+        t += int(rng.integers(1_000_000, 10_000_000))
+        row = [_STAMPS[unit](t), *map(repr, rng.normal(size=7).tolist())]
+        if rng.random() < 0.25:
+            k = int(rng.integers(8))
+            row[k] = ["1_0", "\u0661", "nan", "x", "1e308", "0", "", "\u00a00.5"][int(rng.integers(8))]
+        if rng.random() < 0.05:
+            row[4:8] = ["0", "0.0", "-0", "0e0"]
+        lines.append(sep.join(row) + (sep if trailing else ""))
+    path = tmp_path / "data.csv"
+    path.write_text("\n".join(lines) + ("\n" if seed % 2 else ""))
+    monkeypatch.setattr(_blocks, "BLOCK_BYTES", 512)
+    delimiter = {"delimiter": sep, "time_unit": unit}
+
+    def imu(path: Path, **options: object) -> object:
+        columns = {"gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
+        return io.read_imu_csv(path, time_column=0, accel_unit="g", **columns, **delimiter, **options)  # type: ignore[arg-type]
+
+    def trajectory(path: Path, **options: object) -> object:
+        columns = {"position_columns": [1, 2, 3], "quaternion_columns": [4, 5, 6, 7]}
+        return io.read_trajectory_csv(path, time_column=0, **columns, **delimiter, **options)  # type: ignore[arg-type]
+
+    for read in (imu, trajectory):
+        outcomes = _both(path, read, _blocks, monkeypatch)
+        assert outcomes[:2] == outcomes[2:]
+        assert outcomes[0][2], "the file had junk: the report must not be empty"
 
 
 def test_a_lone_carriage_return_is_read_as_python_reads_it(tmp_path: Path) -> None:

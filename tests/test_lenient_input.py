@@ -8,6 +8,10 @@
 - Bools are not numbers: ``dt=True``, ``Trajectory.state(True)`` (its check came after
   ``operator.index`` had turned True into 1) and ``standard_gravity=True`` are refused, and so is a
   numeric string, ``standard_gravity="9.8"``, as every numeric option refuses one.
+- ``Mahony(kp=True)`` / ``Madgwick(beta=True)`` (and ``gravity=True``, a bool in a ``gain_ramp``
+  tuple) were gains of 1: refused as every numeric option refuses a bool.
+- Readers read numbers as data files write them (ASCII, no ``_``): ``1_000``, ``١`` and a no-break
+  space around a number, which ``float()`` reads, make their line ``malformed``.
 - Float boundaries taken from an int64-ns recording's ``imu.t`` (epoch seconds, 0.24 µs apart)
   refused the last sample and gave 0.10000014 s windows; a boundary equal to a sample's time is that
   sample now, so they equal the integer-ns boundaries exactly.
@@ -75,6 +79,43 @@ def test_bools_are_not_numbers() -> None:
         with pytest.raises(ik.ParameterError, match="k: expected an integer sample index"):
             traj.state(k)  # type: ignore[arg-type]
     assert np.array_equal(traj.state(1).position, traj.position[1])
+
+
+@pytest.mark.parametrize(
+    ("make", "argument"),
+    [
+        (lambda: ik.filters.Mahony(kp=True), "kp"),
+        (lambda: ik.filters.Mahony(ki=np.bool_(True)), "ki"),
+        (lambda: ik.filters.Mahony(kp="0.3"), "kp"),
+        (lambda: ik.filters.Madgwick(beta=True), "beta"),
+        (lambda: ik.filters.Madgwick(gravity=True), "gravity"),
+        (lambda: ik.filters.Mahony(gain_ramp=(True, 10.0)), "gain_ramp"),
+    ],
+)
+def test_filter_gains_refuse_bools(make, argument: str) -> None:  # type: ignore[no-untyped-def]
+    """``Mahony(kp=True)`` was a gain of 1 (PyO3 reads a bool as a float)."""
+    with pytest.raises(ik.ParameterError, match="expected a real number") as info:
+        make()
+    assert info.value.argument == argument
+    assert ik.filters.Mahony(kp=np.float64(0.5), ki=1).kp == 0.5  # numpy and int numbers are numbers
+
+
+@pytest.mark.parametrize("euroc", [True, False])
+def test_numbers_python_alone_reads_are_malformed(tmp_path: Path, euroc: bool) -> None:
+    """``float()`` reads ``1_000``, Unicode digits and a no-break space around a number; the readers do
+    not (no logger writes them: a damaged field), on the fast path and the Python path alike."""
+    path = tmp_path / "data.csv"
+    rows = ["1_000", "\u0661", "\u00a00.5", "0.5"]
+    lines = [f"{1_000_000_000 + 5_000_000 * k},{v},0,0,0,0,9.81" for k, v in enumerate(rows)]
+    path.write_text("#timestamp [ns],wx,wy,wz,ax,ay,az\n" + "\n".join(lines) + "\n", encoding="utf-8")
+    report = ik.io.ReadReport()
+    if euroc:
+        imu = ik.io.read_euroc_imu(path, on_bad_line="skip", report=report)
+    else:
+        columns = {"gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
+        imu = ik.io.read_imu_csv(path, time_column=0, time_unit="ns", on_bad_line="skip", report=report, **columns)  # type: ignore[arg-type]
+    assert [(r.line, r.kind) for r in report.skipped] == [(2, "malformed"), (3, "malformed"), (4, "malformed")]
+    assert imu.gyro[:, 0].tolist() == [0.5]
 
 
 @pytest.mark.parametrize("gravity", ["9.8", True, b"9.8"])

@@ -38,8 +38,11 @@ pub(crate) fn attitude_integrate<'py>(
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;
         let store = (!final_only).then_some(out_slice.as_chunks_mut::<4>().0);
-        let last =
-            py.detach(|| threads::run_in_pool(threads, || attitude::integrate(t, gyro, &initial, &options, store)))?;
+        let last = threads::interruptible(py, t.len(), |cancel| {
+            threads::run_in_pool(threads, || {
+                attitude::integrate_cancellable(t, gyro, &initial, &options, store, cancel)
+            })
+        })??;
         // Errors that name no argument (gimbal lock, overflow) are about the rates.
         let last = last.map_err(|e| to_py(py, "gyro", e))?;
         if final_only {

@@ -611,8 +611,10 @@ fn run<'py, L: Law>(
             gb.as_slice_mut()?.as_chunks_mut().0,
         );
         let state = &mut s;
-        py.detach(|| filter.run(state, &inputs, continued, sq, sb))
-            .map_err(|e| to_py(py, "imu / gains", e))?;
+        crate::threads::interruptible(py, n, |cancel| {
+            filter.run_cancellable(state, &inputs, continued, (sq, sb), cancel)
+        })?
+        .map_err(|e| to_py(py, "imu / gains", e))?;
     }
     Ok((out_q, out_b, PyFilterState::of(&s)))
 }

@@ -169,11 +169,12 @@ impl PyPreintegrator {
         let samples = copies.samples(py)?;
         let flags = FlagCopies::new(py, &gyro_saturated, &accel_saturated)?;
         let inner = &mut self.inner;
-        py.detach(|| {
+        let mask = flags.mask();
+        crate::threads::interruptible(py, samples.t().len(), |cancel| {
             crate::threads::run_in_pool(threads, || {
-                inner.integrate_samples_at(&samples, flags.mask().as_ref(), clock)
+                inner.integrate_samples_cancellable(&samples, mask.as_ref(), clock, cancel)
             })
-        })?
+        })??
         .map_err(|e| as_argument(py, "imu", "imu / bias", e))
     }
 
@@ -224,14 +225,14 @@ pub(crate) struct ImuArrays<'py> {
     accel_saturated: PyReadonlyArray1<'py, bool>,
 }
 
-/// `kernel` over private copies of `imu` and `boundaries` (the run releases the GIL), on
-/// `threads` threads (None: the process-wide pool).
+/// `kernel` over private copies of `imu` and `boundaries` (the run releases the GIL and stops at
+/// Ctrl-C where the kernel polls its cancel flag), on `threads` threads (None: the process-wide pool).
 fn run_windows<'py, R: Send>(
     py: Python<'py>,
     imu: &ImuArrays<'py>,
     boundaries: &PyReadonlyArray1<'py, f64>,
     threads: Option<usize>,
-    kernel: impl FnOnce(&Samples<'_>, Option<&ClipMask<'_>>, &[f64]) -> imukit::Result<R> + Send,
+    kernel: impl FnOnce(&Samples<'_>, Option<&ClipMask<'_>>, &[f64], &imukit::Cancel) -> imukit::Result<R> + Send,
 ) -> PyResult<R> {
     let copies = SampleCopies::new(py, &imu.t, &imu.gyro, &imu.accel)?;
     let samples = copies.samples(py)?;
@@ -239,8 +240,10 @@ fn run_windows<'py, R: Send>(
     let mask = flags.mask();
     let boundaries = crate::private_copy(py, boundaries)?.readonly();
     let boundaries = crate::contiguous(py, "boundaries", &boundaries)?;
-    py.detach(|| crate::threads::run_in_pool(threads, || kernel(&samples, mask.as_ref(), boundaries)))?
-        .map_err(|e| to_py(py, "imu / bias", e))
+    crate::threads::interruptible(py, samples.t().len(), |cancel| {
+        crate::threads::run_in_pool(threads, || kernel(&samples, mask.as_ref(), boundaries, cancel))
+    })??
+    .map_err(|e| to_py(py, "imu / bias", e))
 }
 
 /// One preintegration per window `[boundaries[m], boundaries[m + 1]]` of the `ImuData` `imu`,
@@ -255,7 +258,8 @@ pub(crate) fn preint_windows<'py>(
     threads: Option<usize>,
 ) -> PyResult<Vec<PyPreintegrator>> {
     let template = template.inner.clone();
-    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
+    // The deprecated list form: one state per window, not polled (the record form is).
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b, _| {
         preint::preintegrate_windows_clipped(samples, mask, b, &template)
     })?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
@@ -321,8 +325,8 @@ pub(crate) fn preint_windows_record<'py>(
             bias_jacobian: jac.as_slice_mut()?.as_chunks_mut().0.as_chunks_mut().0,
             covariance_combined: c15,
         };
-        run_windows(py, &imu, &boundaries, threads, |samples, mask, b| {
-            preint::preintegrate_windows_into(samples, mask, b, &template, out)
+        run_windows(py, &imu, &boundaries, threads, |samples, mask, b, cancel| {
+            preint::preintegrate_windows_cancellable(samples, mask, (b, &template), out, cancel)
         })?;
     }
     Ok(record)

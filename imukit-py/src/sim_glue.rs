@@ -171,8 +171,10 @@ pub(crate) fn sim_motion<'py>(
             accel: ag.as_slice_mut()?,
         };
         let g = Vector3::from(gravity);
-        py.detach(|| threads::run_in_pool(threads, || sim::evaluate(&motion, t, &g, out)))?
-            .map_err(|e| to_py(py, "simulate", e))?;
+        threads::interruptible(py, n, |cancel| {
+            threads::run_in_pool(threads, || sim::evaluate_cancellable(&motion, t, &g, out, cancel))
+        })??
+        .map_err(|e| to_py(py, "simulate", e))?;
     }
     Ok((p, v, q, w, a))
 }
@@ -252,8 +254,12 @@ pub(crate) fn sim_measure<'py>(
             Some("bias") => "bias",
             _ => errors,
         };
-        py.detach(|| threads::run_in_pool(threads, || sim::measure_in_place(t, values, &model, seed, triad, b)))?
-            .map_err(|e| raise(py, crate::class_name(&e), argument(&e), e.root()))?;
+        threads::interruptible(py, n, |cancel| {
+            threads::run_in_pool(threads, || {
+                sim::measure_in_place_cancellable(t, values, &model, (seed, triad), b, cancel)
+            })
+        })??
+        .map_err(|e| raise(py, crate::class_name(&e), argument(&e), e.root()))?;
     }
     Ok(bias)
 }

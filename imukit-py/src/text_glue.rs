@@ -22,10 +22,11 @@ type Parsed<'py> = (
 
 /// The rows and deferred lines of the whole lines `block`, numbered from `first_line`:
 /// `separator` one byte or None (runs of white space); `stamp` `"float"`, `"integer"` or
-/// `"nine-decimals"` (see `imukit::text`).
+/// `"nine-decimals"` (see `imukit::text`); `trailing`: a line ending in the separator has that
+/// empty last field dropped.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (block, first_line, separator, width, columns, stamp_column, stamp, stamp_required))]
+#[pyo3(signature = (block, first_line, separator, width, columns, stamp_column, stamp, stamp_required, trailing))]
 pub(crate) fn text_parse_block<'py>(
     py: Python<'py>,
     block: &Bound<'py, PyBytes>,
@@ -36,6 +37,7 @@ pub(crate) fn text_parse_block<'py>(
     stamp_column: usize,
     stamp: &str,
     stamp_required: bool,
+    trailing: bool,
 ) -> PyResult<Parsed<'py>> {
     let stamp = match stamp {
         "float" => StampForm::Float,
@@ -57,6 +59,7 @@ pub(crate) fn text_parse_block<'py>(
         stamp_column,
         stamp,
         stamp_required,
+        trailing,
     };
     let bytes = block.as_bytes();
     let parsed = py.detach(|| parse_block(bytes, first_line, &layout));

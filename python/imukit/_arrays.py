@@ -330,6 +330,33 @@ def check_increasing(t: NDArray[np.int64] | FloatArray, name: str, unit: str) ->
         )
 
 
+def relative_seconds(seconds: FloatArray, name: str) -> FloatArray:
+    """``seconds - seconds[0]``, the clock the kernels integrate over, checked: finite (a span beyond
+    1.8e308 s overflows) and strictly increasing (a step below the rounding of a huge span is lost:
+    ``[-1e16, 0.5, 0.75]``), else a :class:`TimestampError` naming ``name``, never a later kernel
+    blaming a step that the input does not have."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        relative: FloatArray = seconds - seconds[0]
+    if not np.isfinite(relative[-1]):  # increasing: the last is the largest
+        k = int(np.argmax(~np.isfinite(relative)))
+        raise TimestampError(
+            f"the span from the first stamp ({float(seconds[0])!r} s) to sample {k} ({float(seconds[k])!r} s) "
+            "overflows float64",
+            argument=name,
+        )
+    lost = np.flatnonzero(relative[1:] <= relative[:-1])
+    if lost.size:
+        k = int(lost[0]) + 1
+        raise TimestampError(
+            f"samples {k - 1} and {k} ({float(seconds[k - 1])!r} s, {float(seconds[k])!r} s) are "
+            f"{float(seconds[k]) - float(seconds[k - 1]):.6g} s apart, but relative to the first stamp "
+            f"({float(seconds[0])!r} s) both are {float(relative[k])!r} s: the span is too long for "
+            "the step in float64",
+            argument=name,
+        )
+    return relative
+
+
 def readonly_array(
     x: ArrayLike, name: str, shape: tuple[int, ...], shape_text: str, what: str = "sample"
 ) -> FloatArray:

@@ -229,6 +229,7 @@ def text_parse_block(
     stamp_column: int,
     stamp: str,
     stamp_required: bool,
+    trailing: bool,
 ) -> tuple[
     NDArray[np.uint64],
     NDArray[np.uint64],

@@ -133,12 +133,18 @@ _Option = TypeVar("_Option", GainRamp, AccelLowPass, AccelRejection, MagRejectio
 
 
 def _option(value: object, cls: type[_Option], name: str) -> _Option | None:
-    """``value`` as option ``cls`` (None: off); a plain tuple of its fields is accepted."""
+    """``value`` as option ``cls`` (None: off); a plain tuple of its fields (real numbers) is accepted."""
     if value is None or isinstance(value, cls):
         return value
     if isinstance(value, (tuple, list)):
-        return cls(*value)
+        return cls(*(_real(v, name) for v in value))
     raise ParameterError(f"expected a {cls.__name__} or None, got {value!r}", argument=name)
+
+
+def _real(value: object, name: str) -> float:
+    """``value`` as a real number, refusing a bool or a string (a gain of ``True`` is no gain of 1):
+    the Python-ness check of a numeric option; its value is the core's to check (finite, in range)."""
+    return real_scalar(value, name, what="a real number", accept=lambda x: True)
 
 
 def _check_mag_norms(mags: FloatArray) -> FloatArray:
@@ -182,7 +188,7 @@ class _Filter:
             raise ParameterError(f"expected one of {WORLDS}, got {world!r}", argument="world")
         self.options = _core.FilterOptions(
             world=world,
-            gravity=gravity,
+            gravity=_real(gravity, "gravity"),
             gain_ramp=_option(gain_ramp, GainRamp, "gain_ramp"),
             acc_lowpass=_option(acc_lowpass, AccelLowPass, "acc_lowpass"),
             acc_rejection=_option(acc_rejection, AccelRejection, "acc_rejection"),
@@ -345,7 +351,7 @@ class Mahony(_Filter):
 
     def __init__(self, *, kp: float = _MAHONY.kp, ki: float = _MAHONY.ki, **options: Any) -> None:
         super().__init__(**options)
-        self.gains = _core.MahonyGains(kp, ki)
+        self.gains = _core.MahonyGains(_real(kp, "kp"), _real(ki, "ki"))
         self._setup(_core.MahonyFilter(self.gains, self.options))
 
     @property
@@ -374,7 +380,7 @@ class Madgwick(_Filter):
 
     def __init__(self, *, beta: float = _MADGWICK.beta, **options: Any) -> None:
         super().__init__(**options)
-        self.gains = _core.MadgwickGains(beta)
+        self.gains = _core.MadgwickGains(_real(beta, "beta"))
         self._setup(_core.MadgwickFilter(self.gains, self.options))
 
     @property

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_stamps, readonly_array, readonly_copy, real_scalar
+from imukit._arrays import FloatArray, as_stamps, readonly_array, readonly_copy, real_scalar, relative_seconds
 from imukit._errors import NonFiniteError, ShapeError, TimestampError
 from imukit._frozen import Frozen
 
@@ -145,7 +145,7 @@ class ImuData(Frozen):
     ) -> None:
         stamps = as_stamps(t)
         _plausible_ns(stamps.t_ns)
-        seconds = stamps.seconds - stamps.seconds[0]
+        seconds = relative_seconds(stamps.seconds, "t")
         n = len(seconds)
         gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")
         accel_arr = readonly_array(accel, "accel", (n, 3), f"(N, 3) with N = len(t) = {n}")
@@ -177,7 +177,8 @@ class ImuData(Frozen):
         """Samples the compiled core has just produced, without validating or copying them (fresh,
         finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
         simulating them). The arrays are made read-only here and must not be shared elsewhere."""
-        return cls._from_validated(t, None, gyro, accel, t - t[0], *_ranges(gyro_range, accel_range), None)
+        ranges = _ranges(gyro_range, accel_range)
+        return cls._from_validated(t, None, gyro, accel, relative_seconds(t, "t"), *ranges, None)
 
     @property
     def gyro_saturated(self) -> NDArray[np.bool_]:
@@ -433,13 +434,21 @@ class ImuNoise:
 
         ``gyro_sigma = σ_g √rate_hz``, ``gyro_walk_sigma = σ_bg / √rate_hz`` (same for accel).
         """
-        root = math.sqrt(_rate(rate_hz))
-        return DiscreteSigmas(
+        rate = _rate(rate_hz)
+        root = math.sqrt(rate)
+        sigmas = DiscreteSigmas(
             gyro_sigma=self.gyro_density * root,
             accel_sigma=self.accel_density * root,
             gyro_walk_sigma=self.gyro_random_walk / root,
             accel_walk_sigma=self.accel_random_walk / root,
         )
+        if not all(map(math.isfinite, sigmas)):
+            density = max(self.gyro_density, self.accel_density)
+            raise NonFiniteError(
+                f"a density of {density!r} at {rate!r} Hz gives a per-sample sigma beyond float64",
+                argument="rate_hz",
+            )
+        return sigmas
 
     def discrete(self, dt: float) -> DiscreteNoise:
         """Per-sample variances for a step ``dt`` [s] (> 0), per axis.

@@ -33,7 +33,7 @@ use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
 use crate::interp::{Cubic, StepInterpolator};
-use crate::{euler, so3, time, Error, Result};
+use crate::{euler, so3, time, Cancel, Error, Result};
 
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -268,6 +268,19 @@ pub fn integrate(
     options: &Options,
     out: Option<&mut [[f64; 4]]>,
 ) -> Result<UnitQuaternion<f64>> {
+    integrate_cancellable(t, gyro, initial, options, out, &Cancel::new())
+}
+
+/// [`integrate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled every
+/// [`Cancel::EVERY`] samples).
+pub fn integrate_cancellable(
+    t: &[f64],
+    gyro: &[[f64; 3]],
+    initial: &UnitQuaternion<f64>,
+    options: &Options,
+    out: Option<&mut [[f64; 4]]>,
+    cancel: &Cancel,
+) -> Result<UnitQuaternion<f64>> {
     // The steps index flat rows; the views are the same memory.
     let (gyro, out) = (gyro.as_flattened(), out.map(|o| o.as_flattened_mut()));
     check(t, gyro, out.as_ref().map(|o| o.len()))?;
@@ -278,14 +291,16 @@ pub fn integrate(
     let last = match options.representation {
         Representation::Quaternion => match out {
             Some(out) if matches!(options.scheme, Scheme::Exp | Scheme::Magnus) && t.len() > 1 => {
-                return quaternion_product(t, gyro, initial, options.scheme, out);
+                return quaternion_product(t, gyro, initial, options.scheme, out, cancel);
             }
-            out => run(initial.into_inner(), t, gyro, options, out)?.quaternion(),
+            out => run(initial.into_inner(), t, gyro, options, out, cancel)?.quaternion(),
         },
-        Representation::Matrix => run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out)?.quaternion(),
+        Representation::Matrix => {
+            run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out, cancel)?.quaternion()
+        }
         Representation::Euler => {
             let chi = euler::from_rotation(&initial.to_rotation_matrix());
-            run(chi, t, gyro, options, out)?.quaternion()
+            run(chi, t, gyro, options, out, cancel)?.quaternion()
         }
     };
     Ok(last)
@@ -317,7 +332,7 @@ pub fn integrate_rotation_matrix(
             got: format!("{initial:?}"),
         });
     }
-    run(*initial, t, gyro, &options, None)
+    run(*initial, t, gyro, &options, None, &Cancel::new())
 }
 
 /// The scheme is supported by the representation and the gimbal tolerance is an angle in [0, π/2).
@@ -350,7 +365,14 @@ const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9;
 /// `√3/12`, the commutator weight of the fourth-order Magnus step.
 const MAGNUS_WEIGHT: f64 = 0.144_337_567_297_406_44;
 
-fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Option<&mut [f64]>) -> Result<S> {
+fn run<S: State>(
+    mut y: S,
+    t: &[f64],
+    gyro: &[f64],
+    options: &Options,
+    out: Option<&mut [f64]>,
+    cancel: &Cancel,
+) -> Result<S> {
     let (rates, _) = gyro.as_chunks::<3>();
     let mut out = out.map(|o| o.as_chunks_mut::<4>().0);
     let gauss = gauss_nodes(t, gyro);
@@ -370,6 +392,7 @@ fn run<S: State>(mut y: S, t: &[f64], gyro: &[f64], options: &Options, out: Opti
     store(0, &y);
     let mut previous = y;
     for (k, (tt, ww)) in t.windows(2).zip(rates.windows(2)).enumerate() {
+        cancel.check(k)?;
         let h = tt[1] - tt[0];
         // Validated on the fly, one pass over the data; the slow path finds the first bad index.
         if !(h > 0.0 && h <= f64::MAX && ww[1].iter().all(|v| v.is_finite())) {
@@ -463,6 +486,7 @@ fn quaternion_product(
     initial: &UnitQuaternion<f64>,
     scheme: Scheme,
     out: &mut [f64],
+    cancel: &Cancel,
 ) -> Result<UnitQuaternion<f64>> {
     let (rates, _) = gyro.as_chunks::<3>();
     let (out, _) = out.as_chunks_mut::<4>();
@@ -486,7 +510,9 @@ fn quaternion_product(
     }
     let mut q = initial.into_inner();
     out[0] = [q.i, q.j, q.k, q.w];
+    cancel.check(0)?;
     for (k, slot) in out[1..].iter_mut().enumerate() {
+        cancel.check(k)?;
         let [x, y, z, w] = *slot;
         q = crate::quat::multiply(&q, &Quaternion::new(w, x, y, z));
         if (k + 1) % RENORMALIZE_EVERY == 0 {

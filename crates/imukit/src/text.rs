@@ -5,9 +5,8 @@
 //! number of fields, every field read a finite decimal number, the stamp field an exact integer
 //! (or seconds with nine decimals) when asked. Blank lines and `#` lines are passed over. Every
 //! other line is *deferred*: handed back by number and offset for the Python reader, whose rules
-//! and messages are the reference. The grammar accepted here is a subset of Python's `float()` and
-//! of the readers' integer stamps (ASCII only, no `_`, no Unicode digits or spaces), and Rust's
-//! float parsing is correctly rounded as Python's is, so a line read here gives the same numbers,
+//! and messages are the reference. The grammar accepted here is a subset of the readers' (Python's
+//! `float()` on ASCII fields without `_`, and the integer stamps), and Rust's float parsing is correctly rounded as Python's is, so a line read here gives the same numbers,
 //! bit for bit, as the Python reader would.
 
 /// How fields are separated.
@@ -48,6 +47,9 @@ pub struct Layout<'a> {
     pub stamp: StampForm,
     /// Whether a line whose stamp lacks that form is deferred (true), or read with `exact` false.
     pub stamp_required: bool,
+    /// Whether a line ending in the (one-byte) separator has that empty last field dropped (`a;b;c;`
+    /// read as three fields), as the generic CSV reader does for a file written that way.
+    pub trailing: bool,
 }
 
 /// The rows and deferred lines of one block.
@@ -129,6 +131,10 @@ fn read_line<'t>(line: &'t [u8], layout: &Layout<'_>, fields: &mut Vec<&'t [u8]>
     if line.iter().any(|&b| !(b == b'\t' || (b' '..=b'~').contains(&b))) {
         return None;
     }
+    let line = match (layout.trailing, layout.separator, line.split_last()) {
+        (true, Separator::Byte(sep), Some((&last, rest))) if last == sep => rest,
+        _ => line,
+    };
     fields.clear();
     match layout.separator {
         Separator::Byte(sep) => fields.extend(line.split(|&b| b == sep).map(trim)),
@@ -210,6 +216,7 @@ mod tests {
         stamp_column: 0,
         stamp: StampForm::Integer,
         stamp_required: true,
+        trailing: false,
     };
 
     #[test]
@@ -244,6 +251,7 @@ mod tests {
             stamp_column: 0,
             stamp: StampForm::NineDecimals,
             stamp_required: false,
+            trailing: false,
         };
         let block = parse_block(b"  -1.000000001\t 2 \n1.5 3\n", 1, &layout);
         assert_eq!(block.values, vec![-1.000000001, 2.0, 1.5, 3.0]);
@@ -253,5 +261,25 @@ mod tests {
         assert_eq!(nine_decimals(b"9223372036.854775807"), Some(i64::MAX));
         assert_eq!(nine_decimals(b"-9223372036.854775808"), None); // INEXACT, read by Python
         assert_eq!(integer(b"-9223372036854775808"), None);
+    }
+
+    #[test]
+    fn a_trailing_separator_is_dropped_when_asked() {
+        let layout = Layout {
+            trailing: true,
+            ..EUROC
+        };
+        let block = parse_block(
+            b"1,2,3;\n2,4,5,\n3,6,7\n4,8,9,,\n",
+            1,
+            &Layout {
+                separator: Separator::Byte(b','),
+                ..layout
+            },
+        );
+        assert_eq!(block.lines, vec![2, 3]);
+        assert_eq!(block.values, vec![4.0, 5.0, 6.0, 7.0]);
+        assert_eq!(block.deferred_lines, vec![1, 4]);
+        assert_eq!(parse_block(b"2,4,5,\n", 1, &EUROC).deferred_lines, vec![1]);
     }
 }

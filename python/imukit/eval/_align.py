@@ -8,7 +8,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, choice
-from imukit._errors import ParameterError, ShapeError
+from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit.eval._checks import check_trajectory
 from imukit.state import Trajectory
 
@@ -121,6 +121,11 @@ def _umeyama(xc: FloatArray, yc: FloatArray, mean_x: FloatArray, mean_y: FloatAr
         raise ParameterError(
             f"{method} alignment needs at least 3 non-collinear positions, got {n}", argument="estimate"
         )
+    # R is unchanged when xc and yc are divided by their scales a and b, and s becomes (b / a) s̃: the
+    # products stay within float64 for positions from 1e-300 to 1e300 (1e154 overflowed the squares,
+    # and LAPACK's SVD of an inf matrix ran for over 10 min; 1e-200 underflowed σx² to 0).
+    a, b = (float(np.max(np.abs(c))) or 1.0 for c in (xc, yc))
+    xc, yc = xc / a, yc / b
     u, d, vt = np.linalg.svd(yc.T @ xc / n)
     if not d[1] > _DEGENERATE * d[0]:
         raise ParameterError(
@@ -130,8 +135,16 @@ def _umeyama(xc: FloatArray, yc: FloatArray, mean_x: FloatArray, mean_y: FloatAr
         )
     s = np.array([1.0, 1.0, np.sign(np.linalg.det(u) * np.linalg.det(vt))])
     r = (u * s) @ vt
-    scale = float(d @ s / np.mean(np.sum(xc * xc, axis=1))) if with_scale else 1.0
-    return Alignment(Rotation.from_matrix(r), mean_y - scale * r @ mean_x, scale, method)
+    scale = float(d @ s / np.mean(np.sum(xc * xc, axis=1))) * (b / a) if with_scale else 1.0
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below
+        translation = mean_y - scale * r @ mean_x
+    if not (np.isfinite(scale) and scale > 0.0 and np.isfinite(translation).all()):
+        raise NonFiniteError(
+            f"the {method} alignment (scale {scale!r}, translation {translation.tolist()}) is beyond float64: "
+            f"the positions' spreads differ by a factor {b / a:.3g}",
+            argument="estimate / reference",
+        )
+    return Alignment(Rotation.from_matrix(r), translation, scale, method)
 
 
 def _yaw(xc: FloatArray, yc: FloatArray) -> Rotation:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import codecs
 import os
 from collections.abc import Callable, Sequence
-from typing import Literal, NamedTuple
+from typing import BinaryIO, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,10 +73,19 @@ class Layout(NamedTuple):
     check: RowCheck | None = None
     suspect: Mask | None = None
     """The rows ``check`` may refuse, vectorised: they are re-read through ``check``."""
+    data_from: int | None = None
+    """The line the data starts on, the lines before it a header (:mod:`imukit.io._table`); None: a first
+    line with a word in its stamp field is a header (module doc)."""
+    trailing: bool = False
+    """Whether a line ending in the separator has that empty last field dropped (``a;b;c;``)."""
 
     def split(self) -> Split:
         sep = self.separator
-        return str.split if sep is None else lambda text: text.split(sep)
+        if sep is None:
+            return str.split
+        if self.trailing:
+            return lambda text: text.split(sep)[:-1] if text.endswith(sep) else text.split(sep)
+        return lambda text: text.split(sep)
 
     def parse(self, numbered: list[tuple[int, str]], path: str | os.PathLike[str], bad: BadLines) -> Rows:
         """The lines ``numbered`` through the reference parser."""
@@ -109,12 +118,15 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> T
         size = 1 + sum(chunk.count(b"\n") for chunk in iter(lambda: f.read(BLOCK_BYTES), b""))
         f.seek(0)
         out = _Rows(size, layout)
-        carry, number, previous = b"", 1, b""
+        carry, number, previous = _skip_header(f, layout.data_from or 1), layout.data_from or 1, b""
+        if carry is None:
+            return _pure_python(path, bad, layout)
         while True:
             chunk = f.read(BLOCK_BYTES)
             data = carry + chunk
             if number == 1:
-                data = _header_as_comment(data.removeprefix(codecs.BOM_UTF8), layout)
+                data = data.removeprefix(codecs.BOM_UTF8)
+                data = _header_as_comment(data, layout) if layout.data_from is None else data
             end = data.rfind(b"\n") + 1 if chunk else len(data)
             block, carry = data[:end], data[end:]
             # A lone \r: Python's text files break lines there, the core does not.
@@ -136,6 +148,24 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, layout: Layout) -> T
             if not chunk:
                 break
     return out.table()
+
+
+def _skip_header(f: BinaryIO, first: int) -> bytes | None:
+    """The bytes read past the ``first - 1`` lines of a header from ``f`` (at its start), or None when a
+    lone carriage return in them (a line break to Python's text files) makes the line count differ."""
+    data, skip = b"", first - 1
+    while skip:
+        chunk = f.read(BLOCK_BYTES)
+        if not chunk:
+            return data
+        data += chunk
+        if data.count(b"\n") >= skip:
+            end = -1
+            for _ in range(skip):
+                end = data.index(b"\n", end + 1)
+            head, data = data[: end + 1], data[end + 1 :]
+            return None if head.count(b"\r") != head.count(b"\r\n") else data
+    return data
 
 
 def _header_as_comment(data: bytes, layout: Layout) -> bytes:
@@ -183,7 +213,15 @@ class _Rows:
 def _block(path: str | os.PathLike[str], bad: BadLines, layout: Layout, block: bytes, first: int) -> tuple[Table, int]:
     sep = None if layout.separator is None else ord(layout.separator)
     numbers, offsets, values, stamps, _, later, later_offsets, count = _core.text_parse_block(
-        block, first, sep, layout.width, list(layout.columns), layout.stamp_column, layout.stamp, layout.stamp_required
+        block,
+        first,
+        sep,
+        layout.width,
+        list(layout.columns),
+        layout.stamp_column,
+        layout.stamp,
+        layout.stamp_required,
+        layout.trailing,
     )
     lines = numbers.astype(np.int64)
     if layout.suspect is not None and len(values):
@@ -262,9 +300,12 @@ def _pure_python(path: str | os.PathLike[str], bad: BadLines, layout: Layout) ->
     """:func:`read_table` by the reference parser alone (a file with lone carriage returns)."""
     with open_text(path) as f:
         raw = list(f)
-    numbered = [(n, text) for n, line in enumerate(raw, 1) if (text := line.strip()) and not text.startswith("#")]
+    start = layout.data_from or 1
+    numbered = [
+        (n, text) for n, line in enumerate(raw, 1) if n >= start and (text := line.strip()) and not text.startswith("#")
+    ]
     first = next((line.strip() for line in raw if line.strip()), "")
-    if numbered and numbered[0][1] == first and _unmarked_header(first, layout):
+    if layout.data_from is None and numbered and numbered[0][1] == first and _unmarked_header(first, layout):
         numbered.pop(0)
     cut = _truncation(raw[-_TAIL_LINES:]) if raw and not raw[-1].endswith(("\n", "\r")) else None
     if cut is not None:

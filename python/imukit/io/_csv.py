@@ -8,8 +8,9 @@ from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
-from imukit._arrays import choice, real_scalar
+from imukit._arrays import FloatArray, choice, real_scalar
 from imukit.imu import ImuData
 from imukit.io._lines import Problem, as_file_error, public_reader
 from imukit.io._report import BadLines, OnBadLine, ReadReport
@@ -149,11 +150,22 @@ def _read(
             return "non-finite", f"acceleration ({accel}) g overflows float64 in m/s^2"
         return None
 
-    data = read_stamped(table, bad, columns, time_unit, check)
-    gyro = data.values[:, 1:4] * (np.pi / 180.0) if degrees else data.values[:, 1:4]
-    accel = data.values[:, 4:7] * gravity if gravity is not None else data.values[:, 4:7]
-    mag = data.values[:, 7:10] if "mag_columns" in wanted else None
-    return as_file_error(path, lambda: ImuData(data.stamps, gyro, accel, mag=mag))
+    def overflowing(values: FloatArray) -> NDArray[np.bool_]:
+        with np.errstate(over="ignore"):
+            return np.asarray(~np.isfinite(values[:, 4:7] * (gravity or 1.0)).all(axis=1), dtype=np.bool_)
+
+    data = read_stamped(table, bad, columns, time_unit, check, None if gravity is None else overflowing)
+    stamps, values = data.stamps, data.values
+    del data
+    # In place, one column group at a time: peak memory stays under 3x the result.
+    if degrees:
+        values[:, 1:4] *= np.pi / 180.0
+    if gravity is not None:
+        values[:, 4:7] *= gravity
+    gyro, accel = np.ascontiguousarray(values[:, 1:4]), np.ascontiguousarray(values[:, 4:7])
+    mag = np.ascontiguousarray(values[:, 7:10]) if "mag_columns" in wanted else None
+    del values
+    return as_file_error(path, lambda: ImuData(stamps, gyro, accel, mag=mag))
 
 
 def _gravity(value: object) -> float:

@@ -25,7 +25,7 @@ from itertools import islice
 from pathlib import Path
 from typing import Any, Callable, Literal
 
-from imukit.io._lines import data_lines
+from imukit.io._lines import data_lines, plain_digits
 
 __all__ = ["Format", "Head"]
 
@@ -77,6 +77,9 @@ class Format:
 
 
 def is_number(text: str) -> bool:
+    """Whether a field reads as a number by the readers' rule (:func:`imukit.io._lines.plain_digits`, `float()`)."""
+    if not plain_digits(text):
+        return False
     try:
         float(text)
     except ValueError:

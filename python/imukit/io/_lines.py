@@ -140,7 +140,8 @@ def parse_rows(
     ``check``.
 
     Other lines go to ``bad``: ``expected {width} {expected}, got n`` (wrong column count),
-    ``not a number in '…'`` (malformed), ``non-finite value in '…'`` (non-finite), or ``check``'s
+    ``not a number in '…'`` (malformed: ``float()`` refuses a field, or it has more than ASCII or an
+    ``_``, :func:`plain_digits`), ``non-finite value in '…'`` (non-finite), or ``check``'s
     ``(kind, detail)``.
     """
     rows = Rows([], [], [], [])
@@ -155,8 +156,11 @@ def parse_rows(
         if len(fields) != width:
             problem = "wrong column count", f"expected {width} {expected}, got {len(fields)}"
         else:
+            chosen = fields[start:stop] if consecutive else [fields[c] for c in columns]
             try:
-                row = list(map(float, fields[start:stop] if consecutive else [fields[c] for c in columns]))
+                if not plain_digits("".join(chosen)):
+                    raise ValueError(chosen)
+                row = list(map(float, chosen))
             except ValueError:
                 problem = "malformed", f"not a number in {text!r}"
             else:
@@ -172,6 +176,14 @@ def parse_rows(
         else:
             bad.bad(path, number, *problem, text)
     return rows
+
+
+def plain_digits(text: str) -> bool:
+    """Whether ``text`` has only the characters a number in a data file is written with: ASCII, no
+    ``_``. Python's ``float()`` also reads ``1_000``, Unicode digits (``١``) and Unicode spaces
+    around a number (a no-break space); no writer of sensor logs produces them, so a field holding
+    them is damaged or not a number, and its line is ``malformed`` (issue 17, item 16)."""
+    return text.isascii() and "_" not in text
 
 
 def integer_stamp(text: str, scale: int = 1) -> int | None:

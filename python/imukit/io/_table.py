@@ -18,6 +18,9 @@ trailing delimiter a names line or data lines ending in the delimiter (``a;b;c;`
                    field too many: it is dropped where that makes the two agree
 field counts       the header's and the data lines' (the most common count of the first 50) must
                    agree, else one error naming both, not one per line
+data lines         read in blocks straight into arrays by :mod:`imukit.io._blocks` (the compiled core,
+                   the reference parser for every line it defers): only the header and the first 50
+                   data lines are held as text
 =================  ================================================================================
 """
 
@@ -33,19 +36,10 @@ from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray, choice
 from imukit._errors import FileFormatError, ParameterError
+from imukit.io import _blocks as blocks
+from imukit.io._blocks import Layout, Mask
 from imukit.io._format import is_number
-from imukit.io._lines import (
-    Problem,
-    RowCheck,
-    Rows,
-    Split,
-    all_exact,
-    increasing,
-    integer_stamp,
-    open_text,
-    parse_rows,
-    require_rows,
-)
+from imukit.io._lines import INT64_MAX, Problem, RowCheck, Split, integer_stamp, open_text
 from imukit.io._report import BadLines
 
 __all__ = [
@@ -72,17 +66,22 @@ _SAMPLE = 50  # data lines whose most common field count is the data's width
 
 
 class Table(NamedTuple):
-    """A delimited text file split into its header and data lines (:func:`read_table`)."""
+    """A delimited text file's header, and the layout of its data lines (:func:`read_table`)."""
 
     where: str
     lines: list[tuple[int, str]]
-    """``(line number, stripped text)`` of the data lines."""
+    """``(line number, stripped text)`` of the first data lines (those the layout was judged on)."""
     split: Split
     """A data line into its fields (a trailing delimiter dropped where the file has one)."""
     headers: list[tuple[int, list[str]]]
     """``(line number, names)`` of each header line, the names line last; [] without a header."""
     width: int
     """The fields of a data line."""
+    delimiter: str
+    data_from: int
+    """The line number the data starts on (after the header)."""
+    trailing: bool
+    """Whether data lines end in the delimiter, an empty field dropped."""
 
     def column(self, column: Column, name: str) -> int:
         """The 0-based index of ``column`` (an index, or a header name), or a ParameterError naming the
@@ -118,18 +117,23 @@ class Table(NamedTuple):
             argument=name,
         )
 
-    def rows(self, bad: BadLines, columns: Sequence[int], check: RowCheck | None = None) -> Rows:
-        """:func:`imukit.io._lines.parse_rows` of the data lines, ``columns`` read as numbers."""
+    def layout(self, columns: Sequence[int], time_unit: str, check: RowCheck | None, suspect: Mask | None) -> Layout:
+        """The layout :func:`imukit.io._blocks.read_table` reads the data lines by: ``columns``, the time
+        column first, its stamps integers (required for ``"ns"``) unless ``time_unit`` is ``"s"``."""
         origin = "the header" if self.headers else "the first data line"
-        return parse_rows(
-            self.lines,
-            self.where,
-            bad,
-            split=self.split,
-            width=self.width,
-            expected=f"fields ({origin} has {self.width})",
-            columns=columns,
-            check=check,
+        return Layout(
+            None if self.delimiter == " " else self.delimiter,
+            self.width,
+            f"fields ({origin} has {self.width})",
+            columns,
+            columns[0],
+            "float" if time_unit == "s" else "integer",
+            integer_stamp,
+            time_unit == "ns",
+            check,
+            suspect,
+            self.data_from,
+            self.trailing,
         )
 
 
@@ -140,16 +144,23 @@ class Stamped(NamedTuple):
     """``(N, len(columns))`` floats of the columns read, the time column first."""
     stamps: NDArray[np.int64] | FloatArray
     """Exact int64 nanoseconds, or float seconds (what ``ImuData`` and ``Trajectory`` take as ``t``)."""
-    lines: list[int]
+    lines: NDArray[np.int64]
 
 
 def read_stamped(
-    table: Table, bad: BadLines, columns: Sequence[int], time_unit: str, check: RowCheck | None = None
+    table: Table,
+    bad: BadLines,
+    columns: Sequence[int],
+    time_unit: str,
+    check: RowCheck | None = None,
+    suspect: Mask | None = None,
 ) -> Stamped:
-    """The data lines whose ``columns`` (the time column first) are finite numbers and pass ``check``,
-    stamps strictly increasing (:func:`imukit.io._lines.increasing`). ``time_unit`` ``"ns"``: integer
-    stamps, exact ``t_ns``; ``"ms"`` / ``"us"``: exact ``t_ns`` when every stamp is an integer, else like
-    ``"s"`` float seconds, one correctly rounded division by the unit's count per second."""
+    """The data lines whose ``columns`` (the time column first) are finite numbers and pass ``check``
+    (``suspect``: the rows it may refuse, vectorised), stamps strictly increasing
+    (:func:`imukit.io._lines.increasing`), read in blocks by :mod:`imukit.io._blocks`. ``time_unit``
+    ``"ns"``: integer stamps, exact ``t_ns``; ``"ms"`` / ``"us"``: exact ``t_ns`` when every stamp is an
+    integer (and its nanoseconds within int64), else like ``"s"`` float seconds, one correctly rounded
+    division by the unit's count per second."""
     choice(time_unit, "time_unit", TIME_UNITS)
     time = columns[0]
 
@@ -158,17 +169,17 @@ def read_stamped(
             return "malformed", f"time {fields[time].strip()!r} is not an integer number of nanoseconds (int64)"
         return None if check is None else check(fields, row)
 
-    rows = table.rows(bad, columns, stamp_check)
-    stamps = [f[time].strip() for f in rows.fields]
+    layout = table.layout(columns, time_unit, stamp_check, suspect)
+    rows = blocks.read_table(table.where, bad, layout)
     scale = _NS_PER[time_unit]
-    ns = all_exact(stamps, lambda s: integer_stamp(s, scale)) if time_unit != "s" else None
-    keep = increasing(rows, [row[0] for row in rows.values] if ns is None else ns, stamps, table.where, bad)
-    rows = rows.take(keep)
-    require_rows(rows, table.where, bad)
-    values = np.array(rows.values, dtype=np.float64)
-    if ns is not None:
-        return Stamped(values, np.array([ns[k] for k in keep], dtype=np.int64), rows.lines)
-    return Stamped(values, values[:, 0] / _PER_SECOND[time_unit], rows.lines)
+    ns = rows.stamps if time_unit != "s" else None
+    ns = ns if ns is not None and bool(np.all(np.abs(ns) <= INT64_MAX // scale)) else None
+    rows = blocks.increasing_table(rows, rows.values[:, 0] if ns is None else ns, table.where, bad, layout)
+    if not len(rows.lines):
+        raise FileFormatError(f"{table.where}: no data lines{bad.skipped_in(table.where)}", argument="path")
+    if ns is not None and rows.stamps is not None:
+        return Stamped(rows.values, rows.stamps * np.int64(scale), rows.lines)
+    return Stamped(rows.values, rows.values[:, 0] / _PER_SECOND[time_unit], rows.lines)
 
 
 def check_columns(columns: object, name: str, count: int) -> None:
@@ -198,8 +209,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
     if delimiter is not None:
         choice(delimiter, "delimiter", DELIMITERS)
     where = os.fspath(path)
-    with open_text(path) as f:
-        numbered = [(n, line.strip()) for n, line in enumerate(f, start=1) if line.strip()]
+    numbered = _head(path, delimiter, header_lines)
     d = delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else "")
     plain = str.split if d == " " else (lambda text: text.split(d))
     count = header_lines if header_lines is not None else _leading_header(numbered, plain, where, bad)
@@ -210,15 +220,21 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
     named = [(n, text) for k, (n, text) in enumerate(head) if k == 0 or not text.startswith("#")]
     headers = [(n, [name.strip() for name in plain(text.lstrip("#"))]) for n, text in named]
     widths = Counter(len(plain(text)) for _, text in data[:_SAMPLE])
+    start = head[-1][0] + 1 if head else 1
+
+    def table(headers: list[tuple[int, list[str]]], width: int, trailing: bool = False) -> Table:
+        split = (lambda text: _drop_trailing(plain(text), d, text)) if trailing else plain
+        return Table(where, data[:_SAMPLE], split, headers, width, d, start, trailing)
+
     if not headers:
-        return Table(where, data, plain, [], len(plain(data[0][1])))
+        return table([], len(plain(data[0][1])))
     line, names = headers[-1]
     width = widths.most_common(1)[0][0]
     if d != " " and names[-1] == "" and len(names) == width + 1:  # `a;b;c;` over `1;2;3`
         headers[-1] = (line, names[:-1])
-        return Table(where, data, plain, headers, width)
+        return table(headers, width)
     if d != " " and len(names) == width - 1 and all(text.endswith(d) for _, text in data[:_SAMPLE]):
-        return Table(where, data, lambda text: _drop_trailing(plain(text), d, text), headers, len(names))
+        return table(headers, len(names), trailing=True)
     if len(names) != width:
         trailing = d != " " and (named[-1][1].endswith(d) or data[0][1].endswith(d))
         raise FileFormatError(
@@ -227,7 +243,29 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
             + " (header_lines= says how many lines the header has)",
             argument="path",
         )
-    return Table(where, data, plain, headers, width)
+    return table(headers, width)
+
+
+def _head(path: str | os.PathLike[str], delimiter: str | None, header_lines: int | None) -> list[tuple[int, str]]:
+    """``(line number, stripped text)`` of the leading non-blank lines of ``path``: enough to judge its
+    header and layout by (module doc), a header of ``header_lines`` lines (None: up to the first line whose
+    first field is a number) and :data:`_SAMPLE` data lines after it; the whole file only when it has no more."""
+    numbered: list[tuple[int, str]] = []
+    data = numbers = 0
+    with open_text(path) as f:
+        for n, line in enumerate(f, start=1):
+            text = line.strip()
+            if not text:
+                continue
+            numbered.append((n, text))
+            d = delimiter if delimiter is not None else _detect(numbered[0][1])
+            if not text.startswith("#"):
+                data += 1
+                fields = text.split() if d == " " else text.split(d)
+                numbers += is_number(fields[0])
+            if data > (header_lines or 0) + _SAMPLE + 1 and (header_lines is not None or numbers > _SAMPLE + 1):
+                break
+    return numbered
 
 
 def _leading_header(numbered: list[tuple[int, str]], split: Split, where: str, bad: BadLines) -> int:

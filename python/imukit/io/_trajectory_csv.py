@@ -18,6 +18,7 @@ from typing import Any, Literal
 import numpy as np
 
 from imukit._arrays import choice
+from imukit.io._blocks import zero_quaternions
 from imukit.io._format import Format
 from imukit.io._lines import Problem, as_file_error, public_reader, read_into, rotations_from_rows, zero_quaternion
 from imukit.io._named_csv import axis_of, detected, names_sniff, stamp_unit, time_column, words_and_unit
@@ -58,7 +59,7 @@ def trajectory_csv(
     def check(fields: list[str], row: list[float]) -> Problem | None:
         return zero_quaternion(row[4:8])
 
-    data = read_stamped(table, bad, columns, time_unit, check)
+    data = read_stamped(table, bad, columns, time_unit, check, zero_quaternions(4))
     quat = data.values[:, 4:8] if quaternion_order == "xyzw" else data.values[:, [5, 6, 7, 4]]
     rotation = rotations_from_rows(np.ascontiguousarray(quat), data.lines, table.where)
     return as_file_error(path, lambda: Trajectory(data.stamps, data.values[:, 1:4], None, rotation))

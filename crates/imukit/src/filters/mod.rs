@@ -73,7 +73,7 @@ pub use world::{initial_attitude, World};
 use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::quat::{exp, multiply};
-use crate::{Error, Result};
+use crate::{Cancel, Error, Result};
 use gate::Gates;
 
 /// A correction law: its gains (a `Copy` value) and how one gated sample corrects the estimate.
@@ -352,6 +352,20 @@ impl<L: Law> Filter<L> {
         out_q: &mut [[f64; 4]],
         out_bias: &mut [[f64; 3]],
     ) -> Result<()> {
+        self.run_cancellable(state, inputs, continued, (out_q, out_bias), &Cancel::new())
+    }
+
+    /// [`Filter::run`] into `(out_q, out_bias)`, stopping with [`Error::Interrupted`] when `cancel`
+    /// is set (polled every [`Cancel::EVERY`] samples); `state` is then part-way through: run on a
+    /// copy to keep it.
+    pub fn run_cancellable(
+        &self,
+        state: &mut State<L>,
+        inputs: &Inputs<'_>,
+        continued: bool,
+        (out_q, out_bias): (&mut [[f64; 4]], &mut [[f64; 3]]),
+        cancel: &Cancel,
+    ) -> Result<()> {
         let n = inputs.t.len();
         let rows = [
             ("gyro", Some(inputs.gyro)),
@@ -381,8 +395,8 @@ impl<L: Law> Filter<L> {
             });
         }
         match inputs.mag {
-            Some(mag) => self.run_loop::<true>(state, inputs, mag, continued, out_q, out_bias),
-            None => self.run_loop::<false>(state, inputs, &[], continued, out_q, out_bias),
+            Some(mag) => self.run_loop::<true>(state, inputs, mag, continued, (out_q, out_bias), cancel),
+            None => self.run_loop::<false>(state, inputs, &[], continued, (out_q, out_bias), cancel),
         }
     }
 
@@ -393,8 +407,8 @@ impl<L: Law> Filter<L> {
         inputs: &Inputs<'_>,
         mags: &[[f64; 3]],
         continued: bool,
-        out_q: &mut [[f64; 4]],
-        out_bias: &mut [[f64; 3]],
+        (out_q, out_bias): (&mut [[f64; 4]], &mut [[f64; 3]]),
+        cancel: &Cancel,
     ) -> Result<()> {
         let mut previous = state.common.time;
         for (k, (&t, (q_out, b_out))) in inputs
@@ -403,6 +417,7 @@ impl<L: Law> Filter<L> {
             .zip(out_q.iter_mut().zip(out_bias.iter_mut()))
             .enumerate()
         {
+            cancel.check(k)?;
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
             let mag = if NINE { Some(row(&mags[k])) } else { None };

@@ -11,7 +11,7 @@
 use rayon::prelude::*;
 
 use super::{clipped_at, ClipMask, End, Ends, Preintegrator, Scheme};
-use crate::error::{Error, Result};
+use crate::error::{Cancel, Error, Result};
 use crate::imu::Samples;
 
 /// Intervals per parallel chunk: long enough that a merge (a few dense 9×9 products) is noise.
@@ -48,6 +48,18 @@ impl Preintegrator {
         clipped: Option<&ClipMask<'_>>,
         clock: [f64; 2],
     ) -> Result<()> {
+        self.integrate_samples_cancellable(samples, clipped, clock, &Cancel::new())
+    }
+
+    /// [`Preintegrator::integrate_samples_at`], stopping with [`Error::Interrupted`] (nothing added)
+    /// when `cancel` is set (polled every [`Cancel::EVERY`] intervals, and between parallel chunks).
+    pub fn integrate_samples_cancellable(
+        &mut self,
+        samples: &Samples<'_>,
+        clipped: Option<&ClipMask<'_>>,
+        clock: [f64; 2],
+        cancel: &Cancel,
+    ) -> Result<()> {
         samples.validate()?;
         if let Some(mask) = clipped {
             mask.check(samples.t.len())?;
@@ -66,7 +78,7 @@ impl Preintegrator {
             self.boundary.check_next(first, "samples")?;
         }
         let mut next = self.clone();
-        next.add_validated(samples, clipped)?;
+        next.add_validated(samples, clipped, cancel)?;
         if !next.is_finite() {
             return Err(Error::Overflow { index: n - 1 });
         }
@@ -76,7 +88,7 @@ impl Preintegrator {
     }
 
     /// The intervals of validated `samples`, continuing this preintegration.
-    fn add_validated(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>) -> Result<()> {
+    fn add_validated(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, cancel: &Cancel) -> Result<()> {
         let n = samples.t.len();
         let first = (samples.accel_at(0), samples.gyro_at(0));
         match self.scheme {
@@ -91,20 +103,21 @@ impl Preintegrator {
                     .into_par_iter()
                     .map(|start| {
                         let mut p = template.clone();
-                        p.run_euler(samples, clipped, start, (start + CHUNK).min(n - 1));
-                        p
+                        p.run_euler(samples, clipped, start, (start + CHUNK).min(n - 1), cancel)?;
+                        Ok(p)
                     })
-                    .collect();
+                    .collect::<Result<_>>()?;
                 for chunk in &chunks {
                     *self = self.merge_unchecked(chunk)?;
                 }
             }
-            Scheme::Euler => self.run_euler(samples, clipped, 0, n - 1),
+            Scheme::Euler => self.run_euler(samples, clipped, 0, n - 1, cancel)?,
             Scheme::Midpoint => {
                 if self.last_sample().is_none() {
                     self.integrate_measurement_clipped(&first.0, &first.1, 0.0, clipped_at(clipped, 0));
                 }
                 for k in 1..n {
+                    cancel.check(k)?;
                     let h = samples.t[k] - samples.t[k - 1];
                     let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
                     self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
@@ -115,11 +128,20 @@ impl Preintegrator {
     }
 
     /// Euler intervals `start..end` (interval k from sample k to k+1).
-    fn run_euler(&mut self, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, start: usize, end: usize) {
+    fn run_euler(
+        &mut self,
+        samples: &Samples<'_>,
+        clipped: Option<&ClipMask<'_>>,
+        start: usize,
+        end: usize,
+        cancel: &Cancel,
+    ) -> Result<()> {
         for k in start..end {
+            cancel.check(k)?;
             let h = samples.t[k + 1] - samples.t[k];
             let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
             self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
         }
+        Ok(())
     }
 }

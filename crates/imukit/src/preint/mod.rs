@@ -50,7 +50,10 @@ pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use continuity::{End, Ends};
 pub use midpoint::MidpointStepMatrices;
-pub use windows::{preintegrate_windows, preintegrate_windows_clipped, preintegrate_windows_into, WindowsOut};
+pub use windows::{
+    preintegrate_windows, preintegrate_windows_cancellable, preintegrate_windows_clipped, preintegrate_windows_into,
+    WindowsOut,
+};
 
 /// 9×9 covariance of `[δθ, δv, δp]`.
 pub type Covariance9 = SMatrix<f64, 9, 9>;

@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use super::{clipped_at, ClipMask, Clipped, End, Ends, Preintegrator, Scheme};
-use crate::error::{try_vec, Error, Result};
+use crate::error::{try_vec, Cancel, Error, Result};
 use crate::imu::Samples;
 
 /// `template` (an empty preintegrator: scheme, bias, noise, bias walk) run over each window
@@ -82,6 +82,18 @@ pub fn preintegrate_windows_into(
     template: &Preintegrator,
     out: WindowsOut<'_>,
 ) -> Result<()> {
+    preintegrate_windows_cancellable(samples, clipped, (boundaries, template), out, &Cancel::new())
+}
+
+/// [`preintegrate_windows_into`] of `(boundaries, template)`, stopping with
+/// [`Error::Interrupted`] when `cancel` is set (polled before each block of 4096 windows).
+pub fn preintegrate_windows_cancellable(
+    samples: &Samples<'_>,
+    clipped: Option<&ClipMask<'_>>,
+    (boundaries, template): (&[f64], &Preintegrator),
+    out: WindowsOut<'_>,
+    cancel: &Cancel,
+) -> Result<()> {
     check_inputs(samples, clipped, boundaries)?;
     let m = boundaries.len() - 1;
     let lengths = [
@@ -113,6 +125,7 @@ pub fn preintegrate_windows_into(
         mut covariance_combined,
     } = out;
     for first in (0..m).step_by(WINDOWS_PER_BLOCK) {
+        cancel.check(0)?;
         let edges = &boundaries[first..(first + WINDOWS_PER_BLOCK + 1).min(m + 1)];
         let windows: Vec<Preintegrator> = edges
             .par_windows(2)

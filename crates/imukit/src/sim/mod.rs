@@ -7,12 +7,12 @@ mod motion;
 mod sensor;
 
 pub use motion::{Kinematics, Motion, MotionKind};
-pub use sensor::{measure, measure_in_place, SensorModel, CHUNK};
+pub use sensor::{measure, measure_in_place, measure_in_place_cancellable, SensorModel, CHUNK};
 
 use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::{Cancel, Error, Result};
 
 /// Output buffers of [`evaluate`], flat row-major: `position`, `velocity`, `gyro` (body rate) and
 /// `accel` (specific force) `3N`, `rotation` `4N` as `[x, y, z, w]` quaternions of `R_wb`.
@@ -31,6 +31,18 @@ pub struct Truth<'a> {
 
 /// Evaluates `motion` at the times `t` (finite) into `out`, in parallel.
 pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'_>) -> Result<()> {
+    evaluate_cancellable(motion, t, gravity, out, &Cancel::new())
+}
+
+/// [`evaluate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled per chunk of
+/// 4096 rows).
+pub fn evaluate_cancellable(
+    motion: &Motion,
+    t: &[f64],
+    gravity: &Vector3<f64>,
+    out: Truth<'_>,
+    cancel: &Cancel,
+) -> Result<()> {
     let n = t.len();
     for (name, len, width) in [
         ("position", out.position.len(), 3),
@@ -57,7 +69,8 @@ pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'
         .zip(out.rotation.par_chunks_mut(4 * ROWS))
         .zip(out.gyro.par_chunks_mut(3 * ROWS))
         .zip(out.accel.par_chunks_mut(3 * ROWS))
-        .for_each(|(((((ts, p), v), q), w), a)| {
+        .try_for_each(|(((((ts, p), v), q), w), a)| {
+            cancel.check(0)?;
             for (i, &tk) in ts.iter().enumerate() {
                 let x = motion.at(tk);
                 p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
@@ -67,8 +80,8 @@ pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'
                 w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
                 a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
             }
-        });
-    Ok(())
+            Ok(())
+        })
 }
 
 /// Turns the ideal readings of a trajectory given in a world frame that rotates at `earth_rate`

@@ -31,7 +31,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::{Cancel, Error, Result};
 
 /// Samples per random stream and per parallel task.
 pub const CHUNK: usize = 1 << 16;
@@ -173,6 +173,19 @@ pub fn measure_in_place(
     triad: u64,
     bias_out: &mut [f64],
 ) -> Result<()> {
+    measure_in_place_cancellable(t, values, model, (seed, triad), bias_out, &Cancel::new())
+}
+
+/// [`measure_in_place`] of the stream `(seed, triad)`, stopping with [`Error::Interrupted`] when
+/// `cancel` is set (polled per chunk of [`CHUNK`] samples).
+pub fn measure_in_place_cancellable(
+    t: &[f64],
+    values: &mut [f64],
+    model: &SensorModel,
+    (seed, triad): (u64, u64),
+    bias_out: &mut [f64],
+    cancel: &Cancel,
+) -> Result<()> {
     model.check()?;
     let n = t.len();
     if n < 2 {
@@ -208,6 +221,7 @@ pub fn measure_in_place(
         .par_chunks_mut(3 * CHUNK)
         .enumerate()
         .map(|(c, bias)| {
+            cancel.check(0)?;
             let (mut walk_rng, mut gm_rng) = (
                 stream(seed, triad, Process::Walk, c),
                 stream(seed, triad, Process::GaussMarkov, c),
@@ -225,9 +239,9 @@ pub fn measure_in_place(
                     decay *= a;
                 }
             }
-            (Local { end: w, decay: 1.0 }, Local { end: g, decay })
+            Ok((Local { end: w, decay: 1.0 }, Local { end: g, decay }))
         })
-        .collect();
+        .collect::<Result<_>>()?;
 
     // Pass 2 (sequential over chunks): the walk and Gauss–Markov states at each chunk's start.
     let mut starts = Vec::with_capacity(chunks.len());
@@ -247,7 +261,8 @@ pub fn measure_in_place(
         .par_chunks_mut(3 * CHUNK)
         .zip(values.par_chunks_mut(3 * CHUNK))
         .enumerate()
-        .for_each(|(c, (bias, readings))| {
+        .try_for_each(|(c, (bias, readings))| {
+            cancel.check(0)?;
             let (w_start, g_start) = starts[c];
             let mut white = stream(seed, triad, Process::White, c);
             let mut decay = 1.0;
@@ -264,7 +279,8 @@ pub fn measure_in_place(
                     decay *= (-h / model.gauss_markov_tau).exp();
                 }
             }
-        });
+            Ok(())
+        })?;
     match values.iter().position(|v| !v.is_finite()) {
         Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument(overflow_culprit(t, model))),
         None => Ok(()),
