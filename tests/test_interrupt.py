@@ -36,6 +36,8 @@ CHILD = textwrap.dedent(
             "preintegrate": lambda: ik.preintegrate(imu, noise=noise, combined=True),
             "preintegrate_windows": lambda: ik.preintegrate_windows(
                 imu, np.linspace(imu.t[0], imu.t[-1], 40_001), ik.PreintParams(noise, combined=True)),
+            "preintegrate_windows(list)": lambda: ik.preintegrate_windows(  # the deprecated list form
+                imu, np.linspace(imu.t[0], imu.t[-1], 40_001), noise=noise, combined=True),
             "integrate_attitude": lambda: ik.integrate_attitude(imu.t, imu.gyro, scheme="rk4",
                                                                 representation="euler"),
             "mahony": lambda: ik.filters.Mahony().run(imu),
@@ -56,7 +58,16 @@ CHILD = textwrap.dedent(
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 @pytest.mark.parametrize(
     "kernel",
-    ["propagate", "integrate", "preintegrate", "preintegrate_windows", "integrate_attitude", "mahony", "simulate"],
+    [
+        "propagate",
+        "integrate",
+        "preintegrate",
+        "preintegrate_windows",
+        "preintegrate_windows(list)",
+        "integrate_attitude",
+        "mahony",
+        "simulate",
+    ],
 )
 def test_ctrl_c_stops_a_long_kernel_promptly(kernel: str) -> None:
     child = subprocess.Popen(

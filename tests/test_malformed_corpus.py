@@ -153,7 +153,15 @@ def _flag(rng: np.random.Generator) -> bool:
     return bool(rng.integers(2))
 
 
-for _name in ("hat", "exp", "right_jacobian", "right_jacobian_inv", "left_jacobian", "left_jacobian_inv"):
+for _name in (
+    "hat",
+    "exp",
+    "right_jacobian",
+    "right_jacobian_inv",
+    "left_jacobian",
+    "left_jacobian_inv",
+    "exp_double_integral",
+):
     batched_entry(ik.so3, _name, "phi", (3,))
 batched_entry(ik.so3, "vee", "matrix", (3, 3))
 batched_entry(ik.so3, "log", "rotation", (3, 3))
@@ -679,6 +687,17 @@ def _simulate_errors(rng: np.random.Generator) -> Any:
 
 
 # -- noise
+
+
+@entry(
+    "LocalLevel",
+    ("LocalLevel", "earth.LocalLevel"),
+    {"latitude": Arg("scalar"), "height": Arg("scalar")},
+)
+def _local_level(rng: np.random.Generator) -> Any:
+    values = {"latitude": float(rng.uniform(-1.5, 1.5)), "height": float(rng.uniform(-100.0, 3000.0))}
+    axes = ("enu", "ned")[int(rng.integers(2))]
+    return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes).gravity
 
 
 @entry("noise.mean_rate_hz", ("noise.mean_rate_hz",), IMU_ARGS)

@@ -13,7 +13,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use numpy::{PyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString, PyTuple};
+use pyo3::types::{PyBool, PyDict, PyString, PyTuple};
 
 use crate::{raise, to_py};
 
@@ -184,6 +184,30 @@ impl<'py, T: Named> IntoPyObject<'py> for Name<T> {
 
 /// Registers `T`'s canonical names as the tuple `_core.<names>` and, when it has any, its
 /// deprecated aliases as the dict `_core.<aliases>` (`{"old": "canonical"}`).
+/// A real number given as a Python object for a field `name`: a `ParameterError` for anything that
+/// is not one, Python's and numpy's bools included (PyO3 reads a bool as 1.0 / 0.0; issue 17, item 16).
+pub(crate) fn real_number(py: Python<'_>, name: &str, v: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let shown = || v.repr().map_or_else(|_| "?".to_owned(), |r| r.to_string());
+    // numpy's bool scalar (type name "bool" in numpy 2, "bool_" before) converts to float too.
+    let numpy_bool = v.get_type().name().is_ok_and(|n| n == "bool" || n == "bool_");
+    if v.is_instance_of::<PyBool>() || numpy_bool {
+        return Err(raise(
+            py,
+            "ParameterError",
+            name,
+            format!("expected a real number, got the bool {}", shown()),
+        ));
+    }
+    v.extract::<f64>().map_err(|_| {
+        raise(
+            py,
+            "ParameterError",
+            name,
+            format!("expected a real number, got {}", shown()),
+        )
+    })
+}
+
 pub(crate) fn add_names<T: Named>(m: &Bound<'_, PyModule>, names: &str, aliases: Option<&str>) -> PyResult<()> {
     m.add(names, PyTuple::new(m.py(), T::names())?)?;
     if let Some(aliases) = aliases {

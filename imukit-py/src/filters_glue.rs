@@ -21,27 +21,13 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::Name;
-use crate::{contiguous, private_copy, raise, to_py};
+use crate::convert::{real_number, Name};
+use crate::{contiguous, private_copy, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
 /// numbers: a `ParameterError` naming `name`.
 fn real(py: Python<'_>, name: &str, x: Option<&Bound<'_, PyAny>>, default: f64) -> PyResult<f64> {
-    match x {
-        None => Ok(default),
-        Some(v) => v.extract::<f64>().map_err(|_| {
-            raise(
-                py,
-                "ParameterError",
-                name,
-                format!("expected a real number, got {}", repr(v)),
-            )
-        }),
-    }
-}
-
-fn repr(v: &Bound<'_, PyAny>) -> String {
-    v.repr().map_or_else(|_| "?".to_owned(), |r| r.to_string())
+    x.map_or(Ok(default), |v| real_number(py, name, v))
 }
 
 /// A frozen value class mirroring a Rust option struct field for field: keyword (or positional)

@@ -258,9 +258,8 @@ pub(crate) fn preint_windows<'py>(
     threads: Option<usize>,
 ) -> PyResult<Vec<PyPreintegrator>> {
     let template = template.inner.clone();
-    // The deprecated list form: one state per window, not polled (the record form is).
-    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b, _| {
-        preint::preintegrate_windows_clipped(samples, mask, b, &template)
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b, cancel| {
+        preint::preintegrate_windows_clipped_cancellable(samples, mask, (b, &template), cancel)
     })?;
     Ok(windows.into_iter().map(|inner| PyPreintegrator { inner }).collect())
 }

@@ -14,7 +14,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{rows, unit_quaternion, Name};
+use crate::convert::{real_number, rows, unit_quaternion, Name};
 use crate::{private_copy, raise, to_py, SampleCopies};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
@@ -26,9 +26,7 @@ fn from_fields<T: Fields>(py: Python<'_>, base: &T, fields: Option<&Bound<'_, Py
         let Some(i) = T::NAMES.iter().position(|n| *n == name) else {
             return Err(raise(py, "ParameterError", &name, "unknown field"));
         };
-        values[i] = value
-            .extract::<f64>()
-            .map_err(|_| raise(py, "ParameterError", &name, "expected a real number"))?;
+        values[i] = real_number(py, &name, &value)?;
     }
     Ok(values)
 }

@@ -2,7 +2,7 @@
 
 =====================  ===========================================================================
 frame                  origin at geodetic ``latitude`` [rad] (``degrees=True`` for degrees) and
-                       ``height`` [m] above the ellipsoid; ``axes`` ``"enu"`` (default, imukit's
+                       ``height`` [m] above the ellipsoid (−a/2 … 1000 km); ``axes`` ``"enu"`` (default, imukit's
                        z-up world) or ``"ned"``; it turns with the Earth
 ``earth_rate``         ``ω_ie`` (3,) in the frame's axes [rad/s]: ENU ``Ω (0, cos φ, sin φ)``, NED
                        ``Ω (cos φ, 0, −sin φ)``, ``Ω = 7.292115e-5``; pass it as ``omega_coriolis``
@@ -30,7 +30,7 @@ from imukit._errors import ParameterError
 from imukit._frozen import Frozen
 from imukit._names import canonical
 
-__all__ = ["AXES", "LocalLevel", "world"]
+__all__ = ["AXES", "LocalLevel"]
 
 AXES: tuple[str, ...] = _core.LOCAL_LEVEL_AXES
 
@@ -50,7 +50,7 @@ class LocalLevel(Frozen):
 
     def __init__(self, latitude: float, height: float = 0.0, axes: str = "enu", *, degrees: bool = False) -> None:
         if not isinstance(degrees, bool):
-            raise TypeError(f"degrees: expected a bool, got {type(degrees).__name__}")
+            raise ParameterError(f"expected a bool, got {type(degrees).__name__}", argument="degrees")
         lat = real_scalar(latitude, "latitude", what="a latitude", accept=lambda x: True)
         h = real_scalar(height, "height", what="a height in metres", accept=lambda x: True)
         name = canonical(axes, "axes", AXES)
@@ -63,7 +63,7 @@ class LocalLevel(Frozen):
         return f"LocalLevel(latitude={self.latitude!r}, height={self.height!r}, axes={self.axes!r})"
 
 
-def world(frame: LocalLevel | None, gravity: list[float]) -> tuple[list[float], list[float]]:
+def world_of(frame: LocalLevel | None, gravity: list[float]) -> tuple[list[float], list[float]]:
     """``(gravity, rotation rate)`` of the world the core integrates in: ``gravity`` and zero
     without a frame, else the frame's; a frame with a non-default ``gravity`` is refused (two
     gravities for one world)."""

@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation, RotationSpline
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
-from imukit.earth import LocalLevel, world
+from imukit.earth import LocalLevel, world_of
 from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
 from imukit.threads import checked
@@ -342,7 +342,7 @@ def simulate(
     ):
         if value is not None and not isinstance(value, kind):
             raise ParameterError(f"expected an {shown} or None, got {type(value).__name__}", argument=name)
-    world_g, rotating = world(frame, [float(v) for v in vector3(gravity, "gravity")])
+    world_g, rotating = world_of(frame, [float(v) for v in vector3(gravity, "gravity")])
     g = np.asarray(world_g)
     n = math.floor(span * rate_hz + 1e-9) + 1
     if n > _MAX_SAMPLES:

@@ -26,7 +26,7 @@ from imukit._arrays import (
 from imukit._errors import ParameterError, ShapeError
 from imukit._extrinsics import sensor_pose
 from imukit._names import canonical
-from imukit.earth import LocalLevel, world
+from imukit.earth import LocalLevel, world_of
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState, Trajectory
 
@@ -121,7 +121,7 @@ def integrate(
     central difference of the gyro (one-sided at the ends); ``crates/imukit/src/extrinsics.rs``.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
-    g, rate = world(frame, g)
+    g, rate = world_of(frame, g)
     gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
     pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)

@@ -50,9 +50,13 @@ pub struct LocalLevel {
     pub axes: Axes,
 }
 
+/// The highest origin [m] a frame takes (see [`LocalLevel::new`]).
+pub const MAX_HEIGHT: f64 = 1.0e6;
+
 impl LocalLevel {
-    /// Checks the values: a finite latitude within ±π/2, a finite height above −a/2 (where the
-    /// free-air series is meaningful at all; it is accurate to ~1e-6 relative below 100 km).
+    /// Checks the values: a finite latitude within ±π/2, a height from −a/2 to 1000 km (the domain of
+    /// the second-order free-air series: ~1e-6 relative below 100 km, 1.5 % at 1000 km against the
+    /// inverse square; beyond it the series is no gravity model, and it overflows near 1e154 m).
     pub fn new(latitude: f64, height: f64, axes: Axes) -> Result<Self> {
         if !(latitude.is_finite() && latitude.abs() <= std::f64::consts::FRAC_PI_2) {
             return Err(Error::Parameter {
@@ -61,10 +65,10 @@ impl LocalLevel {
                 got: format!("{latitude}"),
             });
         }
-        if !(height.is_finite() && height > -0.5 * SEMI_MAJOR_AXIS) {
+        if !(height > -0.5 * SEMI_MAJOR_AXIS && height <= MAX_HEIGHT) {
             return Err(Error::Parameter {
                 name: "height",
-                expected: "finite and above −a/2 (−3189 km)",
+                expected: "from −a/2 (−3189 km) to 1000 km",
                 got: format!("{height}"),
             });
         }

@@ -51,8 +51,8 @@ use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use continuity::{End, Ends};
 pub use midpoint::MidpointStepMatrices;
 pub use windows::{
-    preintegrate_windows, preintegrate_windows_cancellable, preintegrate_windows_clipped, preintegrate_windows_into,
-    WindowsOut,
+    preintegrate_windows, preintegrate_windows_cancellable, preintegrate_windows_clipped,
+    preintegrate_windows_clipped_cancellable, preintegrate_windows_into, WindowsOut,
 };
 
 /// 9×9 covariance of `[δθ, δv, δp]`.

@@ -35,14 +35,30 @@ pub fn preintegrate_windows_clipped(
     boundaries: &[f64],
     template: &Preintegrator,
 ) -> Result<Vec<Preintegrator>> {
+    preintegrate_windows_clipped_cancellable(samples, clipped, (boundaries, template), &Cancel::new())
+}
+
+/// [`preintegrate_windows_clipped`] of `(boundaries, template)`, stopping with
+/// [`Error::Interrupted`] when `cancel` is set (polled before each block of 4096 windows).
+pub fn preintegrate_windows_clipped_cancellable(
+    samples: &Samples<'_>,
+    clipped: Option<&ClipMask<'_>>,
+    (boundaries, template): (&[f64], &Preintegrator),
+    cancel: &Cancel,
+) -> Result<Vec<Preintegrator>> {
     check_inputs(samples, clipped, boundaries)?;
     // One state (a few kB) per window: 20,000,000 windows would need 51.7 GB.
-    let mut windows = try_vec(boundaries.len() - 1, "windows").map_err(|e| e.in_argument("boundaries"))?;
-    windows.par_extend(
-        boundaries
-            .par_windows(2)
-            .map(|w| window(samples, clipped, w[0], w[1], template)),
-    );
+    let m = boundaries.len() - 1;
+    let mut windows = try_vec(m, "windows").map_err(|e| e.in_argument("boundaries"))?;
+    for first in (0..m).step_by(WINDOWS_PER_BLOCK) {
+        cancel.check(0)?;
+        let edges = &boundaries[first..(first + WINDOWS_PER_BLOCK + 1).min(m + 1)];
+        windows.par_extend(
+            edges
+                .par_windows(2)
+                .map(|w| window(samples, clipped, w[0], w[1], template)),
+        );
+    }
     check_windows(samples, boundaries, 0, &windows)?;
     Ok(windows)
 }
