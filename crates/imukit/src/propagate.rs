@@ -317,8 +317,7 @@ pub fn propagate_cancellable(
             noise.accel_random_walk,
         ];
         let added = densities.iter().fold(0.0_f64, |m, d| m.max(d * d * span));
-        let largest = |rows: &[[f64; 3]]| rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let readings = largest(samples.gyro).max(largest(samples.accel));
+        let readings = strapdown::largest(samples.gyro).max(strapdown::largest(samples.accel));
         let biases = bias.gyro.amax().max(bias.accel.amax());
         let growth = 2.0 * (1.0 + readings.max(biases) * span).log10();
         let name = if growth > covariance.amax().max(added).log10().max(0.0) {

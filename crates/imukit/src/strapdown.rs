@@ -369,7 +369,6 @@ fn overflow_culprit(
     options: &Options,
     unit: bool,
 ) -> &'static str {
-    let largest = |rows: &[[f64; 3]]| rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
     if unit {
         let n = samples.t.len();
         let span = (samples.t[n - 1] - samples.t[0]).max(f64::MIN_POSITIVE);
@@ -390,6 +389,11 @@ fn overflow_culprit(
     } else {
         "imu"
     }
+}
+
+/// The largest magnitude in `rows` (0 for none): the size of a reading stream in the overflow blame.
+pub(crate) fn largest(rows: &[[f64; 3]]) -> f64 {
+    rows.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()))
 }
 
 /// Finite initial state, biases and gravity.
