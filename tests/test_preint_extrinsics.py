@@ -104,8 +104,3 @@ def test_merge_with_a_sensor_pose_equals_one_pass(scheme: str) -> None:
         assert np.abs(x - y).max() < 1e-10 * np.abs(x).max()
     with pytest.raises(ik.ParameterError, match="body_from_sensor"):
         ik.preintegrate(first, noise=NOISE, bias=bias, scheme=scheme).merge(ik.preintegrate(second, **kw))  # type: ignore[arg-type]
-
-
-def test_lever_arm_is_refused_for_now() -> None:
-    with pytest.raises(ik.ParameterError, match="lever arm"):
-        ik.preintegrate(readings(5, 10), noise=NOISE, body_from_sensor=(R_BS, [0.3, 0.0, 0.0]))

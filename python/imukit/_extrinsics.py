@@ -10,22 +10,45 @@ in the body frame      with ``ω_b = R_bs ω_s``, ``a_b = R_bs a_s`` (biases sta
                        so ``Σ_b = T Σ_s Tᵀ`` and ``J_b = T J_s`` with ``T = blockdiag(R, R, R)``
                        (bias columns: the sensor's biases). Exact, window by window, so merging
                        stays exact
-lever arm              preintegration takes the rotation only for now: a non-zero lever arm is
-                       refused (``integrate`` handles both, ``crates/imukit/src/extrinsics.rs``)
+lever arm              the readings are turned into the body origin's before the step (the core's
+                       ``body_readings``, ``crates/imukit/src/extrinsics.rs``: ``a_b = R(a_s − b_a)
+                       − α×r − ω×(ω×r)``, α the gyro's central difference over the whole batch, so
+                       windows cut from one batch see their neighbours) and preintegrated with
+                       zero bias. The bias Jacobian is the body one mapped to the sensor's biases,
+                       ``J_g = J_g^B R + L``, ``J_a = J_a^B R``, plus the centripetal term ``L``:
+                       ``∂a_b,k/∂b_g = D(ω_k) R`` with ``D(ω) = ∂(ω×(ω×r))/∂ω = −[ω×r]× − [ω]×[r]×``
+                       (α is a difference of rates: a constant bias cancels), and since Δv, Δp are
+                       linear in the accelerometer readings for a fixed gyro sequence, ``L`` is the
+                       (v, p) deltas of three preintegrations of the readings ``D(ω_k) R e_m``
+                       (exact for the discrete scheme; they merge as deltas do, so merging stays
+                       exact). Covariance: the direct gyro and accelerometer noise only (see
+                       ``docs/navigation.md``: the gyro noise reaching the corrected accelerometer
+                       is not in it yet)
 =====================  ===========================================================================
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from imukit._arrays import vector3
+from imukit import _core
+from imukit._arrays import FloatArray, vector3
 from imukit._errors import ParameterError
 
-__all__ = ["Pose", "check_preint_pose", "in_body", "sensor_pose"]
+__all__ = [
+    "Pose",
+    "Readings",
+    "check_preint_pose",
+    "has_lever_arm",
+    "in_body",
+    "lever_columns",
+    "lever_jacobian",
+    "origin_readings",
+    "sensor_pose",
+]
 
 Pose = tuple[tuple[tuple[float, ...], ...], tuple[float, float, float]]
 
@@ -64,10 +87,64 @@ def in_body(arrays: tuple[Any, ...], pose: Pose) -> tuple[Any, ...]:
     )
 
 
-def check_preint_pose(pose: Pose | None) -> None:
-    """Refuses what preintegration does not do yet: a lever arm."""
-    if pose is not None and any(v != 0.0 for v in pose[1]):
+def has_lever_arm(pose: Pose | None) -> bool:
+    """Whether ``pose`` has a non-zero lever arm (the readings are then converted before the step)."""
+    return pose is not None and any(v != 0.0 for v in pose[1])
+
+
+def check_preint_pose(pose: Pose | None, combined: bool) -> None:
+    """Refuses what preintegration does not do yet: the bias walk (``combined``) with a lever arm,
+    whose state–bias cross terms would miss the centripetal term ``L`` (module docs)."""
+    if combined and has_lever_arm(pose):
         raise ParameterError(
-            "a lever arm is not supported by preintegration yet (the rotation is); integrate() takes both",
+            "combined=True (the bias walk) is not supported with a lever arm yet (the rotation alone is)",
             argument="body_from_sensor",
         )
+
+
+class Readings(NamedTuple):
+    """Samples as the core and the engines read them (by attribute): the converted readings with
+    the sensor's stamps and saturation flags."""
+
+    seconds: FloatArray
+    gyro: FloatArray
+    accel: FloatArray
+    gyro_saturated: Any
+    accel_saturated: Any
+
+
+def origin_readings(imu: Any, bias: Any, pose: Pose) -> Readings:
+    """The body origin's readings of ``imu`` (an ``ImuData``), ``bias`` removed (the core's
+    ``body_readings``)."""
+    gyro, accel = _core.body_readings(imu.seconds, imu.gyro, imu.accel, bias, [list(r) for r in pose[0]], list(pose[1]))
+    return Readings(imu.seconds, gyro, accel, imu.gyro_saturated, imu.accel_saturated)
+
+
+def lever_columns(body: Readings, pose: Pose) -> list[Readings]:
+    """The three accelerometer sequences ``D(ω_k) R e_m`` (m = 0, 1, 2) on the body rates, whose
+    (v, p) deltas are the centripetal term ``L`` of the gyro-bias Jacobian (module docs)."""
+    r, arm = np.array(pose[0]), np.array(pose[1])
+    w = np.asarray(body.gyro)
+    # D(ω) = −[ω×r]× − [ω]×[r]×, from δ(ω×(ω×r)) = δω×(ω×r) + ω×(δω×r).
+    d = -_hat(np.cross(w, arm)) - _hat(w) @ _hat(arm)
+    x = d @ r
+    return [body._replace(accel=np.ascontiguousarray(x[:, :, m])) for m in range(3)]
+
+
+def lever_jacobian(jac: FloatArray, rotation: FloatArray, dv: FloatArray, dp: FloatArray) -> FloatArray:
+    """The sensor-bias Jacobian (M, 9, 6) from the body readings' ``jac`` (M, 9, 6) and the (v, p)
+    deltas (M, 3, 3) (columns m) of :func:`lever_columns`: ``[J_g^B R + L, J_a^B R]``."""
+    out = np.array(jac)
+    out[:, :, 0:3] = jac[:, :, 0:3] @ rotation
+    out[:, :, 3:6] = jac[:, :, 3:6] @ rotation
+    out[:, 3:6, 0:3] += dv
+    out[:, 6:9, 0:3] += dp
+    return out
+
+
+def _hat(v: FloatArray) -> FloatArray:
+    """``[v]×`` of (..., 3) rows, (..., 3, 3)."""
+    out = np.zeros((*v.shape[:-1], 3, 3))
+    out[..., 0, 1], out[..., 0, 2], out[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    out[..., 1, 0], out[..., 2, 0], out[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return out

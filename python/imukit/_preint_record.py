@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
-from imukit._extrinsics import Pose, check_preint_pose, sensor_pose
+from imukit._extrinsics import Pose, check_preint_pose, has_lever_arm, sensor_pose
 from imukit._names import canonical
 from imukit.imu import ImuBias, ImuNoise
 
@@ -87,13 +87,15 @@ class PreintParams:
             accept=lambda x: math.isfinite(x) and x >= 1.0,
         )
         g = vector3(self.gravity, "gravity")
+        pose = _pose(self.body_from_sensor)
+        check_preint_pose(pose, bool(self.combined))
         fields = {
             "bias": bias,
             "gravity": (float(g[0]), float(g[1]), float(g[2])),
             "scheme": scheme_name(self.scheme),
             "combined": bool(self.combined),
             "saturation_noise_factor": factor,
-            "body_from_sensor": _pose(self.body_from_sensor),
+            "body_from_sensor": pose,
         }
         for name, value in fields.items():
             object.__setattr__(self, name, value)
@@ -128,7 +130,14 @@ class PreintParams:
 
     def _template(self) -> _core.Preintegrator:
         """An empty core preintegrator with these options (the glue reads them by name)."""
-        return _core.Preintegrator(self)
+        return _core.Preintegrator(self._integrated())
+
+    def _integrated(self) -> PreintParams:
+        """The options the core integrates with: with a lever arm the readings are the body
+        origin's, bias removed (:mod:`imukit._extrinsics`), so no bias and no pose."""
+        if not has_lever_arm(self.body_from_sensor):
+            return self
+        return dataclasses.replace(self, bias=ImuBias(), body_from_sensor=None)
 
 
 def _params(
@@ -152,7 +161,6 @@ def _pose(value: object) -> Pose | None:
         pose: Pose = value
     else:
         pose = sensor_pose(value)
-    check_preint_pose(pose)
     return pose
 
 

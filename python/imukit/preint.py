@@ -47,8 +47,9 @@ from imukit import _core, _preint_math
 from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar, seconds_from_ns
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
+from imukit._engines._windows import lever_windows
 from imukit._errors import ParameterError, ShapeError
-from imukit._extrinsics import in_body
+from imukit._extrinsics import has_lever_arm, in_body, lever_columns, lever_jacobian, origin_readings
 from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
@@ -122,7 +123,14 @@ class _Window(NamedTuple):
     hi: Any
 
 
-_Input = ImuData | _Window | _Measurement
+class _Span(NamedTuple):
+    """An :meth:`PreintegratedImu.integrate` call with ``span``, for the deprecated ``reintegrate(bias)``."""
+
+    imu: ImuData
+    span: tuple[float, float]
+
+
+_Input = ImuData | _Window | _Measurement | _Span
 
 
 class PreintegratedImu:
@@ -151,6 +159,10 @@ class PreintegratedImu:
         # The name as given: "euler" stays "euler" for code that compares it.
         self._scheme = self.params.scheme if params is not None else scheme
         self._core = self.params._template()
+        # With a lever arm: the three preintegrations of the centripetal bias term (_extrinsics).
+        self._lever = (
+            [self.params._template() for _ in range(3)] if has_lever_arm(self.params.body_from_sensor) else None
+        )
         self._snapshot: Preintegration | None = None
         self._span = (math.nan, math.nan)
         # What was integrated, for the deprecated reintegrate(bias) only: reintegrate(imu, bias)
@@ -162,12 +174,19 @@ class PreintegratedImu:
     def __reduce__(self) -> tuple[Any, ...]:
         # The core pickles its complete state; the replay log of the deprecated reintegrate(bias)
         # travels too (its samples are data), so a copy behaves as the original in every call.
-        state = (self._span, self._inputs, self._started, self._snapshot)
+        state = (self._span, self._inputs, self._started, self._snapshot, self._lever)
         return (_restore, (self.params, self._scheme, self._core, *state))
 
-    def _like(self, core: _core.Preintegrator, inputs: list[_Input], params: PreintParams) -> PreintegratedImu:
+    def _like(
+        self,
+        core: _core.Preintegrator,
+        inputs: list[_Input],
+        params: PreintParams,
+        lever: list[_core.Preintegrator] | None = None,
+    ) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
         out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
+        out._lever = lever
         out._started = True
         out._snapshot, out._span = None, (math.nan, math.nan)
         out._lock = threading.Lock()
@@ -228,6 +247,11 @@ class PreintegratedImu:
         checks the values (finite readings, the dt rules) and refuses a step that would overflow,
         leaving the preintegration as it was.
         """
+        if self._lever is not None:
+            raise ParameterError(
+                "one sample at a time has no angular acceleration for the lever arm: integrate(imu) a batch",
+                argument="body_from_sensor",
+            )
         a, w = as_float_array(accel, "accel"), as_float_array(gyro, "gyro")
         for v, name in ((a, "accel"), (w, "gyro")):
             if v.shape != (3,):
@@ -239,10 +263,15 @@ class PreintegratedImu:
             self._inputs.append(_Measurement(a, w, step, *flags))
             self._changed()
 
-    def integrate(self, imu: ImuData, *, threads: int | None = None) -> None:
+    def integrate(self, imu: ImuData, *, span: tuple[float, float] | None = None, threads: int | None = None) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
-        share their boundary sample). Long lie_euler batches (over 65,536 intervals, without
+        share their boundary sample).
+
+        ``span=(t_a, t_b)``: only the intervals between the samples stamped ``t_a`` and ``t_b``
+        (two stamps of ``imu.t``); the samples outside still inform a lever arm's angular
+        acceleration at the edges (``body_from_sensor``), so spans cut from one batch merge
+        exactly into the whole batch's preintegration. Long lie_euler batches (over 65,536 intervals, without
         ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
         rounding (1e-12 relative) and independent of the core count.
 
@@ -251,14 +280,19 @@ class PreintegratedImu:
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         count = checked(threads)
-        clock = (float(imu.t[0]), float(imu.t[-1]))
+        lo, hi = _span(imu, span)
+        clock = (float(imu.t[lo]), float(imu.t[hi - 1]))
         # The core call releases the GIL: the lock makes each call whole (the core state, the span
         # and the snapshot change together); calls from several threads run one after another.
         with self._lock:
-            self._core.integrate(
-                imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated, clock, count
-            )
-            self._inputs.append(imu)
+            if self._lever is None:
+                _feed(self._core, _arrays_of(imu), (lo, hi), clock, count)
+            else:
+                body = origin_readings(imu, self.params.bias, self.params.body_from_sensor)
+                _feed(self._core, body, (lo, hi), clock, count)
+                for core, readings in zip(self._lever, lever_columns(body, self.params.body_from_sensor), strict=True):
+                    _feed(core, readings, (lo, hi), clock, count)
+            self._inputs.append(imu if span is None else _Span(imu, span))
             self._changed(*clock)
 
     def snapshot(self) -> Preintegration:
@@ -271,8 +305,15 @@ class PreintegratedImu:
     def _read_snapshot(self) -> Preintegration:
         if self._snapshot is None:
             state = self._core.state()
-            if self.params.body_from_sensor is not None:
-                state = in_body(state, self.params.body_from_sensor)
+            pose = self.params.body_from_sensor
+            if self._lever is not None and pose is not None:
+                cols = [c.state() for c in self._lever]
+                dv = np.stack([c[1] for c in cols], axis=-1)[None]
+                dp = np.stack([c[2] for c in cols], axis=-1)[None]
+                jac = lever_jacobian(state[5][None], np.array(pose[0]), dv, dp)[0]
+                state = (*state[:5], jac, state[6])
+            elif pose is not None:
+                state = in_body(state, pose)
             r, v, p, dt, cov, jac, combined = state
             self._snapshot = Preintegration._owning(
                 delta_rotation=np.asarray(r)[None],
@@ -308,7 +349,8 @@ class PreintegratedImu:
         params = self.params.replace(bias=bias)
 
         def empty() -> PreintegratedImu:
-            return self._like(params._template(), [], params)
+            lever = None if self._lever is None else [params._template() for _ in range(3)]
+            return self._like(params._template(), [], params, lever)
 
         out = empty()
         for item in self._inputs:
@@ -320,6 +362,8 @@ class PreintegratedImu:
                 out._inputs.append(item)
             elif isinstance(item, ImuData):
                 out.integrate(item)
+            elif isinstance(item, _Span):
+                out.integrate(item.imu, span=item.span)
             else:
                 out.integrate_measurement(
                     item.accel,
@@ -346,7 +390,10 @@ class PreintegratedImu:
         with contextlib.ExitStack() as held:
             for _, lock in sorted({id(x): x._lock for x in (self, other)}.items()):
                 held.enter_context(lock)
-            return self._like(self._core.merge(other._core), self._inputs + other._inputs, params)
+            lever = None
+            if self._lever is not None and other._lever is not None:
+                lever = [a.merge(b) for a, b in zip(self._lever, other._lever, strict=True)]
+            return self._like(self._core.merge(other._core), self._inputs + other._inputs, params, lever)
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
         """The old ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian)`` tuple (test helpers read it)."""
@@ -486,12 +533,49 @@ def _restore(
     inputs: list[_Input],
     started: bool,
     snapshot: Preintegration | None,
+    lever: list[_core.Preintegrator] | None = None,
 ) -> PreintegratedImu:
     """A pickled :class:`PreintegratedImu` (its ``__reduce__``)."""
     out = PreintegratedImu(params)
     out._scheme, out._core, out._span, out._inputs = scheme, core, span, inputs
-    out._started, out._snapshot = started, snapshot
+    out._started, out._snapshot, out._lever = started, snapshot, lever
     return out
+
+
+def _arrays_of(imu: ImuData) -> tuple[FloatArray, FloatArray, FloatArray, Any, Any]:
+    """What the core's ``integrate`` reads of the samples, in its order."""
+    return (imu.seconds, imu.gyro, imu.accel, imu.gyro_saturated, imu.accel_saturated)
+
+
+def _span(imu: ImuData, span: object) -> tuple[int, int]:
+    """The sample range ``[lo, hi)`` that ``span`` (two stamps of ``imu.t``, or None: all) names."""
+    if span is None:
+        return 0, len(imu)
+    if not (isinstance(span, tuple) and len(span) == 2):
+        raise ParameterError(f"expected a pair of sample stamps (t_a, t_b), got {span!r}", argument="span")
+    edges = np.asarray(span)
+    if edges.dtype.kind not in "iuf":
+        raise ParameterError(f"expected a pair of sample stamps (t_a, t_b), got {span!r}", argument="span")
+    stamps = imu.t_ns if edges.dtype.kind in "iu" and imu.t_ns is not None else imu.t
+    k = np.searchsorted(stamps, edges)
+    inside = (k < len(imu)) & (stamps[np.minimum(k, len(imu) - 1)] == edges)
+    if not inside.all() or k[1] <= k[0]:
+        raise ParameterError(
+            f"expected two stamps of imu.t, the first before the second, got {span!r}", argument="span"
+        )
+    return int(k[0]), int(k[1]) + 1
+
+
+def _feed(
+    core: _core.Preintegrator,
+    arrays: tuple[Any, Any, Any, Any, Any],
+    cut: tuple[int, int],
+    clock: tuple[float, float],
+    threads: int | None,
+) -> None:
+    """Samples ``[lo, hi)`` of ``(t, gyro, accel, gyro_saturated, accel_saturated)`` into ``core``."""
+    t, gyro, accel, gyro_clipped, accel_clipped = (np.ascontiguousarray(a[cut[0] : cut[1]]) for a in arrays)
+    core.integrate(t, gyro, accel, gyro_clipped, accel_clipped, clock, threads)
 
 
 def _states(state: NavState) -> States:
@@ -510,6 +594,7 @@ def preintegrate(
     saturation_noise_factor: float = _DEFAULT_FACTOR,
     threads: int | None = None,
     body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
+    span: tuple[float, float] | None = None,
 ) -> PreintegratedImu:
     """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
 
@@ -522,7 +607,10 @@ def preintegrate(
 
     ``body_from_sensor``: ``(R_bs, lever arm)``, the IMU's pose in the body frame (GTSAM's
     ``body_P_sensor``): the deltas, covariance and bias Jacobian are the body's (biases stay the
-    sensor's); the rotation only so far, a non-zero lever arm is refused (:mod:`imukit._extrinsics`).
+    sensor's). A lever arm converts the readings to the body origin's before the step, with the
+    angular acceleration from the gyro's central difference (:mod:`imukit._extrinsics`); its
+    covariance holds the direct noise only (``docs/navigation.md``); ``combined=True`` is refused
+    with it. ``span``: as in :meth:`PreintegratedImu.integrate`.
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
@@ -536,7 +624,7 @@ def preintegrate(
         saturation_noise_factor=saturation_noise_factor,
         body_from_sensor=body_from_sensor,
     )
-    pim.integrate(imu, threads=threads)
+    pim.integrate(imu, span=span, threads=threads)
     return pim
 
 
@@ -636,6 +724,8 @@ def preintegrate_windows(
     params = _params(params, None, None, gravity, scheme, combined, saturation_noise_factor)
     if engine not in ENGINES:
         raise ParameterError(f"expected one of {tuple(ENGINES)}, got {engine!r}", argument="engine")
+    if has_lever_arm(params.body_from_sensor):
+        return lever_windows(ENGINES[engine], imu, _windows(imu, boundaries), params, n)
     return ENGINES[engine](imu, _windows(imu, boundaries), params, n)
 
 

@@ -17,6 +17,9 @@ use nalgebra::{Matrix3, Vector3};
 use crate::error::{Error, Result};
 use crate::imu::{Bias, Samples};
 
+/// The largest lever-arm component accepted [m] (about the Earth's radius).
+pub const MAX_LEVER_ARM: f64 = 1e7;
+
 /// The sensor's pose in the body frame (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorPose {
@@ -38,6 +41,15 @@ impl SensorPose {
                 name: "body_from_sensor",
                 expected: "a rotation (|RᵀR − I| ≤ 1e-9, det > 0)",
                 got: format!("|RᵀR − I| = {off:e}, det = {}", rotation.determinant()),
+            });
+        }
+        // A lever arm longer than the Earth's radius is no mounting: refused before its
+        // `ω×(ω×r)` terms overflow in the preintegration's bias Jacobian.
+        if lever_arm.amax() > MAX_LEVER_ARM {
+            return Err(Error::Parameter {
+                name: "body_from_sensor",
+                expected: "a lever arm within ±1e7 m",
+                got: format!("{:e} m", lever_arm.amax()),
             });
         }
         Ok(Self { rotation, lever_arm })
@@ -78,11 +90,26 @@ pub fn to_body(
             Vector3::zeros()
         };
         let arm = pose.lever_arm;
-        let a = r * (samples.accel_at(k) - bias.accel) - alpha.cross(&arm) - w.cross(&w.cross(&arm));
+        let specific = r * (samples.accel_at(k) - bias.accel);
+        let a = specific - alpha.cross(&arm) - w.cross(&w.cross(&arm));
+        if !a.iter().all(|v| v.is_finite()) {
+            return Err(Error::Overflow { index: k }.in_argument(overflow_culprit(&specific)));
+        }
         gyro[k] = w.into();
         accel[k] = a.into();
     }
     Ok(())
+}
+
+/// The input to blame when finite readings overflow in the conversion: the accelerometer when its
+/// rotated reading did, else the rate in `ω×(ω×r)` (the lever arm is bounded by
+/// [`MAX_LEVER_ARM`]), so that errors name what the user can change.
+fn overflow_culprit(specific: &Vector3<f64>) -> &'static str {
+    if specific.iter().all(|v| v.is_finite()) {
+        "gyro"
+    } else {
+        "accel"
+    }
 }
 
 #[cfg(test)]
@@ -112,7 +139,23 @@ mod tests {
     }
 
     #[test]
-    fn a_reflection_is_refused() {
+    fn an_overflow_names_the_rate_or_the_lever_arm() -> Result<()> {
+        let t = [0.0, 0.01, 0.02];
+        let accel = [[0.0, 0.0, 9.81]; 3];
+        let (mut gb, mut ab) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+        for (rate, arm, name) in [(1e200, 0.3, "gyro"), (1e160, 1e6, "gyro")] {
+            let gyro = [[rate, 0.0, 0.0], [0.0, rate, 0.0], [0.0, 0.0, rate]];
+            let samples = Samples::new(&t, &gyro, &accel)?;
+            let pose = SensorPose::new(Matrix3::identity(), Vector3::new(arm, arm, 0.0))?;
+            let err = to_body(&samples, &Bias::default(), &pose, &mut gb, &mut ab);
+            assert!(matches!(&err, Err(e) if e.argument() == Some(name)), "{err:?}");
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn a_reflection_and_an_arm_beyond_the_earth_are_refused() {
+        assert!(SensorPose::new(Matrix3::identity(), Vector3::new(0.0, 2e7, 0.0)).is_err());
         let flip = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
         assert!(SensorPose::new(flip, Vector3::zeros()).is_err());
     }

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
-from imukit._extrinsics import in_body
+from imukit._extrinsics import in_body, lever_columns, lever_jacobian, origin_readings
 from imukit._preint_record import Preintegration, PreintParams
 
 
@@ -42,4 +42,28 @@ def record(arrays: tuple[Any, ...], windows: Windows, params: PreintParams) -> P
         params=params,
         t_start_ns=None if ns is None else np.array(ns[:-1]),
         t_end_ns=None if ns is None else np.array(ns[1:]),
+    )
+
+
+class _Run(Protocol):
+    def __call__(self, imu: Any, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration: ...
+
+
+def lever_windows(run: _Run, imu: Any, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration:
+    """``run`` (an engine) over the body origin's readings of ``imu`` (a sensor with a lever arm),
+    bias Jacobian mapped to the sensor's biases with its centripetal term (:mod:`imukit._extrinsics`).
+    The readings are converted once over all of ``imu``: a window edge's angular acceleration uses
+    the samples on both sides of it, so the windows are those of one pass."""
+    pose = params.body_from_sensor
+    inner = params._integrated()
+    body = origin_readings(imu, params.bias, pose)
+    out = run(body, windows, inner, threads)
+    cols = [run(c, windows, inner, threads) for c in lever_columns(body, pose)]
+    dv = np.stack([c.delta_velocity for c in cols], axis=-1)
+    dp = np.stack([c.delta_position for c in cols], axis=-1)
+    jac = lever_jacobian(out.bias_jacobian, np.array(pose[0]), dv, dp)
+    return Preintegration._owning(
+        **{f: getattr(out, f) for f in out.__dataclass_fields__ if f not in ("bias_jacobian", "params")},
+        bias_jacobian=jac,
+        params=params,
     )
