@@ -44,7 +44,7 @@ from imukit import so3
 from imukit._arrays import FloatArray, as_float_array
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 
-__all__ = ["Coriolis", "coriolis", "implied_deltas", "lift", "predict"]
+__all__ = ["Coriolis", "apparent_j", "coriolis", "implied_deltas", "lift", "predict"]
 
 
 class Coriolis(NamedTuple):
@@ -186,3 +186,40 @@ def lift(
     l_j[:, 3:6, 3:6] = a_t
     lifted_j = (_mv(a_t, p_j), _mv(a_t, v_j + np.cross(c.omega, p_j)), a_t @ r_j)
     return (p_i, e.v_bar, r_i), lifted_j, (e.g_v, e.g_p), l_i, l_j
+
+
+def apparent_j(
+    c: Coriolis,
+    dt: FloatArray,
+    state_i: tuple[FloatArray, FloatArray, FloatArray],
+    state_j: tuple[FloatArray, FloatArray, FloatArray],
+) -> tuple[Lifted, FloatArray, FloatArray]:
+    """For ``"first"`` / ``"second"``: the state j' whose plain residual from i is this model's,
+    ``p_j − c_p``, ``v_j − c_v`` (the Coriolis and centrifugal changes of :func:`predict`) and
+    ``R_i Exp(φ)``, ``φ = Log(R_iᵀR_j) + R_iᵀωΔt``; and its Jacobians (M, 9, 9) w.r.t. state i and
+    state j (columns and rows ``[δp, δv, δθ]``, ``R Exp(δθ)``). With ``X = R_iᵀR_j``:
+    ``∂θ'/∂θ_j = J_r(φ) J_r⁻¹(Log X)``, ``∂θ'/∂θ_i = Exp(φ)ᵀ + J_r(φ)(−J_l⁻¹(Log X) + [R_iᵀωΔt]×)``
+    (``R_i Exp(δθ)`` turns ``Log X`` by ``−J_l⁻¹ δθ`` and ``R_iᵀωΔt`` by ``[R_iᵀωΔt]× δθ``);
+    ``∂v'/∂v_i = 2Δt[ω]×``, ``∂p'/∂v_i = Δt²[ω]×`` and, second order, ``∂v'/∂p_i = Δt[ω]×²``,
+    ``∂p'/∂p_i = ½Δt²[ω]×²``."""
+    p_i, v_i, r_i = state_i
+    p_j, v_j, r_j = state_j
+    cv, cp = _apparent(c, dt, p_i, v_i)
+    ri_t = np.swapaxes(r_i, -1, -2)
+    log_x = so3.log(ri_t @ r_j)
+    tilt = _mv(ri_t, c.omega * dt)
+    phi = log_x + tilt
+    jr_phi = so3.right_jacobian(phi)
+    m = len(dt)
+    wx = np.broadcast_to(so3.hat(c.omega), (m, 3, 3))
+    t1 = dt[:, :, None]
+    l_i = np.zeros((m, 9, 9))
+    l_i[:, 0:3, 3:6] = t1 * t1 * wx
+    l_i[:, 3:6, 3:6] = 2.0 * t1 * wx
+    if c.order == "second":
+        l_i[:, 0:3, 0:3] = 0.5 * t1 * t1 * (wx @ wx)
+        l_i[:, 3:6, 0:3] = t1 * (wx @ wx)
+    l_i[:, 6:9, 6:9] = np.swapaxes(so3.exp(phi), -1, -2) + jr_phi @ (-so3.right_jacobian_inv(-log_x) + so3.hat(tilt))
+    l_j = np.broadcast_to(np.eye(9), (m, 9, 9)).copy()
+    l_j[:, 6:9, 6:9] = jr_phi @ so3.right_jacobian_inv(log_x)
+    return (p_j - cp, v_j - cv, r_i @ so3.exp(phi)), l_i, l_j

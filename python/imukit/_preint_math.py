@@ -194,18 +194,24 @@ def residual_jacobians(
     bias: ImuBias | None = None,
     *,
     omega_coriolis: ArrayLike | None = None,
+    second_order_coriolis: bool = False,
     exact_coriolis: bool = False,
 ) -> ResidualJacobians:
     """Jacobians of :func:`residual` w.r.t. the states at i and j (M, 9, 9) and the bias (M, 9, 6),
-    the bias through the first-order correction. With ``omega_coriolis`` (``exact_coriolis=True``
-    only): the exact residual is the plain one between the states lifted to the inertial frame at i
-    (:func:`imukit._preint_earth.lift`), so these are the plain Jacobians times the lift's."""
-    rotating = _preint_earth.coriolis(omega_coriolis, False, exact_coriolis)
+    the bias through the first-order correction. With ``omega_coriolis``: ``exact_coriolis=True``,
+    the exact residual is the plain one between the states lifted to the inertial frame at i
+    (:func:`imukit._preint_earth.lift`), so these are the plain Jacobians times the lift's; first
+    and second order, the residual is the plain one from state i to a state j' built from both
+    (:func:`imukit._preint_earth.apparent_j`), so state i's Jacobian gains ``D_j ∂j'/∂i``."""
+    rotating = _preint_earth.coriolis(omega_coriolis, second_order_coriolis, exact_coriolis)
     if rotating is None:
         return _jacobians(pre, state_i, state_j, bias)
+    dt = pre.delta_t[:, None]
     if rotating.order != "exact":
-        raise ParameterError("the Jacobians are for exact_coriolis=True only", argument="exact_coriolis")
-    g, dt = np.asarray(pre.params.gravity), pre.delta_t[:, None]
+        moved, a_i, a_j = _preint_earth.apparent_j(rotating, dt, state_i, state_j)
+        d_i, d_j, d_b = _jacobians(pre, state_i, States(*moved), bias)
+        return ResidualJacobians(d_i + d_j @ a_i, d_j @ a_j, d_b)
+    g = np.asarray(pre.params.gravity)
     lifted_i, lifted_j, terms, l_i, l_j = _preint_earth.lift(rotating, g, dt, state_i, state_j)
     d_i, d_j, d_b = _jacobians(pre, States(*lifted_i), States(*lifted_j), bias, terms)
     return ResidualJacobians(d_i @ l_i, d_j @ l_j, d_b)

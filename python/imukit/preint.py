@@ -509,17 +509,20 @@ class PreintegratedImu:
         bias: ImuBias | None = None,
         *,
         omega_coriolis: ArrayLike | None = None,
+        second_order_coriolis: bool = False,
         exact_coriolis: bool = False,
     ) -> ResidualJacobians:
         """Jacobians of :meth:`residual` (Forster et al. 2017, eqs. 44–45, in imukit's charts):
         w.r.t. state i and j (columns ``[δp, δv, δθ]``, ``R Exp(δθ)``) and the bias (``[δb_g, δb_a]``,
-        through the first-order correction); in a rotating frame for ``exact_coriolis=True``."""
+        through the first-order correction); in a rotating frame with ``omega_coriolis``, each
+        model (first order, ``second_order_coriolis``, ``exact_coriolis``)."""
         jac = residual_jacobians(
             self.snapshot(),
             _states(state_i),
             _states(state_j),
             bias,
             omega_coriolis=omega_coriolis,
+            second_order_coriolis=second_order_coriolis,
             exact_coriolis=exact_coriolis,
         )
         return ResidualJacobians(*(j[0] for j in jac))
