@@ -2,7 +2,8 @@
 :class:`Preintegration` (what came out: M windows as arrays with a leading window dimension).
 
 =====================  ===========================================================================
-``PreintParams``       noise, bias, gravity, scheme, combined, saturation_noise_factor; frozen;
+``PreintParams``       noise, bias, gravity, scheme, combined, saturation_noise_factor,
+                       body_from_sensor; frozen;
                        defaults from the core (``GRAVITY``, ``DEFAULT_SATURATION_NOISE_FACTOR``);
                        ``scheme="euler"`` is the deprecated alias of ``"lie_euler"``
 ``Preintegration``     ``delta_rotation (M,3,3)``, ``delta_velocity (M,3)``, ``delta_position (M,3)``,
@@ -71,8 +72,8 @@ class PreintParams:
     saturation_noise_factor: float = _core.DEFAULT_SATURATION_NOISE_FACTOR
     body_from_sensor: Any = None
     """``(R_bs, lever arm)``, the IMU's pose in the body frame (``(Rotation, (3,))``), kept as
-    ``(R_bs rows, lever arm)`` tuples; the deltas are then the body's (:mod:`imukit._extrinsics`:
-    rotation only so far)."""
+    ``(R_bs rows, lever arm)`` tuples; the deltas are then the body's (:mod:`imukit._extrinsics`;
+    with a lever arm, ``combined=True`` is refused)."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.noise, ImuNoise):
