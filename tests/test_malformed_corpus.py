@@ -439,26 +439,28 @@ def _preintegrate(rng: np.random.Generator) -> Any:
     ("preintegrate",),
     {
         **_PREINT_ARGS,
+        "t": Arg("times", names=("t", "gyro", "accel", "span")),
         "rotation": Arg("rotation", names=("body_from_sensor",)),
         "lever_arm": Arg("array", names=("body_from_sensor",)),
+        "span": Arg("array", names=("span",), optional=True),
     },
 )
 def _preintegrate_lever_arm(rng: np.random.Generator) -> Any:
     scheme = ("midpoint", "lie_euler")[int(rng.integers(2))]
     values = {**_preint_values(rng), "rotation": Rotation.random(rng=rng), "lever_arm": rng.normal(0.0, 0.3, 3)}
+    values["span"] = np.array([values["t"][1], values["t"][-1]])  # the edges see a neighbour
     return values, lambda v: _lever_arm_call(v, scheme)
 
 
 def _lever_arm_call(v: dict[str, Any], scheme: str) -> Any:
-    imu = imu_of(v)  # a span of two of its own stamps: the lever arm's edges see a neighbour
     return ik.preintegrate(
-        imu,
+        imu_of(v),
         noise=v["noise"],
         bias=bias_of(v),
         gravity=v["gravity"],
         scheme=scheme,
         body_from_sensor=(v["rotation"], v["lever_arm"]),
-        span=(imu.t[1], imu.t[-1]) if len(imu) > 2 else None,
+        span=v["span"],
     )
 
 

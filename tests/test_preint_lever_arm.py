@@ -138,7 +138,7 @@ def test_what_a_lever_arm_refuses() -> None:
     ik.PreintParams(NOISE, combined=True, body_from_sensor=(R_BS, np.zeros(3)))  # the rotation alone is fine
     imu = readings(5, 20)
     for bad in ((0.0, 0.001), (0.05, 0.0), (0.0,), "all"):
-        with pytest.raises(ik.ParameterError, match="span"):
+        with pytest.raises(ik.ImukitError, match="span"):
             ik.preintegrate(imu, noise=NOISE, span=bad)  # type: ignore[arg-type]
 
 

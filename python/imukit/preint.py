@@ -48,7 +48,7 @@ from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar,
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._engines._windows import lever_windows
-from imukit._errors import ParameterError, ShapeError
+from imukit._errors import DTypeError, ParameterError, ShapeError
 from imukit._extrinsics import has_lever_arm, in_body, lever_columns, lever_jacobian, origin_readings
 from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
@@ -551,14 +551,15 @@ def _arrays_of(imu: ImuData) -> tuple[FloatArray, FloatArray, FloatArray, Any, A
 
 
 def _span(imu: ImuData, span: object) -> tuple[int, int]:
-    """The sample range ``[lo, hi)`` that ``span`` (two stamps of ``imu.t``, or None: all) names."""
+    """The sample range ``[lo, hi)`` that ``span`` (two stamps of ``imu.t``, or integer ns of
+    ``imu.t_ns``; None: all) names."""
     if span is None:
         return 0, len(imu)
-    if not (isinstance(span, tuple) and len(span) == 2):
-        raise ParameterError(f"expected a pair of sample stamps (t_a, t_b), got {span!r}", argument="span")
-    edges = np.asarray(span)
+    edges = plain_array(span, "span")  # type: ignore[arg-type]
+    if edges.shape != (2,):
+        raise ShapeError(f"expected shape (2,), got {edges.shape}", argument="span")
     if edges.dtype.kind not in "iuf":
-        raise ParameterError(f"expected a pair of sample stamps (t_a, t_b), got {span!r}", argument="span")
+        raise DTypeError(f"expected two numbers (sample stamps), got dtype {edges.dtype}", argument="span")
     stamps = imu.t_ns if edges.dtype.kind in "iu" and imu.t_ns is not None else imu.t
     k = np.searchsorted(stamps, edges)
     inside = (k < len(imu)) & (stamps[np.minimum(k, len(imu) - 1)] == edges)
