@@ -65,9 +65,8 @@ def main() -> None:
     args = parser.parse_args()
     for densities in ((2e-3, 2e-2, 0.3), (1e-2, 1e-3, 0.5)):
         for scheme in ("midpoint", "lie_euler"):
-            print(
-                f"σ_g, σ_a, |r| ~ {densities} {scheme}: mean NEES {mean_nees(*densities, scheme, args.trials):.1f} (χ²₉: 9)"
-            )
+            nees = mean_nees(*densities, scheme, args.trials)
+            print(f"σ_g, σ_a, |r| ~ {densities} {scheme}: mean NEES {nees:.1f} (χ²₉: 9)")
     imu = window(args.n, 1)
     noise = ik.ImuNoise(gyro_density=2e-3, accel_density=2e-2, gyro_random_walk=0.0, accel_random_walk=0.0)
     edges = ik.preint.regular_boundaries(imu, 0.5)
@@ -79,9 +78,8 @@ def main() -> None:
             ik.preintegrate_windows(imu, edges, params, threads=1)
             runs[name].append(time.perf_counter() - start)
     times = {k: float(np.median(v)) for k, v in runs.items()}
-    print(
-        f"preintegrate_windows, {args.n} samples, 1 thread: {times} s, ratio {times['lever arm'] / times['rotation only']:.2f}"
-    )
+    ratio = times["lever arm"] / times["rotation only"]
+    print(f"preintegrate_windows, {args.n} samples, 1 thread: {times} s, ratio {ratio:.2f}")
 
 
 if __name__ == "__main__":
