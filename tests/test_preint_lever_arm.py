@@ -114,6 +114,11 @@ def test_merge_with_a_lever_arm_equals_one_pass(scheme: str, jitter: float) -> N
         ik.preintegrate(imu, params, span=(cut, float(imu.t[-1])))
     )
     assert_one_pass(whole, merged)
+    streamed = ik.PreintegratedImu(params)  # spans of one buffer, one call each: the one pass, bit for bit
+    streamed.integrate(imu, span=(0.0, cut))
+    streamed.integrate(imu, span=(cut, float(imu.t[-1])))
+    assert np.array_equal(streamed.covariance, whole.covariance)
+    assert np.array_equal(streamed.bias_jacobian, whole.bias_jacobian)
     # Pieces converted on their own (one-sided differences at the cut) are not the one pass:
     # the core's continuity check refuses them (the shared sample's converted readings differ).
     pieces = ik.preintegrate(imu[:201], params), ik.preintegrate(imu[200:], params)

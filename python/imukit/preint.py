@@ -266,14 +266,16 @@ class PreintegratedImu:
     def integrate(self, imu: ImuData, *, span: tuple[float, float] | None = None, threads: int | None = None) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
-        share their boundary sample).
+        share their boundary sample). Long lie_euler batches (over 65,536 intervals, without
+        ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
+        rounding (1e-12 relative) and independent of the core count.
 
         ``span=(t_a, t_b)``: only the intervals between the samples stamped ``t_a`` and ``t_b``
         (two stamps of ``imu.t``); the samples outside still inform a lever arm's angular
         acceleration at the edges (``body_from_sensor``), so spans cut from one batch merge
-        exactly into the whole batch's preintegration. Long lie_euler batches (over 65,536 intervals, without
-        ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
-        rounding (1e-12 relative) and independent of the core count.
+        exactly into the whole batch's preintegration. With a lever arm, stream that way (the
+        buffer and a span per call): batches converted on their own have one-sided differences
+        at their ends, their shared sample differs, and the continuation is refused.
 
         ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
         """
