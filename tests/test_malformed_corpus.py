@@ -393,6 +393,30 @@ def _integrate(rng: np.random.Generator) -> Any:
     )
 
 
+_LAT, _HEIGHT = 0.7, 120.0
+
+
+@entry(
+    "integrate(frame=LocalLevel(transport=True))",
+    ("integrate", "LocalLevel"),
+    {**IMU_ARGS, "velocity": Arg("array"), "rotation": Arg("rotation"), **BIAS_ARGS},
+)
+def _integrate_transport(rng: np.random.Generator) -> Any:
+    """Over the ellipsoid: the state's position is geodetic, fixed at the frame's start here (a
+    different start is refused, tested in test_transport.py)."""
+    scheme = ("midpoint", "rk4")[int(rng.integers(2))]
+    frame = ik.LocalLevel(_LAT, _HEIGHT, ("enu", "ned")[int(rng.integers(2))], transport=True)
+    values = {**imu_values(rng), **state_values(rng), **bias_values(rng)}
+    del values["position"]
+    return values, lambda v: ik.integrate(
+        imu_of(v),
+        initial=ik.NavState(np.array([_LAT, 0.2, _HEIGHT]), v["velocity"], v["rotation"]),
+        bias=bias_of(v),
+        scheme=scheme,
+        frame=frame,
+    )
+
+
 @entry(
     "propagate",
     ("propagate",),
@@ -630,6 +654,23 @@ _SENSOR = ("turn_on_sigma", "gauss_markov_sigma", "gauss_markov_tau", "range", "
 
 
 @entry(
+    "sim.simulate(frame=LocalLevel(transport=True))",
+    ("sim.simulate",),
+    {"body_velocity": Arg("array"), "body_rate": Arg("array"), "rotation": Arg("rotation")},
+)
+def _simulate_transport(rng: np.random.Generator) -> Any:
+    frame = ik.LocalLevel(_LAT, _HEIGHT, ("enu", "ned")[int(rng.integers(2))], transport=True)
+    values = {
+        "body_velocity": 100.0 * rng.standard_normal(3),
+        "body_rate": rng.standard_normal(3),
+        "rotation": Rotation.random(rng=rng),
+    }
+    return values, lambda v: _simulate(
+        lambda v: sim.ConstantTwist(v["body_velocity"], v["body_rate"], rotation=v["rotation"]), v, frame=frame
+    )
+
+
+@entry(
     "sim.simulate with SensorErrors",
     ("sim.simulate", "sim.SensorErrors", "sim.SensorErrors.from_scale_misalignment"),
     {
@@ -697,7 +738,8 @@ def _simulate_errors(rng: np.random.Generator) -> Any:
 def _local_level(rng: np.random.Generator) -> Any:
     values = {"latitude": float(rng.uniform(-1.5, 1.5)), "height": float(rng.uniform(-100.0, 3000.0))}
     axes = ("enu", "ned")[int(rng.integers(2))]
-    return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes).gravity
+    moving = bool(rng.integers(2))
+    return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes, transport=moving).gravity
 
 
 @entry("noise.mean_rate_hz", ("noise.mean_rate_hz",), IMU_ARGS)

@@ -45,6 +45,7 @@ __all__ = [
     "allan_variance",
     "attitude_integrate",
     "body_readings",
+    "ellipsoid_integrate",
     "euler_from_matrix",
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
@@ -63,6 +64,7 @@ __all__ = [
     "quat_product_matrix",
     "quat_rotate",
     "set_num_threads",
+    "sim_ellipsoid",
     "sim_measure",
     "sim_motion",
     "sim_rotating_world",
@@ -574,6 +576,34 @@ class _LocalLevel(Protocol):
     latitude: float
     height: float
     axes: str
+
+# integrate over the WGS-84 ellipsoid in a frame that follows the vehicle: (N, 6) rows
+# [latitude, longitude, height, v] and (N, 4) quaternions.
+def ellipsoid_integrate(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    initial: _NavState,
+    bias: _Bias,
+    frame: _LocalLevel,
+    scheme: _StrapdownScheme | str,
+) -> tuple[_Rows, _Rows]: ...
+
+# The readings of a motion flown over the ellipsoid from `start` (latitude, longitude, height):
+# Earth rate, transport rate, Coriolis and gravity added to `gyro` / `accel` in place; returns the
+# (N, 3) geodetic track.
+def sim_ellipsoid(
+    axes: str,
+    start: list[float],
+    t: _Rows,
+    position: _Rows,
+    velocity: _Rows,
+    mid_position: _Rows,
+    mid_velocity: _Rows,
+    rotation: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+) -> _Rows: ...
 
 LOCAL_LEVEL_AXES: tuple[str, ...]
 

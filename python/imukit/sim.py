@@ -320,6 +320,12 @@ def simulate(
     ``frame``: an :class:`imukit.earth.LocalLevel`: the trajectory is given in that Earth-fixed
     frame, so the gyro also reads the Earth rate ``R_wbᵀ ω_ie`` and the accelerometer
     ``R_wbᵀ (a − g + 2 ω_ie × v)`` with the frame's gravity (leave ``gravity`` at its default).
+    With ``LocalLevel(..., transport=True)`` the trajectory is flown over the WGS-84 ellipsoid from
+    the frame's latitude and height (longitude 0): its velocity, acceleration and attitude are read
+    in the local-level frame at the vehicle, its height changes with its up (NED: −down) position;
+    the gyro reads ``ω_nb + R_nbᵀ (ω_ie + ω_en)`` and the accelerometer
+    ``R_nbᵀ (v̇ − g(φ, h) + (2 ω_ie + ω_en) × v)``, and the truth's positions are geodetic
+    ``(latitude, longitude, height)`` (latitude and longitude by RK4 on the exact velocities).
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
@@ -354,12 +360,26 @@ def simulate(
         raise ParameterError(
             f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
         )
-    truth = trajectory._truth(t, g, count)
+    moving = frame if frame is not None and frame.transport else None
+    truth = trajectory._truth(t, np.zeros(3) if moving is not None else g, count)
     if not all(np.isfinite(a).all() for a in truth):
         names = " / ".join(_parameter_names(trajectory))
         raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
     position, velocity, quat, gyro, accel = truth
-    if frame is not None:
+    if moving is not None:
+        mid_position, mid_velocity, *_ = trajectory._truth(0.5 * (t[1:] + t[:-1]), np.zeros(3), count)
+        origin = [moving.latitude, 0.0, moving.height]
+        try:
+            position = _core.sim_ellipsoid(
+                moving.axes, origin, t, position, velocity, mid_position, mid_velocity, quat, gyro, accel
+            )
+        except NonFiniteError as exc:  # the core names the track; the user set the motion's parameters
+            if exc.argument != "trajectory":
+                raise
+            names = " / ".join(_parameter_names(trajectory))
+            at = t[exc.index or 0]
+            raise NonFiniteError(f"the motion reaches a pole or overflows at {at!r} s", argument=names) from exc
+    elif frame is not None:
         _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
     n = len(t)
     bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))

@@ -112,7 +112,13 @@ def integrate(
 
     ``frame``: an :class:`imukit.earth.LocalLevel`: the world is that Earth-fixed frame, turning at
     its Earth rate ``ω``: ``Ṙ = R[ω̂]× − [ω]×R``, ``v̇ = R â + g − 2ω×v`` with the frame's gravity
-    (leave ``gravity`` at its default); ``docs/navigation.md``.
+    (leave ``gravity`` at its default); ``docs/navigation.md``. With ``LocalLevel(...,
+    transport=True)`` the frame follows the vehicle over the WGS-84 ellipsoid: ``initial.position``
+    and the trajectory's positions are geodetic ``(latitude [rad], longitude [rad], height [m])``
+    starting at the frame's latitude and height, velocities are in the local-level axes at the
+    vehicle, the frame turns at ``ω_ie + ω_en`` (transport rate), Coriolis is
+    ``(2ω_ie + ω_en) × v`` and gravity follows latitude and height; schemes ``"midpoint"``
+    (default) and ``"rk4"`` only.
 
     ``body_from_sensor``: ``(R_bs, lever arm)``, a scipy ``Rotation`` and a (3,) offset [m]: the
     IMU's pose in the body frame (GTSAM's ``body_P_sensor``); the trajectory is then the body
@@ -123,7 +129,10 @@ def integrate(
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world_of(frame, g)
     gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
+    if frame is not None and frame.transport:
+        pv, quaternions = _core.ellipsoid_integrate(imu.seconds, gyro, accel, initial, b, frame, scheme)
+    else:
+        pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
 
