@@ -437,6 +437,29 @@ def _propagate(rng: np.random.Generator) -> Any:
     )
 
 
+@entry(
+    "propagate(frame=LocalLevel)",
+    ("propagate", "LocalLevel"),
+    {
+        **{k: a for k, a in _STRAPDOWN_ARGS.items() if k != "gravity"},
+        "covariance": Arg("array"),
+        "latitude": Arg("scalar", names=("latitude", "frame")),
+    },
+)
+def _propagate_frame(rng: np.random.Generator) -> Any:
+    values = {**_strapdown_values(rng), "covariance": np.eye(15) * 1e-4, "latitude": float(rng.uniform(-1.5, 1.5))}
+    del values["gravity"]
+    axes = ("enu", "ned")[int(rng.integers(2))]
+    return values, lambda v: ik.propagate(
+        imu_of(v),
+        initial=state_of(v),
+        covariance=v["covariance"],
+        noise=NOISE,
+        bias=bias_of(v),
+        frame=ik.LocalLevel(v["latitude"], 0.0, axes),
+    )
+
+
 _PREINT_ARGS = {**IMU_ARGS, **BIAS_ARGS, "gravity": Arg("array"), "noise": Arg("object")}
 
 

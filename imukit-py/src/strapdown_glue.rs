@@ -104,11 +104,12 @@ pub(crate) fn strapdown_propagate<'py>(
     gravity: [f64; 3],
     scheme: Name<Scheme>,
     every: usize,
+    earth_rate: [f64; 3],
 ) -> PyResult<StatesAndCovariances<'py>> {
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
-        ..Options::default()
+        earth_rate: Vector3::from(earth_rate),
     };
     let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
     if covariance.shape() != [15, 15] {

@@ -218,6 +218,7 @@ def strapdown_propagate(
     gravity: list[float],
     scheme: _StrapdownScheme | str,
     every: int,
+    earth_rate: list[float],
 ) -> tuple[_Rows, _Rows, _Rows]: ...
 def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool, threads: int | None = None

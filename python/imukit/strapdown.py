@@ -147,6 +147,7 @@ def propagate(
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     covariance_every: int = 1,
     body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
+    frame: LocalLevel | None = None,
 ) -> Trajectory:
     """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).
 
@@ -163,8 +164,19 @@ def propagate(
     refused: its gyro-noise terms are not in the covariance); the readings are turned into body
     axes with ``bias`` removed, so the covariance's bias blocks are in body axes (isotropic noise:
     the same densities).
+
+    ``frame``: a fixed :class:`imukit.earth.LocalLevel`, as in :func:`integrate` (the same mean);
+    the covariance gains the Coriolis term of the velocity error, ``−2h[ω]×`` in ``∂δv⁺/∂δv`` and
+    ``−h²[ω]×`` in ``∂δp⁺/∂δv`` (the Earth's turn leaves the right attitude error unchanged);
+    ``docs/strapdown.md``. A frame that follows the vehicle (``transport=True``) is refused.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
+    g, rate = world_of(frame, g)
+    if frame is not None and frame.transport:
+        raise ParameterError(
+            "propagate takes a fixed LocalLevel only (transport=True: its error model is not there yet)",
+            argument="frame",
+        )
     if not isinstance(noise, ImuNoise):
         raise ParameterError(f"expected an imukit.ImuNoise, got {type(noise).__name__}", argument="noise")
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
@@ -182,7 +194,9 @@ def propagate(
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
     gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=False)
-    pv, quaternions, covs = _core.strapdown_propagate(imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every)
+    pv, quaternions, covs = _core.strapdown_propagate(
+        imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every, rate
+    )
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)
     return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))
