@@ -694,6 +694,19 @@ def _simulate_transport(rng: np.random.Generator) -> Any:
 
 
 @entry(
+    "sim.simulate(body_from_sensor=...)",
+    ("sim.simulate",),
+    {"lever_arm": Arg("array", names=("body_from_sensor",)), "rotation": Arg("rotation", names=("body_from_sensor",))},
+)
+def _simulate_sensor_pose(rng: np.random.Generator) -> Any:
+    values = {"lever_arm": 0.3 * rng.standard_normal(3), "rotation": Rotation.random(rng=rng)}
+    motion = sim.ConstantTwist((1.0, 0.0, 0.2), (0.1, -0.05, 2.0))
+    return values, lambda v: sim.simulate(
+        motion, rate=50.0, duration=0.2, body_from_sensor=(v["rotation"], v["lever_arm"])
+    )
+
+
+@entry(
     "sim.simulate with SensorErrors",
     ("sim.simulate", "sim.SensorErrors", "sim.SensorErrors.from_scale_misalignment"),
     {

@@ -69,6 +69,7 @@ __all__ = [
     "sim_motion",
     "sim_rotating_world",
     "sim_sensor_default",
+    "sim_sensor_pose",
     "so3_exp",
     "so3_exp_double_integral",
     "so3_hat",
@@ -569,6 +570,16 @@ def sim_rotating_world(
     earth_rate: list[float],
     rotation: NDArray[np.float64],
     velocity: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+) -> None: ...
+
+# The readings of a sensor at (R_bs rows, lever arm) on the body: gyro and accel (body) turned into
+# the sensor's in place, with the body's angular acceleration `alpha` (N, 3).
+def sim_sensor_pose(
+    rotation: tuple[tuple[float, ...], ...],
+    lever_arm: list[float],
+    alpha: NDArray[np.float64],
     gyro: NDArray[np.float64],
     accel: NDArray[np.float64],
 ) -> None: ...

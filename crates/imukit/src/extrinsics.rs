@@ -9,7 +9,7 @@
 //! | angular acceleration | estimated from the gyro: `α_k = (ω_{k+1} − ω_{k−1}) / (t_{k+1} − t_{k−1})`, the central difference (second order, exact for a rate quadratic in time on uniform stamps), one-sided at the first and last sample (first order) |
 //! | biases | subtracted here, in the sensor frame, before the conversion; the body readings carry none |
 //!
-//! The body readings then integrate as any others; the result is exact for the conversion and as
+//! [`to_sensor`] is the inverse with an exact α, for the simulator. The body readings then integrate as any others; the result is exact for the conversion and as
 //! accurate as the α estimate, whose error is `O(h²) α̈ × r` inside a record.
 
 use nalgebra::{Matrix3, Vector3};
@@ -81,6 +81,25 @@ pub fn to_body(
         let a = r * (samples.accel_at(k) - bias.accel) - alpha.cross(&arm) - w.cross(&w.cross(&arm));
         gyro[k] = w.into();
         accel[k] = a.into();
+    }
+    Ok(())
+}
+
+/// The readings a sensor at `pose` takes on a body whose rate, specific force and angular
+/// acceleration (body axes, one row per sample) are `gyro`, `accel` and `alpha`, in place: the
+/// inverse of [`to_body`] with the α given, `ω_s = R_bsᵀ ω_b`, `f_s = R_bsᵀ (f_b + α × r + ω × (ω × r))`.
+pub fn to_sensor(pose: &SensorPose, alpha: &[[f64; 3]], gyro: &mut [[f64; 3]], accel: &mut [[f64; 3]]) -> Result<()> {
+    let n = alpha.len();
+    for (name, len) in [("gyro", gyro.len()), ("accel", accel.len())] {
+        if len != n {
+            return Err(Error::RowCount { input: n, output: len }.in_argument(name));
+        }
+    }
+    let (back, arm) = (pose.rotation.transpose(), pose.lever_arm);
+    for ((w, a), dw) in gyro.iter_mut().zip(accel.iter_mut()).zip(alpha) {
+        let (wb, dw) = (Vector3::from(*w), Vector3::from(*dw));
+        *a = (back * (Vector3::from(*a) + dw.cross(&arm) + wb.cross(&wb.cross(&arm)))).into();
+        *w = (back * wb).into();
     }
     Ok(())
 }
