@@ -131,6 +131,27 @@ mod tests {
     }
 
     #[test]
+    fn to_sensor_inverts_to_body_for_a_constant_rate() -> Result<()> {
+        // constant rate: the central difference's α is exact (zero), so the round trip is exact
+        let t: Vec<f64> = (0..5).map(|k| 0.01 * f64::from(k)).collect();
+        let (w, f) = ([0.3, -0.2, 1.5], [0.4, 0.1, 9.7]);
+        let pose = SensorPose::new(
+            *crate::so3::exp(&Vector3::new(0.2, -0.4, 1.0)).matrix(),
+            Vector3::new(0.3, -0.1, 0.2),
+        )?;
+        let (mut gyro, mut accel) = (vec![w; t.len()], vec![f; t.len()]);
+        to_sensor(&pose, &vec![[0.0; 3]; t.len()], &mut gyro, &mut accel)?;
+        let samples = Samples::new(&t, &gyro, &accel)?;
+        let (mut gb, mut ab) = (vec![[0.0; 3]; t.len()], vec![[0.0; 3]; t.len()]);
+        to_body(&samples, &Bias::default(), &pose, &mut gb, &mut ab)?;
+        for k in 0..t.len() {
+            assert!((Vector3::from(gb[k]) - Vector3::from(w)).amax() < 1e-15);
+            assert!((Vector3::from(ab[k]) - Vector3::from(f)).amax() < 1e-14);
+        }
+        Ok(())
+    }
+
+    #[test]
     fn a_reflection_is_refused() {
         let flip = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
         assert!(SensorPose::new(flip, Vector3::zeros()).is_err());
