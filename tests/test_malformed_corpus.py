@@ -393,6 +393,30 @@ def _integrate(rng: np.random.Generator) -> Any:
     )
 
 
+_LAT, _HEIGHT = 0.7, 120.0
+
+
+@entry(
+    "integrate(frame=LocalLevel(transport=True))",
+    ("integrate", "LocalLevel"),
+    {**IMU_ARGS, "velocity": Arg("array"), "rotation": Arg("rotation"), **BIAS_ARGS},
+)
+def _integrate_transport(rng: np.random.Generator) -> Any:
+    """Over the ellipsoid: the state's position is geodetic, fixed at the frame's start here (a
+    different start is refused, tested in test_transport.py)."""
+    scheme = ("midpoint", "rk4")[int(rng.integers(2))]
+    frame = ik.LocalLevel(_LAT, _HEIGHT, ("enu", "ned")[int(rng.integers(2))], transport=True)
+    values = {**imu_values(rng), **state_values(rng), **bias_values(rng)}
+    del values["position"]
+    return values, lambda v: ik.integrate(
+        imu_of(v),
+        initial=ik.NavState(np.array([_LAT, 0.2, _HEIGHT]), v["velocity"], v["rotation"]),
+        bias=bias_of(v),
+        scheme=scheme,
+        frame=frame,
+    )
+
+
 @entry(
     "propagate",
     ("propagate",),
@@ -410,6 +434,29 @@ def _propagate(rng: np.random.Generator) -> Any:
         gravity=v["gravity"],
         scheme=scheme,
         covariance_every=v["covariance_every"],
+    )
+
+
+@entry(
+    "propagate(frame=LocalLevel)",
+    ("propagate", "LocalLevel"),
+    {
+        **{k: a for k, a in _STRAPDOWN_ARGS.items() if k != "gravity"},
+        "covariance": Arg("array"),
+        "latitude": Arg("scalar", names=("latitude", "frame")),
+    },
+)
+def _propagate_frame(rng: np.random.Generator) -> Any:
+    values = {**_strapdown_values(rng), "covariance": np.eye(15) * 1e-4, "latitude": float(rng.uniform(-1.5, 1.5))}
+    del values["gravity"]
+    axes = ("enu", "ned")[int(rng.integers(2))]
+    return values, lambda v: ik.propagate(
+        imu_of(v),
+        initial=state_of(v),
+        covariance=v["covariance"],
+        noise=NOISE,
+        bias=bias_of(v),
+        frame=ik.LocalLevel(v["latitude"], 0.0, axes),
     )
 
 
@@ -660,6 +707,36 @@ _SENSOR = ("turn_on_sigma", "gauss_markov_sigma", "gauss_markov_tau", "range", "
 
 
 @entry(
+    "sim.simulate(frame=LocalLevel(transport=True))",
+    ("sim.simulate",),
+    {"body_velocity": Arg("array"), "body_rate": Arg("array"), "rotation": Arg("rotation")},
+)
+def _simulate_transport(rng: np.random.Generator) -> Any:
+    frame = ik.LocalLevel(_LAT, _HEIGHT, ("enu", "ned")[int(rng.integers(2))], transport=True)
+    values = {
+        "body_velocity": 100.0 * rng.standard_normal(3),
+        "body_rate": rng.standard_normal(3),
+        "rotation": Rotation.random(rng=rng),
+    }
+    return values, lambda v: _simulate(
+        lambda v: sim.ConstantTwist(v["body_velocity"], v["body_rate"], rotation=v["rotation"]), v, frame=frame
+    )
+
+
+@entry(
+    "sim.simulate(body_from_sensor=...)",
+    ("sim.simulate",),
+    {"lever_arm": Arg("array", names=("body_from_sensor",)), "rotation": Arg("rotation", names=("body_from_sensor",))},
+)
+def _simulate_sensor_pose(rng: np.random.Generator) -> Any:
+    values = {"lever_arm": 0.3 * rng.standard_normal(3), "rotation": Rotation.random(rng=rng)}
+    motion = sim.ConstantTwist((1.0, 0.0, 0.2), (0.1, -0.05, 2.0))
+    return values, lambda v: sim.simulate(
+        motion, rate=50.0, duration=0.2, body_from_sensor=(v["rotation"], v["lever_arm"])
+    )
+
+
+@entry(
     "sim.simulate with SensorErrors",
     ("sim.simulate", "sim.SensorErrors", "sim.SensorErrors.from_scale_misalignment"),
     {
@@ -727,7 +804,8 @@ def _simulate_errors(rng: np.random.Generator) -> Any:
 def _local_level(rng: np.random.Generator) -> Any:
     values = {"latitude": float(rng.uniform(-1.5, 1.5)), "height": float(rng.uniform(-100.0, 3000.0))}
     axes = ("enu", "ned")[int(rng.integers(2))]
-    return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes).gravity
+    moving = bool(rng.integers(2))
+    return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes, transport=moving).gravity
 
 
 @entry("noise.mean_rate_hz", ("noise.mean_rate_hz",), IMU_ARGS)

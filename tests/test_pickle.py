@@ -184,7 +184,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "DiscreteNoise": lambda: NOISE.discrete(0.005),
     "DiscreteSigmas": lambda: NOISE.to_discrete_sigmas(200.0),
     "NavState": lambda: _sim()[1].state(17),
-    "LocalLevel": lambda: ik.LocalLevel(48.0, 350.0, "ned", degrees=True),
+    "LocalLevel": lambda: ik.LocalLevel(48.0, 350.0, "ned", degrees=True, transport=True),
     "Trajectory": _trajectory,
     "PreintParams": lambda: _preint_params(),
     "Preintegration": lambda: _windows(),

@@ -90,7 +90,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(allan_glue::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_motion, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_rotating_world, m)?)?;
+    m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_pose, m)?)?;
     m.add_function(wrap_pyfunction!(earth_glue::local_level, m)?)?;
+    m.add_function(wrap_pyfunction!(earth_glue::ellipsoid_integrate, m)?)?;
+    m.add_function(wrap_pyfunction!(earth_glue::sim_ellipsoid, m)?)?;
     convert::add_names::<imukit::earth::Axes>(m, "LOCAL_LEVEL_AXES", None)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_measure, m)?)?;
     m.add_function(wrap_pyfunction!(sim_glue::sim_sensor_default, m)?)?;

@@ -292,3 +292,24 @@ pub(crate) fn sim_rotating_world<'py>(
     })
     .map_err(|e| to_py(py, "simulate", e))
 }
+
+/// [`imukit::extrinsics::to_sensor`] on `simulate`'s own fresh `gyro` and `accel` arrays, in place:
+/// the readings of a sensor at `(rotation R_bs rows, lever_arm)` on the simulated body.
+#[pyfunction]
+pub(crate) fn sim_sensor_pose<'py>(
+    py: Python<'py>,
+    rotation: [[f64; 3]; 3],
+    lever_arm: [f64; 3],
+    alpha: PyReadonlyArray2<'py, f64>,
+    gyro: &Bound<'py, PyArray2<f64>>,
+    accel: &Bound<'py, PyArray2<f64>>,
+) -> PyResult<()> {
+    use imukit::extrinsics::{to_sensor, SensorPose};
+    let pose = SensorPose::new(Matrix3::from(rotation).transpose(), Vector3::from(lever_arm))
+        .map_err(|e| to_py(py, "body_from_sensor", e))?;
+    let alpha = crate::convert::rows::<3>(py, "alpha", &alpha)?;
+    let (mut wg, mut ag) = (gyro.readwrite(), accel.readwrite());
+    let (w, a) = (wg.as_slice_mut()?, ag.as_slice_mut()?);
+    py.detach(|| to_sensor(&pose, alpha, w.as_chunks_mut().0, a.as_chunks_mut().0))
+        .map_err(|e| to_py(py, "simulate", e))
+}

@@ -15,7 +15,7 @@ use crate::convert::{contiguous, zeros, BiasFields, Demand, Name, NavStateFields
 use crate::{raise, to_py};
 
 /// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
-type States<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+pub(crate) type States<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 /// `(N, 3)` gyro and accelerometer readings.
 type Readings<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 /// States and `(M, 225)` covariances.
@@ -52,7 +52,23 @@ pub(crate) fn strapdown_integrate<'py>(
         earth_rate: Vector3::from(earth_rate),
     };
     let (initial, bias) = (NavState::from(initial), Bias::from(bias));
-    let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
+    integrate_states(py, (&t, &gyro, &accel), |samples, out, cancel| {
+        strapdown::integrate_cancellable(samples, &initial, &bias, &options, Some(out), cancel)
+    })
+}
+
+/// The `(N, 6)` and `(N, 4)` states of the integrator `run` over the samples `(t, gyro, accel)`
+/// (private copies, GIL released, interruptible).
+pub(crate) fn integrate_states<'py>(
+    py: Python<'py>,
+    (t, gyro, accel): (
+        &PyReadonlyArray1<'py, f64>,
+        &PyReadonlyArray2<'py, f64>,
+        &PyReadonlyArray2<'py, f64>,
+    ),
+    run: impl FnOnce(&imukit::imu::Samples<'_>, StatesOut<'_>, &imukit::Cancel) -> imukit::Result<NavState> + Send,
+) -> PyResult<States<'py>> {
+    let copies = SampleCopies::new(py, t, gyro, accel)?;
     let samples = copies.samples(py)?;
     let n = samples.len();
     let demand = Demand {
@@ -68,10 +84,8 @@ pub(crate) fn strapdown_integrate<'py>(
             position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
             rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
         };
-        crate::threads::interruptible(py, n, |cancel| {
-            strapdown::integrate_cancellable(&samples, &initial, &bias, &options, Some(out), cancel)
-        })?
-        .map_err(|e| to_py(py, "imu / bias", e))?;
+        crate::threads::interruptible(py, n, |cancel| run(&samples, out, cancel))?
+            .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot))
 }
@@ -90,11 +104,12 @@ pub(crate) fn strapdown_propagate<'py>(
     gravity: [f64; 3],
     scheme: Name<Scheme>,
     every: usize,
+    earth_rate: [f64; 3],
 ) -> PyResult<StatesAndCovariances<'py>> {
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
-        ..Options::default()
+        earth_rate: Vector3::from(earth_rate),
     };
     let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
     if covariance.shape() != [15, 15] {

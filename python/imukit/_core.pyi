@@ -45,6 +45,7 @@ __all__ = [
     "allan_variance",
     "attitude_integrate",
     "body_readings",
+    "ellipsoid_integrate",
     "euler_from_matrix",
     "euler_rate_matrix",
     "euler_rate_matrix_inv",
@@ -63,10 +64,12 @@ __all__ = [
     "quat_product_matrix",
     "quat_rotate",
     "set_num_threads",
+    "sim_ellipsoid",
     "sim_measure",
     "sim_motion",
     "sim_rotating_world",
     "sim_sensor_default",
+    "sim_sensor_pose",
     "so3_exp",
     "so3_exp_double_integral",
     "so3_hat",
@@ -216,6 +219,7 @@ def strapdown_propagate(
     gravity: list[float],
     scheme: _StrapdownScheme | str,
     every: int,
+    earth_rate: list[float],
 ) -> tuple[_Rows, _Rows, _Rows]: ...
 def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool, threads: int | None = None
@@ -570,10 +574,48 @@ def sim_rotating_world(
     accel: NDArray[np.float64],
 ) -> None: ...
 
+# The readings of a sensor at (R_bs rows, lever arm) on the body: gyro and accel (body) turned into
+# the sensor's in place, with the body's angular acceleration `alpha` (N, 3).
+def sim_sensor_pose(
+    rotation: tuple[tuple[float, ...], ...],
+    lever_arm: list[float],
+    alpha: NDArray[np.float64],
+    gyro: NDArray[np.float64],
+    accel: NDArray[np.float64],
+) -> None: ...
+
 class _LocalLevel(Protocol):
     latitude: float
     height: float
     axes: str
+
+# integrate over the WGS-84 ellipsoid in a frame that follows the vehicle: (N, 6) rows
+# [latitude, longitude, height, v] and (N, 4) quaternions.
+def ellipsoid_integrate(
+    t: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+    initial: _NavState,
+    bias: _Bias,
+    frame: _LocalLevel,
+    scheme: _StrapdownScheme | str,
+) -> tuple[_Rows, _Rows]: ...
+
+# The readings of a motion flown over the ellipsoid from `start` (latitude, longitude, height):
+# Earth rate, transport rate, Coriolis and gravity added to `gyro` / `accel` in place; returns the
+# (N, 3) geodetic track.
+def sim_ellipsoid(
+    axes: str,
+    start: list[float],
+    t: _Rows,
+    position: _Rows,
+    velocity: _Rows,
+    mid_position: _Rows,
+    mid_velocity: _Rows,
+    rotation: _Rows,
+    gyro: _Rows,
+    accel: _Rows,
+) -> _Rows: ...
 
 LOCAL_LEVEL_AXES: tuple[str, ...]
 

@@ -8,6 +8,13 @@ frame                  origin at geodetic ``latitude`` [rad] (``degrees=True`` f
                        ``Ω (cos φ, 0, −sin φ)``, ``Ω = 7.292115e-5``; pass it as ``omega_coriolis``
 ``gravity``            plumb-bob gravity (3,) at the origin [m/s²], pointing down: WGS-84 normal
                        gravity (Somigliana) with the free-air height correction
+``transport``          ``False`` (default): the frame stays fixed at its origin, positions are
+                       metres in it. ``True``: the frame **follows the vehicle** over the
+                       ellipsoid, starting at the origin: positions are geodetic
+                       ``(latitude [rad], longitude [rad], height [m])``, the frame turns at
+                       ``ω_ie + ω_en`` (transport rate), gravity follows latitude and height
+                       (``crates/imukit/src/ellipsoid.rs``); ``integrate`` takes schemes
+                       ``"midpoint"`` and ``"rk4"`` there
 used by                :func:`imukit.integrate` and :func:`imukit.sim.simulate` (``frame=``); the
                        preintegration's ``predict`` / ``residual`` take ``frame.earth_rate`` as
                        ``omega_coriolis`` and the params ``frame.gravity``
@@ -39,28 +46,39 @@ class LocalLevel(Frozen):
     """A local-level frame fixed on the Earth at ``latitude``, ``height`` with ``axes`` (module docs).
     Immutable; ``earth_rate`` and ``gravity`` are read-only arrays computed once."""
 
-    __slots__ = ("axes", "earth_rate", "gravity", "height", "latitude")
-    _fields = ("latitude", "height", "axes", "earth_rate", "gravity")
+    __slots__ = ("axes", "earth_rate", "gravity", "height", "latitude", "transport")
+    _fields = ("latitude", "height", "axes", "earth_rate", "gravity", "transport")
 
     latitude: float
     height: float
     axes: str
     earth_rate: FloatArray
     gravity: FloatArray
+    transport: bool
 
-    def __init__(self, latitude: float, height: float = 0.0, axes: str = "enu", *, degrees: bool = False) -> None:
-        if not isinstance(degrees, bool):
-            raise ParameterError(f"expected a bool, got {type(degrees).__name__}", argument="degrees")
+    def __init__(
+        self,
+        latitude: float,
+        height: float = 0.0,
+        axes: str = "enu",
+        *,
+        degrees: bool = False,
+        transport: bool = False,
+    ) -> None:
+        for flag, value in (("degrees", degrees), ("transport", transport)):
+            if not isinstance(value, bool):
+                raise ParameterError(f"expected a bool, got {type(value).__name__}", argument=flag)
         lat = real_scalar(latitude, "latitude", what="a latitude", accept=lambda x: True)
         h = real_scalar(height, "height", what="a height in metres", accept=lambda x: True)
         name = canonical(axes, "axes", AXES)
         lat = math.radians(lat) if degrees else lat
         # The core checks the values (latitude within ±π/2, finite height), read by field name.
         earth_rate, gravity = _core.local_level(types.SimpleNamespace(latitude=lat, height=h, axes=name))
-        self._set(lat, h, name, readonly_copy(np.array(earth_rate)), readonly_copy(np.array(gravity)))
+        self._set(lat, h, name, readonly_copy(np.array(earth_rate)), readonly_copy(np.array(gravity)), transport)
 
     def __repr__(self) -> str:
-        return f"LocalLevel(latitude={self.latitude!r}, height={self.height!r}, axes={self.axes!r})"
+        moving = ", transport=True" if self.transport else ""
+        return f"LocalLevel(latitude={self.latitude!r}, height={self.height!r}, axes={self.axes!r}{moving})"
 
 
 def world_of(frame: LocalLevel | None, gravity: list[float]) -> tuple[list[float], list[float]]:

@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation, RotationSpline
 from imukit import _core
 from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
+from imukit._extrinsics import sensor_pose
 from imukit.earth import LocalLevel, world_of
 from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
 from imukit.state import Trajectory
@@ -293,6 +294,25 @@ class SensorErrors:
         return (whole + (1.0 if steps - whole >= 0.5 else 0.0)) * step
 
 
+def _angular_acceleration(
+    trajectory: Motion, t: FloatArray, g: FloatArray, count: int | None, rotating: list[float] | None
+) -> FloatArray:
+    """The body's angular acceleration in body axes at ``t``: the fourth-order central stencil
+    ``(ω(t−2δ) − 8ω(t−δ) + 8ω(t+δ) − ω(t+2δ)) / 12δ``, δ = 1 ms, on the ideal gyro readings
+    (the rotating world's rate included when ``rotating`` is given)."""
+    delta = 1e-3
+
+    def rate(shift: float) -> FloatArray:
+        _, velocity, quat, gyro, accel = trajectory._truth(t + shift, g, count)
+        if rotating is not None:
+            _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
+        return gyro
+
+    return np.ascontiguousarray(
+        (rate(-2 * delta) - 8 * rate(-delta) + 8 * rate(delta) - rate(2 * delta)) / (12 * delta)
+    )
+
+
 def simulate(
     trajectory: Motion,
     *,
@@ -307,6 +327,7 @@ def simulate(
     start: float = 0.0,
     threads: int | None = None,
     frame: LocalLevel | None = None,
+    body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
 ) -> tuple[ImuData, Trajectory]:
     """Simulate ``trajectory`` at ``rate`` [Hz] for ``duration`` [s] from time ``start``: samples
     ``t_k = start + k / rate``, ``k = 0 … floor(duration·rate)``. Returns the readings as
@@ -320,6 +341,19 @@ def simulate(
     ``frame``: an :class:`imukit.earth.LocalLevel`: the trajectory is given in that Earth-fixed
     frame, so the gyro also reads the Earth rate ``R_wbᵀ ω_ie`` and the accelerometer
     ``R_wbᵀ (a − g + 2 ω_ie × v)`` with the frame's gravity (leave ``gravity`` at its default).
+    With ``LocalLevel(..., transport=True)`` the trajectory is flown over the WGS-84 ellipsoid from
+    the frame's latitude and height (longitude 0): its velocity, acceleration and attitude are read
+    in the local-level frame at the vehicle, its height changes with its up (NED: −down) position;
+    the gyro reads ``ω_nb + R_nbᵀ (ω_ie + ω_en)`` and the accelerometer
+    ``R_nbᵀ (v̇ − g(φ, h) + (2 ω_ie + ω_en) × v)``, and the truth's positions are geodetic
+    ``(latitude, longitude, height)`` (latitude and longitude by RK4 on the exact velocities).
+
+    ``body_from_sensor``: ``(R_bs, lever arm)`` (a scipy ``Rotation`` and (3,) [m], as in
+    :func:`imukit.integrate`): the readings are those of a sensor at that pose on the simulated
+    body, ``ω_s = R_bsᵀ ω_b``, ``f_s = R_bsᵀ (f_b + α × r + ω × (ω × r))``, with the body's angular
+    acceleration ``α`` from the trajectory's closed-form rate (the frame's rate included) by the
+    fourth-order central stencil over ±1 ms, ±2 ms (truncation ~1e-13 rad/s² for rates that vary on
+    second scales); the truth stays the body's. Not with a frame that follows the vehicle.
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
@@ -354,13 +388,35 @@ def simulate(
         raise ParameterError(
             f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
         )
-    truth = trajectory._truth(t, g, count)
+    moving = frame if frame is not None and frame.transport else None
+    truth = trajectory._truth(t, np.zeros(3) if moving is not None else g, count)
     if not all(np.isfinite(a).all() for a in truth):
         names = " / ".join(_parameter_names(trajectory))
         raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
     position, velocity, quat, gyro, accel = truth
-    if frame is not None:
+    if moving is not None:
+        mid_position, mid_velocity, *_ = trajectory._truth(0.5 * (t[1:] + t[:-1]), np.zeros(3), count)
+        origin = [moving.latitude, 0.0, moving.height]
+        try:
+            position = _core.sim_ellipsoid(
+                moving.axes, origin, t, position, velocity, mid_position, mid_velocity, quat, gyro, accel
+            )
+        except NonFiniteError as exc:  # the core names the track; the user set the motion's parameters
+            if exc.argument != "trajectory":
+                raise
+            names = " / ".join(_parameter_names(trajectory))
+            at = t[exc.index or 0]
+            raise NonFiniteError(f"the motion reaches a pole or overflows at {at!r} s", argument=names) from exc
+    elif frame is not None:
         _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
+    if body_from_sensor is not None:
+        if moving is not None:
+            raise ParameterError(
+                "a sensor pose with a frame that follows the vehicle is not supported yet", argument="body_from_sensor"
+            )
+        rows, arm = sensor_pose(body_from_sensor)
+        alpha = _angular_acceleration(trajectory, t, g, count, rotating if frame is not None else None)
+        _core.sim_sensor_pose(rows, list(arm), alpha, gyro, accel)
     n = len(t)
     bias_g, bias_a = np.zeros((n, 3)), np.zeros((n, 3))
     perfect = noise is None and bias is None and gyro_errors is None and accel_errors is None

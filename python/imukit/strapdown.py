@@ -112,7 +112,13 @@ def integrate(
 
     ``frame``: an :class:`imukit.earth.LocalLevel`: the world is that Earth-fixed frame, turning at
     its Earth rate ``ω``: ``Ṙ = R[ω̂]× − [ω]×R``, ``v̇ = R â + g − 2ω×v`` with the frame's gravity
-    (leave ``gravity`` at its default); ``docs/navigation.md``.
+    (leave ``gravity`` at its default); ``docs/navigation.md``. With ``LocalLevel(...,
+    transport=True)`` the frame follows the vehicle over the WGS-84 ellipsoid: ``initial.position``
+    and the trajectory's positions are geodetic ``(latitude [rad], longitude [rad], height [m])``
+    starting at the frame's latitude and height, velocities are in the local-level axes at the
+    vehicle, the frame turns at ``ω_ie + ω_en`` (transport rate), Coriolis is
+    ``(2ω_ie + ω_en) × v`` and gravity follows latitude and height; schemes ``"midpoint"``
+    (default) and ``"rk4"`` only.
 
     ``body_from_sensor``: ``(R_bs, lever arm)``, a scipy ``Rotation`` and a (3,) offset [m]: the
     IMU's pose in the body frame (GTSAM's ``body_P_sensor``); the trajectory is then the body
@@ -123,7 +129,10 @@ def integrate(
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world_of(frame, g)
     gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
-    pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
+    if frame is not None and frame.transport:
+        pv, quaternions = _core.ellipsoid_integrate(imu.seconds, gyro, accel, initial, b, frame, scheme)
+    else:
+        pv, quaternions = _core.strapdown_integrate(imu.seconds, gyro, accel, initial, b, g, scheme, rate)
     return _trajectory(imu, pv, quaternions)
 
 
@@ -138,6 +147,7 @@ def propagate(
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
     covariance_every: int = 1,
     body_from_sensor: tuple[Rotation, ArrayLike] | None = None,
+    frame: LocalLevel | None = None,
 ) -> Trajectory:
     """:func:`integrate` plus the 15×15 error-state covariance (ESKF; Solà 2017, §5.4).
 
@@ -154,8 +164,19 @@ def propagate(
     refused: its gyro-noise terms are not in the covariance); the readings are turned into body
     axes with ``bias`` removed, so the covariance's bias blocks are in body axes (isotropic noise:
     the same densities).
+
+    ``frame``: a fixed :class:`imukit.earth.LocalLevel`, as in :func:`integrate` (the same mean);
+    the covariance gains the Coriolis term of the velocity error, ``−2h[ω]×`` in ``∂δv⁺/∂δv`` and
+    ``−h²[ω]×`` in ``∂δp⁺/∂δv`` (the Earth's turn leaves the right attitude error unchanged);
+    ``docs/strapdown.md``. A frame that follows the vehicle (``transport=True``) is refused.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
+    g, rate = world_of(frame, g)
+    if frame is not None and frame.transport:
+        raise ParameterError(
+            "propagate takes a fixed LocalLevel only (transport=True: its error model is not there yet)",
+            argument="frame",
+        )
     if not isinstance(noise, ImuNoise):
         raise ParameterError(f"expected an imukit.ImuNoise, got {type(noise).__name__}", argument="noise")
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
@@ -173,7 +194,9 @@ def propagate(
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
     gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=False)
-    pv, quaternions, covs = _core.strapdown_propagate(imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every)
+    pv, quaternions, covs = _core.strapdown_propagate(
+        imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every, rate
+    )
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)
     return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))

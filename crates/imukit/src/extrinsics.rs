@@ -9,7 +9,7 @@
 //! | angular acceleration | estimated from the gyro: `α_k = (ω_{k+1} − ω_{k−1}) / (t_{k+1} − t_{k−1})`, the central difference (second order, exact for a rate quadratic in time on uniform stamps), one-sided at the first and last sample (first order) |
 //! | biases | subtracted here, in the sensor frame, before the conversion; the body readings carry none |
 //!
-//! The body readings then integrate as any others; the result is exact for the conversion and as
+//! [`to_sensor`] is the inverse with an exact α, for the simulator. The body readings then integrate as any others; the result is exact for the conversion and as
 //! accurate as the α estimate, whose error is `O(h²) α̈ × r` inside a record.
 
 use nalgebra::{Matrix3, Vector3};
@@ -112,6 +112,25 @@ fn overflow_culprit(specific: &Vector3<f64>) -> &'static str {
     }
 }
 
+/// The readings a sensor at `pose` takes on a body whose rate, specific force and angular
+/// acceleration (body axes, one row per sample) are `gyro`, `accel` and `alpha`, in place: the
+/// inverse of [`to_body`] with the α given, `ω_s = R_bsᵀ ω_b`, `f_s = R_bsᵀ (f_b + α × r + ω × (ω × r))`.
+pub fn to_sensor(pose: &SensorPose, alpha: &[[f64; 3]], gyro: &mut [[f64; 3]], accel: &mut [[f64; 3]]) -> Result<()> {
+    let n = alpha.len();
+    for (name, len) in [("gyro", gyro.len()), ("accel", accel.len())] {
+        if len != n {
+            return Err(Error::RowCount { input: n, output: len }.in_argument(name));
+        }
+    }
+    let (back, arm) = (pose.rotation.transpose(), pose.lever_arm);
+    for ((w, a), dw) in gyro.iter_mut().zip(accel.iter_mut()).zip(alpha) {
+        let (wb, dw) = (Vector3::from(*w), Vector3::from(*dw));
+        *a = (back * (Vector3::from(*a) + dw.cross(&arm) + wb.cross(&wb.cross(&arm)))).into();
+        *w = (back * wb).into();
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,6 +168,27 @@ mod tests {
             let pose = SensorPose::new(Matrix3::identity(), Vector3::new(arm, arm, 0.0))?;
             let err = to_body(&samples, &Bias::default(), &pose, &mut gb, &mut ab);
             assert!(matches!(&err, Err(e) if e.argument() == Some(name)), "{err:?}");
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn to_sensor_inverts_to_body_for_a_constant_rate() -> Result<()> {
+        // constant rate: the central difference's α is exact (zero), so the round trip is exact
+        let t: Vec<f64> = (0..5).map(|k| 0.01 * f64::from(k)).collect();
+        let (w, f) = ([0.3, -0.2, 1.5], [0.4, 0.1, 9.7]);
+        let pose = SensorPose::new(
+            *crate::so3::exp(&Vector3::new(0.2, -0.4, 1.0)).matrix(),
+            Vector3::new(0.3, -0.1, 0.2),
+        )?;
+        let (mut gyro, mut accel) = (vec![w; t.len()], vec![f; t.len()]);
+        to_sensor(&pose, &vec![[0.0; 3]; t.len()], &mut gyro, &mut accel)?;
+        let samples = Samples::new(&t, &gyro, &accel)?;
+        let (mut gb, mut ab) = (vec![[0.0; 3]; t.len()], vec![[0.0; 3]; t.len()]);
+        to_body(&samples, &Bias::default(), &pose, &mut gb, &mut ab)?;
+        for k in 0..t.len() {
+            assert!((Vector3::from(gb[k]) - Vector3::from(w)).amax() < 1e-15);
+            assert!((Vector3::from(ab[k]) - Vector3::from(f)).amax() < 1e-14);
         }
         Ok(())
     }

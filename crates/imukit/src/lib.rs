@@ -25,6 +25,7 @@
 pub mod allan;
 pub mod attitude;
 pub mod earth;
+pub mod ellipsoid;
 mod error;
 pub mod euler;
 pub mod extrinsics;

@@ -22,6 +22,12 @@
 //!       0    0    0               0           I                   0    0       0    I
 //! ```
 //!
+//! **Rotating world** ([`Options::earth_rate`] `Ω` non-zero, a fixed [`crate::earth::LocalLevel`]):
+//! the mean takes the Earth's turn and Coriolis as strapdown does; with the right perturbation the
+//! turn `Exp(−Ωh)` on the left of `R` leaves `δθ` unchanged, and the Coriolis term adds
+//! `−2h [Ω]×` to `∂δv⁺/∂δv` and `−h² [Ω]×` to `∂δp⁺/∂δv`, applied as a separate factor after the
+//! step ([`coriolis_blocks`]; its cross terms with the step are O(h²), below the step's order).
+//!
 //! Solà's §5.4.3 drops the h² terms of the position row and uses `I` for `J_r`; both are kept here
 //! because they cost nothing in the block product. The mean may be integrated with any
 //! [`strapdown::Scheme`](crate::strapdown::Scheme); the covariance always uses these Jacobians at
@@ -176,6 +182,25 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     }
 }
 
+/// The rotating world's terms of the step (module docs, "Rotating world"): `P ← D P Dᵀ` with `D = I`
+/// but for the post-step `δv` column, `D_pv = −h² [Ω]×`, `D_vv = I − 2h [Ω]×`, the Coriolis
+/// acceleration `−2 Ω × δv` of the velocity error (Groves 2013, §14.2, the local-level error model
+/// without its transport and gravity-gradient terms). Applied after the inertial step so that the default path pays nothing.
+fn coriolis_blocks(p: &mut Blocks, omega: &Vector3<f64>, h: f64) {
+    let w = so3::hat(omega);
+    let (d_pv, d_vv) = (w * (-h * h), Matrix3::identity() - w * (2.0 * h));
+    let [row_p, row_v, ..] = p;
+    for (pj, vj) in row_p.iter_mut().zip(row_v.iter_mut()) {
+        *pj += mul(&d_pv, vj);
+        *vj = mul(&d_vv, vj);
+    }
+    for row in p.iter_mut() {
+        let av = row[V];
+        row[P] += mul_t(&av, &d_pv);
+        row[V] = mul_t(&av, &d_vv);
+    }
+}
+
 /// Output buffers of [`propagate`].
 #[derive(Debug)]
 pub struct Outputs<'a> {
@@ -234,15 +259,6 @@ pub fn propagate_cancellable(
 ) -> Result<(NavState, Covariance)> {
     noise.check()?;
     strapdown::check_parameters(initial, bias, options)?;
-    if options.earth_rate != Vector3::zeros() {
-        // The error-state Jacobians have no rotating-world terms: a mean with them and a
-        // covariance without them would be inconsistent.
-        return Err(Error::Parameter {
-            name: "earth_rate",
-            expected: "zero (propagate models an inertial world only)",
-            got: format!("{:?}", options.earth_rate.as_slice()),
-        });
-    }
     let n = samples.t.len();
     let Outputs {
         mut states,
@@ -285,11 +301,15 @@ pub fn propagate_cancellable(
         out.store(0, initial);
     }
     store_cov(&p, &mut stored);
+    let rotating = options.earth_rate != Vector3::zeros();
     let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, x, next| {
         let h = samples.t[k + 1] - samples.t[k];
         let w_hat = samples.gyro_at(k) - bias.gyro;
         let a_hat = samples.accel_at(k) - bias.accel;
         propagate_blocks(&mut p, &StepBlocks::new(x, &w_hat, &a_hat, h), noise, h);
+        if rotating {
+            coriolis_blocks(&mut p, &options.earth_rate, h);
+        }
         if let Some(out) = states.as_mut() {
             out.store(k + 1, next);
         }
