@@ -2,6 +2,7 @@
 //! (the core makes them), no math, no defaults.
 //!
 //! - arrays: [`private_copy`] (a copy no other thread can write while the GIL is released),
+//!   [`frozen_or_copy`] (the array itself when nothing can write to it, else that copy),
 //!   [`contiguous`], [`rows`] (`(n, N)` as `&[[f64; N]]`), [`SampleCopies`];
 //! - values by field name: [`NoiseFields`] (`imukit.ImuNoise`), [`BiasFields`]
 //!   (`imukit.ImuBias`), [`NavStateFields`] (`imukit.NavState`);
@@ -27,6 +28,38 @@ pub(crate) fn private_copy<'py, D: numpy::ndarray::Dimension>(
 ) -> PyResult<Bound<'py, PyArray<f64, D>>> {
     let _ = py;
     Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
+}
+
+/// `x` itself when no Python code can write to its buffer while the GIL is released, else
+/// [`private_copy`]: reading in place saves the copy (its page faults and memory traffic, ~5 ns
+/// per sample of a filter run). In place when `x` is C-contiguous and read-only and so is every
+/// array it views, down to one that owns its buffer (an `ImuData`'s arrays, frozen by
+/// `imukit._frozen`); a writeable base, a view of a foreign buffer (bytes, mmap, a memoryview)
+/// is copied. Making the owner writeable again (`setflags(write=True)`) while a call runs is
+/// outside the contract, as is writing to it from C.
+pub(crate) fn frozen_or_copy<'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    x: PyReadonlyArray<'py, f64, D>,
+) -> PyResult<PyReadonlyArray<'py, f64, D>> {
+    let mut link = x.as_any().clone();
+    let frozen = x.is_c_contiguous()
+        && loop {
+            if !link.is_instance_of::<numpy::PyUntypedArray>()
+                || link.getattr("flags")?.getattr("writeable")?.extract::<bool>()?
+            {
+                break false;
+            }
+            let base = link.getattr("base")?;
+            if base.is_none() {
+                break true;
+            }
+            link = base;
+        };
+    if frozen {
+        Ok(x)
+    } else {
+        Ok(private_copy(py, &x)?.readonly())
+    }
 }
 
 /// What a call's outputs need, for the message when they cannot be had: `count` items of `what`

@@ -21,8 +21,9 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::convert::frozen_or_copy;
 use crate::convert::{real_number, Name};
-use crate::{contiguous, private_copy, to_py};
+use crate::{contiguous, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
 /// numbers: a `ParameterError` naming `name`.
@@ -570,11 +571,11 @@ fn run<'py, L: Law>(
 ) -> PyResult<Outputs<'py>> {
     let mut s = state.typed::<L>();
     let n = t.shape()[0];
-    let t = private_copy(py, &t)?.readonly();
-    let gyro = private_copy(py, &gyro)?.readonly();
-    let accel = private_copy(py, &accel)?.readonly();
+    let t = frozen_or_copy(py, t)?;
+    let gyro = frozen_or_copy(py, gyro)?;
+    let accel = frozen_or_copy(py, accel)?;
     let mag = match mag {
-        Some(m) => Some(private_copy(py, &m)?.readonly()),
+        Some(m) => Some(frozen_or_copy(py, m)?),
         None => None,
     };
     let rows = |name, x| contiguous(py, name, x).map(|x| x.as_chunks::<3>().0);

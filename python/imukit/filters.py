@@ -238,7 +238,7 @@ class _Filter:
         threads run one after another, none lost."""
         w, a = _vec3(gyro, "gyro"), _vec3(accel, "accel")
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
-        m = None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist()
+        m = None if mag is None else _vec3(mag, "mag")  # the core refuses a norm that overflows
         with self._lock:
             self._state = state = FilterState(self._core_filter.update(self._state, w, a, step, m))
         return rotation_from_unit_quat(state.quaternion)
@@ -284,7 +284,7 @@ class _Filter:
             mags = np.ascontiguousarray(as_float_array(mag, "mag"))
             if mags.shape != (n, 3):
                 raise ShapeError(f"expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}", argument="mag")
-            _check_mag_norms(mags)
+            # The core refuses a finite sample whose squared norm overflows, naming it.
         continued = isinstance(initial, FilterState)
         if isinstance(initial, FilterState):
             start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds

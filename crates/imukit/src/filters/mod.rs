@@ -218,8 +218,13 @@ impl<L: Law> Filter<L> {
         if !finite(accel) {
             return Err(Error::NonFinite { index: 0 }.in_argument("accel"));
         }
-        if mag.is_some_and(|m| !finite(m)) {
-            return Err(Error::NonFinite { index: 0 }.in_argument("mag"));
+        if let Some(m) = mag {
+            if !finite(m) {
+                return Err(Error::NonFinite { index: 0 }.in_argument("mag"));
+            }
+            if !m.norm_squared().is_finite() {
+                return Err(Error::Overflow { index: 0 }.in_argument("mag"));
+            }
         }
         if state.common.initialized && !(dt > 0.0 && dt.is_finite()) {
             return Err(Error::Parameter {
@@ -422,8 +427,9 @@ impl<L: Law> Filter<L> {
             let accel = row(&inputs.accel[k]);
             let mag = if NINE { Some(row(&mags[k])) } else { None };
             // One test on the sum (NaN and ±inf propagate); only when it fails, find the culprit
-            // (a finite sum overflowing to inf is no error).
-            let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.sum());
+            // (a finite sum overflowing to inf is no error, but a field whose squared norm
+            // overflows is: the gate keeps its first norm as the reference).
+            let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.norm_squared());
             if !sum.is_finite() {
                 if !t.is_finite() {
                     return Err(Error::NonFinite { index: k }.in_argument("t"));
@@ -434,8 +440,14 @@ impl<L: Law> Filter<L> {
                 if !finite(&accel) {
                     return Err(Error::NonFinite { index: k }.in_argument("accel"));
                 }
-                if mag.as_ref().is_some_and(|m| !finite(m)) {
-                    return Err(Error::NonFinite { index: k }.in_argument("mag"));
+                if let Some(m) = mag.filter(|m| !finite(m) || !m.norm_squared().is_finite()) {
+                    let index = k;
+                    return Err(if finite(&m) {
+                        Error::Overflow { index }
+                    } else {
+                        Error::NonFinite { index }
+                    }
+                    .in_argument("mag"));
                 }
             }
             if k == 0 && !continued {

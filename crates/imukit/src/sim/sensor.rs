@@ -19,15 +19,17 @@
 //!
 //! The last sample's Δt is the one before it. The reported true bias is `b_k`.
 //!
-//! Random numbers: ChaCha8 (portable, seekable) seeded with the run's seed, one independent stream
-//! per (triad, process, chunk of [`CHUNK`] samples); normals by the ziggurat of `rand_distr`. The
-//! chunks are fixed by N, so the output does not depend on the thread count, and the same seed
+//! Random numbers: xoshiro256++ (Blackman & Vigna 2021; `rand`'s portable implementation, 64-bit
+//! outputs on every platform), one generator per (seed, triad, process, chunk of [`CHUNK`]
+//! samples), its 256-bit state four SplitMix64 outputs of the seed and of the stream's number (so
+//! distinct streams of a seed start from distinct states); normals by the ziggurat of `rand_distr`.
+//! The chunks are fixed by N, so the output does not depend on the thread count, and the same seed
 //! gives the same output across runs; the walk and Gauss–Markov recursions are joined across chunks
-//! by a prefix pass.
+//! by a prefix pass. (ChaCha8 until issue 20: its 8 bytes per normal cost more than the ziggurat.)
 
 use nalgebra::{Matrix3, Vector3};
+use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 
@@ -117,14 +119,33 @@ enum Process {
     TurnOn = 3,
 }
 
-/// The stream of (triad, process, chunk): disjoint for every combination.
-fn stream(seed: u64, triad: u64, process: Process, chunk: usize) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream((triad << 34) | ((process as u64) << 32) | chunk as u64);
-    rng
+/// SplitMix64's output function (Steele, Lea & Flood 2014): a bijection of `u64` that mixes every
+/// input bit into every output bit.
+fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
-fn normal3(rng: &mut ChaCha8Rng) -> Vector3<f64> {
+/// The generator of (triad, process, chunk) for `seed`: two state words from the seed, two from
+/// the stream's number, each a bijection of its input, so no two streams of a seed share a state.
+fn stream(seed: u64, triad: u64, process: Process, chunk: usize) -> Xoshiro256PlusPlus {
+    let id = (triad << 34) | ((process as u64) << 32) | chunk as u64;
+    let words = [
+        splitmix64(seed),
+        splitmix64(seed ^ 0x5851_F42D_4C95_7F2D),
+        splitmix64(id),
+        splitmix64(id ^ 0x1405_7B7E_F767_814F),
+    ];
+    let mut bytes = [0u8; 32];
+    for (chunk, word) in bytes.chunks_exact_mut(8).zip(words) {
+        chunk.copy_from_slice(&word.to_le_bytes());
+    }
+    Xoshiro256PlusPlus::from_seed(bytes)
+}
+
+fn normal3(rng: &mut Xoshiro256PlusPlus) -> Vector3<f64> {
     Vector3::from_fn(|_, _| StandardNormal.sample(rng))
 }
 
