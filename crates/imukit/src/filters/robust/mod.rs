@@ -193,7 +193,7 @@ impl Robust {
         } else {
             0.0
         };
-        step::step(
+        step::step::<true>(
             &self.params,
             self.world,
             &Coefs::new(&self.params, dt),
@@ -245,20 +245,24 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        match inputs.mag {
-            Some(m) => self.run_loop::<true>(state, inputs, m, continued, out, bias),
-            None => self.run_loop::<false>(state, inputs, &[], continued, out, bias),
+        match (inputs.mag, bias) {
+            (Some(m), None) => self.run_loop::<true, true>(state, inputs, m, continued, out, &[]),
+            (None, None) => self.run_loop::<false, true>(state, inputs, &[], continued, out, &[]),
+            (Some(m), Some(b)) => self.run_loop::<true, false>(state, inputs, m, continued, out, b),
+            (None, Some(b)) => self.run_loop::<false, false>(state, inputs, &[], continued, out, b),
         }
     }
 
-    fn run_loop<const NINE: bool>(
+    /// The loop of [`Robust::run_with`]: `NINE` with the field `mags`; `LEARN` estimating the bias,
+    /// else taking it from `bias` (one row per sample).
+    fn run_loop<const NINE: bool, const LEARN: bool>(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         mags: &[[f64; 3]],
         continued: bool,
         out: &mut Outputs<'_>,
-        bias: Option<&[[f64; 3]]>,
+        bias: &[[f64; 3]],
     ) -> Result<()> {
         let p = &self.params;
         let mut coefs = Coefs::new(p, 0.0);
@@ -282,10 +286,10 @@ impl Robust {
             };
             if dt > 0.0 || !state.initialized {
                 coefs = coefs.for_dt(p, dt);
-                if let Some(b) = bias {
-                    state.bias = row(&b[k]);
+                if !LEARN {
+                    state.bias = row(&bias[k]);
                 }
-                step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
+                step::step::<LEARN>(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
                 check_overflow(state, k)?;
             }
             state.time = t;

@@ -133,8 +133,11 @@ pub(super) fn initialise(
 
 /// One sample on validated input with coefficients `c` for its step `c.dt` (0 on the first
 /// sample of an uninitialised state, which only initialises). Updates `s.q` (in `world`).
+/// `LEARN` false: the bias is given (the smoother's second stage), so rest detection and the bias
+/// windows, which only feed the bias estimate and the rest flag, are skipped; the attitude is the
+/// same as with them.
 #[inline(always)]
-pub(super) fn step(
+pub(super) fn step<const LEARN: bool>(
     p: &RobustParams,
     world: World,
     c: &Coefs,
@@ -154,7 +157,9 @@ pub(super) fn step(
         }
     }
     if dt > 0.0 {
-        rest_detection(p, c, s, gyro, accel);
+        if LEARN {
+            rest_detection(p, c, s, gyro, accel);
+        }
         s.q_gyro = compose(&s.q_gyro, &exp(&((gyro - s.bias) * dt)));
     }
     let a_i = s.q_gyro * accel;
@@ -176,7 +181,7 @@ pub(super) fn step(
             heading_gain = Some(gain);
         }
     }
-    if dt > 0.0 {
+    if LEARN && dt > 0.0 {
         bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
     }
     let q = if mag.is_some() {
