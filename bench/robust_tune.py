@@ -7,6 +7,7 @@ Usage::
     python bench/robust_tune.py --set tau_acc_s=2.5   # the same with parameters changed
     python bench/robust_tune.py --cv                  # grid search: all-trials and leave-one-group-out scores
     python bench/robust_tune.py --speed               # 10^6 samples: Robust vs vqf.VQF.updateBatch / offlineVQF
+    python bench/robust_tune.py --field               # the field seen through the true attitude, per trial
 
 Metric as ``bench/broad_accuracy.py``: :func:`imukit.eval.attitude_error` over the ``movement``
 samples with mocap; 6D inclination RMSE with the heading offset removed, 9D total RMSE as estimated.
@@ -203,6 +204,44 @@ def speed(n: int = 1_000_000, repeat: int = 3) -> None:
         print(f"| {name} | {t:.3f} | {1e9 * t / n:.0f} | {ref} |")
 
 
+def field_report(trs: list[Trial]) -> None:
+    """Per trial, the field seen through the motion capture's attitude, ``m_w = R_truth m``: the
+    heading of its horizontal part from mocap north (what a filter following the magnetometer
+    cannot avoid), per sixth of the trial, and a hard-iron fit ``m = Rᵀ m_w + h`` (least squares
+    for ``m_w`` and ``h``; its condition number says whether the record turns enough to tell them
+    apart)."""
+    from scipy.spatial.transform import Rotation
+
+    def heading(m: np.ndarray) -> np.ndarray:
+        return np.degrees(np.arctan2(m[:, 0], m[:, 1]))
+
+    print(
+        "| trial | heading of m_w [°] mean ± std | per sixth [°] | attitude spread, median [°] "
+        "| h [µT] | residual without / with h [µT] | condition | heading with h removed [°] |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    for tr in trs:
+        ok = np.isfinite(tr.truth).all(1) & tr.movement
+        rot = Rotation.from_quat(tr.truth[ok], scalar_first=True)
+        m = tr.mag[ok]
+        head = heading(rot.apply(m))
+        n = len(m)
+        a = np.zeros((3 * n, 6))
+        a[:, :3] = rot.inv().as_matrix().reshape(3 * n, 3)
+        a[:, 3:] = np.tile(np.eye(3), (n, 1))
+        x, *_ = np.linalg.lstsq(a, m.ravel(), rcond=None)
+        x0, *_ = np.linalg.lstsq(a[:, :3], m.ravel(), rcond=None)
+        res = [float(np.sqrt(np.mean((m.ravel() - a[:, : k.size] @ k) ** 2))) for k in (x0, x)]
+        sv = np.linalg.svd(a, compute_uv=False)
+        spread = np.degrees((rot.mean().inv() * rot).magnitude())
+        sixths = ", ".join(f"{np.mean(c):.1f}" for c in np.array_split(head, 6))
+        print(
+            f"| {tr.name} | {head.mean():.2f} ± {head.std():.2f} | {sixths} | {np.median(spread):.0f} "
+            f"| {np.array2string(x[3:], precision=2)} | {res[0]:.2f} / {res[1]:.2f} | {sv[0] / sv[-1]:.1f} "
+            f"| {heading(rot.apply(m - x[3:])).mean():.2f} |"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--set", action="append", default=[], help="parameter=value (repeatable)")
@@ -210,13 +249,16 @@ def main() -> None:
     parser.add_argument("--cv", action="store_true", help="grid search with leave-one-group-out scores")
     parser.add_argument("--offline", action="store_true", help="with --cv: tune the smoother")
     parser.add_argument("--speed", action="store_true", help="timing, 10^6 samples")
+    parser.add_argument("--field", action="store_true", help="the field through the true attitude, per trial")
     args = parser.parse_args()
     params = {k: float(v) for k, v in (s.split("=", 1) for s in args.set)}
     if args.speed:
         speed()
         return
     trs = trials()
-    if args.cv:
+    if args.field:
+        field_report(trs)
+    elif args.cv:
         cross_validate(trs, args.offline)
     else:
         report(trs, params, not args.no_vqf)

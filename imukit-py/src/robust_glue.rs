@@ -14,7 +14,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{real_number, rows, unit_quaternion, Name};
+use crate::convert::{contiguous, real_number, rows, unit_quaternion, Name};
 use crate::{private_copy, raise, to_py, SampleCopies};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
@@ -212,21 +212,6 @@ impl PyRobustFilter {
     ) -> PyResult<Outputs<'py>> {
         let mut s = state.0;
         let n = t.shape()[0];
-        let copies = SampleCopies::new(py, &t, &gyro, &accel)?;
-        let samples = copies.samples(py)?;
-        let mag = match mag {
-            Some(m) => Some(private_copy(py, &m)?.readonly()),
-            None => None,
-        };
-        let inputs = Inputs {
-            t: samples.t(),
-            gyro: samples.gyro(),
-            accel: samples.accel(),
-            mag: match &mag {
-                Some(m) => Some(rows(py, "mag", m)?),
-                None => None,
-            },
-        };
         let out_q = PyArray2::<f64>::zeros(py, [n, 4], false);
         let out_b = PyArray2::<f64>::zeros(py, [n, 3], false);
         let out_s = PyArray2::<f64>::zeros(py, [n, 3], false);
@@ -242,17 +227,140 @@ impl PyRobustFilter {
                 rest: gr.as_slice_mut()?,
                 mag_disturbed: gm.as_slice_mut()?,
             };
-            let (f, state) = (&self.inner, &mut s);
-            py.detach(|| {
-                if offline {
-                    f.smooth(state, &inputs, &mut out)
-                } else {
-                    f.run(state, &inputs, continued, &mut out)
-                }
-            })
-            .map_err(|e| to_py(py, "imu / params", e))?;
+            if offline {
+                smooth(py, &self.inner, &mut s, (&t, &gyro, &accel, mag.as_ref()), &mut out)?;
+            } else {
+                let record = Record::new(py, &t, &gyro, &accel, mag.as_ref())?;
+                record.run(py, &self.inner, &mut s, continued, &mut out)?;
+            }
         }
         Ok((out_q, out_b, out_s, out_rest, out_mag, PyRobustState(s)))
+    }
+}
+
+/// The input arrays of a run as the caller passed them: `t`, `gyro`, `accel`, `mag`.
+type Arrays<'a, 'py> = (
+    &'a PyReadonlyArray1<'py, f64>,
+    &'a PyReadonlyArray2<'py, f64>,
+    &'a PyReadonlyArray2<'py, f64>,
+    Option<&'a PyReadonlyArray2<'py, f64>>,
+);
+
+/// The smoother over private copies of the whole record (it reads it forward and backward).
+fn smooth(
+    py: Python<'_>,
+    f: &Robust,
+    s: &mut RobustState,
+    (t, gyro, accel, mag): Arrays<'_, '_>,
+    out: &mut RobustOutputs<'_>,
+) -> PyResult<()> {
+    let copies = SampleCopies::new(py, t, gyro, accel)?;
+    let samples = copies.samples(py)?;
+    let mag = match mag {
+        Some(m) => Some(private_copy(py, m)?.readonly()),
+        None => None,
+    };
+    let inputs = Inputs {
+        t: samples.t(),
+        gyro: samples.gyro(),
+        accel: samples.accel(),
+        mag: match &mag {
+            Some(m) => Some(rows(py, "mag", m)?),
+            None => None,
+        },
+    };
+    py.detach(|| f.smooth(s, &inputs, out))
+        .map_err(|e| to_py(py, "imu / params", e))
+}
+
+/// Rows per part of an online run: each part is copied (GIL held) into buffers that stay in the
+/// cache, then filtered with the GIL released. Copying the whole record instead, as a private
+/// copy for the GIL-free read (see [`private_copy`]), cost a quarter of a 9D run in fresh pages.
+const PART: usize = 4096;
+
+/// The caller's arrays, read part by part with the GIL held.
+struct Record<'a> {
+    t: &'a [f64],
+    gyro: &'a [[f64; 3]],
+    accel: &'a [[f64; 3]],
+    mag: Option<&'a [[f64; 3]]>,
+}
+
+impl<'a> Record<'a> {
+    fn new<'py>(
+        py: Python<'py>,
+        t: &'a PyReadonlyArray1<'py, f64>,
+        gyro: &'a PyReadonlyArray2<'py, f64>,
+        accel: &'a PyReadonlyArray2<'py, f64>,
+        mag: Option<&'a PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            t: contiguous(py, "t", t)?,
+            gyro: rows(py, "gyro", gyro)?,
+            accel: rows(py, "accel", accel)?,
+            mag: mag.map(|m| rows(py, "mag", m)).transpose()?,
+        })
+    }
+
+    /// The whole record as the core's inputs (read only with the GIL held).
+    fn inputs(&self) -> Inputs<'a> {
+        Inputs {
+            t: self.t,
+            gyro: self.gyro,
+            accel: self.accel,
+            mag: self.mag,
+        }
+    }
+
+    /// The online filter over the record, part by part; between parts Python may run (its
+    /// signal handlers too: Ctrl-C stops a long run).
+    fn run(
+        &self,
+        py: Python<'_>,
+        f: &Robust,
+        s: &mut RobustState,
+        continued: bool,
+        out: &mut RobustOutputs<'_>,
+    ) -> PyResult<()> {
+        let n = self.t.len();
+        let lengths = [Some(self.gyro.len()), Some(self.accel.len()), self.mag.map(<[_]>::len)];
+        if n == 0 || lengths.iter().flatten().any(|&l| l != n) {
+            // The core's answer (its error for unequal lengths, raised before it reads a sample).
+            return f
+                .run(s, &self.inputs(), continued, out)
+                .map_err(|e| to_py(py, "imu / params", e));
+        }
+        let part = PART.min(n);
+        let (mut t, mut gyro, mut accel) = (vec![0.0; part], vec![[0.0; 3]; part], vec![[0.0; 3]; part]);
+        let mut mag = self.mag.map(|_| vec![[0.0; 3]; part]);
+        for first in (0..n).step_by(PART) {
+            let end = (first + PART).min(n);
+            let m = end - first;
+            t[..m].copy_from_slice(&self.t[first..end]);
+            gyro[..m].copy_from_slice(&self.gyro[first..end]);
+            accel[..m].copy_from_slice(&self.accel[first..end]);
+            if let (Some(buf), Some(src)) = (mag.as_mut(), self.mag) {
+                buf[..m].copy_from_slice(&src[first..end]);
+            }
+            let inputs = Inputs {
+                t: &t[..m],
+                gyro: &gyro[..m],
+                accel: &accel[..m],
+                mag: mag.as_deref().map(|b| &b[..m]),
+            };
+            let mut part_out = RobustOutputs {
+                q: &mut out.q[first..end],
+                bias: &mut out.bias[first..end],
+                bias_sigma: &mut out.bias_sigma[first..end],
+                rest: &mut out.rest[first..end],
+                mag_disturbed: &mut out.mag_disturbed[first..end],
+            };
+            let resumed = continued || first > 0;
+            py.detach(|| f.run_part(s, &inputs, first, resumed, &mut part_out))
+                .map_err(|e| to_py(py, "imu / params", e))?;
+            py.check_signals()?;
+        }
+        Ok(())
     }
 }
 

@@ -146,8 +146,9 @@ class Robust:
         initial: Rotation | RobustState | None = None,
         offline: bool = False,
     ) -> RobustResult:
-        """Filter (or, ``offline=True``, smooth) a whole recording in one native call (GIL
-        released); the streaming state is not touched.
+        """Filter (or, ``offline=True``, smooth) a whole recording natively with the GIL released
+        (online: in parts of 4096 samples, between which Python runs and Ctrl-C stops the run);
+        the streaming state is not touched.
 
         ``initial``: None (the first sample initialises), a ``Rotation`` (the attitude at
         ``imu.t[0]``), or a :class:`RobustState` to continue from (online only; the first sample is

@@ -445,4 +445,9 @@ fn errors_name_the_input() {
         .run(&mut RobustState::default(), &inputs, false, &mut out.outputs())
         .unwrap_err();
     assert_eq!((e.argument(), e.index()), (Some("t"), Some(5)));
+    // A part of a longer record: the row in the whole record.
+    let e = f
+        .run_part(&mut RobustState::default(), &inputs, 100, false, &mut out.outputs())
+        .unwrap_err();
+    assert_eq!((e.argument(), e.index()), (Some("t"), Some(105)));
 }

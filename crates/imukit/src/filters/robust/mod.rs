@@ -193,7 +193,7 @@ impl Robust {
         } else {
             0.0
         };
-        step::step(
+        step::step::<true>(
             &self.params,
             self.world,
             &Coefs::new(&self.params, dt),
@@ -217,16 +217,30 @@ impl Robust {
         continued: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
-        self.run_with(state, inputs, continued, out, None)
+        self.run_with((state, inputs), (0, continued), out, None)
     }
 
-    /// [`Robust::run`], with the bias of every step taken from `bias` (one row per sample)
-    /// instead of the estimate when given (the smoother's second passes).
-    fn run_with(
+    /// [`Robust::run`] on a part of a longer record whose first row is row `first` of the whole
+    /// (a caller feeding the record part by part, `continued` after the first part): errors name
+    /// the row in the whole record. Parts give the same result as one run, bit for bit.
+    pub fn run_part(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
+        first: usize,
         continued: bool,
+        out: &mut Outputs<'_>,
+    ) -> Result<()> {
+        self.run_with((state, inputs), (first, continued), out, None)
+    }
+
+    /// [`Robust::run_part`] with `start = (first, continued)`, the bias of every step taken from
+    /// `bias` (one row per sample) instead of the estimate when given (the smoother's second
+    /// passes).
+    fn run_with(
+        &self,
+        (state, inputs): (&mut RobustState, &Inputs<'_>),
+        (first, continued): (usize, bool),
         out: &mut Outputs<'_>,
         bias: Option<&[[f64; 3]]>,
     ) -> Result<()> {
@@ -245,20 +259,24 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        match inputs.mag {
-            Some(m) => self.run_loop::<true>(state, inputs, m, continued, out, bias),
-            None => self.run_loop::<false>(state, inputs, &[], continued, out, bias),
+        match (inputs.mag, bias) {
+            (Some(m), None) => self.run_loop::<true, true>(state, inputs, m, (first, continued), out, &[]),
+            (None, None) => self.run_loop::<false, true>(state, inputs, &[], (first, continued), out, &[]),
+            (Some(m), Some(b)) => self.run_loop::<true, false>(state, inputs, m, (first, continued), out, b),
+            (None, Some(b)) => self.run_loop::<false, false>(state, inputs, &[], (first, continued), out, b),
         }
     }
 
-    fn run_loop<const NINE: bool>(
+    /// The loop of [`Robust::run_with`]: `NINE` with the field `mags`; `LEARN` estimating the bias,
+    /// else taking it from `bias` (one row per sample); `start` is `(first, continued)`.
+    fn run_loop<const NINE: bool, const LEARN: bool>(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         mags: &[[f64; 3]],
-        continued: bool,
+        (first, continued): (usize, bool),
         out: &mut Outputs<'_>,
-        bias: Option<&[[f64; 3]]>,
+        bias: &[[f64; 3]],
     ) -> Result<()> {
         let p = &self.params;
         let mut coefs = Coefs::new(p, 0.0);
@@ -269,24 +287,24 @@ impl Robust {
             let mag = if NINE { Some(row(&mags[k])) } else { None };
             let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.sum());
             if !sum.is_finite() {
-                non_finite(k, t, &gyro, &accel, mag.as_ref())?;
+                non_finite(first + k, t, &gyro, &accel, mag.as_ref())?;
             }
             let dt = if k == 0 && !continued {
                 0.0
             } else {
                 let dt = t - previous;
                 if dt.is_nan() || dt <= 0.0 {
-                    return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
+                    return Err(Error::NonIncreasingTime { index: first + k, dt }.in_argument("t"));
                 }
                 dt
             };
             if dt > 0.0 || !state.initialized {
                 coefs = coefs.for_dt(p, dt);
-                if let Some(b) = bias {
-                    state.bias = row(&b[k]);
+                if !LEARN {
+                    state.bias = row(&bias[k]);
                 }
-                step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
-                check_overflow(state, k)?;
+                step::step::<LEARN>(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
+                check_overflow(state, first + k)?;
             }
             state.time = t;
             previous = t;

@@ -6,13 +6,21 @@
 //! the same `q_wb(t)` from the samples after `t`. Each interval is integrated with the same gyro
 //! sample in both passes (the later one, as the online step does).
 //!
-//! Fusion (two independent Gaussian estimates, weights by inverse variance): the bias per axis
-//! `b = (b_f/σ_f² + b_b/σ_b²)/(1/σ_f² + 1/σ_b²)`; the attitude `q = Exp(w Log(q_b ⊗ q_f⁻¹)) ⊗ q_f`,
-//! `w = v_f/(v_f + v_b)`, each pass's attitude variance `v` taken as `‖σ_b‖²` (a bias error ε
-//! leaves the low-passed inclination `ε τ` behind and the heading `ε τ_mag`, the same `τ` for both
-//! passes; a pass that has just started has the prior σ and so little weight). 6D: the backward
-//! heading is first aligned to the forward one by the circular mean of their heading difference
-//! (each 6D heading has its own arbitrary origin).
+//! Fusion (two independent Gaussian estimates, weights by inverse variance, the two-filter
+//! smoother of Fraser & Potter, IEEE Trans. Automatic Control 14 (1969) 387–390): the bias per
+//! axis `b = (b_f/σ_f² + b_b/σ_b²)/(1/σ_f² + 1/σ_b²)`; the attitude
+//! `q = Exp(W Log(q_b ⊗ q_f⁻¹)) ⊗ q_f` with `W = diag(½, ½, w)` in the world frame:
+//! - inclination (x, y) `½`: in the second stage both passes run the same filter with the same
+//!   bias over the same samples, so their tilt errors have the same variance, and the low pass's
+//!   lag, which trails the drift forward in one pass and backward in the other, cancels in the mean
+//!   (BROAD 6D offline 0.541° → 0.530°, every group better or equal);
+//! - heading (z) `w = v_f/(v_f + v_b)`, each pass's variance `v` taken as `‖σ_b‖²` (a bias error ε
+//!   leaves the heading `ε τ_mag` behind; a pass that has just started has the prior σ and so little
+//!   weight): the two headings differ in quality, as each pass rejects the field at other times
+//!   (`½` for the heading too: 9D 2.16° → 2.38°).
+//!
+//! 6D: the backward heading is first aligned to the forward one by the circular mean of their
+//! heading difference (each 6D heading has its own arbitrary origin).
 //!
 //! Flags: rest where either pass detects it (detection needs `rest_duration_s` of history, which
 //! each pass has on its own side); disturbed where both passes reject the field.
@@ -70,7 +78,8 @@ impl Reversed {
     }
 }
 
-/// `Exp(w_k Log(q_b,k ⊗ q_f,k⁻¹)) ⊗ q_f,k` into `out`, the backward heading first aligned in 6D.
+/// `Exp(diag(½, ½, w_k) Log(q_b,k ⊗ q_f,k⁻¹)) ⊗ q_f,k` into `out` (`weights` the `w_k` of the
+/// heading), the backward heading first aligned in 6D.
 fn fuse_attitudes(fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], nine: bool, out: &mut [[f64; 4]]) {
     // 6D: the backward heading origin moved onto the forward one (circular mean of the twist
     // about the vertical z, which both worlds share).
@@ -88,7 +97,8 @@ fn fuse_attitudes(fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], nine: boo
     for (k, o) in out.iter_mut().enumerate() {
         let qb = align * quat(&bwd[k]);
         let d = log(&relative(&fwd[k], &qb.coords.into()));
-        *o = (exp(&(d * weights[k])) * quat(&fwd[k])).coords.into();
+        let w = Vector3::new(0.5, 0.5, weights[k]);
+        *o = (exp(&d.component_mul(&w)) * quat(&fwd[k])).coords.into();
     }
 }
 
@@ -143,14 +153,9 @@ impl Robust {
         // Second stage: the fused bias in every step of both passes.
         let bias_rev: Vec<[f64; 3]> = out.bias.iter().rev().map(|b| [-b[0], -b[1], -b[2]]).collect();
         let mut s = start;
-        self.run_with(&mut s, inputs, false, &mut fwd.outputs(), Some(out.bias))?;
-        self.run_with(
-            &mut RobustState::default(),
-            &rev.inputs(),
-            false,
-            &mut bwd.outputs(),
-            Some(&bias_rev),
-        )?;
+        self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(out.bias))?;
+        let back = (&mut RobustState::default(), &rev.inputs());
+        self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev))?;
         bwd.q.reverse();
         fuse_attitudes(&fwd.q, &bwd.q, &weights, inputs.mag.is_some(), out.q);
         Ok(())
