@@ -77,6 +77,7 @@ bench: build
 	$(VPY) bench/bench_attitude.py
 	$(VPY) bench/bench_strapdown.py
 	$(VPY) bench/bench_preint.py
+	$(VPY) bench/bench_simd.py
 	$(VPY) bench/bench_allan.py
 	$(VPY) bench/bench_sim.py
 	$(VPY) bench/bench_filters.py

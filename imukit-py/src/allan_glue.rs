@@ -4,7 +4,8 @@ use imukit::allan::{self, Estimator};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::{contiguous, private_copy, raise, threads, to_py};
+use crate::convert::frozen_or_copy;
+use crate::{contiguous, raise, threads, to_py};
 
 /// `(M, C)` variances and `(M,)` term counts.
 type VarianceAndTerms<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<i64>>);
@@ -24,7 +25,7 @@ pub(crate) fn allan_variance<'py>(
     threads: Option<usize>,
 ) -> PyResult<VarianceAndTerms<'py>> {
     let columns = y.shape()[1];
-    let copy = private_copy(py, &y)?.readonly();
+    let copy = frozen_or_copy(py, &y)?.readonly();
     let samples = contiguous(py, name, &copy)?;
     let estimator = if overlapping {
         Estimator::Overlapping

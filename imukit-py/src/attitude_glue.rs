@@ -4,7 +4,7 @@ use imukit::attitude::{self, Representation, Scheme};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, private_copy, rows, unit_quaternion, zeros_for, Name};
+use crate::convert::{contiguous, frozen_or_copy, rows, unit_quaternion, zeros_for, Name};
 use crate::{threads, to_py};
 
 /// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`; on `threads` threads (None: the
@@ -29,7 +29,7 @@ pub(crate) fn attitude_integrate<'py>(
         gimbal_tolerance,
     };
     let initial = unit_quaternion(initial);
-    let (t, gyro) = (private_copy(py, &t)?, private_copy(py, &gyro)?);
+    let (t, gyro) = (frozen_or_copy(py, &t)?, frozen_or_copy(py, &gyro)?);
     let (t, gyro) = (t.readonly(), gyro.readonly());
     let (t, gyro) = (contiguous(py, "t", &t)?, rows::<3>(py, "gyro", &gyro)?);
     let n = if final_only { 1 } else { t.len() };

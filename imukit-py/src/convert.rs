@@ -2,7 +2,7 @@
 //! (the core makes them), no math, no defaults.
 //!
 //! - arrays: [`private_copy`] (a copy no other thread can write while the GIL is released),
-//!   [`frozen_or_copy`] (the array itself when nothing can write to it, else that copy),
+//!   [`frozen_or_copy`] (no copy of an array nothing can write),
 //!   [`contiguous`], [`rows`] (`(n, N)` as `&[[f64; N]]`), [`SampleCopies`];
 //! - values by field name: [`NoiseFields`] (`imukit.ImuNoise`), [`BiasFields`]
 //!   (`imukit.ImuBias`), [`NavStateFields`] (`imukit.NavState`);
@@ -30,36 +30,32 @@ pub(crate) fn private_copy<'py, D: numpy::ndarray::Dimension>(
     Ok(x.as_any().call_method0("copy")?.cast_into::<PyArray<f64, D>>()?)
 }
 
-/// `x` itself when no Python code can write to its buffer while the GIL is released, else
-/// [`private_copy`]: reading in place saves the copy (its page faults and memory traffic, ~5 ns
-/// per sample of a filter run). In place when `x` is C-contiguous and read-only and so is every
-/// array it views, down to one that owns its buffer (an `ImuData`'s arrays, frozen by
-/// `imukit._frozen`); a writeable base, a view of a foreign buffer (bytes, mmap, a memoryview)
-/// is copied. Making the owner writeable again (`setflags(write=True)`) while a call runs is
-/// outside the contract, as is writing to it from C.
+/// `x` itself when no Python code can write to it while a kernel reads it with the GIL released:
+/// C-contiguous, read-only, and owning its memory or viewing read-only arrays down to an owner
+/// that is none or bytes (as `imukit.ImuData`'s arrays, pickled or not); else [`private_copy`]. Saves the copy (~5 ns/sample of
+/// three streams) on the hot entry points (issue 20). A Python thread that sets such an array
+/// writeable again and writes to it during the call is outside this contract.
 pub(crate) fn frozen_or_copy<'py, D: numpy::ndarray::Dimension>(
     py: Python<'py>,
-    x: PyReadonlyArray<'py, f64, D>,
-) -> PyResult<PyReadonlyArray<'py, f64, D>> {
-    let mut link = x.as_any().clone();
-    let frozen = x.is_c_contiguous()
-        && loop {
-            if !link.is_instance_of::<numpy::PyUntypedArray>()
-                || link.getattr("flags")?.getattr("writeable")?.extract::<bool>()?
-            {
-                break false;
-            }
-            let base = link.getattr("base")?;
-            if base.is_none() {
-                break true;
-            }
-            link = base;
-        };
-    if frozen {
-        Ok(x)
-    } else {
-        Ok(private_copy(py, &x)?.readonly())
+    x: &PyReadonlyArray<'py, f64, D>,
+) -> PyResult<Bound<'py, PyArray<f64, D>>> {
+    let frozen =
+        |a: &Bound<'py, PyAny>| -> PyResult<bool> { Ok(!a.getattr("flags")?.getattr("writeable")?.is_truthy()?) };
+    let mut owner_frozen = x.is_c_contiguous() && frozen(x.as_any())?;
+    let mut base = x.as_any().getattr("base")?;
+    // Read-only ndarrays are followed down to the owner, which must be none (the array owns its
+    // memory) or immutable bytes (an unpickled array); any other owner (a buffer, an mmap) may
+    // be written to.
+    while owner_frozen && !base.is_none() && !base.is_instance_of::<pyo3::types::PyBytes>() {
+        owner_frozen = base.is_instance_of::<numpy::PyUntypedArray>() && frozen(&base)?;
+        if owner_frozen {
+            base = base.getattr("base")?;
+        }
     }
+    if owner_frozen {
+        return Ok(x.as_any().clone().cast_into::<PyArray<f64, D>>()?);
+    }
+    private_copy(py, x)
 }
 
 /// What a call's outputs need, for the message when they cannot be had: `count` items of `what`
@@ -161,7 +157,7 @@ pub(crate) fn rows<'a, 'py, const N: usize>(
     }
 }
 
-/// Private copies of a sample set ([`private_copy`]), alive while a kernel borrows them
+/// The sample arrays themselves when frozen, else private copies ([`frozen_or_copy`]), alive while a kernel borrows them
 /// without the GIL.
 pub(crate) struct SampleCopies<'py> {
     t: PyReadonlyArray1<'py, f64>,
@@ -177,9 +173,9 @@ impl<'py> SampleCopies<'py> {
         accel: &PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Self> {
         Ok(Self {
-            t: private_copy(py, t)?.readonly(),
-            gyro: private_copy(py, gyro)?.readonly(),
-            accel: private_copy(py, accel)?.readonly(),
+            t: frozen_or_copy(py, t)?.readonly(),
+            gyro: frozen_or_copy(py, gyro)?.readonly(),
+            accel: frozen_or_copy(py, accel)?.readonly(),
         })
     }
 

@@ -571,11 +571,11 @@ fn run<'py, L: Law>(
 ) -> PyResult<Outputs<'py>> {
     let mut s = state.typed::<L>();
     let n = t.shape()[0];
-    let t = frozen_or_copy(py, t)?;
-    let gyro = frozen_or_copy(py, gyro)?;
-    let accel = frozen_or_copy(py, accel)?;
+    let t = frozen_or_copy(py, &t)?.readonly();
+    let gyro = frozen_or_copy(py, &gyro)?.readonly();
+    let accel = frozen_or_copy(py, &accel)?.readonly();
     let mag = match mag {
-        Some(m) => Some(frozen_or_copy(py, m)?),
+        Some(m) => Some(frozen_or_copy(py, &m)?.readonly()),
         None => None,
     };
     let rows = |name, x| contiguous(py, name, x).map(|x| x.as_chunks::<3>().0);

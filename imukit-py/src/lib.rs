@@ -56,6 +56,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(strapdown_glue::strapdown_propagate, m)?,
         wrap_pyfunction!(threads::set_num_threads, m)?,
         wrap_pyfunction!(threads::get_num_threads, m)?,
+        wrap_pyfunction!(threads::simd_path, m)?,
     ] {
         m.add_function(f)?;
     }

@@ -40,7 +40,7 @@ from imukit.preint import (
 )
 from imukit.state import NavState, Trajectory
 from imukit.strapdown import integrate, propagate
-from imukit.threads import get_num_threads, set_num_threads
+from imukit.threads import get_num_threads, set_num_threads, simd_path
 
 __all__ = [
     "GRAVITY",
@@ -82,5 +82,6 @@ __all__ = [
     "quat",
     "set_num_threads",
     "sim",
+    "simd_path",
     "so3",
 ]

@@ -70,6 +70,7 @@ __all__ = [
     "sim_rotating_world",
     "sim_sensor_default",
     "sim_sensor_pose",
+    "simd_path",
     "so3_exp",
     "so3_exp_double_integral",
     "so3_hat",
@@ -137,6 +138,7 @@ FILTER_WORLDS: tuple[str, ...]
 # kernel below that takes `threads` runs on that many threads, None: on this process-wide count.
 def set_num_threads(n: int) -> None: ...
 def get_num_threads() -> int: ...
+def simd_path() -> str: ...
 
 # so3 / quat / euler row maps: `x` is a C-contiguous (n, k) float64 array, `name` the argument
 # named in errors, `threads` the thread count; each returns a new (n, m) array. Bad rows raise

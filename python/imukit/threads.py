@@ -21,7 +21,7 @@ import operator
 from imukit import _core
 from imukit._errors import ParameterError
 
-__all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads"]
+__all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads", "simd_path"]
 
 MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
 
@@ -54,3 +54,14 @@ def set_num_threads(n: int) -> None:
 def get_num_threads() -> int:
     """The number of threads a parallel kernel uses when its call does not say."""
     return _core.get_num_threads()
+
+
+def simd_path() -> str:
+    """The instruction-set path of the hot kernels in this process: ``"avx512"``, ``"avx2"`` or ``"baseline"``.
+
+    Chosen once, at the first kernel call: the best the CPU has, or the one the environment
+    variable ``IMUKIT_SIMD`` names (``baseline``, ``avx2``, ``avx512``; ``auto``: the best), falling
+    back to the best supported path below a forced one the CPU lacks. The paths give equal results
+    (``docs/performance.md``). Raises :class:`ParameterError` when ``IMUKIT_SIMD`` holds another value.
+    """
+    return _core.simd_path()

@@ -145,18 +145,7 @@ pub fn allan_variance(
         .collect();
     let sums: Vec<[f64; GROUP]> = tasks
         .par_iter()
-        .map(|&(i, (first, width))| {
-            let m = clusters[i];
-            let view = Columns { y, columns, first };
-            match (estimator, width) {
-                (Estimator::Overlapping, 1) => widen(overlapping::<1>(view, n, m)),
-                (Estimator::Overlapping, 2) => widen(overlapping::<2>(view, n, m)),
-                (Estimator::Overlapping, _) => overlapping::<GROUP>(view, n, m),
-                (Estimator::NonOverlapping, 1) => widen(non_overlapping::<1>(view, n, m)),
-                (Estimator::NonOverlapping, 2) => widen(non_overlapping::<2>(view, n, m)),
-                (Estimator::NonOverlapping, _) => non_overlapping::<GROUP>(view, n, m),
-            }
-        })
+        .map(|&(i, (first, width))| sums_of(Columns { y, columns, first }, width, n, clusters[i], estimator))
         .collect();
 
     let mut variance = vec![0.0; clusters.len() * columns];
@@ -216,6 +205,21 @@ impl Columns<'_> {
     }
 }
 
+crate::simd_dispatch! {
+    /// The sums of squared differences of `width` columns at cluster size `m`, per instruction-set
+    /// path.
+    fn sums_of(view: Columns<'_>, width: usize, n: usize, m: usize, estimator: Estimator) -> [f64; GROUP] {
+        match (estimator, width) {
+            (Estimator::Overlapping, 1) => widen(overlapping::<1>(view, n, m)),
+            (Estimator::Overlapping, 2) => widen(overlapping::<2>(view, n, m)),
+            (Estimator::Overlapping, _) => overlapping::<GROUP>(view, n, m),
+            (Estimator::NonOverlapping, 1) => widen(non_overlapping::<1>(view, n, m)),
+            (Estimator::NonOverlapping, 2) => widen(non_overlapping::<2>(view, n, m)),
+            (Estimator::NonOverlapping, _) => non_overlapping::<GROUP>(view, n, m),
+        }
+    }
+}
+
 fn widen<const W: usize>(s: [f64; W]) -> [f64; GROUP] {
     std::array::from_fn(|c| if c < W { s[c] } else { 0.0 })
 }
@@ -258,6 +262,7 @@ fn cluster_difference<const W: usize>(view: Columns<'_>, k: usize, m: usize) -> 
 }
 
 /// `Σ_k d_k²` of the overlapping estimator for `W` columns.
+#[inline(always)]
 fn overlapping<const W: usize>(view: Columns<'_>, n: usize, m: usize) -> [f64; W] {
     let terms = n - 2 * m + 1;
     let mut d = cluster_difference::<W>(view, 0, m);
@@ -279,6 +284,7 @@ fn overlapping<const W: usize>(view: Columns<'_>, n: usize, m: usize) -> [f64; W
 }
 
 /// `Σ_j d_{jm}²` of the non-overlapping estimator for `W` columns.
+#[inline(always)]
 fn non_overlapping<const W: usize>(view: Columns<'_>, n: usize, m: usize) -> [f64; W] {
     let mut squares = [Sum2::default(); W];
     for j in 0..n / m - 1 {

@@ -288,22 +288,36 @@ pub fn integrate_cancellable(
     if !initial.coords.iter().all(|v| v.is_finite()) {
         return Err(Error::NonFinite { index: 0 }.in_argument("initial"));
     }
-    let last = match options.representation {
-        Representation::Quaternion => match out {
-            Some(out) if matches!(options.scheme, Scheme::Exp | Scheme::Magnus) && t.len() > 1 => {
-                return quaternion_product(t, gyro, initial, options.scheme, out, cancel);
+    integrate_checked(t, gyro, initial, options, out, cancel)
+}
+
+crate::simd_dispatch! {
+    /// [`integrate_cancellable`] on checked inputs (flat rows), per instruction-set path.
+    fn integrate_checked(
+        t: &[f64],
+        gyro: &[f64],
+        initial: &UnitQuaternion<f64>,
+        options: &Options,
+        out: Option<&mut [f64]>,
+        cancel: &Cancel,
+    ) -> Result<UnitQuaternion<f64>> {
+        let last = match options.representation {
+            Representation::Quaternion => match out {
+                Some(out) if matches!(options.scheme, Scheme::Exp | Scheme::Magnus) && t.len() > 1 => {
+                    return quaternion_product(t, gyro, initial, options.scheme, out, cancel);
+                }
+                out => run(initial.into_inner(), t, gyro, options, out, cancel)?.quaternion(),
+            },
+            Representation::Matrix => {
+                run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out, cancel)?.quaternion()
             }
-            out => run(initial.into_inner(), t, gyro, options, out, cancel)?.quaternion(),
-        },
-        Representation::Matrix => {
-            run(*initial.to_rotation_matrix().matrix(), t, gyro, options, out, cancel)?.quaternion()
-        }
-        Representation::Euler => {
-            let chi = euler::from_rotation(&initial.to_rotation_matrix());
-            run(chi, t, gyro, options, out, cancel)?.quaternion()
-        }
-    };
-    Ok(last)
+            Representation::Euler => {
+                let chi = euler::from_rotation(&initial.to_rotation_matrix());
+                run(chi, t, gyro, options, out, cancel)?.quaternion()
+            }
+        };
+        Ok(last)
+    }
 }
 
 /// Integrates body rates in the rotation-matrix representation from the matrix `initial` and
@@ -365,6 +379,7 @@ const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9;
 /// `√3/12`, the commutator weight of the fourth-order Magnus step.
 const MAGNUS_WEIGHT: f64 = 0.144_337_567_297_406_44;
 
+#[inline(always)] // into each instruction-set copy (crate::simd)
 fn run<S: State>(
     mut y: S,
     t: &[f64],
@@ -480,6 +495,7 @@ const CHUNK: usize = 4096;
 /// `out[k+1]`; a sequential pass then turns them in place into the running product
 /// `q_{k+1} = q_k ⊗ Exp(θ_k)`. Same operations in the same order as [`run`], so the same bits,
 /// with the expensive half spread over the cores.
+#[inline(always)] // into each instruction-set copy (crate::simd)
 fn quaternion_product(
     t: &[f64],
     gyro: &[f64],

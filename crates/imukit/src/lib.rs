@@ -40,6 +40,7 @@ pub mod preint;
 pub mod propagate;
 pub mod quat;
 pub mod sim;
+pub mod simd;
 pub mod so3;
 pub mod strapdown;
 pub mod text;

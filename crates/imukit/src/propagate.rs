@@ -62,6 +62,7 @@ struct StepBlocks {
 }
 
 impl StepBlocks {
+    #[inline]
     fn new(x: &NavState, w_hat: &Vector3<f64>, a_hat: &Vector3<f64>, h: f64) -> Self {
         let theta = w_hat * h;
         Self {
@@ -117,6 +118,7 @@ fn to_blocks(c: &Covariance) -> Blocks {
     std::array::from_fn(|i| std::array::from_fn(|j| c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()))
 }
 
+#[inline]
 fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
     // Row-major 15×15.
     for (i, row) in b.iter().enumerate() {
@@ -134,6 +136,7 @@ fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
 /// `P ← F_x P F_xᵀ + F_i Q_i F_iᵀ` using the block structure of `F_x` (module docs): only the
 /// blocks of `A = F_x P` that the upper block triangle of `A F_xᵀ` reads are formed, with
 /// `R [â]×` and `R` shared between the δp and δv rows; the lower triangle is mirrored.
+#[inline]
 fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     let half_h2 = 0.5 * h * h;
     let ra = mul(&b.r, &b.a_cross);

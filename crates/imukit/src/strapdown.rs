@@ -145,16 +145,25 @@ impl<'a> Stepper<'a> {
         x0: NavState,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
-        let rotating = self.options.earth_rate != Vector3::zeros();
-        match (self.options.scheme, rotating) {
-            (Scheme::LieEuler, false) => self.drive::<EULER, false>(x0, visit),
-            (Scheme::Midpoint, false) => self.drive::<MIDPOINT, false>(x0, visit),
-            (Scheme::Rk4, false) => self.drive::<RK4, false>(x0, visit),
-            (Scheme::Exp, false) => self.drive::<EXP, false>(x0, visit),
-            (Scheme::LieEuler, true) => self.drive::<EULER, true>(x0, visit),
-            (Scheme::Midpoint, true) => self.drive::<MIDPOINT, true>(x0, visit),
-            (Scheme::Rk4, true) => self.drive::<RK4, true>(x0, visit),
-            (Scheme::Exp, true) => self.drive::<EXP, true>(x0, visit),
+        if self.options.earth_rate == Vector3::zeros() {
+            drive_inertial(self, x0, visit)
+        } else {
+            drive_rotating(self, x0, visit)
+        }
+    }
+
+    /// The loop of this stepper's scheme, matched once outside the loop.
+    #[inline(always)]
+    fn drive_scheme<const E: bool>(
+        &self,
+        x0: NavState,
+        visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
+    ) -> Result<NavState> {
+        match self.options.scheme {
+            Scheme::LieEuler => self.drive::<EULER, E>(x0, visit),
+            Scheme::Midpoint => self.drive::<MIDPOINT, E>(x0, visit),
+            Scheme::Rk4 => self.drive::<RK4, E>(x0, visit),
+            Scheme::Exp => self.drive::<EXP, E>(x0, visit),
         }
     }
 
@@ -388,6 +397,31 @@ fn overflow_culprit(
         "bias"
     } else {
         "imu"
+    }
+}
+
+crate::simd_dispatch! {
+    /// [`Stepper::run`] in an inertial world: the loop of the scheme of `stepper` (matched once,
+    /// outside the loop, so each loop is compiled for its scheme alone), per instruction-set path.
+    /// The rotating-world loops are a function of their own ([`drive_rotating`]), so the default
+    /// loops are the four they were before those terms (issue 20's regression hunt).
+    fn drive_inertial(
+        stepper: &Stepper<'_>,
+        x0: NavState,
+        visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
+    ) -> Result<NavState> {
+        stepper.drive_scheme::<false>(x0, visit)
+    }
+}
+
+crate::simd_dispatch! {
+    /// [`drive_inertial`] with the rotating-world terms (module docs).
+    fn drive_rotating(
+        stepper: &Stepper<'_>,
+        x0: NavState,
+        visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
+    ) -> Result<NavState> {
+        stepper.drive_scheme::<true>(x0, visit)
     }
 }
 

@@ -103,7 +103,7 @@ impl Preintegrator {
                     .into_par_iter()
                     .map(|start| {
                         let mut p = template.clone();
-                        p.run_euler(samples, clipped, start, (start + CHUNK).min(n - 1), cancel)?;
+                        run_euler(&mut p, samples, clipped, start, (start + CHUNK).min(n - 1), cancel)?;
                         Ok(p)
                     })
                     .collect::<Result<_>>()?;
@@ -111,25 +111,22 @@ impl Preintegrator {
                     *self = self.merge_unchecked(chunk)?;
                 }
             }
-            Scheme::Euler => self.run_euler(samples, clipped, 0, n - 1, cancel)?,
+            Scheme::Euler => run_euler(self, samples, clipped, 0, n - 1, cancel)?,
             Scheme::Midpoint => {
                 if self.last_sample().is_none() {
                     self.integrate_measurement_clipped(&first.0, &first.1, 0.0, clipped_at(clipped, 0));
                 }
-                for k in 1..n {
-                    cancel.check(k)?;
-                    let h = samples.t[k] - samples.t[k - 1];
-                    let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
-                    self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
-                }
+                run_midpoint(self, samples, clipped, cancel)?;
             }
         }
         Ok(())
     }
+}
 
-    /// Euler intervals `start..end` (interval k from sample k to k+1).
+crate::simd_dispatch! {
+    /// Euler intervals `start..end` of `p` (interval k from sample k to k+1).
     fn run_euler(
-        &mut self,
+        p: &mut Preintegrator,
         samples: &Samples<'_>,
         clipped: Option<&ClipMask<'_>>,
         start: usize,
@@ -140,7 +137,20 @@ impl Preintegrator {
             cancel.check(k)?;
             let h = samples.t[k + 1] - samples.t[k];
             let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
-            self.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
+            p.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
+        }
+        Ok(())
+    }
+}
+
+crate::simd_dispatch! {
+    /// Midpoint intervals 1..n of `p`, whose last sample is sample 0.
+    fn run_midpoint(p: &mut Preintegrator, samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, cancel: &Cancel) -> Result<()> {
+        for k in 1..samples.t.len() {
+            cancel.check(k)?;
+            let h = samples.t[k] - samples.t[k - 1];
+            let (a, w) = (samples.accel_at(k), samples.gyro_at(k));
+            p.integrate_measurement_clipped(&a, &w, h, clipped_at(clipped, k));
         }
         Ok(())
     }

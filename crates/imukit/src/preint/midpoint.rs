@@ -116,6 +116,7 @@ impl Preintegrator {
         }
     }
 
+    #[inline(always)]
     pub(super) fn integrate_midpoint(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
         let Some(prev) = self.ends.last else {
             let first = Sample {

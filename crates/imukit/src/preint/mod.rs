@@ -365,7 +365,8 @@ impl Preintegrator {
     /// [`Preintegrator::integrate_measurement`] of a sample whose sensors `clipped` flags as
     /// saturated: its white-noise densities are multiplied by
     /// [`Preintegrator::saturation_noise_factor`] (module docs); the deltas are the same.
-    #[inline]
+    // Inlined into each instruction-set copy of the batch loops (crate::simd).
+    #[inline(always)]
     pub fn integrate_measurement_clipped(
         &mut self,
         accel: &Vector3<f64>,

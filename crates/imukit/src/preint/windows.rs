@@ -246,51 +246,53 @@ fn at(samples: &Samples<'_>, clipped: Option<&ClipMask<'_>>, k: usize, x: f64, s
     (a0 + (a1 - a0) * s, w0 + (w1 - w0) * s, c)
 }
 
-fn window(
-    samples: &Samples<'_>,
-    clipped: Option<&ClipMask<'_>>,
-    lo: f64,
-    hi: f64,
-    template: &Preintegrator,
-) -> Preintegrator {
-    let t = samples.t;
-    let scheme = template.scheme;
-    let mut p = template.clone();
-    // Samples strictly inside (lo, hi); k0 is the last sample at or before lo.
-    let inside = t.partition_point(|&x| x <= lo)..t.partition_point(|&x| x < hi);
-    let k0 = inside.start - 1;
-    let first = at(samples, clipped, k0, lo, scheme);
-    let mut current = first;
-    let mut time = lo;
-    if scheme == Scheme::Midpoint {
-        p.integrate_measurement_clipped(&current.0, &current.1, 0.0, current.2);
+crate::simd_dispatch! {
+    fn window(
+        samples: &Samples<'_>,
+        clipped: Option<&ClipMask<'_>>,
+        lo: f64,
+        hi: f64,
+        template: &Preintegrator,
+    ) -> Preintegrator {
+        let t = samples.t;
+        let scheme = template.scheme;
+        let mut p = template.clone();
+        // Samples strictly inside (lo, hi); k0 is the last sample at or before lo.
+        let inside = t.partition_point(|&x| x <= lo)..t.partition_point(|&x| x < hi);
+        let k0 = inside.start - 1;
+        let first = at(samples, clipped, k0, lo, scheme);
+        let mut current = first;
+        let mut time = lo;
+        if scheme == Scheme::Midpoint {
+            p.integrate_measurement_clipped(&current.0, &current.1, 0.0, current.2);
+        }
+        let mut add = |p: &mut Preintegrator, next_time: f64, next: Point| {
+            // euler: the sample at the start is held; midpoint: the sample at the end is given.
+            let (sa, sw, sc) = if scheme == Scheme::Euler { current } else { next };
+            p.integrate_measurement_clipped(&sa, &sw, next_time - time, sc);
+            (time, current) = (next_time, next);
+        };
+        for (k, &tk) in t.iter().enumerate().take(inside.end).skip(inside.start) {
+            add(
+                &mut p,
+                tk,
+                (samples.accel_at(k), samples.gyro_at(k), clipped_at(clipped, k)),
+            );
+        }
+        let last = at(samples, clipped, inside.end - 1, hi, scheme);
+        add(&mut p, hi, last);
+        // The signal at each boundary, which the adjacent window shares: euler holds the sample at
+        // or before it (the one starting there when the boundary is a sample time).
+        let held = t.partition_point(|&x| x <= hi) - 1;
+        let end_at = |(accel, gyro, _): Point| End { t: None, accel, gyro };
+        let last = match scheme {
+            Scheme::Euler => (samples.accel_at(held), samples.gyro_at(held), Clipped::NONE),
+            Scheme::Midpoint => last,
+        };
+        p.boundary = Ends {
+            first: Some(end_at(first)),
+            last: Some(end_at(last)),
+        };
+        p
     }
-    let mut add = |p: &mut Preintegrator, next_time: f64, next: Point| {
-        // euler: the sample at the start is held; midpoint: the sample at the end is given.
-        let (sa, sw, sc) = if scheme == Scheme::Euler { current } else { next };
-        p.integrate_measurement_clipped(&sa, &sw, next_time - time, sc);
-        (time, current) = (next_time, next);
-    };
-    for (k, &tk) in t.iter().enumerate().take(inside.end).skip(inside.start) {
-        add(
-            &mut p,
-            tk,
-            (samples.accel_at(k), samples.gyro_at(k), clipped_at(clipped, k)),
-        );
-    }
-    let last = at(samples, clipped, inside.end - 1, hi, scheme);
-    add(&mut p, hi, last);
-    // The signal at each boundary, which the adjacent window shares: euler holds the sample at
-    // or before it (the one starting there when the boundary is a sample time).
-    let held = t.partition_point(|&x| x <= hi) - 1;
-    let end_at = |(accel, gyro, _): Point| End { t: None, accel, gyro };
-    let last = match scheme {
-        Scheme::Euler => (samples.accel_at(held), samples.gyro_at(held), Clipped::NONE),
-        Scheme::Midpoint => last,
-    };
-    p.boundary = Ends {
-        first: Some(end_at(first)),
-        last: Some(end_at(last)),
-    };
-    p
 }

@@ -1,0 +1,136 @@
+"""The dispatched kernels per instruction-set path (``IMUKIT_SIMD``), with their flop and byte
+counts, the floor on this CPU and the peers, in one table (``docs/performance.md``).
+
+Each path runs in its own process (the choice is made once per process), one thread, alternated
+``--rounds`` times; each cell is the median over rounds of the median over ``--repeats`` calls, in
+ns per sample. The peer rows (GTSAM's per-sample Python loop for preintegration, the euler and
+combined forms) run in the parent, between the rounds, so the ratios compare the same load.
+
+Usage: ``python bench/bench_simd.py [--n 200000] [--gtsam-n 20000] [--rounds 3] [--repeats 5]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+import imukit as ik
+from _timing import median_s, synthetic_imu
+
+try:
+    import gtsam
+except ImportError:  # a dev peer; the imukit rows run without it
+    gtsam = None
+
+PATHS = ("baseline", "avx2", "avx512")
+# Floating-point operations and bytes moved per sample, counted from the kernels' code (3×3
+# products 45 flops, symmetric ones 30, axpys 18; docs/performance.md), and the target of issue 20.
+KERNELS = {
+    "preintegrate euler (9×9 + 9×6)": (1300, 56, 100),
+    "preintegrate midpoint": (2400, 56, 150),
+    "preintegrate combined (15×15)": (2100, 56, 180),
+    "propagate (15×15 each sample)": (2000, 136, 150),
+    "integrate midpoint": (200, 136, 25),
+    "integrate_attitude": (120, 64, None),
+}
+# One core's double-precision peak at the clock of this host's EPYC (2 FMA pipes × 4 lanes × 2
+# flops at ~3 GHz): the floor is flops / FLOPS_PER_NS, the byte traffic is far below bandwidth.
+FLOPS_PER_NS = 48.0
+
+
+def cases(n: int) -> dict[str, Callable[[], object]]:
+    t, gyro, accel = synthetic_imu(n)
+    imu = ik.ImuData(t, gyro, accel)
+    noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+    initial = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    names = list(KERNELS)
+    return {
+        names[0]: lambda: ik.preintegrate(imu, noise=noise, threads=1),
+        names[1]: lambda: ik.preintegrate(imu, noise=noise, scheme="midpoint", threads=1),
+        names[2]: lambda: ik.preintegrate(imu, noise=noise, combined=True, threads=1),
+        names[3]: lambda: ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise),
+        names[4]: lambda: ik.integrate(imu, initial=initial, scheme="midpoint"),
+        names[5]: lambda: ik.integrate_attitude(t, gyro, threads=1),
+    }
+
+
+def child(n: int, repeats: int) -> None:
+    """One path's row, as JSON on stdout."""
+    row = {"path": ik.simd_path()}
+    row.update({name: median_s(f, repeats) / n * 1e9 for name, f in cases(n).items()})
+    print(json.dumps(row))
+
+
+def gtsam_rows(n: int) -> dict[str, float]:
+    """ns per sample of GTSAM's Python loops (euler: the manifold class; combined)."""
+    if gtsam is None:
+        return {}
+    t, gyro, accel = synthetic_imu(n)
+    steps = np.diff(t).tolist()
+    params = gtsam.PreintegrationCombinedParams.MakeSharedU(9.81)
+    for name in ("setGyroscopeCovariance", "setAccelerometerCovariance", "setIntegrationCovariance"):
+        getattr(params, name)(1e-6 * np.eye(3))
+
+    def loop(make: Callable[[], object]) -> float:
+        pim = make()
+        step = pim.integrateMeasurement  # type: ignore[attr-defined]
+        start = time.perf_counter()
+        for k in range(n - 1):
+            step(accel[k], gyro[k], steps[k])
+        return (time.perf_counter() - start) / (n - 1) * 1e9
+
+    return {
+        "preintegrate euler (9×9 + 9×6)": loop(lambda: gtsam.PreintegratedImuMeasurementsManifold(params)),
+        "preintegrate combined (15×15)": loop(lambda: gtsam.PreintegratedCombinedMeasurements(params)),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=200_000)
+    parser.add_argument("--gtsam-n", type=int, default=20_000)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        child(args.n, args.repeats)
+        return
+    runs: dict[str, list[dict[str, float]]] = {p: [] for p in PATHS}
+    peers: list[dict[str, float]] = []
+    used: dict[str, str] = {}
+    for _ in range(args.rounds):
+        for path in PATHS:
+            env = dict(os.environ, IMUKIT_SIMD=path, RAYON_NUM_THREADS="1")
+            command = [sys.executable, __file__, "--child", f"--n={args.n}", f"--repeats={args.repeats}"]
+            out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout
+            row = json.loads(out)
+            used[path] = row.pop("path")
+            runs[path].append(row)
+        peers.append(gtsam_rows(args.gtsam_n))
+    print(f"paths in use: {used}; n = {args.n:,}, {args.rounds} alternated rounds, one thread")
+    header = "| kernel | flops | bytes | floor ns | " + " | ".join(PATHS) + " | target | peer ns | peer/best |"
+    print(header)
+    print("|" + "---|" * (header.count("|") - 1))
+    for name, (flops, nbytes, target) in KERNELS.items():
+        cells = [float(np.median([r[name] for r in runs[p]])) for p in PATHS]
+        peer = [p[name] for p in peers if name in p]
+        peer_ns = float(np.median(peer)) if peer else None
+        ratio = f"{peer_ns / min(cells):.1f}×" if peer_ns else "—"
+        print(
+            f"| {name} | {flops} | {nbytes} | {flops / FLOPS_PER_NS:.0f} | "
+            + " | ".join(f"{c:.0f}" for c in cells)
+            + f" | {target or '—'} | {f'{peer_ns:.0f}' if peer_ns else '—'} | {ratio} |"
+        )
+
+
+if __name__ == "__main__":
+    main()

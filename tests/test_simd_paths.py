@@ -1,0 +1,110 @@
+"""Runtime CPU dispatch (``crates/imukit/src/simd.rs``): each instruction-set path, forced with
+``IMUKIT_SIMD`` in a fresh process (the choice is made once per process), gives the baseline
+path's results to 1e-12 relative on the deltas, covariances, bias Jacobians and states of
+preintegrate (euler, midpoint, combined), propagate, integrate and integrate_attitude. The paths
+compute the same operations in the same order, so they agree bit for bit today; 1e-12 is the
+stated tolerance (a reassociated sum of a vectorised path would still pass, a wrong lane not).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import imukit as ik
+
+# Run in the child: every dispatched kernel on one input, results saved to argv[1] (an .npz).
+CHILD = """
+import sys
+import numpy as np
+from scipy.spatial.transform import Rotation
+import imukit as ik
+
+rng = np.random.default_rng(7)
+n = 70_001  # past two parallel euler chunks (2 * 2**15 intervals): the chunked path and merges
+t = np.arange(n) * 0.005 + 0.002 * rng.random(n)
+t.sort()
+s = np.arange(n) * 0.005
+gyro = np.c_[0.9 * np.sin(1.1 * s), 0.6 * np.cos(0.7 * s), 1.5 * np.sin(1.3 * s)] + 0.01 * rng.normal(size=(n, 3))
+accel = np.c_[0.5 * np.sin(0.9 * s), 0.4 * np.cos(0.3 * s), 9.81 + np.sin(1.7 * s)] + 0.05 * rng.normal(size=(n, 3))
+imu = ik.ImuData(t, gyro, accel)
+noise = ik.ImuNoise(gyro_density=1.7e-4, accel_density=2e-3, gyro_random_walk=2e-5, accel_random_walk=3e-3)
+bias = ik.ImuBias(gyro=[0.01, -0.02, 0.005], accel=[0.05, 0.02, -0.1])
+initial = ik.NavState([1.0, 2.0, 3.0], [0.5, -0.2, 0.1], Rotation.from_rotvec([0.1, -0.3, 0.7]))
+out = {"path": np.array(ik.simd_path())}
+for scheme in ("euler", "midpoint"):
+    p = ik.preintegrate(imu, noise=noise, bias=bias, scheme=scheme, combined=scheme == "midpoint")
+    out[scheme + "_deltas"] = np.r_[p.delta_rotation.as_matrix().ravel(), p.delta_velocity, p.delta_position]
+    out[scheme + "_covariance"] = p.covariance
+    out[scheme + "_jacobian"] = p.bias_jacobian
+    if p.covariance_combined is not None:
+        out[scheme + "_combined"] = p.covariance_combined
+combined = ik.preintegrate(imu, noise=noise, bias=bias, combined=True)
+out["combined_covariance"] = combined.covariance_combined
+windows = ik.preintegrate_windows(imu, t[::500], ik.PreintParams(noise, bias=bias, scheme="midpoint"))
+out["windows_covariance"] = windows.covariance
+out["windows_deltas"] = windows.delta_position
+prop = ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise, bias=bias, covariance_every=997)
+out["propagate_covariance"] = prop.covariance
+out["propagate_position"] = prop.position
+for scheme in ("midpoint", "rk4"):
+    traj = ik.integrate(imu, initial=initial, bias=bias, scheme=scheme)
+    out["integrate_" + scheme] = np.c_[traj.position, traj.velocity]
+out["attitude"] = ik.integrate_attitude(t, gyro).as_quat()
+out["attitude_rk4"] = ik.integrate_attitude(t, gyro, scheme="rk4").as_quat()
+out["allan"] = ik.noise.allan_deviation(gyro, 200.0).deviation
+np.savez(sys.argv[1], **out)
+"""
+
+
+def _run(path: str, target: Path) -> dict[str, np.ndarray]:
+    env = dict(os.environ, IMUKIT_SIMD=path, RAYON_NUM_THREADS="2")
+    subprocess.run([sys.executable, "-c", CHILD, str(target)], env=env, check=True, timeout=600)
+    with np.load(target) as data:
+        return {k: data[k] for k in data.files}
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, np.ndarray]]:
+    folder = tmp_path_factory.mktemp("simd")
+    return {p: _run(p, folder / f"{p}.npz") for p in ("baseline", "avx2", "avx512")}
+
+
+@pytest.mark.parametrize("path", ["avx2", "avx512"])
+def test_each_path_gives_the_baseline_results(results: dict[str, dict[str, np.ndarray]], path: str) -> None:
+    base, other = results["baseline"], results[path]
+    assert str(base["path"]) == "baseline"
+    assert set(other) == set(base)
+    for key in base:
+        if key == "path":
+            continue
+        a, b = base[key], other[key]
+        scale = np.abs(a).max()
+        assert scale > 0, key
+        gap = np.abs(a - b).max() / scale
+        assert gap <= 1e-12, f"{key}: {gap:.2e} relative to the baseline path"
+
+
+def test_a_forced_path_is_the_one_in_use_or_the_best_below_it(results: dict[str, dict[str, np.ndarray]]) -> None:
+    order = ["baseline", "avx2", "avx512"]
+    for forced, res in results.items():
+        used = str(res["path"])
+        assert order.index(used) <= order.index(forced), (forced, used)
+    best = ik.simd_path() if "IMUKIT_SIMD" not in os.environ else None
+    if best is not None:
+        # Unforced, the best path the CPU has: a forced path at or below it is honoured.
+        for forced, res in results.items():
+            if order.index(forced) <= order.index(best):
+                assert str(res["path"]) == forced
+
+
+def test_an_unknown_path_name_is_a_parameter_error_naming_the_variable() -> None:
+    code = "import imukit as ik\ntry:\n    ik.simd_path()\nexcept ik.ParameterError as e:\n    print(e.argument)"
+    env = dict(os.environ, IMUKIT_SIMD="sse9")
+    done = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True)
+    assert done.stdout.strip() == "IMUKIT_SIMD"
