@@ -107,7 +107,7 @@ def cases(scan: bool) -> dict[str, Callable[..., torch.Tensor]]:
 
 def cpu(batch: int, n: int, repeats: int, scan: bool) -> None:
     print(f"CPU, {torch.get_num_threads()} threads, batch {batch} × {n} samples, ns per sample")
-    print(f"(median of {repeats} alternated runs; load average before: {os.getloadavg()[0]:.1f})")
+    print(f"(median of {repeats} alternated runs, no separate warm-up; load average before: {os.getloadavg()[0]:.1f})")
     runs = cases(scan)
     keys = [
         (name, backward, dtype)
@@ -116,8 +116,6 @@ def cpu(batch: int, n: int, repeats: int, scan: bool) -> None:
         for dtype in (torch.float64, torch.float32)
     ]
     inputs_of = {(b, d): inputs(batch, n, d, "cpu", b) for b in (False, True) for d in (torch.float64, torch.float32)}
-    for name, backward, dtype in keys:  # warm-up
-        time_once(runs[name], inputs_of[backward, dtype], backward, "cpu")
     times: dict[tuple[str, bool, torch.dtype], list[float]] = {k: [] for k in keys}
     for _ in range(repeats):
         for name, backward, dtype in keys:

@@ -1,8 +1,8 @@
 """``imukit.torch``'s CPU path (``method="native"``: the Rust kernels and their reverse sweep).
 
 - Forward equals the numpy API (``imukit.preintegrate``, ``integrate_attitude``) and the torch scan
-  to 1e-12 (float64) over lengths 1 … 1025 and batch shapes (N, 3), (B, N, 3), (B1, B2, N, 3):
-  lie_euler with covariance and bias Jacobian, midpoint deltas.
+  to 1e-12 (float64) over lengths 1 … 1025 and batch shapes (N, 3), (B, N, 3), (B1, B2, N, 3),
+  both schemes, with covariance and bias Jacobian.
 - ``torch.autograd.gradcheck`` (float64) of the Rust backward for every differentiable input
   (``dt``, ``gyro``, ``accel``, ``bias``, noise densities, per-sample covariances, the initial
   state), covariance, bias Jacobian and per-step outputs included, at zero rates and masked samples.
@@ -23,8 +23,8 @@ from torch_cases import NOISE, case, gap, numpy_attitude, numpy_preintegrate  # 
 
 LENGTHS = [1, 2, 3, 7, 1000, 1023, 1024, 1025]
 FIELDS = ("delta_rotation", "delta_velocity", "delta_position", "delta_t", "covariance", "bias_jacobian")
-# What the kernels cover per scheme: lie_euler everything, midpoint the deltas.
-LINEAR = {"lie_euler": True, "midpoint": False}
+# Covariance and bias Jacobian asked for, per scheme (both: the kernels cover every output).
+LINEAR = {"lie_euler": True, "midpoint": True}
 
 
 def _run(c, scheme, method, **kw):
@@ -82,7 +82,8 @@ def _leaves(*xs):
 
 
 @pytest.mark.parametrize("per_step", [False, True])
-def test_gradcheck_native_lie_euler(per_step: bool) -> None:
+@pytest.mark.parametrize("scheme", ["midpoint", "lie_euler"])
+def test_gradcheck_native_preintegrate(scheme: str, per_step: bool) -> None:
     c = case((2,), 5, seed=10)
     g = torch.Generator().manual_seed(3)
     gyro_cov = 1e-4 * torch.rand(2, 5, 3, 3, generator=g, dtype=torch.float64)  # full, not symmetric
@@ -91,7 +92,7 @@ def test_gradcheck_native_lie_euler(per_step: bool) -> None:
 
     def f(dt, gyro, accel, bias, noise, gcov):
         out = it.preintegrate(
-            dt, gyro, accel, bias=bias, noise=noise, gyro_cov=gcov, scheme="lie_euler", method="native",
+            dt, gyro, accel, bias=bias, noise=noise, gyro_cov=gcov, scheme=scheme, method="native",
             return_covariance=True, return_jacobian=True, per_step=per_step,
         )  # fmt: skip
         return tuple(out)
@@ -99,7 +100,7 @@ def test_gradcheck_native_lie_euler(per_step: bool) -> None:
     assert torch.autograd.gradcheck(f, inputs)
 
 
-def test_gradcheck_native_midpoint_deltas_and_integrate() -> None:
+def test_gradcheck_native_integrate_and_attitude() -> None:
     c = case((2,), 6, seed=12)
     r0 = torch.linalg.matrix_exp(torch.tensor([[0.0, -0.5, -0.2], [0.5, 0.0, -0.3], [0.2, 0.3, 0.0]]).double())
     v0, p0 = torch.tensor([1.0, 2.0, -0.5]).double(), torch.tensor([-1.0, 0.5, 2.0]).double()
@@ -115,7 +116,8 @@ def test_gradcheck_native_midpoint_deltas_and_integrate() -> None:
     assert torch.autograd.gradcheck(f, inputs)
 
 
-def test_gradcheck_native_at_zero_rates_and_masked_samples() -> None:
+@pytest.mark.parametrize("scheme", ["midpoint", "lie_euler"])
+def test_gradcheck_native_at_zero_rates_and_masked_samples(scheme: str) -> None:
     c = case((2,), 5, seed=14)
     gyro = c.gyro.clone()
     gyro[0, 1] = 0.0
@@ -123,7 +125,7 @@ def test_gradcheck_native_at_zero_rates_and_masked_samples() -> None:
 
     def f(dt, w, a, b):
         out = it.preintegrate(
-            dt, w, a, bias=b, noise=torch.tensor([1e-2, 1e-1]).double(), mask=mask, scheme="lie_euler",
+            dt, w, a, bias=b, noise=torch.tensor([1e-2, 1e-1]).double(), mask=mask, scheme=scheme,
             method="native", return_covariance=True, return_jacobian=True,
         )  # fmt: skip
         return tuple(out)
@@ -180,8 +182,6 @@ def test_mask_equals_windows_alone(scheme: str, method: str) -> None:
 
 def test_native_where_it_does_not_apply_is_refused() -> None:
     c = case((), 5)
-    with pytest.raises(ik.ParameterError, match="method: the native kernels need"):
-        it.preintegrate(c.dt, c.gyro, c.accel, scheme="midpoint", noise=NOISE, return_covariance=True, method="native")
     with pytest.raises(ik.ParameterError, match="method: the native kernels need"):
         it.integrate_attitude(c.dt, c.gyro, scheme="rk2", method="native")
     with pytest.raises(ik.ParameterError, match="mask: expected a boolean"):

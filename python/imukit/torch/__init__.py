@@ -24,8 +24,8 @@ guide.
   covariance of each reading's white noise (each replaces ``noise`` for its sensor).
 - Bias Jacobian 9 × 6, rows ``[θ, v, p]``, columns ``[b_g, b_a]``.
 - ``method``: ``"auto"`` (default): ``"native"`` where it applies, else ``"scan"``;
-  ``"native"``, the Rust kernels with their analytic backward (CPU tensors; lie_euler with every
-  output, midpoint deltas; ``_native.py``); ``"scan"``, associative scans over the sequence in
+  ``"native"``, the Rust kernels with their analytic backward (CPU tensors; every output of both
+  schemes, ``integrate_attitude``'s ``exp``; ``_native.py``); ``"scan"``, associative scans over the sequence in
   torch, depth O(log N) (``_scan.py``), the device (CUDA) path; ``"sequential"``, the step-by-step
   recursion in torch, the reference.
 
@@ -78,13 +78,13 @@ class State(NamedTuple):
     position: torch.Tensor
 
 
-def _method(method: str, x: torch.Tensor, scheme: str, linear: bool) -> str:
-    """The path that runs: ``auto`` resolved, ``native`` refused where the kernels do not apply."""
+def _method(method: str, x: torch.Tensor, kernel: bool = True) -> str:
+    """The path that runs: ``auto`` resolved, ``native`` refused where the kernels do not apply
+    (CUDA tensors; no ``kernel`` for the call)."""
     method = choice(method, "method", _METHODS)
-    native = _native.supported(x, scheme, linear)
+    native = kernel and _native.supported(x)
     if method == "native" and not native:
-        need = "the native kernels need CPU tensors (midpoint: without covariance or Jacobian)"
-        raise ParameterError(need, argument="method")
+        raise ParameterError("the native kernels need CPU tensors (and integrate_attitude: exp)", argument="method")
     if method == "auto":
         return "native" if native else "scan"
     return method
@@ -137,7 +137,7 @@ def preintegrate(
         scheme=scheme,
     )
     linear = return_covariance or return_jacobian
-    method = _method(method, s.gyro, scheme, linear)
+    method = _method(method, s.gyro)
     if method == "native":
         out = _native.preintegrate(
             s, batch, scheme, per_step=per_step, covariance=return_covariance, jacobian=return_jacobian
@@ -216,7 +216,7 @@ def integrate_attitude(
     scheme = choice(scheme, "scheme", ("exp", "rk2"))
     s, batch = samples(dt, gyro, None, bias=None, lengths=lengths, mask=mask)
     # exp is the preintegration's rotation (lie_euler); rk2 has no native kernel.
-    method = _method(method, s.gyro, "lie_euler" if scheme == "exp" else "midpoint", scheme == "rk2")
+    method = _method(method, s.gyro, kernel=scheme == "exp")
     if method == "native":
         rot = _native.preintegrate(s, batch, "lie_euler", per_step=True, covariance=False, jacobian=False)[0]
     elif scheme == "exp":

@@ -8,8 +8,8 @@ compute in float64). What differs per scheme is prepared here in torch, where au
 bias subtraction, masking (a step of 0), the midpoint rate ``½(ω₀ + ω₁)``; the kernels see each
 interval's ``h``, ``ω̂``, specific forces and noise covariances (module docs of ``adjoint``).
 
-Covered: every output of the euler scheme (deltas, covariance, bias Jacobian, per step or final)
-and the midpoint scheme's deltas; :func:`supported` says when.
+Covered: every output of both schemes (deltas, covariance, bias Jacobian, per step or final);
+``integrate_attitude``'s ``exp`` scheme is the euler rotation (``rk2`` has no kernel).
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from imukit import _core
 from imukit.torch._steps import Samples, rates
 
 
-def supported(x: torch.Tensor, scheme: str, linear: bool) -> bool:
-    """Whether the kernels cover this call: CPU tensors; midpoint only for deltas."""
-    return x.device.type == "cpu" and (scheme == "lie_euler" or not linear)
+def supported(x: torch.Tensor) -> bool:
+    """Whether the kernels cover this call: CPU tensors."""
+    return x.device.type == "cpu"
 
 
 _Array = np.ndarray[Any, np.dtype[np.float64]]
@@ -78,7 +78,7 @@ def preintegrate(
         return x.movedim(0, first).reshape(-1, n, *x.shape[first + 1 :]).to(torch.float64)
 
     cov_g = cov_a = None
-    if covariance and s.cov is not None:
+    if s.cov is not None:
         cov_g, cov_a = windows(s.cov[..., :3, :3]), windows(s.cov[..., 3:, 3:])
     a_end = windows(a1) if scheme == "midpoint" else None
     options = {"per_step": per_step, "covariance": covariance, "jacobian": jacobian}

@@ -12,8 +12,9 @@
 //! | `a_end` | 3 | midpoint only: the specific force at its end |
 //! | `cov_g`, `cov_a` | 9 | the covariance of its gyro / accelerometer white noise (3×3) |
 //!
-//! The interval step is `step.rs` (Forster et al. 2017; the midpoint deltas of
-//! `preint/midpoint.rs`); covariance and bias Jacobian are carried for the euler scheme.
+//! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
+//! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
+//! Jacobian in both schemes.
 //! [`forward`] writes one record per interval (`per_step`) or per window:
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
@@ -105,13 +106,6 @@ impl Windows<'_> {
                 got: "none".into(),
             });
         }
-        if self.a_end.is_some() && (out.covariance || out.jacobian) {
-            return Err(Error::Parameter {
-                name: "a_end",
-                expected: "the euler scheme for covariance and bias Jacobian",
-                got: "the midpoint scheme".into(),
-            });
-        }
         let windows = self.h.len() / self.n;
         let mut buffers = vec![("dt", self.h, 1), ("gyro", self.w, 3), ("accel", self.a, 3)];
         if let Some(a) = self.a_end {
@@ -193,6 +187,8 @@ fn add(a: &State, b: &State) -> State {
         p: a.p + b.p,
         cov: a.cov + b.cov,
         jac: a.jac + b.jac,
+        cross: a.cross + b.cross,
+        last: a.last + b.last,
     }
 }
 
@@ -225,7 +221,7 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
     let linear = outputs.linear();
     out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
         let x = window(x, b);
-        let mut s = State::START;
+        let mut s = State::start();
         for k in 0..x.n {
             s = step::forward(&s, &x.interval(k), linear);
             if outputs.per_step {
@@ -258,7 +254,7 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
         let mut before = Vec::with_capacity(x.n);
-        let mut s = State::START;
+        let mut s = State::start();
         for k in 0..x.n {
             before.push(s);
             s = step::forward(&s, &x.interval(k), linear);
