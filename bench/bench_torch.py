@@ -2,11 +2,15 @@
 
 CPU: batch ``--batch`` (256) × ``--samples`` (1023) windows, float64 and float32, forward and
 forward + backward, with and without the 9×9 covariance, in ns per sample (median of
-``--repeats``), both libraries in the same run on the same inputs. 1023 samples, not 1000: pypose
+``--repeats`` runs, the cases alternated within each repeat so that a load change hits all of
+them), both libraries in the same run on the same inputs. 1023 samples, not 1000: pypose
 0.9.5's ``cumops`` asks torch for ``arange(2^k, L)`` with ``2^k > L`` unless ``L = samples + 1``
 is a power of two, which torch 2.15 refuses. pypose has one scheme (lie_euler, the sample held
-over its step); imukit.torch is timed in both. pypose's covariance takes densities; ours per-sample
-covariances: the same noise either way.
+over its step); imukit.torch runs its CPU path (``method="native"``, the Rust kernels) in both
+schemes and, with ``--scan``, the torch scan.
+pypose's covariance takes densities; ours per-sample covariances: the same noise either way.
+``--only CASE`` runs one case (forward + backward, float64) and prints the process's peak
+resident memory, e.g. ``--only "native lie_euler, cov"``.
 
 CUDA (when a GPU is present): batch ``--gpu-batch`` (4096) × 1000 samples, float32 and float64,
 forward and forward + backward, deltas without covariance and with it; samples per second and the
@@ -16,6 +20,9 @@ device name. Self-contained: ``python bench/bench_torch.py [--gpu-only]``.
 from __future__ import annotations
 
 import argparse
+import os
+import resource
+import statistics
 import time
 import warnings
 from collections.abc import Callable
@@ -35,26 +42,21 @@ def inputs(batch: int, n: int, dtype: torch.dtype, device: str, grad: bool) -> t
     return tuple(x.to(device).requires_grad_(grad) for x in (dt, gyro, accel))
 
 
-def median_s(f: Callable[[], object], repeats: int, sync: Callable[[], None]) -> float:
-    f()
-    sync()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        sync()
-        times.append(time.perf_counter() - start)
-    return sorted(times)[len(times) // 2]
-
-
-def ours(scheme: str, cov: bool) -> Callable[..., torch.Tensor]:
+def ours(scheme: str, cov: bool, method: str = "native") -> Callable[..., torch.Tensor]:
     def run(dt: torch.Tensor, gyro: torch.Tensor, accel: torch.Tensor) -> torch.Tensor:
         if not cov:
-            d = it.preintegrate(dt, gyro, accel, scheme=scheme)
+            d = it.preintegrate(dt, gyro, accel, scheme=scheme, method=method)
             return d.delta_rotation.sum() + d.delta_velocity.sum() + d.delta_position.sum()
         per_sample = (1e-4 / dt)[..., None].expand(*dt.shape, 3)
         d = it.preintegrate(
-            dt, gyro, accel, scheme=scheme, gyro_cov=per_sample, accel_cov=per_sample, return_covariance=True
+            dt,
+            gyro,
+            accel,
+            scheme=scheme,
+            gyro_cov=per_sample,
+            accel_cov=per_sample,
+            return_covariance=True,
+            method=method,
         )
         return d.delta_velocity.sum() + d.covariance.sum()  # type: ignore[union-attr]
 
@@ -73,35 +75,67 @@ def pypose(cov: bool) -> Callable[..., torch.Tensor]:
     return run
 
 
+def time_once(f: Callable[..., torch.Tensor], args: tuple[torch.Tensor, ...], backward: bool, device: str) -> float:
+    sync = torch.cuda.synchronize if device == "cuda" else (lambda: None)
+    start = time.perf_counter()
+    loss = f(*args)
+    if backward:
+        loss.backward()  # type: ignore[no-untyped-call]
+    sync()
+    return time.perf_counter() - start
+
+
 def time_case(
     f: Callable[..., torch.Tensor], args: tuple[torch.Tensor, ...], backward: bool, repeats: int, device: str
 ) -> float:
-    def go() -> None:
-        loss = f(*args)
-        if backward:
-            loss.backward()  # type: ignore[no-untyped-call]
-
-    sync = torch.cuda.synchronize if device == "cuda" else (lambda: None)
-    return median_s(go, repeats, sync)
+    time_once(f, args, backward, device)
+    return statistics.median(time_once(f, args, backward, device) for _ in range(repeats))
 
 
-def cpu(batch: int, n: int, repeats: int) -> None:
-    print(f"CPU, {torch.get_num_threads()} threads, batch {batch} × {n} samples, ns per sample (median of {repeats})")
-    print(f"{'case':<44} {'float64':>10} {'float32':>10}")
+def cases(scan: bool) -> dict[str, Callable[..., torch.Tensor]]:
+    out = {}
     for cov in (False, True):
-        rows: list[tuple[str, Callable[..., torch.Tensor]]] = [
-            ("imukit.torch lie_euler", ours("lie_euler", cov)),
-            ("imukit.torch midpoint", ours("midpoint", cov)),
-            ("pypose IMUPreintegrator", pypose(cov)),
-        ]
-        for backward in (False, True):
-            for name, f in rows:
-                label = f"{name}, {'fwd+bwd' if backward else 'fwd'}, {'cov' if cov else 'no cov'}"
-                cells = []
-                for dtype in (torch.float64, torch.float32):
-                    args = inputs(batch, n, dtype, "cpu", backward)
-                    cells.append(time_case(f, args, backward, repeats, "cpu") / (batch * n) * 1e9)
-                print(f"{label:<44} {cells[0]:>10.0f} {cells[1]:>10.0f}", flush=True)
+        tag = "cov" if cov else "no cov"
+        out[f"native lie_euler, {tag}"] = ours("lie_euler", cov)
+        out[f"native midpoint, {tag}"] = ours("midpoint", cov)
+        if scan:
+            out[f"scan lie_euler, {tag}"] = ours("lie_euler", cov, "scan")
+        out[f"pypose IMUPreintegrator, {tag}"] = pypose(cov)
+    return out
+
+
+def cpu(batch: int, n: int, repeats: int, scan: bool) -> None:
+    print(f"CPU, {torch.get_num_threads()} threads, batch {batch} × {n} samples, ns per sample")
+    print(f"(median of {repeats} alternated runs, no separate warm-up; load average before: {os.getloadavg()[0]:.1f})")
+    runs = cases(scan)
+    keys = [
+        (name, backward, dtype)
+        for name in runs
+        for backward in (False, True)
+        for dtype in (torch.float64, torch.float32)
+    ]
+    inputs_of = {(b, d): inputs(batch, n, d, "cpu", b) for b in (False, True) for d in (torch.float64, torch.float32)}
+    times: dict[tuple[str, bool, torch.dtype], list[float]] = {k: [] for k in keys}
+    for _ in range(repeats):
+        for name, backward, dtype in keys:
+            times[name, backward, dtype].append(time_once(runs[name], inputs_of[backward, dtype], backward, "cpu"))
+    print(f"{'case':<48} {'float64':>10} {'float32':>10}")
+    for backward in (False, True):
+        for name in runs:
+            cells = [
+                statistics.median(times[name, backward, d]) / (batch * n) * 1e9 for d in (torch.float64, torch.float32)
+            ]
+            label = f"{name}, {'fwd+bwd' if backward else 'fwd'}"
+            print(f"{label:<48} {cells[0]:>10.0f} {cells[1]:>10.0f}", flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.1f}")
+
+
+def only(name: str, batch: int, n: int, repeats: int) -> None:
+    f = cases(scan=True)[name]
+    seconds = time_case(f, inputs(batch, n, torch.float64, "cpu", True), True, repeats, "cpu")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+    ns = seconds / (batch * n) * 1e9
+    print(f"{name}, fwd+bwd, float64, batch {batch} × {n}: {ns:.0f} ns/sample, peak RSS {peak:.2f} GiB")
 
 
 def gpu(batch: int, n: int, repeats: int) -> None:
@@ -116,7 +150,7 @@ def gpu(batch: int, n: int, repeats: int) -> None:
                 label = f"lie_euler {dtype}, {'fwd+bwd' if backward else 'fwd'}, {'cov' if cov else 'deltas only'}"
                 try:
                     args = inputs(batch, n, dtype, "cuda", backward)
-                    s = time_case(ours("lie_euler", cov), args, backward, repeats, "cuda")
+                    s = time_case(ours("lie_euler", cov, "scan"), args, backward, repeats, "cuda")
                 except torch.cuda.OutOfMemoryError:
                     print(f"{label:<52} out of GPU memory", flush=True)
                     continue
@@ -134,10 +168,15 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--gpu-batch", type=int, default=4096)
     parser.add_argument("--gpu-only", action="store_true")
+    parser.add_argument("--scan", action="store_true", help="also time the torch scan on CPU")
+    parser.add_argument("--only", help="one case, forward + backward float64, with its peak memory")
     a = parser.parse_args()
     print(f"torch {torch.__version__}")
+    if a.only:
+        only(a.only, a.batch, a.samples, a.repeats)
+        return
     if not a.gpu_only:
-        cpu(a.batch, a.samples, a.repeats)
+        cpu(a.batch, a.samples, a.repeats, a.scan)
     gpu(a.gpu_batch, 1000, a.repeats)
 
 

@@ -5,6 +5,7 @@
 //! The public Python API (shapes, broadcasting, scipy interop) lives in `python/imukit`; nothing
 //! here is meant to be called directly.
 
+mod adjoint_glue;
 mod allan_glue;
 mod attitude_glue;
 mod convert;
@@ -54,6 +55,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(strapdown_glue::strapdown_integrate, m)?,
         wrap_pyfunction!(strapdown_glue::body_readings, m)?,
         wrap_pyfunction!(strapdown_glue::strapdown_propagate, m)?,
+        wrap_pyfunction!(adjoint_glue::preint_adjoint, m)?,
         wrap_pyfunction!(threads::set_num_threads, m)?,
         wrap_pyfunction!(threads::get_num_threads, m)?,
         wrap_pyfunction!(threads::simd_path, m)?,

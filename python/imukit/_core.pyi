@@ -52,6 +52,7 @@ __all__ = [
     "euler_to_matrix",
     "get_num_threads",
     "local_level",
+    "preint_adjoint",
     "preint_windows",
     "preint_windows_record",
     "quat_conjugate",
@@ -139,6 +140,23 @@ FILTER_WORLDS: tuple[str, ...]
 def set_num_threads(n: int) -> None: ...
 def get_num_threads() -> int: ...
 def simd_path() -> str: ...
+
+# imukit.torch's CPU kernels (crates/imukit/src/adjoint): C-contiguous float64 buffers read in
+# place, h (B, N), w / a / a_end (B, N, 3), covariances (B, N, 3, 3); without bar the records
+# (B, N or 1, width), with bar (their cotangents) the input cotangents (B, N, grad_width).
+def preint_adjoint(
+    h: _Rows,
+    w: _Rows,
+    a: _Rows,
+    *,
+    bar: _Rows | None,
+    a_end: _Rows | None,
+    gyro_cov: _Rows | None,
+    accel_cov: _Rows | None,
+    per_step: bool,
+    covariance: bool,
+    jacobian: bool,
+) -> _Rows: ...
 
 # so3 / quat / euler row maps: `x` is a C-contiguous (n, k) float64 array, `name` the argument
 # named in errors, `threads` the thread count; each returns a new (n, m) array. Bad rows raise

@@ -22,6 +22,7 @@
 //! assert!((quat::exp(&phi) * Vector3::x() - Vector3::y()).norm() < 1e-15);
 //! ```
 
+pub mod adjoint;
 pub mod allan;
 pub mod attitude;
 pub mod earth;

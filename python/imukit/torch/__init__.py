@@ -7,8 +7,11 @@ dimensions, and gradients by autograd with respect to every tensor input. ``docs
 guide.
 
 - Shapes: ``gyro``, ``accel`` (..., N, 3); ``dt`` (..., N) or a scalar; ``bias`` (..., 6)
-  ``[b_g, b_a]``; ``lengths`` (...,) integers ≤ N for ragged windows (samples from ``lengths`` on
-  are ignored; per-step outputs there repeat the window's end).
+  ``[b_g, b_a]``; ragged windows through ``lengths`` (...,) integers ≤ N (samples from
+  ``lengths`` on are ignored; per-step outputs there repeat the window's end) and/or ``mask``
+  (..., N) booleans (False: the sample is not in the window; lie_euler skips it, midpoint counts an
+  interval only when both its samples are in, so a window padded at either end is that window
+  alone).
 - ``dt`` as ``PreintegratedImu.integrate_measurement``: ``lie_euler`` / ``exp``: sample k is held
   over the next ``dt[k]`` s; ``midpoint`` / ``rk2``: sample k was taken ``dt[k]`` s after sample
   k − 1 (``dt[0]`` is not used).
@@ -20,8 +23,11 @@ guide.
   sample from ``gyro_cov`` / ``accel_cov`` (..., N, 3, 3) or their diagonals (..., N, 3), the
   covariance of each reading's white noise (each replaces ``noise`` for its sensor).
 - Bias Jacobian 9 × 6, rows ``[θ, v, p]``, columns ``[b_g, b_a]``.
-- ``method``: ``"scan"``, associative scans over the sequence, depth O(log N) (``_scan.py``);
-  ``"sequential"``, the step-by-step recursion, the reference.
+- ``method``: ``"auto"`` (default): ``"native"`` where it applies, else ``"scan"``;
+  ``"native"``, the Rust kernels with their analytic backward (CPU tensors; every output of both
+  schemes, ``integrate_attitude``'s ``exp``; ``_native.py``); ``"scan"``, associative scans over the sequence in
+  torch, depth O(log N) (``_scan.py``), the device (CUDA) path; ``"sequential"``, the step-by-step
+  recursion in torch, the reference.
 
 ``import imukit`` does not import torch; ``import imukit.torch`` needs it (``pip install imukit[torch]``).
 """
@@ -40,14 +46,14 @@ except ImportError as exc:  # pragma: no cover - torch is installed wherever the
 from imukit import _core
 from imukit._errors import ParameterError
 from imukit.preint import PreintParams
-from imukit.torch import _scan, _steps
+from imukit.torch import _native, _scan, _steps
 from imukit.torch._inputs import choice, like, samples
 from imukit.torch._so3 import quat_multiply, quat_to_matrix
 
 __all__ = ["Preintegrated", "State", "integrate", "integrate_attitude", "preintegrate"]
 
 _PREINT_SCHEMES = ("midpoint", "lie_euler")
-_METHODS = ("scan", "sequential")
+_METHODS = ("auto", "native", "scan", "sequential")
 
 
 class Preintegrated(NamedTuple):
@@ -72,6 +78,18 @@ class State(NamedTuple):
     position: torch.Tensor
 
 
+def _method(method: str, x: torch.Tensor, kernel: bool = True) -> str:
+    """The path that runs: ``auto`` resolved, ``native`` refused where the kernels do not apply
+    (CUDA tensors; no ``kernel`` for the call)."""
+    method = choice(method, "method", _METHODS)
+    native = kernel and _native.supported(x)
+    if method == "native" and not native:
+        raise ParameterError("the native kernels need CPU tensors (and integrate_attitude: exp)", argument="method")
+    if method == "auto":
+        return "native" if native else "scan"
+    return method
+
+
 def _compose(combine: _scan.Combine, xs: _scan.Elements, *, keep: bool, method: str) -> _scan.Elements:
     if method == "sequential":
         return _scan.sequential(combine, xs, keep=keep)
@@ -93,24 +111,39 @@ def preintegrate(
     gyro_cov: Any = None,
     accel_cov: Any = None,
     lengths: torch.Tensor | None = None,
+    mask: torch.Tensor | None = None,
     scheme: str = PreintParams.scheme,
     return_covariance: bool = False,
     return_jacobian: bool = False,
     per_step: bool = False,
-    method: str = "scan",
+    method: str = "auto",
 ) -> Preintegrated:
     """Preintegrated ``ΔR``, ``Δv``, ``Δp``, ``Δt`` of each window (module docs for the shapes);
     ``return_covariance`` needs ``noise``, ``gyro_cov`` or ``accel_cov``."""
     scheme = choice(scheme, "scheme", _PREINT_SCHEMES)
-    method = choice(method, "method", _METHODS)
     noisy = noise is not None or gyro_cov is not None or accel_cov is not None
     if return_covariance and not noisy:
         raise ParameterError("needs noise, gyro_cov or accel_cov", argument="return_covariance")
     s, batch = samples(
-        dt, gyro, accel, bias=bias, lengths=lengths, noise=noise, gyro_cov=gyro_cov, accel_cov=accel_cov, scheme=scheme
+        dt,
+        gyro,
+        accel,
+        bias=bias,
+        lengths=lengths,
+        mask=mask,
+        noise=noise,
+        gyro_cov=gyro_cov,
+        accel_cov=accel_cov,
+        scheme=scheme,
     )
-    iv = _steps.intervals(s, scheme)
     linear = return_covariance or return_jacobian
+    method = _method(method, s.gyro)
+    if method == "native":
+        out = _native.preintegrate(
+            s, batch, scheme, per_step=per_step, covariance=return_covariance, jacobian=return_jacobian
+        )
+        return Preintegrated(*out)
+    iv = _steps.intervals(s, scheme)
     elements = _steps.deltas(iv, scheme)
     rot, vel, pos, t = _compose(_steps.compose_deltas, elements, keep=per_step or linear, method=method)
     cov = jac = None
@@ -144,8 +177,9 @@ def integrate(
     bias: Any = None,
     gravity: Any = _core.GRAVITY,
     lengths: torch.Tensor | None = None,
+    mask: torch.Tensor | None = None,
     scheme: str = _core.STRAPDOWN_DEFAULT_SCHEME,
-    method: str = "scan",
+    method: str = "auto",
 ) -> State:
     """Strapdown states (..., N, ...) in the world frame from ``initial_state`` (module docs for
     the per-step index), as ``imukit.integrate``: the per-step preintegration predicted from the
@@ -153,7 +187,9 @@ def integrate(
     if not isinstance(initial_state, State):
         got = type(initial_state).__name__
         raise ParameterError(f"expected an imukit.torch.State, got {got}", argument="initial_state")
-    d = preintegrate(dt, gyro, accel, bias=bias, lengths=lengths, scheme=scheme, per_step=True, method=method)
+    d = preintegrate(
+        dt, gyro, accel, bias=bias, lengths=lengths, mask=mask, scheme=scheme, per_step=True, method=method
+    )
     r0 = like(initial_state.rotation, d.delta_rotation, "initial_state.rotation", (3, 3))[..., None, :, :]
     v0 = like(initial_state.velocity, d.delta_rotation, "initial_state.velocity", (3,))[..., None, :]
     p0 = like(initial_state.position, d.delta_rotation, "initial_state.position", (3,))[..., None, :]
@@ -171,21 +207,26 @@ def integrate_attitude(
     initial: torch.Tensor | None = None,
     scheme: str = _core.ATTITUDE_DEFAULT_SCHEME,
     lengths: torch.Tensor | None = None,
-    method: str = "scan",
+    mask: torch.Tensor | None = None,
+    method: str = "auto",
 ) -> torch.Tensor:
     """Attitudes ``R_wb`` (..., N, 3, 3) from body rates, as ``imukit.integrate_attitude``:
     ``"exp"`` (``R ← R Exp(ω_k h)``) or ``"rk2"`` (explicit midpoint on the quaternion ODE with
     ``½(ω_{k−1} + ω_k)``, a right product by ``[ωh/2, 1 − |ω|²h²/8]``, normalised)."""
     scheme = choice(scheme, "scheme", ("exp", "rk2"))
-    method = choice(method, "method", _METHODS)
-    s, batch = samples(dt, gyro, None, bias=None, lengths=lengths)
-    if scheme == "exp":
+    s, batch = samples(dt, gyro, None, bias=None, lengths=lengths, mask=mask)
+    # exp is the preintegration's rotation (lie_euler); rk2 has no native kernel.
+    method = _method(method, s.gyro, kernel=scheme == "exp")
+    if method == "native":
+        rot = _native.preintegrate(s, batch, "lie_euler", per_step=True, covariance=False, jacobian=False)[0]
+    elif scheme == "exp":
         steps = (_steps.intervals(s, "lie_euler").step,)
         (rot,) = _compose(lambda a, b: (a[0] @ b[0],), steps, keep=True, method=method)
     else:
         (q,) = _compose(lambda a, b: (quat_multiply(a[0], b[0]),), (_steps.rk2_steps(s),), keep=True, method=method)
         rot = quat_to_matrix(q / q.norm(dim=-1, keepdim=True))
-    rot = rot.movedim(0, len(batch))
+    if method != "native":
+        rot = rot.movedim(0, len(batch))
     if initial is None:
         return rot
     return like(initial, rot, "initial", (3, 3))[..., None, :, :] @ rot

@@ -57,6 +57,15 @@ def like(x: Any, ref: torch.Tensor, name: str, tail: tuple[int, ...]) -> torch.T
     return t
 
 
+def _mask(mask: Any, n: int, device: torch.device) -> torch.Tensor:
+    """A boolean tensor (..., N): True where a sample belongs to its window."""
+    if not isinstance(mask, torch.Tensor) or mask.dtype != torch.bool:
+        raise ParameterError("expected a boolean torch.Tensor (..., N)", argument="mask")
+    if mask.ndim < 1 or mask.shape[-1] != n:
+        raise ShapeError(f"expected shape (..., {n}), got {tuple(mask.shape)}", argument="mask")
+    return mask.to(device)
+
+
 def _per_sample(cov: Any, ref: torch.Tensor, name: str) -> torch.Tensor:
     """A per-sample covariance, (..., N, 3, 3) or its diagonal (..., N, 3), as (..., N, 3, 3)."""
     c = like(cov, ref, name, ())
@@ -81,6 +90,7 @@ def samples(
     *,
     bias: Any,
     lengths: Any,
+    mask: Any = None,
     noise: Any = None,
     gyro_cov: Any = None,
     accel_cov: Any = None,
@@ -109,7 +119,8 @@ def samples(
         raise ParameterError("expected an integer torch.Tensor (...,) of window lengths", argument="lengths")
     else:
         count = lengths.to(w.device)
-    shapes = [w.shape[:-2], a.shape[:-2], d.shape[:-1], b.shape[:-1], count.shape]
+    keep = torch.ones((n,), dtype=torch.bool, device=w.device) if mask is None else _mask(mask, n, w.device)
+    shapes = [w.shape[:-2], a.shape[:-2], d.shape[:-1], b.shape[:-1], count.shape, keep.shape[:-1]]
     shapes += [c.shape[:-3] for c in covs.values()] + ([] if dens is None else [dens.shape[:-1]])
     try:
         batch = torch.broadcast_shapes(*shapes)  # type: ignore[no-untyped-call]
@@ -122,7 +133,7 @@ def samples(
 
     dts = seq(d[..., None], 1)[..., 0]
     valid = torch.arange(n, device=w.device).view(n, *([1] * first)) < count
-    valid = valid.expand(n, *batch)
+    valid = (valid & seq(keep[..., None], 1)[..., 0]).expand(n, *batch)
     cov = None
     if covs or dens is not None:
         cov = _noise(dts, valid, dens, covs, batch, seq, scheme)
@@ -143,7 +154,9 @@ def _noise(
     sample's the one it starts), as the Rust kernels (docs/conventions.md, row 11)."""
     own = dts
     if scheme == "midpoint" and dts.shape[0] > 1:
-        own = torch.cat((dts[1:2], dts[1:]))
+        # A window's first sample (no sample before it in the window) takes the interval it starts.
+        starts = ~torch.cat((torch.zeros_like(valid[:1]), valid[:-1]))
+        own = torch.where(starts, torch.cat((dts[1:], dts[-1:])), dts)
     own = torch.where(valid, own, torch.ones_like(own))
     eye = torch.eye(3, dtype=dts.dtype, device=dts.device)
     blocks = []

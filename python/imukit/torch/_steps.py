@@ -65,17 +65,27 @@ def _previous(x: torch.Tensor) -> torch.Tensor:
     return torch.cat((x[:1], x[:-1]))
 
 
+def pairs_valid(valid: torch.Tensor) -> torch.Tensor:
+    """Whether each midpoint interval counts: both its samples are in the window (interval 0,
+    before the first sample, never)."""
+    return torch.cat((torch.zeros_like(valid[:1]), valid[1:] & valid[:-1]))
+
+
+def rates(s: Samples, scheme: str) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Each interval's step ``h`` (0 where masked), bias-corrected rate ``ω̂`` and specific forces
+    at its two ends (the same one for lie_euler)."""
+    bg, ba = s.bias[..., :3], s.bias[..., 3:]
+    a1 = s.accel - ba
+    if scheme == "midpoint":
+        h = torch.where(pairs_valid(s.valid), s.dt, torch.zeros_like(s.dt))
+        return h, 0.5 * (_previous(s.gyro) + s.gyro) - bg, _previous(a1), a1
+    return torch.where(s.valid, s.dt, torch.zeros_like(s.dt)), s.gyro - bg, a1, a1
+
+
 def intervals(s: Samples, scheme: str) -> Interval:
     """Each interval's step ``h`` (0 where masked), ``Exp(ω̂h)``, ``J_r(ω̂h)`` and the
     bias-corrected specific forces at its two ends (the same one for lie_euler)."""
-    bg, ba = s.bias[..., :3], s.bias[..., 3:]
-    h = torch.where(s.valid, s.dt, torch.zeros_like(s.dt))
-    a1 = s.accel - ba
-    if scheme == "midpoint":
-        h = torch.cat((torch.zeros_like(h[:1]), h[1:]))
-        w, a0 = 0.5 * (_previous(s.gyro) + s.gyro) - bg, _previous(a1)
-    else:
-        w, a0 = s.gyro - bg, a1
+    h, w, a0, a1 = rates(s, scheme)
     step, jr = exp_and_right_jacobian(w * h[..., None])
     return Interval(h, step, jr, a0, a1)
 
@@ -150,8 +160,7 @@ def rk2_steps(s: Samples) -> torch.Tensor:
     ``attitude.rs`` takes them: ``q_mid = q + ½h f(q, ω₀)``, ``q⁺ = q + h f(q_mid, ω̄)``,
     ``ω̄ = ½(ω₀ + ω₁)``, i.e. ``q⁺ = q ⊗ (1 + ½h[ω̄, 0] + ⅛h²[ω₀, 0] ⊗ [ω̄, 0])``, a right product
     by ``[½hω̄ + ⅛h² ω₀ × ω̄, 1 − ⅛h² ω₀·ω̄]``. Element 0 is the identity."""
-    h = torch.where(s.valid, s.dt, torch.zeros_like(s.dt))
-    h = torch.cat((torch.zeros_like(h[:1]), h[1:]))[..., None]
+    h = torch.where(pairs_valid(s.valid), s.dt, torch.zeros_like(s.dt))[..., None]
     w0 = _previous(s.gyro)
     w = 0.5 * (w0 + s.gyro)
     vector = 0.5 * h * w + h * h / 8 * torch.linalg.cross(w0, w)

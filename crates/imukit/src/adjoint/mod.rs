@@ -1,0 +1,288 @@
+//! Differentiable preintegration: batched forward kernels over flat buffers and their analytic
+//! reverse sweep (vector–Jacobian product), for `imukit.torch`'s CPU path.
+//!
+//! A batch holds `windows` windows of `n` intervals each, every buffer row-major and
+//! window-major (what a contiguous torch tensor `(B, N, …)` is, read without a copy):
+//!
+//! | buffer | per interval | meaning |
+//! |---|---|---|
+//! | `h` | 1 | its step [s], ≥ 0 (0: an identity step, how ragged windows are padded) |
+//! | `w` | 3 | its rate ω [rad/s], bias-corrected (midpoint: the mean of its two samples) |
+//! | `a` | 3 | its specific force [m/s²], bias-corrected (midpoint: at its start) |
+//! | `a_end` | 3 | midpoint only: the specific force at its end |
+//! | `cov_g`, `cov_a` | 9 | the covariance of its gyro / accelerometer white noise (3×3) |
+//!
+//! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
+//! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
+//! Jacobian in both schemes.
+//! [`forward`] writes one record per interval (`per_step`) or per window:
+//! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
+//! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
+//! Σ̄_g (9), Σ̄_a (9, if cov)]`: it re-runs each window forward, keeping the state before every
+//! interval (one window at a time per thread: O(n) memory per thread, none between the passes),
+//! then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
+//! the thread count.
+
+mod so3;
+mod step;
+#[cfg(test)]
+mod tests;
+
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use step::{Interval, Linear, Mat9, Mat96, State};
+
+/// A batch of windows (module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct Windows<'a> {
+    /// Intervals per window.
+    pub n: usize,
+    /// Steps `(windows, n)`.
+    pub h: &'a [f64],
+    /// Rates `(windows, n, 3)`.
+    pub w: &'a [f64],
+    /// Specific forces `(windows, n, 3)`.
+    pub a: &'a [f64],
+    /// Midpoint: specific forces at the intervals' ends `(windows, n, 3)`.
+    pub a_end: Option<&'a [f64]>,
+    /// Gyro and accelerometer noise covariances `(windows, n, 3, 3)` each.
+    pub cov: Option<(&'a [f64], &'a [f64])>,
+}
+
+/// What [`forward`] returns and [`backward`] differentiates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Outputs {
+    /// One record per interval, else one per window.
+    pub per_step: bool,
+    /// The 9×9 covariance (needs `Windows::cov`).
+    pub covariance: bool,
+    /// The 9×6 bias Jacobian.
+    pub jacobian: bool,
+}
+
+impl Outputs {
+    /// Numbers per output record.
+    pub fn width(&self) -> usize {
+        15 + if self.covariance { 81 } else { 0 } + if self.jacobian { 54 } else { 0 }
+    }
+
+    fn records(&self, n: usize) -> usize {
+        if self.per_step {
+            n
+        } else {
+            1
+        }
+    }
+
+    fn linear(&self) -> Linear {
+        Linear {
+            cov: self.covariance,
+            jac: self.jacobian,
+        }
+    }
+}
+
+impl Windows<'_> {
+    /// Numbers per record of [`backward`]'s input cotangents.
+    pub fn grad_width(&self) -> usize {
+        7 + if self.a_end.is_some() { 3 } else { 0 } + if self.cov.is_some() { 18 } else { 0 }
+    }
+
+    /// The number of windows, after checking every buffer's length and every value.
+    fn check(&self, out: &Outputs) -> Result<usize> {
+        if self.n == 0 {
+            return Err(Error::Parameter {
+                name: "n",
+                expected: "at least one interval per window",
+                got: "0".into(),
+            });
+        }
+        if out.covariance && self.cov.is_none() {
+            return Err(Error::Parameter {
+                name: "covariance",
+                expected: "noise covariances",
+                got: "none".into(),
+            });
+        }
+        let windows = self.h.len() / self.n;
+        let mut buffers = vec![("dt", self.h, 1), ("gyro", self.w, 3), ("accel", self.a, 3)];
+        if let Some(a) = self.a_end {
+            buffers.push(("accel", a, 3));
+        }
+        if let Some((g, a)) = self.cov {
+            buffers.extend([("gyro_cov", g, 9), ("accel_cov", a, 9)]);
+        }
+        for (name, x, width) in buffers {
+            if x.len() != windows * self.n * width {
+                return Err(Error::RowLength {
+                    len: x.len(),
+                    row: width,
+                }
+                .in_argument(name));
+            }
+            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+                return Err(Error::NonFinite { index: i / width }.in_argument(name));
+            }
+        }
+        if let Some(i) = self.h.iter().position(|&h| h < 0.0) {
+            return Err(Error::Parameter {
+                name: "dt",
+                expected: "steps ≥ 0",
+                got: format!("{} at {i}", self.h[i]),
+            });
+        }
+        Ok(windows)
+    }
+
+    fn interval(&self, k: usize) -> Interval {
+        let v = |x: &[f64]| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+        let m = |x: &[f64]| Matrix3::from_row_slice(&x[9 * k..9 * k + 9]);
+        Interval {
+            h: self.h[k],
+            w: v(self.w),
+            a: v(self.a),
+            a_end: self.a_end.map(v),
+            cov_g: self.cov.map_or(Matrix3::zeros(), |c| m(c.0)),
+            cov_a: self.cov.map_or(Matrix3::zeros(), |c| m(c.1)),
+        }
+    }
+}
+
+fn write(s: &State, out: &Outputs, record: &mut [f64]) {
+    record[..9].copy_from_slice(s.r.transpose().as_slice());
+    record[9..12].copy_from_slice(s.v.as_slice());
+    record[12..15].copy_from_slice(s.p.as_slice());
+    let mut at = 15;
+    if out.covariance {
+        record[at..at + 81].copy_from_slice(s.cov.transpose().as_slice());
+        at += 81;
+    }
+    if out.jacobian {
+        record[at..at + 54].copy_from_slice(s.jac.transpose().as_slice());
+    }
+}
+
+fn read(record: &[f64], out: &Outputs) -> State {
+    let mut s = State::zero();
+    s.r = Matrix3::from_row_slice(&record[..9]);
+    s.v = Vector3::from_column_slice(&record[9..12]);
+    s.p = Vector3::from_column_slice(&record[12..15]);
+    let mut at = 15;
+    if out.covariance {
+        s.cov = Mat9::from_row_slice(&record[at..at + 81]);
+        at += 81;
+    }
+    if out.jacobian {
+        s.jac = Mat96::from_row_slice(&record[at..at + 54]);
+    }
+    s
+}
+
+fn add(a: &State, b: &State) -> State {
+    State {
+        r: a.r + b.r,
+        v: a.v + b.v,
+        p: a.p + b.p,
+        cov: a.cov + b.cov,
+        jac: a.jac + b.jac,
+        cross: a.cross + b.cross,
+        last: a.last + b.last,
+    }
+}
+
+/// The window `b` of `x`.
+fn window<'a>(x: &Windows<'a>, b: usize) -> Windows<'a> {
+    let n = x.n;
+    let part = |s: &'a [f64], width: usize| &s[b * n * width..(b + 1) * n * width];
+    Windows {
+        n,
+        h: part(x.h, 1),
+        w: part(x.w, 3),
+        a: part(x.a, 3),
+        a_end: x.a_end.map(|a| part(a, 3)),
+        cov: x.cov.map(|(g, a)| (part(g, 9), part(a, 9))),
+    }
+}
+
+/// Preintegrates every window of `x` into `out` (`windows × records × width` numbers, module
+/// docs). Errors: a buffer of the wrong length, a non-finite input, a negative step, a result
+/// that overflows (the window's index).
+pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()> {
+    let windows = x.check(outputs)?;
+    let chunk = outputs.records(x.n) * outputs.width();
+    if out.len() != windows * chunk {
+        return Err(Error::RowCount {
+            input: windows * chunk,
+            output: out.len(),
+        });
+    }
+    let linear = outputs.linear();
+    out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
+        let x = window(x, b);
+        let mut s = State::start();
+        for k in 0..x.n {
+            s = step::forward(&s, &x.interval(k), linear);
+            if outputs.per_step {
+                write(&s, outputs, &mut o[k * outputs.width()..(k + 1) * outputs.width()]);
+            }
+        }
+        if !outputs.per_step {
+            write(&s, outputs, o);
+        }
+        match o.iter().all(|v| v.is_finite()) {
+            true => Ok(()),
+            false => Err(Error::Overflow { index: b }),
+        }
+    })
+}
+
+/// The cotangents of every interval's inputs (`windows × n × grad_width`, module docs) given
+/// `bar`, those of [`forward`]'s output for the same `x` and `outputs`.
+pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64]) -> Result<()> {
+    let windows = x.check(outputs)?;
+    let (width, records, gw) = (outputs.width(), outputs.records(x.n), x.grad_width());
+    if bar.len() != windows * records * width || grad.len() != windows * x.n * gw {
+        return Err(Error::RowCount {
+            input: windows * records * width,
+            output: bar.len(),
+        });
+    }
+    let linear = outputs.linear();
+    grad.par_chunks_mut(x.n * gw).enumerate().try_for_each(|(b, g)| {
+        let x = window(x, b);
+        let bar = &bar[b * records * width..(b + 1) * records * width];
+        let mut before = Vec::with_capacity(x.n);
+        let mut s = State::start();
+        for k in 0..x.n {
+            before.push(s);
+            s = step::forward(&s, &x.interval(k), linear);
+        }
+        let mut cot = read(&bar[(records - 1) * width..], outputs);
+        for k in (0..x.n).rev() {
+            let (prev, ib) = step::reverse(&before[k], &x.interval(k), &cot, linear);
+            let row = &mut g[k * gw..(k + 1) * gw];
+            row[0] = ib.h;
+            row[1..4].copy_from_slice(ib.w.as_slice());
+            row[4..7].copy_from_slice(ib.a.as_slice());
+            let mut at = 7;
+            if x.a_end.is_some() {
+                row[7..10].copy_from_slice(ib.a_end.as_slice());
+                at = 10;
+            }
+            if x.cov.is_some() {
+                row[at..at + 9].copy_from_slice(ib.cov_g.transpose().as_slice());
+                row[at + 9..at + 18].copy_from_slice(ib.cov_a.transpose().as_slice());
+            }
+            cot = match outputs.per_step && k > 0 {
+                true => add(&prev, &read(&bar[(k - 1) * width..k * width], outputs)),
+                false => prev,
+            };
+        }
+        match g.iter().all(|v| v.is_finite()) {
+            true => Ok(()),
+            false => Err(Error::Overflow { index: b }),
+        }
+    })
+}
