@@ -227,13 +227,16 @@ def _integrate_attitude(rng: np.random.Generator) -> Any:
     )
 
 
-@entry("set_num_threads", ("set_num_threads", "get_num_threads"), {"n": Arg("int")})
+# `simd_path` takes no argument; its one input, the IMUKIT_SIMD variable, is refused when
+# malformed in tests/test_simd_paths.py (a process of its own: the choice is made once).
+@entry("set_num_threads", ("set_num_threads", "get_num_threads", "simd_path"), {"n": Arg("int")})
 def _set_num_threads(rng: np.random.Generator) -> Any:
     before = ik.get_num_threads()
 
     def call(v: dict[str, Any]) -> Any:
         try:
             ik.set_num_threads(v["n"])
+            assert ik.simd_path() in ("avx512", "avx2", "baseline")
             return np.array([float(ik.get_num_threads())])
         finally:
             ik.set_num_threads(before)
