@@ -50,6 +50,21 @@ def test_run_tracks_a_simulated_rotation() -> None:
         assert not res.mag_disturbed.any()
 
 
+def test_mag_follows_the_same_rule_as_mahony() -> None:
+    """``mag=None`` takes ``imu.mag`` when the samples carry one (a silent 6D run of a 9D recording
+    was the old behaviour), ``False`` forces 6D, ``True`` demands it."""
+    imu, mag, _ = _imu(10.0)
+    with_mag = ik.ImuData(imu.t, imu.gyro, imu.accel, mag=mag)
+    f = ik.filters.Robust()
+    nine, six = f.run(imu, mag=mag).rotation.as_quat(), f.run(imu).rotation.as_quat()
+    assert np.abs(nine - six).max() > 1e-3  # the heading differs: the two runs are distinguishable
+    np.testing.assert_array_equal(f.run(with_mag).rotation.as_quat(), nine)
+    np.testing.assert_array_equal(f.run(with_mag, mag=True).rotation.as_quat(), nine)
+    np.testing.assert_array_equal(f.run(with_mag, mag=False).rotation.as_quat(), six)
+    with pytest.raises(ik.ParameterError, match="mag: mag=True"):
+        f.run(imu, mag=True)
+
+
 def test_streaming_equals_batch_and_resume() -> None:
     # 50 s at 100 Hz: the batch run is fed to the core in parts of 4096 rows (robust_glue.rs).
     imu, mag, _ = _imu(50.0)

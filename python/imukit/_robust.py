@@ -24,9 +24,9 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, real_scalar, rotation_from_unit_quat
-from imukit._errors import ParameterError, ShapeError
-from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _vec3
+from imukit._arrays import FloatArray, real_scalar, rotation_from_unit_quat
+from imukit._errors import ParameterError
+from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _run_mag, _vec3
 from imukit.imu import ImuData
 
 __all__ = ["Robust", "RobustResult", "RobustState"]
@@ -142,7 +142,7 @@ class Robust:
         self,
         imu: ImuData,
         *,
-        mag: ArrayLike | None = None,
+        mag: ArrayLike | bool | None = None,
         initial: Rotation | RobustState | None = None,
         offline: bool = False,
     ) -> RobustResult:
@@ -150,6 +150,8 @@ class Robust:
         (online: in parts of 4096 samples, between which Python runs and Ctrl-C stops the run);
         the streaming state is not touched.
 
+        ``mag``: as ``Mahony.run``'s: None → ``imu.mag`` when there is one (9D); ``False`` → 6D;
+        ``True`` → ``imu.mag``, which must be there; an ``(N, 3)`` array → those samples.
         ``initial``: None (the first sample initialises), a ``Rotation`` (the attitude at
         ``imu.t[0]``), or a :class:`RobustState` to continue from (online only; the first sample is
         a step of ``imu.t[0] − state.time``). The result's ``state`` is the forward pass's last.
@@ -158,12 +160,8 @@ class Robust:
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         if not isinstance(offline, bool):
             raise ParameterError(f"expected a bool, got {offline!r}", argument="offline")
-        n = len(imu.t)
-        mags = None
-        if mag is not None:
-            mags = np.ascontiguousarray(as_float_array(mag, "mag"))
-            if mags.shape != (n, 3):
-                raise ShapeError(f"expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}", argument="mag")
+        mags = _run_mag(imu, mag)
+        if mags is not None:
             _check_mag_norms(mags)
         continued = isinstance(initial, RobustState)
         if isinstance(initial, RobustState):

@@ -147,6 +147,23 @@ def _real(value: object, name: str) -> float:
     return real_scalar(value, name, what="a real number", accept=lambda x: True)
 
 
+def _run_mag(imu: ImuData, mag: ArrayLike | bool | None) -> FloatArray | None:
+    """The magnetometer samples a filter's ``run`` uses, by one rule for every filter: None →
+    ``imu.mag`` when there is one; ``False`` → none (6D); ``True`` → ``imu.mag``, which must be
+    there; an ``(N, 3)`` array → those samples."""
+    if isinstance(mag, (bool, np.bool_)) or mag is None:
+        if mag and imu.mag is None:
+            raise ParameterError("mag=True, but imu has no magnetometer samples (imu.mag is None)", argument="mag")
+        mag = imu.mag if mag is None or mag else None
+    if mag is None:
+        return None
+    n = len(imu.t)
+    mags = np.ascontiguousarray(as_float_array(mag, "mag"))
+    if mags.shape != (n, 3):
+        raise ShapeError(f"expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}", argument="mag")
+    return mags
+
+
 def _check_mag_norms(mags: FloatArray) -> FloatArray:
     """``mags`` (N, 3), refusing finite samples whose norm overflows: the filter keeps the first
     norm as its reference, which must stay finite."""
@@ -274,17 +291,8 @@ class _Filter:
         """
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
-        n = len(imu.t)
-        mags = None
-        if isinstance(mag, (bool, np.bool_)) or mag is None:
-            if mag and imu.mag is None:
-                raise ParameterError("mag=True, but imu has no magnetometer samples (imu.mag is None)", argument="mag")
-            mag = imu.mag if mag is None or mag else None
-        if mag is not None:
-            mags = np.ascontiguousarray(as_float_array(mag, "mag"))
-            if mags.shape != (n, 3):
-                raise ShapeError(f"expected shape (N, 3) with N = len(imu.t) = {n}, got {mags.shape}", argument="mag")
-            # The core refuses a finite sample whose squared norm overflows, naming it.
+        # The core refuses a finite sample whose squared norm overflows, naming it.
+        mags = _run_mag(imu, mag)
         continued = isinstance(initial, FilterState)
         if isinstance(initial, FilterState):
             start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds
