@@ -70,13 +70,13 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// `(b + bᵀ)/2`: keeps the diagonal blocks exactly symmetric against rounding.
-#[inline]
+#[inline(always)]
 pub(super) fn symmetric(b: Matrix3<f64>) -> Matrix3<f64> {
     (b + b.transpose()) * 0.5
 }
 
 /// `A X` for a 9×6 cross covariance `X`.
-#[inline]
+#[inline(always)]
 pub(super) fn transition(x: &Cross, phi: &Matrix3<f64>, m: &Matrix3<f64>, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
@@ -99,7 +99,7 @@ pub(super) struct Input {
 
 impl Input {
     /// `G diag(s_g I, s_a I)` as a cross covariance.
-    #[inline]
+    #[inline(always)]
     pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
         let (vg, va) = (self.vg * s_g, self.va * s_a);
         [
@@ -110,7 +110,7 @@ impl Input {
     }
 
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
-    #[inline]
+    #[inline(always)]
     pub fn add_quadratic(&self, cov: &mut CovarianceBlocks, s_g: f64, s_a: f64) {
         let tv = mul_t(&self.tg, &self.vg) * s_g;
         let vv = mul_t_symmetric(&self.vg, &self.vg) * s_g + mul_t_symmetric(&self.va, &self.va) * s_a;
@@ -124,7 +124,7 @@ impl Input {
     }
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
-    #[inline]
+    #[inline(always)]
     pub fn add_cross(&self, cov: &mut CovarianceBlocks, y: &Cross) {
         let c = self.half_h;
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
@@ -144,7 +144,7 @@ impl Input {
 }
 
 /// Block-wise `a + b` for cross covariances.
-#[inline]
+#[inline(always)]
 pub(super) fn add(a: &Cross, b: &Cross) -> Cross {
     std::array::from_fn(|i| [a[i][0] + b[i][0], a[i][1] + b[i][1]])
 }
