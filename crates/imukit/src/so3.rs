@@ -78,6 +78,42 @@ pub fn right_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     jacobian(&-phi)
 }
 
+/// `(Exp(φ), J_r(φ))` at once, the pair every preintegration step needs: with `K = [φ]×`,
+/// `Exp = I + a K + b K²` and `J_r = I − b K + c K²` share θ, `b = (1 − cos θ)/θ²` and
+/// `K² = φ φᵀ − θ² I` (one norm and one set of coefficients for the two).
+#[inline(always)]
+pub fn exp_and_right_jacobian(phi: &Vector3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let theta = phi.norm();
+    let (a, b) = series::rodrigues(theta);
+    let c = theta_minus_sin_over_cube(theta);
+    let (x, y, z) = (phi.x, phi.y, phi.z);
+    let (xy, xz, yz) = (x * y, x * z, y * z);
+    let (d0, d1, d2) = (y * y + z * z, x * x + z * z, x * x + y * y);
+    let exp = Matrix3::new(
+        1.0 - b * d0,
+        b * xy - a * z,
+        b * xz + a * y,
+        b * xy + a * z,
+        1.0 - b * d1,
+        b * yz - a * x,
+        b * xz - a * y,
+        b * yz + a * x,
+        1.0 - b * d2,
+    );
+    let jr = Matrix3::new(
+        1.0 - c * d0,
+        c * xy + b * z,
+        c * xz - b * y,
+        c * xy - b * z,
+        1.0 - c * d1,
+        c * yz + b * x,
+        c * xz + b * y,
+        c * yz - b * x,
+        1.0 - c * d2,
+    );
+    (exp, jr)
+}
+
 /// Left Jacobian `J_l(φ) = I + ((1 − cos θ)/θ²) [φ]× + ((θ − sin θ)/θ³) [φ]×² = J_r(−φ)`.
 pub fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     jacobian(phi)

@@ -175,6 +175,16 @@ fn jacobians_match_their_defining_series() {
             ("J_r", so3::right_jacobian(&phi), series_left_jacobian(&-phi)),
             ("J_l⁻¹", so3::left_jacobian_inv(&phi), jl_inv_reference(&phi)),
             ("J_r⁻¹", so3::right_jacobian_inv(&phi), jl_inv_reference(&-phi)),
+            (
+                "fused J_r",
+                so3::exp_and_right_jacobian(&phi).1,
+                series_left_jacobian(&-phi),
+            ),
+            (
+                "fused Exp",
+                so3::exp_and_right_jacobian(&phi).0,
+                *so3::exp(&phi).matrix(),
+            ),
         ];
         for (name, analytic, reference) in cases {
             let err = max_abs_diff(&analytic, &reference);

@@ -98,13 +98,14 @@ impl Preintegrator {
         let a1 = accel - self.bias_accel;
         let w = (prev.gyro + gyro) * 0.5 - self.bias_gyro;
         let r0 = self.delta_rotation;
-        let step = *so3::exp(&(w * h)).matrix();
+        let (step, jr) = so3::exp_and_right_jacobian(&(w * h));
         let phi = step.transpose();
         let r1 = mul(&r0, &step);
-        let jr = so3::right_jacobian(&(w * h));
-        let r1a = mul(&r1, &so3::hat(&a1));
+        let r1a = blocks::times_hat(&r1, &a1);
         Step {
-            m: -(mul(&r0, &so3::hat(&a0)) + mul(&r1a, &phi)) * 0.5,
+            // R_1[â_1]× Φᵀ = R_0 Exp(ω̂h) [â_1]× Exp(ω̂h)ᵀ = R_0 [Exp(ω̂h) â_1]× (the adjoint), so
+            // M = −½ R_0 [â_0 + Exp(ω̂h) â_1]×: one product instead of three.
+            m: -blocks::times_hat(&r0, &(a0 + step * a1)) * 0.5,
             k: mul(&r1a, &jr) * (0.25 * h),
             a0,
             a1,

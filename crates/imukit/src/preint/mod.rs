@@ -397,10 +397,9 @@ impl Preintegrator {
         let a = accel - self.bias_accel;
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
-        let r_a_cross = mul(&r, &so3::hat(&a));
-        let step = so3::exp(&(w * h));
-        let step_t = step.matrix().transpose();
-        let jr = so3::right_jacobian(&(w * h));
+        let r_a_cross = blocks::times_hat(&r, &a);
+        let (step, jr) = so3::exp_and_right_jacobian(&(w * h));
+        let step_t = step.transpose();
         let half_h2 = 0.5 * h * h;
 
         // Covariance first: A, B, C use the state before the update.
@@ -431,7 +430,7 @@ impl Preintegrator {
         let ra = r * a;
         self.delta_position += self.delta_velocity * h + ra * half_h2;
         self.delta_velocity += ra * h;
-        self.delta_rotation = mul(&r, step.matrix());
+        self.delta_rotation = mul(&r, &step);
         self.delta_t += h;
         self.count_interval();
     }
