@@ -16,13 +16,13 @@ struct Buffers<'a, 'py> {
     w: &'a PyReadonlyArrayDyn<'py, f64>,
     a: &'a PyReadonlyArrayDyn<'py, f64>,
     a_end: &'a Option<PyReadonlyArrayDyn<'py, f64>>,
-    cov: &'a Option<PyReadonlyArrayDyn<'py, f64>>,
+    cov: &'a Option<(PyReadonlyArrayDyn<'py, f64>, PyReadonlyArrayDyn<'py, f64>)>,
 }
 
 impl<'a> Buffers<'a, '_> {
     fn windows(&self, py: Python<'a>) -> PyResult<(usize, Windows<'a>)> {
         let cov = match self.cov {
-            Some(c) => Some(contiguous(py, "covariance", c)?),
+            Some((g, a)) => Some((contiguous(py, "gyro_cov", g)?, contiguous(py, "accel_cov", a)?)),
             None => None,
         };
         let a_end = match self.a_end {
@@ -45,7 +45,7 @@ impl<'a> Buffers<'a, '_> {
 /// `bar` (their cotangents): the input cotangents `(windows, n, grad_width)` of
 /// `imukit::adjoint::backward`.
 #[pyfunction]
-#[pyo3(signature = (h, w, a, *, bar, a_end, noise, per_step, covariance, jacobian))]
+#[pyo3(signature = (h, w, a, *, bar, a_end, gyro_cov, accel_cov, per_step, covariance, jacobian))]
 #[allow(clippy::too_many_arguments)] // the kernel's buffers and output switches, by keyword
 pub(crate) fn preint_adjoint<'py>(
     py: Python<'py>,
@@ -54,12 +54,13 @@ pub(crate) fn preint_adjoint<'py>(
     a: PyReadonlyArrayDyn<'py, f64>,
     bar: Option<PyReadonlyArrayDyn<'py, f64>>,
     a_end: Option<PyReadonlyArrayDyn<'py, f64>>,
-    noise: Option<PyReadonlyArrayDyn<'py, f64>>,
+    gyro_cov: Option<PyReadonlyArrayDyn<'py, f64>>,
+    accel_cov: Option<PyReadonlyArrayDyn<'py, f64>>,
     per_step: bool,
     covariance: bool,
     jacobian: bool,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-    let cov = noise;
+    let cov = gyro_cov.zip(accel_cov);
     let buffers = Buffers {
         h: &h,
         w: &w,

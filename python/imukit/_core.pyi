@@ -142,7 +142,7 @@ def get_num_threads() -> int: ...
 def simd_path() -> str: ...
 
 # imukit.torch's CPU kernels (crates/imukit/src/adjoint): C-contiguous float64 buffers read in
-# place, h (B, N), w / a / a_end (B, N, 3), noise (B, N, 6, 6); without bar the records
+# place, h (B, N), w / a / a_end (B, N, 3), covariances (B, N, 3, 3); without bar the records
 # (B, N or 1, width), with bar (their cotangents) the input cotangents (B, N, grad_width).
 def preint_adjoint(
     h: _Rows,
@@ -151,7 +151,8 @@ def preint_adjoint(
     *,
     bar: _Rows | None,
     a_end: _Rows | None,
-    noise: _Rows | None,
+    gyro_cov: _Rows | None,
+    accel_cov: _Rows | None,
     per_step: bool,
     covariance: bool,
     jacobian: bool,

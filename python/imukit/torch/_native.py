@@ -6,9 +6,7 @@ contiguous float64 CPU input reaches Rust as is; broadcast, strided or float32 i
 made contiguous float64 by torch (float32 is widened, and the outputs narrowed back: the kernels
 compute in float64). What differs per scheme is prepared here in torch, where autograd carries it:
 bias subtraction, masking (a step of 0), the midpoint rate ``½(ω₀ + ω₁)``; the kernels see each
-interval's ``h``, ``ω̂``, specific forces and 6×6 noise covariances (module docs of ``adjoint``),
-the latter whole, not split into gyro and accelerometer blocks, so that neither the forward nor
-the backward copies blocks out of them or scatters gradients back into them.
+interval's ``h``, ``ω̂``, specific forces and noise covariances (module docs of ``adjoint``).
 
 Covered: every output of both schemes (deltas, covariance, bias Jacobian, per step or final);
 ``integrate_attitude``'s ``exp`` scheme is the euler rotation (``rk2`` has no kernel).
@@ -39,13 +37,13 @@ def _buffer(x: torch.Tensor) -> _Array:
 
 def _buffers(inputs: tuple[Any, ...]) -> tuple[_Array, _Array, _Array, dict[str, Any]]:
     """``h, w, a`` and the optional buffers by keyword, as the kernels take them."""
-    h, w, a, a_end, noise = inputs
-    optional = {"a_end": a_end, "noise": noise}
+    h, w, a, a_end, cov_g, cov_a = inputs
+    optional = {"a_end": a_end, "gyro_cov": cov_g, "accel_cov": cov_a}
     return _buffer(h), _buffer(w), _buffer(a), {k: None if x is None else _buffer(x) for k, x in optional.items()}
 
 
 class _Kernel(torch.autograd.Function):
-    """``records = forward(h, w, a, a_end, Σ)`` (B, S, width); the backward is the Rust
+    """``records = forward(h, w, a, a_end, Σ_g, Σ_a)`` (B, S, width); the backward is the Rust
     reverse sweep. Not twice differentiable."""
 
     @staticmethod
@@ -63,7 +61,7 @@ class _Kernel(torch.autograd.Function):
         h, w, a, optional = _buffers(inputs)
         bar_buffer = bar.contiguous().numpy()
         g = torch.from_numpy(_core.preint_adjoint(h, w, a, bar=bar_buffer, **optional, **ctx.options))
-        widths = [1, 3, 3] + ([3] if inputs[3] is not None else []) + ([36] if inputs[4] is not None else [])
+        widths = [1, 3, 3] + ([3] if inputs[3] is not None else []) + ([9, 9] if inputs[4] is not None else [])
         parts = iter(torch.split(g, widths, dim=-1))
         return (None, *(None if x is None else next(parts).reshape(x.shape) for x in inputs))
 
@@ -79,10 +77,12 @@ def preintegrate(
         """Sequence-first (N, *B, ...) to (B, N, ...) float64."""
         return x.movedim(0, first).reshape(-1, n, *x.shape[first + 1 :]).to(torch.float64)
 
-    noise = None if s.cov is None else windows(s.cov)
+    cov_g = cov_a = None
+    if s.cov is not None:
+        cov_g, cov_a = windows(s.cov[..., :3, :3]), windows(s.cov[..., 3:, 3:])
     a_end = windows(a1) if scheme == "midpoint" else None
     options = {"per_step": per_step, "covariance": covariance, "jacobian": jacobian}
-    records = _Kernel.apply(options, windows(h), windows(w), windows(a0), a_end, noise)
+    records = _Kernel.apply(options, windows(h), windows(w), windows(a0), a_end, cov_g, cov_a)
     records = records.to(s.dt.dtype).reshape(*batch, *((n,) if per_step else ()), -1)
     lead = records.shape[:-1]
     rot, vel, pos = records[..., :9].reshape(*lead, 3, 3), records[..., 9:12], records[..., 12:15]

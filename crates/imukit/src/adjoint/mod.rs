@@ -10,7 +10,7 @@
 //! | `w` | 3 | its rate ω [rad/s], bias-corrected (midpoint: the mean of its two samples) |
 //! | `a` | 3 | its specific force [m/s²], bias-corrected (midpoint: at its start) |
 //! | `a_end` | 3 | midpoint only: the specific force at its end |
-//! | `cov` | 36 | the covariance of its white noise `[gyro, accel]` (6×6; its gyro–accel blocks may be non-zero) |
+//! | `cov_g`, `cov_a` | 9 | the covariance of its gyro / accelerometer white noise (3×3) |
 //!
 //! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
 //! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
@@ -18,7 +18,7 @@
 //! [`forward`] writes one record per interval (`per_step`) or per window:
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
-//! Σ̄ (36, if cov)]`: it re-runs each window forward, keeping the state before every
+//! Σ̄_g (9), Σ̄_a (9, if cov)]`: it re-runs each window forward, keeping the state before every
 //! interval (one window at a time per thread: O(n) memory per thread, none between the passes),
 //! then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
 //! the thread count.
@@ -32,7 +32,7 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use step::{Interval, Linear, Mat6, Mat9, Mat96, State};
+use step::{Interval, Linear, Mat9, Mat96, State};
 
 /// A batch of windows (module docs).
 #[derive(Debug, Clone, Copy)]
@@ -47,8 +47,8 @@ pub struct Windows<'a> {
     pub a: &'a [f64],
     /// Midpoint: specific forces at the intervals' ends `(windows, n, 3)`.
     pub a_end: Option<&'a [f64]>,
-    /// Noise covariances `[gyro, accel]` `(windows, n, 6, 6)`.
-    pub cov: Option<&'a [f64]>,
+    /// Gyro and accelerometer noise covariances `(windows, n, 3, 3)` each.
+    pub cov: Option<(&'a [f64], &'a [f64])>,
 }
 
 /// What [`forward`] returns and [`backward`] differentiates.
@@ -87,7 +87,7 @@ impl Outputs {
 impl Windows<'_> {
     /// Numbers per record of [`backward`]'s input cotangents.
     pub fn grad_width(&self) -> usize {
-        7 + if self.a_end.is_some() { 3 } else { 0 } + if self.cov.is_some() { 36 } else { 0 }
+        7 + if self.a_end.is_some() { 3 } else { 0 } + if self.cov.is_some() { 18 } else { 0 }
     }
 
     /// The number of windows, after checking every buffer's length and every value.
@@ -111,8 +111,8 @@ impl Windows<'_> {
         if let Some(a) = self.a_end {
             buffers.push(("accel", a, 3));
         }
-        if let Some(c) = self.cov {
-            buffers.push(("covariance", c, 36));
+        if let Some((g, a)) = self.cov {
+            buffers.extend([("gyro_cov", g, 9), ("accel_cov", a, 9)]);
         }
         for (name, x, width) in buffers {
             if x.len() != windows * self.n * width {
@@ -138,14 +138,14 @@ impl Windows<'_> {
 
     fn interval(&self, k: usize) -> Interval {
         let v = |x: &[f64]| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+        let m = |x: &[f64]| Matrix3::from_row_slice(&x[9 * k..9 * k + 9]);
         Interval {
             h: self.h[k],
             w: v(self.w),
             a: v(self.a),
             a_end: self.a_end.map(v),
-            q: self
-                .cov
-                .map_or(Mat6::zeros(), |c| Mat6::from_row_slice(&c[36 * k..36 * k + 36])),
+            cov_g: self.cov.map_or(Matrix3::zeros(), |c| m(c.0)),
+            cov_a: self.cov.map_or(Matrix3::zeros(), |c| m(c.1)),
         }
     }
 }
@@ -202,7 +202,7 @@ fn window<'a>(x: &Windows<'a>, b: usize) -> Windows<'a> {
         w: part(x.w, 3),
         a: part(x.a, 3),
         a_end: x.a_end.map(|a| part(a, 3)),
-        cov: x.cov.map(|c| part(c, 36)),
+        cov: x.cov.map(|(g, a)| (part(g, 9), part(a, 9))),
     }
 }
 
@@ -272,7 +272,8 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
                 at = 10;
             }
             if x.cov.is_some() {
-                row[at..at + 36].copy_from_slice(ib.q.transpose().as_slice());
+                row[at..at + 9].copy_from_slice(ib.cov_g.transpose().as_slice());
+                row[at + 9..at + 18].copy_from_slice(ib.cov_a.transpose().as_slice());
             }
             cot = match outputs.per_step && k > 0 {
                 true => add(&prev, &read(&bar[(k - 1) * width..k * width], outputs)),

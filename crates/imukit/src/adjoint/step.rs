@@ -14,7 +14,7 @@
 //! `K = ¼h R₁[a₁]× J_r`, `R₀ = ΔR`, `R₁ = ΔR E`. A sample's noise enters both intervals it
 //! bounds, so the state carries `X = Cov(δx, n_last)` and `S = Σ_last`:
 //! `P' = APAᵀ + AXB₀ᵀ + B₀XᵀAᵀ + B₀SB₀ᵀ + B₁ΣB₁ᵀ`, `X' = B₁Σ`, `S' = Σ` (Σ the end sample's noise
-//! covariance, 6×6 over `[gyro, accel]`), and the bias Jacobian `J' = AJ + B₀ + B₁`.
+//! covariance, block-diagonal `[Σ_g, Σ_a]`), and the bias Jacobian `J' = AJ + B₀ + B₁`.
 //!
 //! Reverse: for a scalar loss with cotangents `(ΔR̄', Δv̄', Δp̄', P̄', J̄', X̄', S̄')` after the step,
 //! the chain rule through each line above gives those before it and of the inputs, e.g.
@@ -80,8 +80,8 @@ pub(super) struct Interval {
     pub a: Vector3<f64>,
     /// Midpoint: the specific force at the interval's end (`a` is at its start).
     pub a_end: Option<Vector3<f64>>,
-    /// Its noise covariance `[gyro, accel]` (6×6).
-    pub q: Mat6,
+    pub cov_g: Matrix3<f64>,
+    pub cov_a: Matrix3<f64>,
 }
 
 /// The cotangents of an interval's inputs.
@@ -91,7 +91,8 @@ pub(super) struct IntervalBar {
     pub w: Vector3<f64>,
     pub a: Vector3<f64>,
     pub a_end: Vector3<f64>,
-    pub q: Mat6,
+    pub cov_g: Matrix3<f64>,
+    pub cov_a: Matrix3<f64>,
 }
 
 /// Which linear outputs are carried.
@@ -222,6 +223,13 @@ fn linearize(r0: &Matrix3<f64>, x: &Interval, p: &Parts) -> Lin {
     }
 }
 
+fn noise(x: &Interval) -> Mat6 {
+    let mut q = Mat6::zeros();
+    q.fixed_view_mut::<3, 3>(0, 0).copy_from(&x.cov_g);
+    q.fixed_view_mut::<3, 3>(3, 3).copy_from(&x.cov_a);
+    q
+}
+
 /// The state after interval `x`.
 pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
     let p = parts(x);
@@ -238,7 +246,7 @@ pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
     }
     let l = linearize(&s.r, x, &p);
     if linear.cov {
-        let q = x.q;
+        let q = noise(x);
         let mut cov = l.sandwich(&s.cov) + l.b1 * q * l.b1.transpose();
         if let Some(b0) = &l.b0 {
             let axb = l.a_mul(&s.cross) * b0.transpose();
@@ -360,7 +368,7 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
             b1: Mat96::zeros(),
         };
         if linear.cov {
-            let (pb, q) = (&bar.cov, x.q);
+            let (pb, q) = (&bar.cov, noise(x));
             prev.cov = l.sandwich_t(pb);
             // P̄'APᵀ + P̄'ᵀAP, first six columns.
             let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
@@ -408,7 +416,8 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
         w: phi_bar * h,
         a,
         a_end,
-        q: q_bar,
+        cov_g: q_bar.fixed_view::<3, 3>(0, 0).into_owned(),
+        cov_a: q_bar.fixed_view::<3, 3>(3, 3).into_owned(),
     };
     (prev, out)
 }

@@ -23,8 +23,8 @@ struct Data {
     w: Vec<f64>,
     a: Vec<f64>,
     a_end: Vec<f64>,
-    /// 6×6 noise covariances, all 36 entries random (correlated gyro–accel blocks included).
-    q: Vec<f64>,
+    g: Vec<f64>,
+    c: Vec<f64>,
 }
 
 fn data(windows: usize, n: usize) -> Data {
@@ -34,7 +34,8 @@ fn data(windows: usize, n: usize) -> Data {
         w: numbers(3 * m, 2).iter().map(|x| 2.0 * x).collect(),
         a: numbers(3 * m, 3).iter().map(|x| 5.0 * x).collect(),
         a_end: numbers(3 * m, 4).iter().map(|x| 5.0 * x).collect(),
-        q: numbers(36 * m, 5),
+        g: numbers(9 * m, 5),
+        c: numbers(9 * m, 6),
     }
 }
 
@@ -45,7 +46,7 @@ fn windows<'a>(d: &'a Data, n: usize, midpoint: bool) -> Windows<'a> {
         w: &d.w,
         a: &d.a,
         a_end: midpoint.then_some(&d.a_end[..]),
-        cov: Some(&d.q[..]),
+        cov: Some((&d.g[..], &d.c[..])),
     }
 }
 
@@ -77,7 +78,7 @@ fn check(midpoint: bool, per_step: bool) -> Result<()> {
     } else {
         7
     };
-    fields.push(("q", 36, at));
+    fields.extend([("g", 9, at), ("c", 9, at + 9)]);
     for (name, width, offset) in fields {
         for i in 0..count * n * width {
             let eps = 1e-6;
@@ -88,7 +89,8 @@ fn check(midpoint: bool, per_step: bool) -> Result<()> {
                     "w" => &mut e.w,
                     "a" => &mut e.a,
                     "a_end" => &mut e.a_end,
-                    _ => &mut e.q,
+                    "g" => &mut e.g,
+                    _ => &mut e.c,
                 };
                 buffer[i] += delta;
                 loss(&windows(&e, n, midpoint), &outputs, &bar)
@@ -123,19 +125,23 @@ fn reverse_matches_central_differences_midpoint_with_covariance() -> Result<()> 
 fn forward_equals_preintegrator() -> Result<()> {
     let n = 50;
     let d = data(1, n);
-    let (sg, sa): (f64, f64) = (0.01, 0.2);
-    // Isotropic σ²/h on the diagonal of each 6×6.
-    let q: Vec<f64> =
+    let (sg, sa) = (0.01, 0.2);
+    let iso = |s: f64| -> Vec<f64> {
         d.h.iter()
-            .flat_map(|h| (0..36).map(move |i| if i % 7 == 0 { [sg, sa][i / 18].powi(2) / h } else { 0.0 }))
-            .collect();
+            .flat_map(|h| {
+                let v = s * s / h;
+                [v, 0.0, 0.0, 0.0, v, 0.0, 0.0, 0.0, v]
+            })
+            .collect()
+    };
+    let (g, c) = (iso(sg), iso(sa));
     let x = Windows {
         n,
         h: &d.h,
         w: &d.w,
         a: &d.a,
         a_end: None,
-        cov: Some(&q),
+        cov: Some((&g, &c)),
     };
     let outputs = Outputs {
         per_step: true,
