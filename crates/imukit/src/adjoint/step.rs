@@ -122,12 +122,50 @@ fn parts(x: &Interval) -> Parts {
     }
 }
 
-/// `A`, `B₀`, `B₁` of an interval (module docs); `b0` is None for euler.
+/// `A`, `B₀`, `B₁` of an interval (module docs); `b0` is None for euler. `A` is kept as its
+/// two non-trivial blocks `E` and `hM`: products with it skip its identity and zero blocks.
 struct Lin {
     m: Matrix3<f64>,
-    a: Mat9,
+    e: Matrix3<f64>,
+    hm: Matrix3<f64>,
+    h: f64,
     b0: Option<Mat96>,
     b1: Mat96,
+}
+
+impl Lin {
+    /// `A X`, with `A = [[Eᵀ, 0, 0], [hM, I, 0], [½h²M, hI, I]]`.
+    fn a_mul<const C: usize>(&self, x: &SMatrix<f64, 9, C>) -> SMatrix<f64, 9, C> {
+        let (x0, x1, x2) = (x.fixed_rows::<3>(0), x.fixed_rows::<3>(3), x.fixed_rows::<3>(6));
+        let mx = self.hm * x0;
+        let mut y = SMatrix::<f64, 9, C>::zeros();
+        y.fixed_rows_mut::<3>(0).copy_from(&self.e.tr_mul(&x0));
+        y.fixed_rows_mut::<3>(3).copy_from(&(mx + x1));
+        y.fixed_rows_mut::<3>(6)
+            .copy_from(&(mx * (0.5 * self.h) + x1 * self.h + x2));
+        y
+    }
+
+    /// `Aᵀ X`.
+    fn at_mul<const C: usize>(&self, x: &SMatrix<f64, 9, C>) -> SMatrix<f64, 9, C> {
+        let (x0, x1, x2) = (x.fixed_rows::<3>(0), x.fixed_rows::<3>(3), x.fixed_rows::<3>(6));
+        let mut y = SMatrix::<f64, 9, C>::zeros();
+        y.fixed_rows_mut::<3>(0)
+            .copy_from(&(self.e * x0 + self.hm.tr_mul(&(x1 + x2 * (0.5 * self.h)))));
+        y.fixed_rows_mut::<3>(3).copy_from(&(x1 + x2 * self.h));
+        y.fixed_rows_mut::<3>(6).copy_from(&x2);
+        y
+    }
+
+    /// `A X Aᵀ`.
+    fn sandwich(&self, x: &Mat9) -> Mat9 {
+        self.a_mul(&self.a_mul(x).transpose()).transpose()
+    }
+
+    /// `Aᵀ X A`.
+    fn sandwich_t(&self, x: &Mat9) -> Mat9 {
+        self.at_mul(&self.at_mul(&x.transpose()).transpose())
+    }
 }
 
 fn put(m: &mut Mat96, i: usize, j: usize, b: &Matrix3<f64>) {
@@ -135,10 +173,6 @@ fn put(m: &mut Mat96, i: usize, j: usize, b: &Matrix3<f64>) {
 }
 
 fn sub96(m: &Mat96, i: usize, j: usize) -> Matrix3<f64> {
-    m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()
-}
-
-fn block(m: &Mat9, i: usize, j: usize) -> Matrix3<f64> {
     m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()
 }
 
@@ -179,12 +213,14 @@ fn linearize(r0: &Matrix3<f64>, x: &Interval, p: &Parts) -> Lin {
             )
         }
     };
-    let mut a = Mat9::identity();
-    a.fixed_view_mut::<3, 3>(0, 0).copy_from(&p.e.transpose());
-    a.fixed_view_mut::<3, 3>(3, 0).copy_from(&(m * h));
-    a.fixed_view_mut::<3, 3>(6, 0).copy_from(&(m * (0.5 * h * h)));
-    a.fixed_view_mut::<3, 3>(6, 3).copy_from(&(Matrix3::identity() * h));
-    Lin { m, a, b0, b1 }
+    Lin {
+        m,
+        e: p.e,
+        hm: m * h,
+        h,
+        b0,
+        b1,
+    }
 }
 
 fn noise(x: &Interval) -> Mat6 {
@@ -211,9 +247,9 @@ pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
     let l = linearize(&s.r, x, &p);
     if linear.cov {
         let q = noise(x);
-        let mut cov = l.a * s.cov * l.a.transpose() + l.b1 * q * l.b1.transpose();
+        let mut cov = l.sandwich(&s.cov) + l.b1 * q * l.b1.transpose();
         if let Some(b0) = &l.b0 {
-            let axb = l.a * s.cross * b0.transpose();
+            let axb = l.a_mul(&s.cross) * b0.transpose();
             cov += axb + axb.transpose() + b0 * s.last * b0.transpose();
             next.cross = l.b1 * q;
             next.last = q;
@@ -221,14 +257,14 @@ pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
         next.cov = cov;
     }
     if linear.jac {
-        next.jac = l.a * s.jac + l.b1 + l.b0.unwrap_or_else(Mat96::zeros);
+        next.jac = l.a_mul(&s.jac) + l.b1 + l.b0.unwrap_or_else(Mat96::zeros);
     }
     next
 }
 
-/// Cotangents of `A`, `B₀`, `B₁`.
+/// Cotangents of `A` (its first six columns, where its variable blocks are), `B₀`, `B₁`.
 struct LinBar {
-    a: Mat9,
+    a: Mat96,
     b0: Mat96,
     b1: Mat96,
 }
@@ -238,10 +274,10 @@ struct LinBar {
 fn linearization_reverse(r0: &Matrix3<f64>, x: &Interval, p: &Parts, l: &Lin, bar: &LinBar, acc: &mut Reverse) {
     let h = x.h;
     let ab = &bar.a;
-    acc.e += block(ab, 0, 0).transpose();
-    let (a10, a20) = (block(ab, 1, 0), block(ab, 2, 0));
+    acc.e += sub96(ab, 0, 0).transpose();
+    let (a10, a20) = (sub96(ab, 1, 0), sub96(ab, 2, 0));
     let m_bar = a10 * h + a20 * (0.5 * h * h);
-    acc.h += a10.dot(&l.m) + h * a20.dot(&l.m) + block(ab, 2, 1).trace();
+    acc.h += a10.dot(&l.m) + h * a20.dot(&l.m) + sub96(ab, 2, 1).trace();
     match x.a_end {
         None => {
             // M = −R₀[α]×; B₁ blocks −hJ_r, −hR₀, −½h²R₀.
@@ -327,21 +363,26 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
     if linear.cov || linear.jac {
         let l = linearize(&s.r, x, &p);
         let mut lb = LinBar {
-            a: Mat9::zeros(),
+            a: Mat96::zeros(),
             b0: Mat96::zeros(),
             b1: Mat96::zeros(),
         };
         if linear.cov {
             let (pb, q) = (&bar.cov, noise(x));
-            prev.cov = l.a.transpose() * pb * l.a;
-            lb.a += pb * l.a * s.cov.transpose() + pb.transpose() * l.a * s.cov;
+            prev.cov = l.sandwich_t(pb);
+            // P̄'APᵀ + P̄'ᵀAP, first six columns.
+            let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
+            lb.a += pba * s.cov.fixed_rows::<6>(0).transpose() + pbta * s.cov.fixed_columns::<6>(0);
             lb.b1 += pb * l.b1 * q.transpose() + pb.transpose() * l.b1 * q;
             q_bar += l.b1.transpose() * pb * l.b1;
             if let Some(b0) = &l.b0 {
                 let u = pb + pb.transpose();
-                lb.a += u * b0 * s.cross.transpose();
-                prev.cross = l.a.transpose() * u * b0;
-                lb.b0 += u * l.a * s.cross + pb * b0 * s.last.transpose() + pb.transpose() * b0 * s.last;
+                let ub0 = u * b0;
+                lb.a += ub0 * s.cross.fixed_rows::<6>(0).transpose();
+                prev.cross = l.at_mul(&ub0);
+                // U is symmetric: UA = (AᵀU)ᵀ.
+                lb.b0 +=
+                    l.at_mul(&u).transpose() * s.cross + pb * b0 * s.last.transpose() + pb.transpose() * b0 * s.last;
                 prev.last = b0.transpose() * pb * b0;
                 // X' = B₁Σ, S' = Σ.
                 lb.b1 += bar.cross * q.transpose();
@@ -349,8 +390,8 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
             }
         }
         if linear.jac {
-            prev.jac = l.a.transpose() * bar.jac;
-            lb.a += bar.jac * s.jac.transpose();
+            prev.jac = l.at_mul(&bar.jac);
+            lb.a += bar.jac * s.jac.fixed_rows::<6>(0).transpose();
             lb.b1 += bar.jac;
             lb.b0 += bar.jac;
         }
