@@ -8,7 +8,8 @@ accelerometer          specific force, low-passed in an almost-inertial frame (s
 magnetometer (9D)      heading only, never the inclination; disturbed samples (norm, dip against a
                        learned reference) rejected for a bounded time
 gyro_bias              Kalman estimate after each sample [rad/s], with ``gyro_bias_sigma``
-offline                ``run(..., offline=True)``: forward and backward passes fused (acausal)
+offline                ``run(..., offline=True)``: forward and backward passes' biases fused, the
+                       specific force filtered forward then backward (zero phase, acausal)
 =====================  ===========================================================================
 
 Every default is the Rust core's ``RobustParams::default()`` (``imukit._core.RobustParams()``).

@@ -18,7 +18,7 @@
 //! | rest | `‖ω − ω̄‖`, `‖ω̄‖ < rest_gyro_rad_s` and `‖a − ā‖ < rest_accel` (first-order low passes, `rest_tau_s`) for `rest_duration_s` |
 //! | first sample | initialises: tilt from the accelerometer, yaw 0 (6D) or heading from the field (9D), unless an initial attitude is given; output as is |
 //! | outputs per sample | `q_wb`, `b̂`, `σ_b = √diag P`, rest flag, magnetic-disturbance flag, after that sample |
-//! | offline | [`Robust::smooth`]: forward and backward (time-reversed) passes fused by their uncertainties |
+//! | offline | [`Robust::smooth`]: forward and backward (time-reversed) passes' biases fused; the specific force in `I` filtered forward then backward (zero phase) for the inclination; 9D heading of both passes fused |
 //!
 //! Why not a [`super::Law`]: the law seam corrects one attitude with `ω_c dt`; this filter keeps
 //! three factors of the attitude, a low-pass state and a bias covariance, and outputs more per

@@ -74,7 +74,7 @@ impl Coefs {
 impl Coefs {
     /// One Butterworth step of input `x` with delay elements `s1`, `s2` (per element).
     #[inline(always)]
-    fn butter<T>(&self, x: T, s1: &mut T, s2: &mut T) -> T
+    pub(super) fn butter<T>(&self, x: T, s1: &mut T, s2: &mut T) -> T
     where
         T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f64, Output = T>,
     {
@@ -82,6 +82,16 @@ impl Coefs {
         *s1 = x * self.b1 - y * self.a1 + *s2;
         *s2 = x * self.b0 - y * self.a2;
         y
+    }
+
+    /// The delay elements `(s1, s2)` of [`Coefs::butter`] in steady state for the constant input
+    /// `x` (its output is then `x`: the DC gain is 1).
+    pub(super) fn steady<T>(&self, x: T) -> (T, T)
+    where
+        T: Copy + Add<Output = T> + Mul<f64, Output = T>,
+    {
+        let s2 = x * (self.b0 - self.a2);
+        (x * (self.b1 - self.a1) + s2, s2)
     }
 }
 
@@ -109,7 +119,7 @@ pub(super) fn from_world(world: World, q: &UnitQuaternion<f64>) -> UnitQuaternio
 /// `q ⊗ r` renormalised by one Newton step (both unit: the product is unit to rounding, this
 /// stops the rounding from accumulating without a square root).
 #[inline(always)]
-fn compose(q: &UnitQuaternion<f64>, r: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+pub(super) fn compose(q: &UnitQuaternion<f64>, r: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
     let p = multiply(q.quaternion(), r.quaternion());
     UnitQuaternion::new_unchecked(p * (0.5 * (3.0 - p.norm_squared())))
 }
