@@ -330,3 +330,80 @@ pub(crate) fn preint_windows_record<'py>(
     }
     Ok(record)
 }
+
+/// The lever-arm-complete covariance of one window (`imukit::preint::LeverNoise`); held by
+/// `imukit.PreintegratedImu` and read by `preintegrate_windows` with a lever arm.
+#[pyclass(name = "LeverNoise", module = "imukit._core")]
+pub(crate) struct PyLeverNoise {
+    inner: preint::LeverNoise,
+}
+
+#[pymethods]
+impl PyLeverNoise {
+    /// The window of `words` (from `__reduce__`).
+    #[staticmethod]
+    fn from_state(py: Python<'_>, words: Vec<f64>) -> PyResult<Self> {
+        let inner = preint::LeverNoise::from_state_words(&words).map_err(|e| to_py(py, "words", e))?;
+        Ok(Self { inner })
+    }
+
+    /// Pickles as `LeverNoise.from_state(words)`: exact.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
+        let from_state = py.get_type::<Self>().getattr("from_state")?;
+        Ok((from_state, (self.inner.state_words(),)))
+    }
+
+    /// This window followed by `next`, as one.
+    fn merge(&self, py: Python<'_>, next: PyRef<'_, PyLeverNoise>) -> PyResult<PyLeverNoise> {
+        let inner = self
+            .inner
+            .merge(&next.inner)
+            .map_err(|e| as_argument(py, "other", "other", e))?;
+        Ok(PyLeverNoise { inner })
+    }
+
+    /// `(covariance (9, 9), bias Jacobian (9, 6), combined covariance (15, 15) or None)`.
+    #[allow(clippy::type_complexity)]
+    fn state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Option<Bound<'py, PyArray2<f64>>>,
+    )> {
+        let p = &self.inner;
+        let combined = p
+            .covariance_combined()
+            .map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
+        Ok((
+            rows(py, p.covariance().as_slice(), 9, 9)?,
+            rows(py, p.bias_jacobian().as_slice(), 9, 6)?,
+            combined.transpose()?,
+        ))
+    }
+}
+
+/// The lever-arm-complete covariance of each window `[boundaries[m], boundaries[m + 1]]` (sample
+/// stamps of `imu.seconds`) of the body origin's readings `imu` of a sensor at
+/// `(rotation R_bs, lever_arm)`, preintegrated with `params` (zero bias), GIL released.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lever_noise<'py>(
+    py: Python<'py>,
+    imu: ImuArrays<'py>,
+    rotation: [[f64; 3]; 3],
+    lever_arm: [f64; 3],
+    boundaries: PyReadonlyArray1<'py, f64>,
+    params: Params,
+    threads: Option<usize>,
+) -> PyResult<Vec<PyLeverNoise>> {
+    let pose =
+        imukit::extrinsics::SensorPose::new(nalgebra::Matrix3::from(rotation).transpose(), Vector3::from(lever_arm))
+            .map_err(|e| to_py(py, "body_from_sensor", e))?;
+    let template = params.template(py)?;
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b, _| {
+        preint::LeverNoise::windows(samples, mask, &pose, b, &template)
+    })?;
+    Ok(windows.into_iter().map(|inner| PyLeverNoise { inner }).collect())
+}
