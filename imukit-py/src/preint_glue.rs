@@ -10,6 +10,14 @@ use pyo3::prelude::*;
 use crate::convert::{zeros, BiasFields, Demand, Name, NoiseFields};
 use crate::{raise, to_py, SampleCopies};
 
+/// What `__reduce__` returns for a state class: `(Class.from_state, (words,))`.
+type Reduced<'py> = (Bound<'py, PyAny>, (Vec<f64>,));
+
+/// `(T.from_state, (words,))`: pickles (and `copy.deepcopy`s) a state class exactly.
+fn reduced<T: pyo3::PyTypeInfo>(py: Python<'_>, words: Vec<f64>) -> PyResult<Reduced<'_>> {
+    Ok((py.get_type::<T>().getattr("from_state")?, (words,)))
+}
+
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
 #[pyclass(name = "Preintegrator", module = "imukit._core")]
 pub(crate) struct PyPreintegrator {
@@ -114,9 +122,8 @@ impl PyPreintegrator {
 
     /// Pickles (and `copy.deepcopy`s) as `Preintegrator.from_state(words)`: exact, every part of
     /// the state included.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
-        let from_state = py.get_type::<Self>().getattr("from_state")?;
-        Ok((from_state, (self.inner.state_words(),)))
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
+        reduced::<Self>(py, self.inner.state_words())
     }
 
     /// This preintegration followed by `next`, as one.
@@ -343,23 +350,22 @@ impl PyLeverNoise {
     /// The window of `words` (from `__reduce__`).
     #[staticmethod]
     fn from_state(py: Python<'_>, words: Vec<f64>) -> PyResult<Self> {
-        let inner = preint::LeverNoise::from_state_words(&words).map_err(|e| to_py(py, "words", e))?;
-        Ok(Self { inner })
+        preint::LeverNoise::from_state_words(&words)
+            .map(|inner| Self { inner })
+            .map_err(|e| to_py(py, "words", e))
     }
 
     /// Pickles as `LeverNoise.from_state(words)`: exact.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
-        let from_state = py.get_type::<Self>().getattr("from_state")?;
-        Ok((from_state, (self.inner.state_words(),)))
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
+        reduced::<Self>(py, self.inner.state_words())
     }
 
     /// This window followed by `next`, as one.
     fn merge(&self, py: Python<'_>, next: PyRef<'_, PyLeverNoise>) -> PyResult<PyLeverNoise> {
-        let inner = self
-            .inner
-            .merge(&next.inner)
-            .map_err(|e| as_argument(py, "other", "other", e))?;
-        Ok(PyLeverNoise { inner })
+        let merged = self.inner.merge(&next.inner);
+        merged
+            .map(|inner| PyLeverNoise { inner })
+            .map_err(|e| as_argument(py, "other", "other", e))
     }
 
     /// `(covariance (9, 9), bias Jacobian (9, 6), combined covariance (15, 15) or None)`.
@@ -373,12 +379,13 @@ impl PyLeverNoise {
         Option<Bound<'py, PyArray2<f64>>>,
     )> {
         let p = &self.inner;
-        let combined = p
-            .covariance_combined()
-            .map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
+        let (cov, jac) = (p.covariance(), p.bias_jacobian());
+        let combined = p.covariance_combined();
+        // Symmetric: column-major storage reads the same as row-major.
+        let combined = combined.map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
         Ok((
-            rows(py, p.covariance().as_slice(), 9, 9)?,
-            rows(py, p.bias_jacobian().as_slice(), 9, 6)?,
+            rows(py, cov.as_slice(), 9, 9)?,
+            rows(py, jac.as_slice(), 9, 6)?,
             combined.transpose()?,
         ))
     }
