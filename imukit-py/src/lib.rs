@@ -70,6 +70,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::add_names::<ffi::Convention>(m, "QUAT_CONVENTIONS", None)?;
     convert::add_names::<imukit::filters::World>(m, "FILTER_WORLDS", None)?;
     m.add_class::<preint_glue::PyPreintegrator>()?;
+    m.add_class::<preint_glue::PyLeverNoise>()?;
     m.add_class::<filters_glue::PyGainRamp>()?;
     m.add_class::<filters_glue::PyAccelLowPass>()?;
     m.add_class::<filters_glue::PyAccelRejection>()?;
@@ -83,6 +84,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<filters_glue::PyMadgwickFilter>()?;
     robust_glue::register(m)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows, m)?)?;
+    m.add_function(wrap_pyfunction!(preint_glue::lever_noise, m)?)?;
     m.add_function(wrap_pyfunction!(preint_glue::preint_windows_record, m)?)?;
     convert::add_names::<imukit::preint::Scheme>(m, "PREINT_SCHEMES", Some("PREINT_SCHEME_ALIASES"))?;
     m.add("PREINT_DEFAULT_SCHEME", imukit::preint::Scheme::default().name())?;

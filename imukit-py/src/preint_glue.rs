@@ -10,6 +10,14 @@ use pyo3::prelude::*;
 use crate::convert::{zeros, BiasFields, Demand, Name, NoiseFields};
 use crate::{raise, to_py, SampleCopies};
 
+/// What `__reduce__` returns for a state class: `(Class.from_state, (words,))`.
+type Reduced<'py> = (Bound<'py, PyAny>, (Vec<f64>,));
+
+/// `(T.from_state, (words,))`: pickles (and `copy.deepcopy`s) a state class exactly.
+fn reduced<T: pyo3::PyTypeInfo>(py: Python<'_>, words: Vec<f64>) -> PyResult<Reduced<'_>> {
+    Ok((py.get_type::<T>().getattr("from_state")?, (words,)))
+}
+
 /// Streaming preintegration state; wrapped by `imukit.PreintegratedImu`.
 #[pyclass(name = "Preintegrator", module = "imukit._core")]
 pub(crate) struct PyPreintegrator {
@@ -114,9 +122,8 @@ impl PyPreintegrator {
 
     /// Pickles (and `copy.deepcopy`s) as `Preintegrator.from_state(words)`: exact, every part of
     /// the state included.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Vec<f64>,))> {
-        let from_state = py.get_type::<Self>().getattr("from_state")?;
-        Ok((from_state, (self.inner.state_words(),)))
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
+        reduced::<Self>(py, self.inner.state_words())
     }
 
     /// This preintegration followed by `next`, as one.
@@ -329,4 +336,81 @@ pub(crate) fn preint_windows_record<'py>(
         })?;
     }
     Ok(record)
+}
+
+/// The lever-arm-complete covariance of one window (`imukit::preint::LeverNoise`); held by
+/// `imukit.PreintegratedImu` and read by `preintegrate_windows` with a lever arm.
+#[pyclass(name = "LeverNoise", module = "imukit._core")]
+pub(crate) struct PyLeverNoise {
+    inner: preint::LeverNoise,
+}
+
+#[pymethods]
+impl PyLeverNoise {
+    /// The window of `words` (from `__reduce__`).
+    #[staticmethod]
+    fn from_state(py: Python<'_>, words: Vec<f64>) -> PyResult<Self> {
+        preint::LeverNoise::from_state_words(&words)
+            .map(|inner| Self { inner })
+            .map_err(|e| to_py(py, "words", e))
+    }
+
+    /// Pickles as `LeverNoise.from_state(words)`: exact.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
+        reduced::<Self>(py, self.inner.state_words())
+    }
+
+    /// This window followed by `next`, as one.
+    fn merge(&self, py: Python<'_>, next: PyRef<'_, PyLeverNoise>) -> PyResult<PyLeverNoise> {
+        let merged = self.inner.merge(&next.inner);
+        merged
+            .map(|inner| PyLeverNoise { inner })
+            .map_err(|e| as_argument(py, "other", "other", e))
+    }
+
+    /// `(covariance (9, 9), bias Jacobian (9, 6), combined covariance (15, 15) or None)`.
+    #[allow(clippy::type_complexity)]
+    fn state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Option<Bound<'py, PyArray2<f64>>>,
+    )> {
+        let p = &self.inner;
+        let (cov, jac) = (p.covariance(), p.bias_jacobian());
+        let combined = p.covariance_combined();
+        // Symmetric: column-major storage reads the same as row-major.
+        let combined = combined.map(|c| PyArray1::from_slice(py, c.as_slice()).reshape([15, 15]));
+        Ok((
+            rows(py, cov.as_slice(), 9, 9)?,
+            rows(py, jac.as_slice(), 9, 6)?,
+            combined.transpose()?,
+        ))
+    }
+}
+
+/// The lever-arm-complete covariance of each window `[boundaries[m], boundaries[m + 1]]` (sample
+/// stamps of `imu.seconds`) of the body origin's readings `imu` of a sensor at
+/// `(rotation R_bs, lever_arm)`, preintegrated with `params` (zero bias), GIL released.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lever_noise<'py>(
+    py: Python<'py>,
+    imu: ImuArrays<'py>,
+    rotation: [[f64; 3]; 3],
+    lever_arm: [f64; 3],
+    boundaries: PyReadonlyArray1<'py, f64>,
+    params: Params,
+    threads: Option<usize>,
+) -> PyResult<Vec<PyLeverNoise>> {
+    let pose =
+        imukit::extrinsics::SensorPose::new(nalgebra::Matrix3::from(rotation).transpose(), Vector3::from(lever_arm))
+            .map_err(|e| to_py(py, "body_from_sensor", e))?;
+    let template = params.template(py)?;
+    let windows = run_windows(py, &imu, &boundaries, threads, |samples, mask, b, _| {
+        preint::LeverNoise::windows(samples, mask, &pose, b, &template)
+    })?;
+    Ok(windows.into_iter().map(|inner| PyLeverNoise { inner }).collect())
 }

@@ -31,6 +31,7 @@ __all__ = [
     "FilterOptions",
     "FilterState",
     "GainRamp",
+    "LeverNoise",
     "MadgwickFilter",
     "MadgwickGains",
     "MagRejection",
@@ -51,6 +52,7 @@ __all__ = [
     "euler_rate_matrix_inv",
     "euler_to_matrix",
     "get_num_threads",
+    "lever_noise",
     "local_level",
     "preint_adjoint",
     "preint_windows",
@@ -703,3 +705,20 @@ class RobustFilter:
         NDArray[np.bool_],
         RobustState,
     ]: ...
+
+@final
+class LeverNoise:
+    @staticmethod
+    def from_state(words: list[float]) -> LeverNoise: ...
+    def __reduce__(self) -> tuple[Any, tuple[list[float]]]: ...
+    def merge(self, next: LeverNoise) -> LeverNoise: ...
+    def state(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None]: ...
+
+def lever_noise(
+    imu: _ImuArrays,
+    rotation: list[list[float]],
+    lever_arm: list[float],
+    boundaries: NDArray[np.float64],
+    params: _PreintFields,
+    threads: int | None,
+) -> list[LeverNoise]: ...

@@ -21,9 +21,11 @@ lever arm              the readings are turned into the body origin's before the
                        linear in the accelerometer readings for a fixed gyro sequence, ``L`` is the
                        (v, p) deltas of three preintegrations of the readings ``D(ω_k) R e_m``
                        (exact for the discrete scheme; they merge as deltas do, so merging stays
-                       exact). Covariance: the direct gyro and accelerometer noise only (see
-                       ``docs/navigation.md``: the gyro noise reaching the corrected accelerometer
-                       is not in it yet)
+                       exact). Covariance: complete, from the core's ``LeverNoise``
+                       (``crates/imukit/src/preint/lever.rs``): the direct noise and the gyro noise
+                       that the conversion puts into the corrected accelerometer (centripetal
+                       ``D(ω) R n_g``, tangential ``[r]× R Δn_g / Δt``), exact for correlated
+                       noise, merging exactly; ``combined`` too. Window edges must be samples
 =====================  ===========================================================================
 """
 
@@ -41,11 +43,11 @@ from imukit._errors import ParameterError
 __all__ = [
     "Pose",
     "Readings",
-    "check_preint_pose",
     "has_lever_arm",
     "in_body",
     "lever_columns",
     "lever_jacobian",
+    "lever_noise",
     "origin_readings",
     "sensor_pose",
 ]
@@ -87,19 +89,18 @@ def in_body(arrays: tuple[Any, ...], pose: Pose) -> tuple[Any, ...]:
     )
 
 
+def lever_noise(body: Readings, params: Any, edges: FloatArray, threads: int | None) -> list[_core.LeverNoise]:
+    """The core's complete covariance state of each window between ``edges`` (sample stamps of
+    ``body.seconds``) of the body readings ``body``, with ``params`` (a ``PreintParams`` with a
+    lever arm)."""
+    pose = params.body_from_sensor
+    rows = [list(r) for r in pose[0]]
+    return _core.lever_noise(body, rows, list(pose[1]), np.ascontiguousarray(edges), params._integrated(), threads)
+
+
 def has_lever_arm(pose: Pose | None) -> bool:
     """Whether ``pose`` has a non-zero lever arm (the readings are then converted before the step)."""
     return pose is not None and any(v != 0.0 for v in pose[1])
-
-
-def check_preint_pose(pose: Pose | None, combined: bool) -> None:
-    """Refuses what preintegration does not do yet: the bias walk (``combined``) with a lever arm,
-    whose state–bias cross terms would miss the centripetal term ``L`` (module docs)."""
-    if combined and has_lever_arm(pose):
-        raise ParameterError(
-            "combined=True (the bias walk) is not supported with a lever arm yet (the rotation alone is)",
-            argument="body_from_sensor",
-        )
 
 
 class Readings(NamedTuple):

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from imukit import _core
 from imukit._arrays import FloatArray, choice, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
-from imukit._extrinsics import Pose, check_preint_pose, has_lever_arm, sensor_pose
+from imukit._extrinsics import Pose, has_lever_arm, sensor_pose
 from imukit._names import canonical
 from imukit.imu import ImuBias, ImuNoise
 
@@ -89,7 +89,6 @@ class PreintParams:
         )
         g = vector3(self.gravity, "gravity")
         pose = _pose(self.body_from_sensor)
-        check_preint_pose(pose, bool(self.combined))
         fields = {
             "bias": bias,
             "gravity": (float(g[0]), float(g[1]), float(g[2])),

@@ -49,7 +49,7 @@ from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._engines._windows import lever_windows
 from imukit._errors import DTypeError, ParameterError, ShapeError
-from imukit._extrinsics import has_lever_arm, in_body, lever_columns, lever_jacobian, origin_readings
+from imukit._extrinsics import has_lever_arm, in_body, lever_columns, lever_jacobian, lever_noise, origin_readings
 from imukit._preint_math import Deltas, ResidualJacobians, States
 from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
 from imukit.imu import ImuBias, ImuData, ImuNoise
@@ -163,6 +163,8 @@ class PreintegratedImu:
         self._lever = (
             [self.params._template() for _ in range(3)] if has_lever_arm(self.params.body_from_sensor) else None
         )
+        # With a lever arm: the complete covariance (the gyro noise in the corrected accelerometer).
+        self._noise: _core.LeverNoise | None = None
         self._snapshot: Preintegration | None = None
         self._span = (math.nan, math.nan)
         # What was integrated, for the deprecated reintegrate(bias) only: reintegrate(imu, bias)
@@ -174,7 +176,7 @@ class PreintegratedImu:
     def __reduce__(self) -> tuple[Any, ...]:
         # The core pickles its complete state; the replay log of the deprecated reintegrate(bias)
         # travels too (its samples are data), so a copy behaves as the original in every call.
-        state = (self._span, self._inputs, self._started, self._snapshot, self._lever)
+        state = (self._span, self._inputs, self._started, self._snapshot, self._lever, self._noise)
         return (_restore, (self.params, self._scheme, self._core, *state))
 
     def _like(
@@ -183,10 +185,11 @@ class PreintegratedImu:
         inputs: list[_Input],
         params: PreintParams,
         lever: list[_core.Preintegrator] | None = None,
+        noise: _core.LeverNoise | None = None,
     ) -> PreintegratedImu:
         out = object.__new__(PreintegratedImu)
         out.params, out._scheme, out._core, out._inputs = params, self._scheme, core, inputs
-        out._lever = lever
+        out._lever, out._noise = lever, noise
         out._started = True
         out._snapshot, out._span = None, (math.nan, math.nan)
         out._lock = threading.Lock()
@@ -294,6 +297,9 @@ class PreintegratedImu:
                 _feed(self._core, body, (lo, hi), clock, count)
                 for core, readings in zip(self._lever, lever_columns(body, self.params.body_from_sensor), strict=True):
                     _feed(core, readings, (lo, hi), clock, count)
+                edges = np.array([body.seconds[lo], body.seconds[hi - 1]])
+                noise = lever_noise(body, self.params, edges, count)[0]
+                self._noise = noise if self._noise is None else self._noise.merge(noise)
             self._inputs.append(imu if span is None else _Span(imu, span))
             self._changed(*clock)
 
@@ -313,7 +319,8 @@ class PreintegratedImu:
                 dv = np.stack([c[1] for c in cols], axis=-1)[None]
                 dp = np.stack([c[2] for c in cols], axis=-1)[None]
                 jac = lever_jacobian(state[5][None], np.array(pose[0]), dv, dp)[0]
-                state = (*state[:5], jac, state[6])
+                cov, _, combined = self._noise.state() if self._noise is not None else (state[4], jac, state[6])
+                state = (*state[:4], cov, jac, combined)
             elif pose is not None:
                 state = in_body(state, pose)
             r, v, p, dt, cov, jac, combined = state
@@ -392,10 +399,13 @@ class PreintegratedImu:
         with contextlib.ExitStack() as held:
             for _, lock in sorted({id(x): x._lock for x in (self, other)}.items()):
                 held.enter_context(lock)
-            lever = None
+            lever, noise = None, None
             if self._lever is not None and other._lever is not None:
                 lever = [a.merge(b) for a, b in zip(self._lever, other._lever, strict=True)]
-            return self._like(self._core.merge(other._core), self._inputs + other._inputs, params, lever)
+            if self._noise is not None and other._noise is not None:
+                noise = self._noise.merge(other._noise)
+            core = self._core.merge(other._core)
+            return self._like(core, self._inputs + other._inputs, params, lever, noise)
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray, FloatArray]:
         """The old ``(ΔR, Δv, Δp, Δt, covariance, bias Jacobian)`` tuple (test helpers read it)."""
@@ -539,11 +549,12 @@ def _restore(
     started: bool,
     snapshot: Preintegration | None,
     lever: list[_core.Preintegrator] | None = None,
+    noise: _core.LeverNoise | None = None,
 ) -> PreintegratedImu:
     """A pickled :class:`PreintegratedImu` (its ``__reduce__``)."""
     out = PreintegratedImu(params)
     out._scheme, out._core, out._span, out._inputs = scheme, core, span, inputs
-    out._started, out._snapshot, out._lever = started, snapshot, lever
+    out._started, out._snapshot, out._lever, out._noise = started, snapshot, lever, noise
     return out
 
 
@@ -614,9 +625,9 @@ def preintegrate(
     ``body_from_sensor``: ``(R_bs, lever arm)``, the IMU's pose in the body frame (GTSAM's
     ``body_P_sensor``): the deltas, covariance and bias Jacobian are the body's (biases stay the
     sensor's). A lever arm converts the readings to the body origin's before the step, with the
-    angular acceleration from the gyro's central difference (:mod:`imukit._extrinsics`); its
-    covariance holds the direct noise only (``docs/navigation.md``); ``combined=True`` is refused
-    with it. ``span``: as in :meth:`PreintegratedImu.integrate`.
+    angular acceleration from the gyro's central difference (:mod:`imukit._extrinsics`); the
+    covariance (and ``combined``'s) includes the gyro noise that the conversion puts into the
+    corrected accelerometer (``docs/navigation.md``). ``span``: as in :meth:`PreintegratedImu.integrate`.
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """

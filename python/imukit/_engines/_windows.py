@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray
-from imukit._extrinsics import in_body, lever_columns, lever_jacobian, origin_readings
+from imukit._extrinsics import in_body, lever_columns, lever_jacobian, lever_noise, origin_readings
 from imukit._preint_record import Preintegration, PreintParams
 
 
@@ -51,7 +51,8 @@ class _Run(Protocol):
 
 def lever_windows(run: _Run, imu: Any, windows: Windows, params: PreintParams, threads: int | None) -> Preintegration:
     """``run`` (an engine) over the body origin's readings of ``imu`` (a sensor with a lever arm),
-    bias Jacobian mapped to the sensor's biases with its centripetal term (:mod:`imukit._extrinsics`).
+    bias Jacobian mapped to the sensor's biases with its centripetal term, covariance the core's
+    complete one (:mod:`imukit._extrinsics`; window edges must be samples).
     The readings are converted once over all of ``imu``: a window edge's angular acceleration uses
     the samples on both sides of it, so the windows are those of one pass."""
     pose = params.body_from_sensor
@@ -62,8 +63,13 @@ def lever_windows(run: _Run, imu: Any, windows: Windows, params: PreintParams, t
     dv = np.stack([c.delta_velocity for c in cols], axis=-1)
     dp = np.stack([c.delta_position for c in cols], axis=-1)
     jac = lever_jacobian(out.bias_jacobian, np.array(pose[0]), dv, dp)
+    states = [n.state() for n in lever_noise(body, params, windows.offsets, threads)]
+    combined = np.array([s[2] for s in states]) if params.combined else None
+    replaced = ("bias_jacobian", "params", "covariance", "covariance_combined")
     return Preintegration._owning(
-        **{f: getattr(out, f) for f in out.__dataclass_fields__ if f not in ("bias_jacobian", "params")},
+        **{f: getattr(out, f) for f in out.__dataclass_fields__ if f not in replaced},
+        covariance=np.array([s[0] for s in states]).reshape(-1, 9, 9),
+        covariance_combined=combined,
         bias_jacobian=jac,
         params=params,
     )

@@ -8,7 +8,7 @@
 //! in the midpoint scheme, the correlation through the shared sample j:
 //! `Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Cov(n_j)⁻¹ Cov(n_j, δx_jk)`.
 
-use nalgebra::{Matrix3, SMatrix};
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::blocks::{self, Cross};
 use super::{Covariance9, Preintegrator, Scheme};
@@ -21,6 +21,25 @@ fn mismatch(expected: &'static str, got: String) -> Error {
         expected,
         got,
     }
+}
+
+/// `(J_1, J_2)` of the composition (module docs) after `ΔR_ij`, with the deltas `(ΔR, Δv, Δp, Δt)`
+/// of j → k.
+pub(super) fn composition(
+    r: &Matrix3<f64>,
+    (dr, dv, dp, dt_jk): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>, f64),
+) -> (Covariance9, Covariance9) {
+    let mut j1 = Covariance9::identity();
+    j1.fixed_view_mut::<3, 3>(0, 0).copy_from(&dr.transpose());
+    j1.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-r * so3::hat(dv)));
+    j1.fixed_view_mut::<3, 3>(6, 0).copy_from(&(-r * so3::hat(dp)));
+    j1.fixed_view_mut::<3, 3>(6, 3)
+        .copy_from(&(Matrix3::identity() * dt_jk));
+    let mut j2 = Covariance9::zeros();
+    j2.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
+    j2.fixed_view_mut::<3, 3>(3, 3).copy_from(r);
+    j2.fixed_view_mut::<3, 3>(6, 6).copy_from(r);
+    (j1, j2)
 }
 
 impl Preintegrator {
@@ -84,19 +103,10 @@ impl Preintegrator {
         }
         let r = self.delta_rotation;
         let dt_jk = next.delta_t;
-        let mut j1 = Covariance9::identity();
-        j1.fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&next.delta_rotation.transpose());
-        j1.fixed_view_mut::<3, 3>(3, 0)
-            .copy_from(&(-r * so3::hat(&next.delta_velocity)));
-        j1.fixed_view_mut::<3, 3>(6, 0)
-            .copy_from(&(-r * so3::hat(&next.delta_position)));
-        j1.fixed_view_mut::<3, 3>(6, 3)
-            .copy_from(&(Matrix3::identity() * dt_jk));
-        let mut j2 = Covariance9::zeros();
-        j2.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
-        j2.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
-        j2.fixed_view_mut::<3, 3>(6, 6).copy_from(&r);
+        let (j1, j2) = composition(
+            &r,
+            (&next.delta_rotation, &next.delta_velocity, &next.delta_position, dt_jk),
+        );
         // Dense 9×9 products: merging is rare.
         let mut cov = j1 * self.covariance() * j1.transpose() + j2 * next.covariance() * j2.transpose();
         let transport = |m: &Covariance9, x: &Cross| blocks::cross_of(&(m * blocks::cross_matrix(x)));

@@ -35,6 +35,7 @@
 mod batch;
 mod blocks;
 mod continuity;
+mod lever;
 mod merge;
 mod midpoint;
 mod state;
@@ -49,6 +50,7 @@ use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use continuity::{End, Ends};
+pub use lever::LeverNoise;
 pub use midpoint::MidpointStepMatrices;
 pub use windows::{
     preintegrate_windows, preintegrate_windows_cancellable, preintegrate_windows_clipped,
