@@ -96,7 +96,7 @@ impl LocalLevel {
         surface * (1.0 - 2.0 * (1.0 + FLATTENING + m - 2.0 * FLATTENING * s2) * h + 3.0 * h * h)
     }
 
-    /// `(∂γ/∂φ, ∂γ/∂h)` of [`Self::gravity_magnitude`] [m/s² per rad, s⁻²], differentiated
+    /// `(∂γ/∂φ, ∂γ/∂h)` of [`Self::gravity_magnitude`] (m/s² per rad, s⁻²), differentiated
     /// term by term (with `s = sin²φ`, `ds/dφ = sin 2φ`): the error model of a frame that follows
     /// the vehicle needs them ([`crate::ellipsoid_errors`]).
     pub fn gravity_derivatives(&self) -> (f64, f64) {

@@ -28,6 +28,10 @@
 //! `−2h [Ω]×` to `∂δv⁺/∂δv` and `−h² [Ω]×` to `∂δp⁺/∂δv`, applied as a separate factor after the
 //! step ([`coriolis_blocks`]; its cross terms with the step are O(h²), below the step's order).
 //!
+//! **Lever arm and a frame that follows the vehicle** ([`Model`], [`propagate_model`]): a dense
+//! step that carries the lever-arm conversion's gyro noise across the three samples it spans, and
+//! for the ellipsoid the error model of [`crate::ellipsoid_errors`] (module `augmented`).
+//!
 //! Solà's §5.4.3 drops the h² terms of the position row and uses `I` for `J_r`; both are kept here
 //! because they cost nothing in the block product. The mean may be integrated with any
 //! [`strapdown::Scheme`](crate::strapdown::Scheme); the covariance always uses these Jacobians at
