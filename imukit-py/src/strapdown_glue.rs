@@ -12,6 +12,7 @@ use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUnty
 use pyo3::prelude::*;
 
 use crate::convert::{contiguous, zeros, BiasFields, Demand, Name, NavStateFields, NoiseFields, SampleCopies};
+use crate::earth_glue::LocalLevelFields;
 use crate::{raise, to_py};
 
 /// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
@@ -105,11 +106,17 @@ pub(crate) fn strapdown_propagate<'py>(
     scheme: Name<Scheme>,
     every: usize,
     earth_rate: [f64; 3],
+    lever_arm: [f64; 3],
+    transport: Option<LocalLevelFields>,
 ) -> PyResult<StatesAndCovariances<'py>> {
     let options = Options {
         scheme: scheme.0,
         gravity: Vector3::from(gravity),
         earth_rate: Vector3::from(earth_rate),
+    };
+    let model = propagate::Model {
+        lever_arm: Vector3::from(lever_arm),
+        transport: transport.map(|f| f.frame(py)).transpose()?,
     };
     let (initial, bias, noise) = (NavState::from(initial), Bias::from(bias), Noise::from(noise));
     if covariance.shape() != [15, 15] {
@@ -141,7 +148,13 @@ pub(crate) fn strapdown_propagate<'py>(
             every,
         };
         crate::threads::interruptible(py, n, |cancel| {
-            propagate::propagate_cancellable(&samples, &initial, &p0, &bias, &noise, &options, outputs, cancel)
+            let setup = propagate::Setup {
+                bias: &bias,
+                noise: &noise,
+                options: &options,
+                model: &model,
+            };
+            propagate::propagate_model(&samples, &initial, &p0, setup, outputs, cancel)
         })?
         .map_err(|e| to_py(py, "imu / bias", e))?;
     }

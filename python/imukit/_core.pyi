@@ -229,7 +229,8 @@ def body_readings(
 ) -> tuple[_Rows, _Rows]: ...
 
 # As strapdown_integrate, plus (M, 225) row-major 15x15 covariances every `every` samples and at
-# the last one, from the initial `covariance` (15, 15).
+# the last one, from the initial `covariance` (15, 15); `lever_arm` [m] (body axes) of readings
+# already converted to the body origin, `transport` a frame that follows the vehicle (or None).
 def strapdown_propagate(
     t: _Rows,
     gyro: _Rows,
@@ -242,6 +243,8 @@ def strapdown_propagate(
     scheme: _StrapdownScheme | str,
     every: int,
     earth_rate: list[float],
+    lever_arm: list[float],
+    transport: _LocalLevel | None,
 ) -> tuple[_Rows, _Rows, _Rows]: ...
 def allan_variance(
     y: NDArray[np.float64], name: str, rate: float, clusters: list[int], overlapping: bool, threads: int | None = None

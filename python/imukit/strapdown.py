@@ -54,19 +54,15 @@ def _common(
 
 
 def _in_body(
-    imu: ImuData, bias: ImuBias, body_from_sensor: object, *, lever_arm: bool
-) -> tuple[FloatArray, FloatArray, ImuBias]:
-    """The readings and bias to integrate: the IMU's own, or the body origin's (bias removed)."""
+    imu: ImuData, bias: ImuBias, body_from_sensor: object
+) -> tuple[FloatArray, FloatArray, ImuBias, list[float]]:
+    """The readings and bias to integrate: the IMU's own, or the body origin's (bias removed), and
+    the lever arm (zero without a sensor pose)."""
     if body_from_sensor is None:
-        return imu.gyro, imu.accel, bias
+        return imu.gyro, imu.accel, bias, [0.0, 0.0, 0.0]
     rows, arm = sensor_pose(body_from_sensor)
-    if not lever_arm and any(v != 0.0 for v in arm):
-        raise ParameterError(
-            "a lever arm is not supported by propagate yet (its noise terms are not in the covariance)",
-            argument="body_from_sensor",
-        )
     gyro, accel = _core.body_readings(imu.seconds, imu.gyro, imu.accel, bias, [list(r) for r in rows], list(arm))
-    return gyro, accel, ImuBias()
+    return gyro, accel, ImuBias(), [float(v) for v in arm]
 
 
 def _trajectory(
@@ -128,7 +124,7 @@ def integrate(
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world_of(frame, g)
-    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=True)
+    gyro, accel, b, _ = _in_body(imu, b, body_from_sensor)
     if frame is not None and frame.transport:
         pv, quaternions = _core.ellipsoid_integrate(imu.seconds, gyro, accel, initial, b, frame, scheme)
     else:
@@ -160,23 +156,25 @@ def propagate(
     …`` and at the last sample (``Trajectory.covariance`` with times ``covariance_t``), so memory stays
     bounded for long recordings.
 
-    ``body_from_sensor``: ``(R_bs, 0)``, as in :func:`integrate`, rotation only (a lever arm is
-    refused: its gyro-noise terms are not in the covariance); the readings are turned into body
-    axes with ``bias`` removed, so the covariance's bias blocks are in body axes (isotropic noise:
-    the same densities).
+    ``body_from_sensor``: ``(R_bs, r)``, as in :func:`integrate` (the same mean); the readings are
+    turned into the body origin's with ``bias`` removed, so the covariance's bias blocks are in body
+    axes (isotropic noise: the same densities). With a lever arm ``r ≠ 0`` the covariance carries
+    the gyro noise the conversion puts into the specific force, the centripetal ``D(ω) w_k`` and
+    the tangential ``[r]× (w_{k+1} − w_{k−1}) / (t_{k+1} − t_{k−1})`` (three samples, carried
+    exactly by an augmented step), and the gyro-bias error through ``D(ω)``,
+    ``D(ω) = −[ω×r]× − [ω]×[r]×``; ``docs/navigation.md``.
 
-    ``frame``: a fixed :class:`imukit.earth.LocalLevel`, as in :func:`integrate` (the same mean);
-    the covariance gains the Coriolis term of the velocity error, ``−2h[ω]×`` in ``∂δv⁺/∂δv`` and
-    ``−h²[ω]×`` in ``∂δp⁺/∂δv`` (the Earth's turn leaves the right attitude error unchanged);
-    ``docs/strapdown.md``. A frame that follows the vehicle (``transport=True``) is refused.
+    ``frame``: a :class:`imukit.earth.LocalLevel`, as in :func:`integrate` (the same mean). A fixed
+    frame adds the Coriolis term of the velocity error, ``−2h[ω]×`` in ``∂δv⁺/∂δv`` and
+    ``−h²[ω]×`` in ``∂δp⁺/∂δv`` (the Earth's turn leaves the right attitude error unchanged). A
+    frame that follows the vehicle (``transport=True``) takes the full local-level error model:
+    ``δp`` is then ``(δφ, δλ, δh)`` (rad, rad, m), coupled through the radii of curvature, the
+    transport rate and gravity's change with latitude and height (the Schuler loop and the
+    vertical channel); ``docs/navigation.md``.
     """
     b, g, scheme = _common(imu, initial, bias, gravity, scheme)
     g, rate = world_of(frame, g)
-    if frame is not None and frame.transport:
-        raise ParameterError(
-            "propagate takes a fixed LocalLevel only (transport=True: its error model is not there yet)",
-            argument="frame",
-        )
+    transport = frame if frame is not None and frame.transport else None
     if not isinstance(noise, ImuNoise):
         raise ParameterError(f"expected an imukit.ImuNoise, got {type(noise).__name__}", argument="noise")
     p0 = np.ascontiguousarray(as_float_array(covariance, "covariance"))
@@ -193,9 +191,9 @@ def propagate(
         raise ParameterError(f"expected an integer ≥ 1, got {covariance_every!r}", argument="covariance_every")
     n = len(imu)
     every = min(every, max(n - 1, 1))  # a stride past the end keeps the first and last samples
-    gyro, accel, b = _in_body(imu, b, body_from_sensor, lever_arm=False)
+    gyro, accel, b, arm = _in_body(imu, b, body_from_sensor)
     pv, quaternions, covs = _core.strapdown_propagate(
-        imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every, rate
+        imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every, rate, arm, transport
     )
     kept = np.unique(np.append(np.arange(0, n, every), n - 1))
     covs.setflags(write=False)

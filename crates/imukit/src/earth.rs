@@ -96,6 +96,25 @@ impl LocalLevel {
         surface * (1.0 - 2.0 * (1.0 + FLATTENING + m - 2.0 * FLATTENING * s2) * h + 3.0 * h * h)
     }
 
+    /// `(∂γ/∂φ, ∂γ/∂h)` of [`Self::gravity_magnitude`] (m/s² per rad, s⁻²), differentiated
+    /// term by term (with `s = sin²φ`, `ds/dφ = sin 2φ`): the error model of a frame that follows
+    /// the vehicle needs them ([`crate::ellipsoid_errors`]).
+    pub fn gravity_derivatives(&self) -> (f64, f64) {
+        let s2 = self.latitude.sin().powi(2);
+        let ds2 = (2.0 * self.latitude).sin();
+        let e2 = FLATTENING * (2.0 - FLATTENING);
+        let root = (1.0 - e2 * s2).sqrt();
+        let surface = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / root;
+        let d_surface = GAMMA_EQUATOR * (SOMIGLIANA_K / root + (1.0 + SOMIGLIANA_K * s2) * 0.5 * e2 / root.powi(3));
+        let b = SEMI_MAJOR_AXIS * (1.0 - FLATTENING);
+        let m = EARTH_RATE * EARTH_RATE * SEMI_MAJOR_AXIS * SEMI_MAJOR_AXIS * b / GM;
+        let h = self.height / SEMI_MAJOR_AXIS;
+        let free_air = 1.0 - 2.0 * (1.0 + FLATTENING + m - 2.0 * FLATTENING * s2) * h + 3.0 * h * h;
+        let d_lat = (d_surface * free_air + surface * 4.0 * FLATTENING * h) * ds2;
+        let d_height = surface * (-2.0 * (1.0 + FLATTENING + m - 2.0 * FLATTENING * s2) + 6.0 * h) / SEMI_MAJOR_AXIS;
+        (d_lat, d_height)
+    }
+
     /// Gravity at the origin in the frame's axes [m/s²], pointing down (added to the rotated
     /// specific force, as imukit's `gravity`).
     pub fn gravity(&self) -> Vector3<f64> {
@@ -135,6 +154,23 @@ mod tests {
         // free-air gradient ≈ −3.086e-6 s⁻² at the equator
         let gradient = (at(0.0, 1000.0)? - at(0.0, 0.0)?) / 1000.0;
         assert!((gradient + 3.086e-6).abs() < 5e-9);
+        Ok(())
+    }
+
+    #[test]
+    fn gravity_derivatives_are_the_central_differences() -> Result<()> {
+        for (lat, h) in [(0.3, 0.0), (-1.1, 2500.0), (0.785, 9e5)] {
+            let g = |lat: f64, h: f64| Ok::<f64, Error>(LocalLevel::new(lat, h, Axes::Enu)?.gravity_magnitude());
+            let (d_lat, d_h) = LocalLevel::new(lat, h, Axes::Ned)?.gravity_derivatives();
+            let (e, dh) = (1e-5, 1.0);
+            let num_lat = (g(lat + e, h)? - g(lat - e, h)?) / (2.0 * e);
+            let num_h = (g(lat, h + dh)? - g(lat, h - dh)?) / (2.0 * dh);
+            assert!(
+                (d_lat - num_lat).abs() < 1e-7 * num_lat.abs().max(1e-3),
+                "{d_lat} {num_lat}"
+            );
+            assert!((d_h - num_h).abs() < 1e-12, "{d_h} {num_h}");
+        }
         Ok(())
     }
 

@@ -26,7 +26,7 @@ use crate::strapdown::{Scheme, StatesOut};
 use crate::{quat, Cancel, Error, Result};
 
 /// First eccentricity squared `e² = f (2 − f)`.
-const E2: f64 = FLATTENING * (2.0 - FLATTENING);
+pub(crate) const E2: f64 = FLATTENING * (2.0 - FLATTENING);
 
 /// Meridian and transverse radii of curvature `(R_N, R_E)` at latitude φ [m] (module docs).
 pub fn radii(latitude: f64) -> (f64, f64) {
@@ -38,7 +38,7 @@ pub fn radii(latitude: f64) -> (f64, f64) {
 }
 
 /// `(north, east, up)` components of a vector in `axes`.
-fn north_east_up(axes: Axes, v: &Vector3<f64>) -> (f64, f64, f64) {
+pub(crate) fn north_east_up(axes: Axes, v: &Vector3<f64>) -> (f64, f64, f64) {
     match axes {
         Axes::Enu => (v.y, v.x, v.z),
         Axes::Ned => (v.x, v.y, -v.z),
@@ -46,7 +46,7 @@ fn north_east_up(axes: Axes, v: &Vector3<f64>) -> (f64, f64, f64) {
 }
 
 /// The vector in `axes` with these north, east and up components.
-fn from_north_east_up(axes: Axes, north: f64, east: f64, up: f64) -> Vector3<f64> {
+pub(crate) fn from_north_east_up(axes: Axes, north: f64, east: f64, up: f64) -> Vector3<f64> {
     match axes {
         Axes::Enu => Vector3::new(east, north, up),
         Axes::Ned => Vector3::new(north, east, -up),
@@ -88,7 +88,7 @@ pub fn transport_rate(axes: Axes, latitude: f64, height: f64, v: &Vector3<f64>) 
 
 /// Time derivative `(ṗ, v̇, q̇)` of the state with body rate `w` and specific force `f` (module docs;
 /// `q` unnormalised inside a step, `R(q/|q|)`).
-fn derivative(
+pub(crate) fn derivative(
     axes: Axes,
     (pos, v, q): (&Vector3<f64>, &Vector3<f64>, &Quaternion<f64>),
     w: &Vector3<f64>,
@@ -114,10 +114,29 @@ pub fn integrate(
     mut out: Option<StatesOut<'_>>,
     cancel: &Cancel,
 ) -> Result<NavState> {
-    let n = samples.t.len();
-    if let Some(out) = out.as_ref() {
-        out.check(n)?;
+    if let Some(out) = out.as_mut() {
+        out.check(samples.t.len())?;
+        out.store(0, initial);
     }
+    run(samples, initial, bias, start, scheme, |k, _, next| {
+        if let Some(out) = out.as_mut() {
+            out.store(k + 1, next);
+        }
+        cancel.check(k)
+    })
+}
+
+/// [`integrate`]'s loop: calls `visit(k, state_k, state_k+1)` after each step (the covariance
+/// propagation of [`crate::propagate`] rides on it, so its mean is this one).
+pub(crate) fn run(
+    samples: &Samples<'_>,
+    initial: &NavState,
+    bias: &Bias,
+    start: &LocalLevel,
+    scheme: Scheme,
+    mut visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
+) -> Result<NavState> {
+    let n = samples.t.len();
     crate::strapdown::check_parameters(initial, bias, &crate::strapdown::Options::default())?;
     if !matches!(scheme, Scheme::Rk4 | Scheme::Midpoint) {
         return Err(Error::Parameter {
@@ -153,9 +172,6 @@ pub fn integrate(
     let mid_gyro = StepInterpolator::new(Cubic::new(samples.t, samples.gyro.as_flattened()), [0.5]);
     let mid_accel = StepInterpolator::new(Cubic::new(samples.t, samples.accel.as_flattened()), [0.5]);
     let mut x = *initial;
-    if let Some(out) = out.as_mut() {
-        out.store(0, &x);
-    }
     for k in 0..n - 1 {
         if !samples.step_ok(k) {
             return Err(samples.value_error());
@@ -189,20 +205,18 @@ pub fn integrate(
         } else {
             k2
         };
-        x = NavState {
+        let next = NavState {
             position: p + dp * h,
             velocity: v + dv * h,
             rotation: UnitQuaternion::new_normalize(q + dq * h),
         };
-        let finite = x.position.iter().chain(x.velocity.iter()).all(|c| c.is_finite());
-        if !(finite && x.position.x.abs() < std::f64::consts::FRAC_PI_2) {
+        let finite = next.position.iter().chain(next.velocity.iter()).all(|c| c.is_finite());
+        if !(finite && next.position.x.abs() < std::f64::consts::FRAC_PI_2) {
             let name = culprit(samples, initial, bias);
             return Err(Error::Overflow { index: k + 1 }.in_argument(name));
         }
-        if let Some(out) = out.as_mut() {
-            out.store(k + 1, &x);
-        }
-        cancel.check(k)?;
+        visit(k, &x, &next)?;
+        x = next;
     }
     Ok(x)
 }

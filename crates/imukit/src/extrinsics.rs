@@ -101,6 +101,13 @@ pub fn to_body(
     Ok(())
 }
 
+/// `D(ω) = ∂(ω × (ω × r))/∂ω = −[ω × r]× − [ω]× [r]×`, the centripetal term's sensitivity to the
+/// rate (from `δ(ω×(ω×r)) = δω×(ω×r) + ω×(δω×r)`; Titterton & Weston 2004, eq. 3.48): a gyro
+/// error `δω` moves the body-origin reading of [`to_body`] by `−D δω`.
+pub fn centripetal_sensitivity(rate: &Vector3<f64>, lever_arm: &Vector3<f64>) -> Matrix3<f64> {
+    -crate::so3::hat(&rate.cross(lever_arm)) - crate::so3::hat(rate) * crate::so3::hat(lever_arm)
+}
+
 /// The input to blame when finite readings overflow in the conversion: the accelerometer when its
 /// rotated reading did, else the rate in `ω×(ω×r)` (the lever arm is bounded by
 /// [`MAX_LEVER_ARM`]), so that errors name what the user can change.
@@ -191,6 +198,18 @@ mod tests {
             assert!((Vector3::from(ab[k]) - Vector3::from(f)).amax() < 1e-14);
         }
         Ok(())
+    }
+
+    #[test]
+    fn centripetal_sensitivity_is_the_derivative_of_the_centripetal_term() {
+        let (w, arm) = (Vector3::new(0.7, -1.3, 2.1), Vector3::new(0.3, -0.1, 0.2));
+        let c = |w: &Vector3<f64>| w.cross(&w.cross(&arm));
+        let d = centripetal_sensitivity(&w, &arm);
+        for j in 0..3 {
+            let e = Vector3::ith(j, 1e-6);
+            let numeric = (c(&(w + e)) - c(&(w - e))) / 2e-6;
+            assert!((d.column(j) - numeric).amax() < 1e-9);
+        }
     }
 
     #[test]

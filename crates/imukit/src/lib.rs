@@ -27,6 +27,7 @@ pub mod allan;
 pub mod attitude;
 pub mod earth;
 pub mod ellipsoid;
+pub mod ellipsoid_errors;
 mod error;
 pub mod euler;
 pub mod extrinsics;

@@ -28,6 +28,10 @@
 //! `−2h [Ω]×` to `∂δv⁺/∂δv` and `−h² [Ω]×` to `∂δp⁺/∂δv`, applied as a separate factor after the
 //! step ([`coriolis_blocks`]; its cross terms with the step are O(h²), below the step's order).
 //!
+//! **Lever arm and a frame that follows the vehicle** ([`Model`], [`propagate_model`]): a dense
+//! step that carries the lever-arm conversion's gyro noise across the three samples it spans, and
+//! for the ellipsoid the error model of [`crate::ellipsoid_errors`] (module `augmented`).
+//!
 //! Solà's §5.4.3 drops the h² terms of the position row and uses `I` for `J_r`; both are kept here
 //! because they cost nothing in the block product. The mean may be integrated with any
 //! [`strapdown::Scheme`](crate::strapdown::Scheme); the covariance always uses these Jacobians at
@@ -36,13 +40,31 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+use crate::earth::LocalLevel;
 use crate::imu::{Bias, NavState, Noise, Samples};
 use crate::mat3::{mul, mul_t};
 use crate::strapdown::{self, Options, StatesOut, Stepper};
 use crate::{so3, Cancel, Error, Result};
 
+mod augmented;
+
 /// 15×15 error-state covariance, order `[δp, δv, δθ, δb_a, δb_g]`.
 pub type Covariance = SMatrix<f64, 15, 15>;
+
+/// What the readings and the world are beyond an IMU at the body origin in a fixed world
+/// ([`propagate_model`]); the default is neither.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Model {
+    /// The sensor's lever arm `r` in body axes [m]: the readings given are the body origin's,
+    /// converted by [`crate::extrinsics::to_body`] (biases removed, α the central difference of
+    /// the gyro), and the covariance carries the gyro noise that conversion puts into the specific
+    /// force (`augmented` module docs). Zero for none.
+    pub lever_arm: Vector3<f64>,
+    /// A local-level frame that follows the vehicle ([`crate::ellipsoid`]): the mean is
+    /// [`crate::ellipsoid::integrate`]'s (positions `(φ, λ, h)`), the covariance the error model
+    /// of [`crate::ellipsoid_errors`]; `options.gravity` and `options.earth_rate` are unused.
+    pub transport: Option<LocalLevel>,
+}
 
 /// The step Jacobians as dense matrices (the propagation itself uses their block structure).
 #[derive(Debug, Clone, PartialEq)]
@@ -235,31 +257,47 @@ pub fn propagate(
     options: &Options,
     outputs: Outputs<'_>,
 ) -> Result<(NavState, Covariance)> {
-    propagate_cancellable(
-        samples,
-        initial,
-        covariance,
+    let model = Model::default();
+    let setup = Setup {
         bias,
         noise,
         options,
-        outputs,
-        &Cancel::new(),
-    )
+        model: &model,
+    };
+    propagate_model(samples, initial, covariance, setup, outputs, &Cancel::new())
 }
 
-/// [`propagate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled every
-/// [`Cancel::EVERY`] samples).
-#[allow(clippy::too_many_arguments)] // propagate's inputs and the flag
-pub fn propagate_cancellable(
+/// The inputs of [`propagate_model`] besides the samples, the initial state and covariance.
+#[derive(Debug, Clone, Copy)]
+pub struct Setup<'a> {
+    /// The biases removed from the samples.
+    pub bias: &'a Bias,
+    /// The noise densities.
+    pub noise: &'a Noise,
+    /// Scheme, gravity and the fixed world's rotation rate.
+    pub options: &'a Options,
+    /// Lever arm and frame that follows the vehicle ([`Model`]).
+    pub model: &'a Model,
+}
+
+/// [`propagate`] with a lever arm or a frame that follows the vehicle ([`Model`]), stopping with
+/// [`Error::Interrupted`] when `cancel` is set (polled every [`Cancel::EVERY`] samples). The
+/// default model takes the block-structured step of the module docs, any other the dense
+/// augmented step (`augmented` module docs).
+pub fn propagate_model(
     samples: &Samples<'_>,
     initial: &NavState,
     covariance: &Covariance,
-    bias: &Bias,
-    noise: &Noise,
-    options: &Options,
+    setup: Setup<'_>,
     outputs: Outputs<'_>,
     cancel: &Cancel,
 ) -> Result<(NavState, Covariance)> {
+    let Setup {
+        bias,
+        noise,
+        options,
+        model,
+    } = setup;
     noise.check()?;
     strapdown::check_parameters(initial, bias, options)?;
     let n = samples.t.len();
@@ -296,37 +334,61 @@ pub fn propagate_cancellable(
     }
     let mut p = to_blocks(covariance);
     let mut stored = 0;
-    let mut store_cov = |p: &Blocks, stored: &mut usize| {
-        write_blocks(p, &mut covariances[*stored]);
-        *stored += 1;
-    };
     if let Some(out) = states.as_mut() {
         out.store(0, initial);
     }
-    store_cov(&p, &mut stored);
-    let rotating = options.earth_rate != Vector3::zeros();
-    let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, x, next| {
-        let h = samples.t[k + 1] - samples.t[k];
-        let w_hat = samples.gyro_at(k) - bias.gyro;
-        let a_hat = samples.accel_at(k) - bias.accel;
-        propagate_blocks(&mut p, &StepBlocks::new(x, &w_hat, &a_hat, h), noise, h);
-        if rotating {
-            coriolis_blocks(&mut p, &options.earth_rate, h);
-        }
+    write_blocks(&p, &mut covariances[0]);
+    // After step k: the state, the covariance when its stride comes, the cancel flag.
+    let mut sink = |k: usize, next: &NavState, write: &dyn Fn(&mut [f64; 225])| {
         if let Some(out) = states.as_mut() {
             out.store(k + 1, next);
         }
         if (k + 1).is_multiple_of(every) || k + 2 == n {
-            store_cov(&p, &mut stored);
+            stored += 1;
+            write(&mut covariances[stored]);
         }
         cancel.check(k)
-    })?;
-    let mut last = Covariance::zeros();
-    for (i, row) in p.iter().enumerate() {
-        for (j, block) in row.iter().enumerate() {
-            last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
+    };
+    let (x, last) = if *model == Model::default() {
+        let rotating = options.earth_rate != Vector3::zeros();
+        let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, x, next| {
+            let h = samples.t[k + 1] - samples.t[k];
+            let w_hat = samples.gyro_at(k) - bias.gyro;
+            let a_hat = samples.accel_at(k) - bias.accel;
+            propagate_blocks(&mut p, &StepBlocks::new(x, &w_hat, &a_hat, h), noise, h);
+            if rotating {
+                coriolis_blocks(&mut p, &options.earth_rate, h);
+            }
+            sink(k, next, &|out| write_blocks(&p, out))
+        })?;
+        let mut last = Covariance::zeros();
+        for (i, row) in p.iter().enumerate() {
+            for (j, block) in row.iter().enumerate() {
+                last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
+            }
         }
-    }
+        (x, last)
+    } else {
+        augmented::run(
+            samples,
+            initial,
+            covariance,
+            bias,
+            noise,
+            options,
+            model,
+            |k, next, p| {
+                // Row-major 15×15 (nalgebra stores columns; the matrix is symmetric to rounding).
+                sink(k, next, &|out| {
+                    for (i, row) in out.as_chunks_mut::<15>().0.iter_mut().enumerate() {
+                        for (j, v) in row.iter_mut().enumerate() {
+                            *v = p[(i, j)];
+                        }
+                    }
+                })
+            },
+        )?
+    };
     strapdown::check_finite_result(&x, states.as_ref(), (samples, initial, bias, options))?;
     if !last.iter().all(|v| v.is_finite()) {
         // The mean is finite: the covariance ends near (P₀ + Q)·(1 + D)², D the largest
