@@ -119,14 +119,24 @@ impl Robust {
         }
         let start = *state;
         let mut fwd = Track::new(n);
-        self.run(state, inputs, false, &mut fwd.outputs())?;
         if n == 0 {
-            return Ok(());
+            return self.run(state, inputs, false, &mut fwd.outputs());
         }
-        let rev = Reversed::new(inputs);
-        let mut bwd = Track::new(n);
-        self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs())?;
-        bwd.reverse();
+        // The two passes of each stage are independent: one thread each (every pass is the same
+        // sequential loop, so the result does not depend on the threads; errors are the forward
+        // pass's first, as in sequence).
+        let (forward, backward) = rayon::join(
+            || self.run(state, inputs, false, &mut fwd.outputs()),
+            || {
+                let rev = Reversed::new(inputs);
+                let mut bwd = Track::new(n);
+                let done = self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs());
+                bwd.reverse();
+                done.map(|()| (rev, bwd))
+            },
+        );
+        forward?;
+        let (rev, mut bwd) = backward?;
 
         let mut weights = vec![0.5; n];
         for (k, weight) in weights.iter_mut().enumerate() {
@@ -153,10 +163,18 @@ impl Robust {
         // Second stage: the fused bias in every step of both passes.
         let bias_rev: Vec<[f64; 3]> = out.bias.iter().rev().map(|b| [-b[0], -b[1], -b[2]]).collect();
         let mut s = start;
-        self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(out.bias))?;
-        let back = (&mut RobustState::default(), &rev.inputs());
-        self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev))?;
-        bwd.q.reverse();
+        let fused_bias: &[[f64; 3]] = out.bias;
+        let (forward, backward) = rayon::join(
+            || self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(fused_bias)),
+            || {
+                let back = (&mut RobustState::default(), &rev.inputs());
+                let done = self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev));
+                bwd.q.reverse();
+                done
+            },
+        );
+        forward?;
+        backward?;
         fuse_attitudes(&fwd.q, &bwd.q, &weights, inputs.mag.is_some(), out.q);
         Ok(())
     }
