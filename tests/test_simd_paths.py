@@ -1,7 +1,8 @@
 """Runtime CPU dispatch (``crates/imukit/src/simd.rs``): each instruction-set path, forced with
 ``IMUKIT_SIMD`` in a fresh process (the choice is made once per process), gives the baseline
 path's results to 1e-12 relative on the deltas, covariances, bias Jacobians and states of
-preintegrate (euler, midpoint, combined), propagate, integrate and integrate_attitude. The paths
+preintegrate (euler, midpoint, combined), propagate, integrate and integrate_attitude, and on the
+attitudes and biases of the filters (Mahony, Madgwick 6D / 9D; Robust online and offline, 6D / 9D). The paths
 compute the same operations in the same order, so they agree bit for bit today; 1e-12 is the
 stated tolerance (a reassociated sum of a vectorised path would still pass, a wrong lane not).
 """
@@ -58,6 +59,16 @@ for scheme in ("midpoint", "rk4"):
 out["attitude"] = ik.integrate_attitude(t, gyro).as_quat()
 out["attitude_rk4"] = ik.integrate_attitude(t, gyro, scheme="rk4").as_quat()
 out["allan"] = ik.noise.allan_deviation(gyro, 200.0).deviation
+mag = np.c_[20.0 * np.cos(0.2 * s), 20.0 * np.sin(0.2 * s), np.full(n, -40.0)] + 0.2 * rng.normal(size=(n, 3))
+for name, f in (("mahony", ik.filters.Mahony()), ("madgwick", ik.filters.Madgwick())):
+    for dim, m in (("6d", None), ("9d", mag)):
+        r = f.run(imu, mag=m)
+        out[f"{name}_{dim}"] = np.c_[r.rotation.as_quat(canonical=True), r.gyro_bias]
+for offline in (False, True):
+    for dim, m in (("6d", False), ("9d", mag)):
+        r = ik.filters.Robust().run(imu, mag=m, offline=offline)
+        q = r.rotation.as_quat(canonical=True)
+        out[f"robust_{dim}_{'offline' if offline else 'online'}"] = np.c_[q, r.gyro_bias, r.gyro_bias_sigma]
 np.savez(sys.argv[1], **out)
 """
 

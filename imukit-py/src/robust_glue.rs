@@ -14,8 +14,8 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{contiguous, real_number, rows, unit_quaternion, Name};
-use crate::{private_copy, raise, to_py, SampleCopies};
+use crate::convert::{contiguous, frozen_or_copy, real_number, rows, unit_quaternion, Name};
+use crate::{raise, to_py};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
 /// take `base`'s value.
@@ -246,7 +246,8 @@ type Arrays<'a, 'py> = (
     Option<&'a PyReadonlyArray2<'py, f64>>,
 );
 
-/// The smoother over private copies of the whole record (it reads it forward and backward).
+/// The smoother over the whole record (it reads it forward and backward), read in place where no
+/// Python code can write to it meanwhile ([`frozen_or_copy`]), else over private copies.
 fn smooth(
     py: Python<'_>,
     f: &Robust,
@@ -254,16 +255,17 @@ fn smooth(
     (t, gyro, accel, mag): Arrays<'_, '_>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
-    let copies = SampleCopies::new(py, t, gyro, accel)?;
-    let samples = copies.samples(py)?;
+    let t = frozen_or_copy(py, t)?.readonly();
+    let gyro = frozen_or_copy(py, gyro)?.readonly();
+    let accel = frozen_or_copy(py, accel)?.readonly();
     let mag = match mag {
-        Some(m) => Some(private_copy(py, m)?.readonly()),
+        Some(m) => Some(frozen_or_copy(py, m)?.readonly()),
         None => None,
     };
     let inputs = Inputs {
-        t: samples.t(),
-        gyro: samples.gyro(),
-        accel: samples.accel(),
+        t: contiguous(py, "t", &t)?,
+        gyro: rows(py, "gyro", &gyro)?,
+        accel: rows(py, "accel", &accel)?,
         mag: match &mag {
             Some(m) => Some(rows(py, "mag", m)?),
             None => None,
@@ -275,7 +277,7 @@ fn smooth(
 
 /// Rows per part of an online run: each part is copied (GIL held) into buffers that stay in the
 /// cache, then filtered with the GIL released. Copying the whole record instead, as a private
-/// copy for the GIL-free read (see [`private_copy`]), cost a quarter of a 9D run in fresh pages.
+/// copy for the GIL-free read (see [`crate::convert::private_copy`]), cost a quarter of a 9D run in fresh pages.
 const PART: usize = 4096;
 
 /// The caller's arrays, read part by part with the GIL held.

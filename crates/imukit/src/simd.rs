@@ -101,7 +101,8 @@ pub fn path() -> Path {
 
 /// Defines `fn $name(args) -> R { body }` compiled once per [`Path`] and dispatched on [`path`]
 /// (the module docs). Free functions with plain `ident: Type` arguments; lifetimes may be named
-/// after the name (`fn run<'a>(…)`), and `impl Trait` argument types are accepted.
+/// after the name (`fn run<'a>(…)`), or one bounded type parameter (`fn run<L: Law>(…)`), and
+/// `impl Trait` argument types are accepted.
 ///
 /// ```
 /// imukit::simd_dispatch! {
@@ -115,21 +116,22 @@ pub fn path() -> Path {
 #[macro_export]
 macro_rules! simd_dispatch {
     (
+        @emit [$($generics:tt)*]
         $(#[$meta:meta])*
-        $vis:vis fn $name:ident $(<$($lt:lifetime),+>)? ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
+        $vis:vis fn $name:ident ($($arg:ident : $ty:ty),*) -> $ret:ty $body:block
     ) => {
         $(#[$meta])*
-        $vis fn $name $(<$($lt),+>)? ($($arg: $ty),*) -> $ret {
+        $vis fn $name<$($generics)*>($($arg: $ty),*) -> $ret {
             #[inline(always)]
-            fn portable $(<$($lt),+>)? ($($arg: $ty),*) -> $ret $body
+            fn portable<$($generics)*>($($arg: $ty),*) -> $ret $body
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,fma,bmi1,bmi2")]
-            fn avx512 $(<$($lt),+>)? ($($arg: $ty),*) -> $ret {
+            fn avx512<$($generics)*>($($arg: $ty),*) -> $ret {
                 portable($($arg),*)
             }
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
-            fn avx2 $(<$($lt),+>)? ($($arg: $ty),*) -> $ret {
+            fn avx2<$($generics)*>($($arg: $ty),*) -> $ret {
                 portable($($arg),*)
             }
             match $crate::simd::path() {
@@ -144,6 +146,18 @@ macro_rules! simd_dispatch {
                 _ => portable($($arg),*),
             }
         }
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident $(<$($lt:lifetime),+>)? ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
+    ) => {
+        $crate::simd_dispatch!(@emit [$($($lt),+)?] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident <$t:ident : $bound:path> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
+    ) => {
+        $crate::simd_dispatch!(@emit [$t: $bound] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
     };
 }
 

@@ -399,13 +399,11 @@ impl<L: Law> Filter<L> {
                 got: "an uninitialised state".into(),
             });
         }
-        match inputs.mag {
-            Some(mag) => self.run_loop::<true>(state, inputs, mag, continued, (out_q, out_bias), cancel),
-            None => self.run_loop::<false>(state, inputs, &[], continued, (out_q, out_bias), cancel),
-        }
+        run_batch(self, state, inputs, continued, (out_q, out_bias), cancel)
     }
 
     /// The batch loop for one sensor set (checked inputs), compiled per law.
+    #[inline(always)]
     fn run_loop<const NINE: bool>(
         &self,
         state: &mut State<L>,
@@ -469,5 +467,23 @@ impl<L: Law> Filter<L> {
             *b_out = state.common.bias.into();
         }
         Ok(())
+    }
+}
+
+crate::simd_dispatch! {
+    /// [`Filter::run_cancellable`] on checked inputs: the loop of its sensor set, per
+    /// instruction-set path.
+    fn run_batch<L: Law>(
+        filter: &Filter<L>,
+        state: &mut State<L>,
+        inputs: &Inputs<'_>,
+        continued: bool,
+        out: (&mut [[f64; 4]], &mut [[f64; 3]]),
+        cancel: &Cancel,
+    ) -> Result<()> {
+        match inputs.mag {
+            Some(mag) => filter.run_loop::<true>(state, inputs, mag, continued, out, cancel),
+            None => filter.run_loop::<false>(state, inputs, &[], continued, out, cancel),
+        }
     }
 }

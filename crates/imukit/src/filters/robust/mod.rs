@@ -68,13 +68,34 @@ impl Outputs<'_> {
     }
 
     #[inline(always)]
-    fn write(&mut self, k: usize, s: &RobustState) {
+    fn write(&mut self, k: usize, s: &RobustState, sigma: &mut Sigma) {
         self.q[k] = s.q.coords.into();
         self.bias[k] = s.bias.into();
-        let p = &s.bias_cov;
-        self.bias_sigma[k] = [p[(0, 0)].sqrt(), p[(1, 1)].sqrt(), p[(2, 2)].sqrt()];
+        self.bias_sigma[k] = sigma.of(&s.bias_cov);
         self.rest[k] = s.rest;
         self.mag_disturbed[k] = s.mag_disturbed;
+    }
+}
+
+/// `√diag P` of the bias covariance, recomputed only when the diagonal changes (at a Kalman
+/// update or a window's process noise, once per window): three square roots per sample were a
+/// tenth of a 6D step.
+#[derive(Debug, Default)]
+struct Sigma {
+    /// The diagonal's bits the roots are of.
+    diag: [u64; 3],
+    roots: [f64; 3],
+}
+
+impl Sigma {
+    #[inline(always)]
+    fn of(&mut self, p: &nalgebra::Matrix3<f64>) -> [f64; 3] {
+        let diag = [p[(0, 0)].to_bits(), p[(1, 1)].to_bits(), p[(2, 2)].to_bits()];
+        if diag != self.diag {
+            self.diag = diag;
+            self.roots = diag.map(|d| f64::from_bits(d).sqrt());
+        }
+        self.roots
     }
 }
 
@@ -259,16 +280,12 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        match (inputs.mag, bias) {
-            (Some(m), None) => self.run_loop::<true, true>(state, inputs, m, (first, continued), out, &[]),
-            (None, None) => self.run_loop::<false, true>(state, inputs, &[], (first, continued), out, &[]),
-            (Some(m), Some(b)) => self.run_loop::<true, false>(state, inputs, m, (first, continued), out, b),
-            (None, Some(b)) => self.run_loop::<false, false>(state, inputs, &[], (first, continued), out, b),
-        }
+        run_any(self, state, inputs, (first, continued), out, bias)
     }
 
     /// The loop of [`Robust::run_with`]: `NINE` with the field `mags`; `LEARN` estimating the bias,
     /// else taking it from `bias` (one row per sample); `start` is `(first, continued)`.
+    #[inline(always)]
     fn run_loop<const NINE: bool, const LEARN: bool>(
         &self,
         state: &mut RobustState,
@@ -281,6 +298,8 @@ impl Robust {
         let p = &self.params;
         let mut coefs = Coefs::new(p, 0.0);
         let mut previous = state.time;
+        // Bits of 0.0: the cache starts valid for a zero diagonal, whose roots are 0.0.
+        let mut sigma = Sigma::default();
         for (k, &t) in inputs.t.iter().enumerate() {
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
@@ -308,9 +327,29 @@ impl Robust {
             }
             state.time = t;
             previous = t;
-            out.write(k, state);
+            out.write(k, state, &mut sigma);
         }
         Ok(())
+    }
+}
+
+crate::simd_dispatch! {
+    /// [`Robust::run_with`] on checked inputs: the loop of its sensor set and bias source, per
+    /// instruction-set path.
+    fn run_any(
+        f: &Robust,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        start: (usize, bool),
+        out: &mut Outputs<'_>,
+        bias: Option<&[[f64; 3]]>,
+    ) -> Result<()> {
+        match (inputs.mag, bias) {
+            (Some(m), None) => f.run_loop::<true, true>(state, inputs, m, start, out, &[]),
+            (None, None) => f.run_loop::<false, true>(state, inputs, &[], start, out, &[]),
+            (Some(m), Some(b)) => f.run_loop::<true, false>(state, inputs, m, start, out, b),
+            (None, Some(b)) => f.run_loop::<false, false>(state, inputs, &[], start, out, b),
+        }
     }
 }
 

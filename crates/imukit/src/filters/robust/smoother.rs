@@ -101,14 +101,24 @@ impl Robust {
         }
         let start = *state;
         let mut fwd = Track::new(n);
-        self.run(state, inputs, false, &mut fwd.outputs())?;
         if n == 0 {
-            return Ok(());
+            return self.run(state, inputs, false, &mut fwd.outputs());
         }
-        let rev = Reversed::new(inputs);
-        let mut bwd = Track::new(n);
-        self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs())?;
-        bwd.reverse();
+        // The two passes of each stage are independent: one thread each (every pass is the same
+        // sequential loop, so the result does not depend on the threads; errors are the forward
+        // pass's first, as in sequence).
+        let (forward, backward) = rayon::join(
+            || self.run(state, inputs, false, &mut fwd.outputs()),
+            || {
+                let rev = Reversed::new(inputs);
+                let mut bwd = Track::new(n);
+                let done = self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs());
+                bwd.reverse();
+                done.map(|()| (rev, bwd))
+            },
+        );
+        forward?;
+        let (rev, mut bwd) = backward?;
 
         let mut weights = vec![0.5; n];
         for (k, weight) in weights.iter_mut().enumerate() {
@@ -133,15 +143,23 @@ impl Robust {
         }
 
         // Second stage: the zero-phase inclination from the fused bias; in 9D the heading of
-        // both passes run again with the fused bias, fused by the weights.
+        // both passes run again with the fused bias (on two threads), fused by the weights.
         self.zero_phase(&start, inputs, out.bias, out.q);
         if inputs.mag.is_some() {
             let bias_rev: Vec<[f64; 3]> = out.bias.iter().rev().map(|b| [-b[0], -b[1], -b[2]]).collect();
             let mut s = start;
-            self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(out.bias))?;
-            let back = (&mut RobustState::default(), &rev.inputs());
-            self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev))?;
-            bwd.q.reverse();
+            let fused_bias: &[[f64; 3]] = out.bias;
+            let (forward, backward) = rayon::join(
+                || self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(fused_bias)),
+                || {
+                    let back = (&mut RobustState::default(), &rev.inputs());
+                    let done = self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev));
+                    bwd.q.reverse();
+                    done
+                },
+            );
+            forward?;
+            backward?;
             self.fuse_headings(&fwd.q, &bwd.q, &weights, out.q);
         }
         for o in out.q.iter_mut() {
