@@ -3,8 +3,10 @@ callgrind (exact, independent of the machine's load; this host has no hardware c
 ``perf stat``), per dispatch path (``IMUKIT_SIMD``; valgrind cannot run AVX-512).
 
 Each kernel runs once on ``--n`` samples (the inputs of ``bench/_timing.synthetic_imu``, one thread)
-under ``valgrind --tool=callgrind --toggle-collect=<entry>``, so only the kernel's own call tree is
-counted, inclusive of its callees; the count is divided by the number of samples.
+under ``valgrind --tool=callgrind --toggle-collect=<entry>``, so only the entry's call tree is
+counted, inclusive of its callees (preintegration: ``Preintegrator::integrate_samples_cancellable``,
+i.e. the validation, the dispatched loop and the finiteness check; propagate: the whole Rust call);
+the count is divided by the number of samples.
 
 Usage: ``python bench/instructions.py [--n 50000] [--paths baseline avx2]``.
 """
@@ -21,9 +23,9 @@ from pathlib import Path
 
 # The kernel's call and the function (callgrind pattern) whose call tree is counted.
 KERNELS = {
-    "preintegrate euler": ("dict(scheme='lie_euler')", "*preint*run_euler*"),
-    "preintegrate midpoint": ("dict(scheme='midpoint')", "*preint*run_midpoint*"),
-    "preintegrate combined": ("dict(scheme='lie_euler', combined=True)", "*preint*run_euler*"),
+    "preintegrate euler": ("dict(scheme='lie_euler')", "*integrate_samples_cancellable*"),
+    "preintegrate midpoint": ("dict(scheme='midpoint')", "*integrate_samples_cancellable*"),
+    "preintegrate combined": ("dict(scheme='lie_euler', combined=True)", "*integrate_samples_cancellable*"),
     "propagate": (None, "*propagate_cancellable*"),
 }
 
