@@ -114,8 +114,27 @@ def test_a_forced_path_is_the_one_in_use_or_the_best_below_it(results: dict[str,
                 assert str(res["path"]) == forced
 
 
-def test_an_unknown_path_name_is_a_parameter_error_naming_the_variable() -> None:
-    code = "import imukit as ik\ntry:\n    ik.simd_path()\nexcept ik.ParameterError as e:\n    print(e.argument)"
+def test_an_unknown_path_name_is_refused_at_import_naming_the_variable() -> None:
+    # Importing imukit raises, so no kernel can run the best path in its place; the class is
+    # imukit's ParameterError (named by its module and name: the package did not import).
+    code = (
+        "try:\n    import imukit\nexcept Exception as e:\n"
+        "    print(type(e).__module__, type(e).__name__, e.argument, str(e))"
+    )
     env = dict(os.environ, IMUKIT_SIMD="sse9")
     done = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True)
-    assert done.stdout.strip() == "IMUKIT_SIMD"
+    module, name, argument, message = done.stdout.strip().split(" ", 3)
+    assert (module, name, argument) == ("imukit", "ParameterError", "IMUKIT_SIMD")
+    assert '"sse9"' in message and "'avx2'" in message
+
+
+def test_auto_and_an_empty_value_choose_the_best_path() -> None:
+    code = "import imukit as ik\nprint(ik.simd_path())"
+    paths = []
+    for value in ("auto", ""):
+        env = dict(os.environ, IMUKIT_SIMD=value)
+        done = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True)
+        paths.append(done.stdout.strip())
+    unset = {k: v for k, v in os.environ.items() if k != "IMUKIT_SIMD"}
+    done = subprocess.run([sys.executable, "-c", code], env=unset, check=True, capture_output=True, text=True)
+    assert paths == [done.stdout.strip()] * 2

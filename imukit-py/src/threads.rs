@@ -78,7 +78,8 @@ pub(crate) fn get_num_threads() -> usize {
 
 /// The instruction-set path the dispatched kernels run (`"baseline"`, `"avx2"`, `"avx512"`;
 /// [`imukit::simd`]): `IMUKIT_SIMD`'s choice when set, else the best this CPU has. An unknown
-/// `IMUKIT_SIMD` is a `ParameterError` here (the kernels ignore it and take the best path).
+/// `IMUKIT_SIMD` is a `ParameterError` here; the package calls this at import, so that no kernel
+/// runs with such a value (the Rust kernels alone would take the best path).
 #[pyfunction]
 pub(crate) fn simd_path(py: Python<'_>) -> PyResult<&'static str> {
     imukit::simd::requested().map_err(|e| crate::to_py(py, imukit::simd::VARIABLE, e))?;

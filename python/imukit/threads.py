@@ -62,6 +62,13 @@ def simd_path() -> str:
     Chosen once, at the first kernel call: the best the CPU has, or the one the environment
     variable ``IMUKIT_SIMD`` names (``baseline``, ``avx2``, ``avx512``; ``auto``: the best), falling
     back to the best supported path below a forced one the CPU lacks. The paths give equal results
-    (``docs/performance.md``). Raises :class:`ParameterError` when ``IMUKIT_SIMD`` holds another value.
+    (``docs/performance.md``). ``IMUKIT_SIMD`` holding another value is refused when imukit is
+    imported (below), so no kernel runs with it.
     """
     return _core.simd_path()
+
+
+# An unknown ``IMUKIT_SIMD`` (a typo such as ``avx-2``) is a ParameterError naming the variable at
+# import, before any kernel could silently run the best path instead; this also fixes the path for
+# the process (it is read once).
+simd_path()

@@ -1,7 +1,16 @@
 //! 3×3 block products for the block-structured covariance updates.
 //!
 //! Written out: nalgebra's generic product compiles to about twice the instructions, and these run
-//! tens of times per IMU sample.
+//! tens of times per IMU sample. Two forms:
+//!
+//! - on nalgebra's `Matrix3` (`mul`, `mul_t`, `mul_t_symmetric`), for the occasional product;
+//! - on [`M3`], a 3×3 block held as three columns padded to four lanes and aligned to 32 bytes, for
+//!   the per-sample kernels: a column operation is one 256-bit instruction on the AVX paths (two
+//!   128-bit ones on the baseline), with no shuffles to gather 3-element columns. Each element is
+//!   computed with the same operations in the same order as the `Matrix3` form, so both give the
+//!   same bits.
+
+use std::ops::{Add, Mul, Neg, Sub};
 
 use nalgebra::Matrix3;
 
@@ -24,4 +33,187 @@ pub(crate) fn mul_t_symmetric(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64
     let d = |r: usize, c: usize| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)];
     let (xy, xz, yz) = (d(0, 1), d(0, 2), d(1, 2));
     Matrix3::new(d(0, 0), xy, xz, xy, d(1, 1), yz, xz, yz, d(2, 2))
+}
+
+/// A column of [`M3`]: three values and a zero lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct Col(pub [f64; 4]);
+
+impl Col {
+    #[inline(always)]
+    fn zip(self, other: Col, f: impl Fn(f64, f64) -> f64) -> Col {
+        Col(std::array::from_fn(|i| f(self.0[i], other.0[i])))
+    }
+}
+
+impl Add for Col {
+    type Output = Col;
+    #[inline(always)]
+    fn add(self, o: Col) -> Col {
+        self.zip(o, |x, y| x + y)
+    }
+}
+
+impl Sub for Col {
+    type Output = Col;
+    #[inline(always)]
+    fn sub(self, o: Col) -> Col {
+        self.zip(o, |x, y| x - y)
+    }
+}
+
+impl Mul<f64> for Col {
+    type Output = Col;
+    #[inline(always)]
+    fn mul(self, s: f64) -> Col {
+        Col(self.0.map(|x| x * s))
+    }
+}
+
+/// A 3×3 block as padded columns (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct M3(pub [Col; 3]);
+
+impl M3 {
+    /// The zero block.
+    pub const ZERO: M3 = M3([Col([0.0; 4]); 3]);
+
+    /// The block of `m`.
+    #[inline(always)]
+    pub fn of(m: &Matrix3<f64>) -> M3 {
+        M3(std::array::from_fn(|c| Col([m[(0, c)], m[(1, c)], m[(2, c)], 0.0])))
+    }
+
+    /// The block of `mᵀ`.
+    #[inline(always)]
+    pub fn of_transpose(m: &Matrix3<f64>) -> M3 {
+        M3(std::array::from_fn(|c| Col([m[(c, 0)], m[(c, 1)], m[(c, 2)], 0.0])))
+    }
+
+    /// Back to nalgebra.
+    #[inline(always)]
+    pub fn matrix(&self) -> Matrix3<f64> {
+        Matrix3::from_fn(|r, c| self.0[c].0[r])
+    }
+
+    #[inline(always)]
+    fn map_cols(&self, f: impl Fn(usize, Col) -> Col) -> M3 {
+        M3(std::array::from_fn(|c| f(c, self.0[c])))
+    }
+
+    /// `self b`.
+    #[inline(always)]
+    pub fn mul(&self, b: &M3) -> M3 {
+        let [a0, a1, a2] = self.0;
+        b.map_cols(|_, bc| a0 * bc.0[0] + a1 * bc.0[1] + a2 * bc.0[2])
+    }
+
+    /// `self bᵀ`.
+    #[inline(always)]
+    pub fn mul_t(&self, b: &M3) -> M3 {
+        let [a0, a1, a2] = self.0;
+        let [b0, b1, b2] = b.0;
+        M3(std::array::from_fn(|c| a0 * b0.0[c] + a1 * b1.0[c] + a2 * b2.0[c]))
+    }
+
+    /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (as [`mul_t_symmetric`]).
+    #[inline(always)]
+    pub fn mul_t_symmetric(&self, b: &M3) -> M3 {
+        self.mul_t(b).mirror_upper()
+    }
+
+    /// The transpose.
+    #[inline(always)]
+    pub fn transpose(&self) -> M3 {
+        M3(std::array::from_fn(|c| {
+            Col([self.0[0].0[c], self.0[1].0[c], self.0[2].0[c], 0.0])
+        }))
+    }
+
+    /// The upper triangle copied onto the lower one.
+    #[inline(always)]
+    fn mirror_upper(mut self) -> M3 {
+        self.0[0].0[1] = self.0[1].0[0];
+        self.0[0].0[2] = self.0[2].0[0];
+        self.0[1].0[2] = self.0[2].0[1];
+        self
+    }
+
+    /// `(b + bᵀ)/2`, exactly symmetric.
+    #[inline(always)]
+    pub fn symmetric(self) -> M3 {
+        let s = |r: usize, c: usize| (self.0[c].0[r] + self.0[r].0[c]) * 0.5;
+        let (xy, xz, yz) = (s(0, 1), s(0, 2), s(1, 2));
+        let mut out = self;
+        for i in 0..3 {
+            out.0[i].0[i] = s(i, i);
+        }
+        (out.0[1].0[0], out.0[2].0[0], out.0[2].0[1]) = (xy, xz, yz);
+        out.mirror_upper()
+    }
+
+    /// `self + s I`.
+    #[inline(always)]
+    pub fn plus_identity(mut self, s: f64) -> M3 {
+        for i in 0..3 {
+            self.0[i].0[i] += s;
+        }
+        self
+    }
+}
+
+impl Add for M3 {
+    type Output = M3;
+    #[inline(always)]
+    fn add(self, o: M3) -> M3 {
+        self.map_cols(|c, x| x + o.0[c])
+    }
+}
+
+impl Sub for M3 {
+    type Output = M3;
+    #[inline(always)]
+    fn sub(self, o: M3) -> M3 {
+        self.map_cols(|c, x| x - o.0[c])
+    }
+}
+
+impl Mul<f64> for M3 {
+    type Output = M3;
+    #[inline(always)]
+    fn mul(self, s: f64) -> M3 {
+        self.map_cols(|_, x| x * s)
+    }
+}
+
+impl Neg for M3 {
+    type Output = M3;
+    #[inline(always)]
+    fn neg(self) -> M3 {
+        self.map_cols(|_, x| Col(x.0.map(|v| -v)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix3;
+
+    use super::M3;
+
+    /// The padded form gives the `Matrix3` form's bits (same operations, same order).
+    #[test]
+    fn padded_blocks_match_the_matrix_forms_bit_for_bit() {
+        let a = Matrix3::new(0.3, -1.2, 2.5, 0.7, 0.1, -0.4, -2.2, 1.9, 0.6);
+        let b = Matrix3::new(1.1, 0.2, -0.3, 0.45, -0.9, 1.7, 0.05, 2.2, -1.4);
+        let (pa, pb) = (M3::of(&a), M3::of(&b));
+        assert_eq!(pa.mul(&pb).matrix(), super::mul(&a, &b));
+        assert_eq!(pa.mul_t(&pb).matrix(), super::mul_t(&a, &b));
+        assert_eq!(pa.mul_t_symmetric(&pa).matrix(), super::mul_t_symmetric(&a, &a));
+        assert_eq!(M3::of_transpose(&a).matrix(), a.transpose());
+        assert_eq!(pa.transpose().matrix(), a.transpose());
+        assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);
+        assert_eq!(pa.plus_identity(0.7).matrix(), a + Matrix3::identity() * 0.7);
+        assert_eq!((pa * 1.3 - pb + -pa).matrix(), a * 1.3 - b + -a);
+    }
 }

@@ -42,7 +42,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::earth::LocalLevel;
 use crate::imu::{Bias, NavState, Noise, Samples};
-use crate::mat3::{mul, mul_t};
+use crate::mat3::M3;
 use crate::strapdown::{self, Options, StatesOut, Stepper};
 use crate::{so3, Cancel, Error, Result};
 
@@ -84,14 +84,15 @@ struct StepBlocks {
 }
 
 impl StepBlocks {
-    #[inline]
+    #[inline(always)]
     fn new(x: &NavState, w_hat: &Vector3<f64>, a_hat: &Vector3<f64>, h: f64) -> Self {
-        let theta = w_hat * h;
+        // `Exp` and `J_r` from one θ (one set of series coefficients).
+        let (exp, jr) = so3::exp_and_right_jacobian(&(w_hat * h));
         Self {
             r: *x.rotation.to_rotation_matrix().matrix(),
             a_cross: so3::hat(a_hat),
-            phi_t: so3::exp(&theta).matrix().transpose(),
-            jr: so3::right_jacobian(&theta),
+            phi_t: exp.transpose(),
+            jr,
         }
     }
 }
@@ -128,8 +129,9 @@ pub fn impulse_covariance(noise: &Noise, h: f64) -> SMatrix<f64, 12, 12> {
     SMatrix::<f64, 12, 12>::from_diagonal(&SMatrix::<f64, 12, 1>::from_fn(|i, _| d[i / 3] * d[i / 3] * h))
 }
 
-/// The covariance as 5×5 blocks of 3×3, the form the propagation works in.
-type Blocks = [[Matrix3<f64>; 5]; 5];
+/// The covariance as 5×5 blocks of 3×3, the form the propagation works in (padded blocks,
+/// `mat3::M3`, so that the block algebra runs in whole vector registers).
+type Blocks = [[M3; 5]; 5];
 const P: usize = 0;
 const V: usize = 1;
 const TH: usize = 2;
@@ -137,7 +139,7 @@ const BA: usize = 3;
 const BG: usize = 4;
 
 fn to_blocks(c: &Covariance) -> Blocks {
-    std::array::from_fn(|i| std::array::from_fn(|j| c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()))
+    std::array::from_fn(|i| std::array::from_fn(|j| M3::of(&c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned())))
 }
 
 #[inline]
@@ -147,7 +149,7 @@ fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
         for (j, block) in row.iter().enumerate() {
             for r in 0..3 {
                 for c in 0..3 {
-                    out[15 * (3 * i + r) + 3 * j + c] = block[(r, c)];
+                    out[15 * (3 * i + r) + 3 * j + c] = block.0[c].0[r];
                 }
             }
         }
@@ -158,17 +160,19 @@ fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
 /// `P ← F_x P F_xᵀ + F_i Q_i F_iᵀ` using the block structure of `F_x` (module docs): only the
 /// blocks of `A = F_x P` that the upper block triangle of `A F_xᵀ` reads are formed, with
 /// `R [â]×` and `R` shared between the δp and δv rows; the lower triangle is mirrored.
-#[inline]
+// Per sample: inlined into each instruction-set copy of the strapdown loop (crate::simd).
+#[inline(always)]
 fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     let half_h2 = 0.5 * h * h;
-    let ra = mul(&b.r, &b.a_cross);
+    let (r, a_cross, phi_t, jr) = (M3::of(&b.r), M3::of(&b.a_cross), M3::of(&b.phi_t), M3::of(&b.jr));
+    let ra = r.mul(&a_cross);
     // n_j = R ([â]× P_θj + P_aj): the common part of rows δp and δv of F_x P.
-    let n = |j: usize, p: &Blocks| mul(&ra, &p[TH][j]) + mul(&b.r, &p[BA][j]);
-    let theta_row = |j: usize, p: &Blocks| mul(&b.phi_t, &p[TH][j]) - mul(&b.jr, &p[BG][j]) * h;
+    let n = |j: usize, p: &Blocks| ra.mul(&p[TH][j]) + r.mul(&p[BA][j]);
+    let theta_row = |j: usize, p: &Blocks| phi_t.mul(&p[TH][j]) - jr.mul(&p[BG][j]) * h;
     // Row δp of A: all five block columns; row δv: columns δv…; row δθ: columns δθ….
-    let mut a_p = [Matrix3::zeros(); 5];
-    let mut a_v = [Matrix3::zeros(); 5];
-    let mut a_th = [Matrix3::zeros(); 5];
+    let mut a_p = [M3::ZERO; 5];
+    let mut a_v = [M3::ZERO; 5];
+    let mut a_th = [M3::ZERO; 5];
     for j in P..=BG {
         let nj = n(j, p);
         a_p[j] = p[P][j] + p[V][j] * h - nj * half_h2;
@@ -180,8 +184,8 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
         }
     }
     // P' = A F_xᵀ on the upper block triangle.
-    let n_t = |a: &[Matrix3<f64>; 5]| mul_t(&(mul_t(&a[TH], &b.a_cross) + a[BA]), &b.r);
-    let theta_col = |a: &[Matrix3<f64>; 5]| mul_t(&a[TH], &b.phi_t) - mul_t(&a[BG], &b.jr) * h;
+    let n_t = |a: &[M3; 5]| (a[TH].mul_t(&a_cross) + a[BA]).mul_t(&r);
+    let theta_col = |a: &[M3; 5]| a[TH].mul_t(&phi_t) - a[BG].mul_t(&jr) * h;
     let (np, nv) = (n_t(&a_p), n_t(&a_v));
     p[P][P] = a_p[P] + a_p[V] * h - np * half_h2;
     p[P][V] = a_p[V] - np * h;
@@ -194,13 +198,13 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
         p[i][BG] = row[BG];
     }
     let q = |d: f64| d * d * h;
-    p[V][V] += Matrix3::identity() * q(noise.accel_density);
-    p[TH][TH] += mul_t(&b.jr, &b.jr) * q(noise.gyro_density);
-    p[BA][BA] += Matrix3::identity() * q(noise.accel_random_walk);
-    p[BG][BG] += Matrix3::identity() * q(noise.gyro_random_walk);
+    p[V][V] = p[V][V].plus_identity(q(noise.accel_density));
+    p[TH][TH] = p[TH][TH] + jr.mul_t(&jr) * q(noise.gyro_density);
+    p[BA][BA] = p[BA][BA].plus_identity(q(noise.accel_random_walk));
+    p[BG][BG] = p[BG][BG].plus_identity(q(noise.gyro_random_walk));
     for i in P..=BG {
         // Exact symmetry on the diagonal blocks, mirrored blocks below it.
-        p[i][i] = (p[i][i] + p[i][i].transpose()) * 0.5;
+        p[i][i] = p[i][i].symmetric();
         for j in i + 1..=BG {
             p[j][i] = p[i][j].transpose();
         }
@@ -213,16 +217,16 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
 /// without its transport and gravity-gradient terms). Applied after the inertial step so that the default path pays nothing.
 fn coriolis_blocks(p: &mut Blocks, omega: &Vector3<f64>, h: f64) {
     let w = so3::hat(omega);
-    let (d_pv, d_vv) = (w * (-h * h), Matrix3::identity() - w * (2.0 * h));
+    let (d_pv, d_vv) = (M3::of(&(w * (-h * h))), M3::of(&(Matrix3::identity() - w * (2.0 * h))));
     let [row_p, row_v, ..] = p;
     for (pj, vj) in row_p.iter_mut().zip(row_v.iter_mut()) {
-        *pj += mul(&d_pv, vj);
-        *vj = mul(&d_vv, vj);
+        *pj = *pj + d_pv.mul(vj);
+        *vj = d_vv.mul(vj);
     }
     for row in p.iter_mut() {
         let av = row[V];
-        row[P] += mul_t(&av, &d_pv);
-        row[V] = mul_t(&av, &d_vv);
+        row[P] = row[P] + av.mul_t(&d_pv);
+        row[V] = av.mul_t(&d_vv);
     }
 }
 
@@ -364,7 +368,7 @@ pub fn propagate_model(
         let mut last = Covariance::zeros();
         for (i, row) in p.iter().enumerate() {
             for (j, block) in row.iter().enumerate() {
-                last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(block);
+                last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&block.matrix());
             }
         }
         (x, last)

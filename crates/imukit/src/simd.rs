@@ -93,7 +93,9 @@ fn choose(request: Option<Path>, supported: &[Path]) -> Path {
         .unwrap_or(Path::Baseline)
 }
 
-/// The path every dispatched kernel of this process runs (decided on first use).
+/// The path every dispatched kernel of this process runs (decided on first use). An unknown
+/// `IMUKIT_SIMD` counts as unset here (a kernel has no error to return for it); callers that
+/// must refuse it check [`requested`] first, as the Python package does at import.
 pub fn path() -> Path {
     static PATH: OnceLock<Path> = OnceLock::new();
     *PATH.get_or_init(|| choose(requested().ok().flatten(), &supported()))

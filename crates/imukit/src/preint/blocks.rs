@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::mat3::{mul, mul_t, mul_t_symmetric};
+use crate::mat3::{mul, mul_t, mul_t_symmetric, M3};
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
@@ -35,13 +35,19 @@ pub(super) fn propagate(
     var_a: f64,
     var_g: f64,
 ) -> CovarianceBlocks {
-    let [tt, tv, tp, vv, vp, pp] = *cov;
-    let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
+    // In padded 3×3 blocks (`mat3::M3`): the same operations as on `Matrix3`, vectorised.
+    let [tt, tv, tp, vv, vp, pp] = cov.each_ref().map(M3::of);
+    let (vt, pt, pv) = (
+        M3::of_transpose(&cov[1]),
+        M3::of_transpose(&cov[2]),
+        M3::of_transpose(&cov[4]),
+    );
+    let (phi, m, jr) = (M3::of(phi), M3::of(m), M3::of(jr));
     let half_h2 = 0.5 * h * h;
     // Rows of A Σ.
-    let phi_tt = mul(phi, &tt);
-    let m_tt = mul(m, &tt);
-    let (m_tv, m_tp) = (mul(m, &tv), mul(m, &tp));
+    let phi_tt = phi.mul(&tt);
+    let m_tt = m.mul(&tt);
+    let (m_tv, m_tp) = (m.mul(&tv), m.mul(&tp));
     let a_vt = m_tt * h + vt;
     let a_vv = m_tv * h + vv;
     let a_vp = m_tp * h + vp;
@@ -49,16 +55,16 @@ pub(super) fn propagate(
     let a_pv = m_tv * half_h2 + vv * h + pv;
     let a_pp = m_tp * half_h2 + vp * h + pp;
     // (A Σ) Aᵀ, upper blocks.
-    let phi_tt_mt = mul_t(&phi_tt, m);
-    let new_tt = mul_t_symmetric(&phi_tt, phi) + mul_t_symmetric(jr, jr) * (var_g * h * h);
-    let phi_tv = mul(phi, &tv);
+    let phi_tt_mt = phi_tt.mul_t(&m);
+    let new_tt = phi_tt.mul_t_symmetric(&phi) + jr.mul_t_symmetric(&jr) * (var_g * h * h);
+    let phi_tv = phi.mul(&tv);
     let new_tv = phi_tt_mt * h + phi_tv;
-    let new_tp = phi_tt_mt * half_h2 + phi_tv * h + mul(phi, &tp);
-    let a_vt_mt = mul_t(&a_vt, m);
-    let new_vv = a_vt_mt * h + a_vv + Matrix3::identity() * (var_a * h * h);
-    let new_vp = a_vt_mt * half_h2 + a_vv * h + a_vp + Matrix3::identity() * (var_a * h * half_h2);
-    let new_pp = mul_t(&a_pt, m) * half_h2 + a_pv * h + a_pp + Matrix3::identity() * (var_a * half_h2 * half_h2);
-    [new_tt, new_tv, new_tp, symmetric(new_vv), new_vp, symmetric(new_pp)]
+    let new_tp = phi_tt_mt * half_h2 + phi_tv * h + phi.mul(&tp);
+    let a_vt_mt = a_vt.mul_t(&m);
+    let new_vv = (a_vt_mt * h + a_vv).plus_identity(var_a * h * h);
+    let new_vp = (a_vt_mt * half_h2 + a_vv * h + a_vp).plus_identity(var_a * h * half_h2);
+    let new_pp = (a_pt.mul_t(&m) * half_h2 + a_pv * h + a_pp).plus_identity(var_a * half_h2 * half_h2);
+    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()].map(|b| b.matrix())
 }
 
 /// `R [a]×` by columns: column j is `R (a × e_j)`, a difference of two columns of R (27 flops

@@ -45,7 +45,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::error::{Error, Result};
 use crate::imu::Noise;
-use crate::mat3::mul;
+use crate::mat3::{mul, M3};
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
@@ -420,13 +420,16 @@ impl Preintegrator {
         }
 
         // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac;
-        let ra_drot = mul(&r_a_cross, &jtg);
+        // In padded blocks (`mat3::M3`), as the covariance.
+        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac.each_ref().map(|row| row.each_ref().map(M3::of));
+        let (rp, jr_h) = (M3::of(&r), M3::of(&jr) * h);
+        let ra_drot = M3::of(&r_a_cross).mul(&jtg);
         self.jac = [
-            [mul(&step_t, &jtg) - jr * h, Matrix3::zeros()],
-            [jvg - ra_drot * h, jva - r * h],
-            [jpg + jvg * h - ra_drot * half_h2, jpa + jva * h - r * half_h2],
-        ];
+            [M3::of(&step_t).mul(&jtg) - jr_h, M3::ZERO],
+            [jvg - ra_drot * h, jva - rp * h],
+            [jpg + jvg * h - ra_drot * half_h2, jpa + jva * h - rp * half_h2],
+        ]
+        .map(|row| row.map(|b| b.matrix()));
 
         // Deltas.
         let ra = r * a;
