@@ -92,10 +92,11 @@ impl Outputs {
         }
     }
 
-    fn linear(&self) -> Linear {
+    fn linear(&self, noise: Option<Noise<'_>>) -> Linear {
         Linear {
             cov: self.covariance,
             jac: self.jacobian,
+            symmetric: matches!(noise, Some(Noise::Densities(_))),
         }
     }
 }
@@ -267,7 +268,7 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
             output: out.len(),
         });
     }
-    let linear = outputs.linear();
+    let linear = outputs.linear(x.noise);
     out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
         let x = window(x, b);
         let mut s = State::start();
@@ -298,7 +299,7 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
             output: bar.len(),
         });
     }
-    let linear = outputs.linear();
+    let linear = outputs.linear(x.noise);
     grad.par_chunks_mut(x.n * gw).enumerate().try_for_each(|(b, g)| {
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
