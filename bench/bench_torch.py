@@ -8,7 +8,10 @@ them), both libraries in the same run on the same inputs. 1023 samples, not 1000
 is a power of two, which torch 2.15 refuses. pypose has one scheme (lie_euler, the sample held
 over its step); imukit.torch runs its CPU path (``method="native"``, the Rust kernels) in both
 schemes and, with ``--scan``, the torch scan.
-pypose's covariance takes densities; ours per-sample covariances: the same noise either way.
+The covariance cases give both libraries the same white noise as densities (pypose's
+``gyro_cov=1e-4``, ours ``noise=[1e-2, 1e-2]``, both discretised as ``σ²/dt``); ``--per-sample``
+adds imukit's rows with that noise given per sample (``gyro_cov``/``accel_cov`` (B, N, 3),
+computed from ``dt`` so that their gradient reaches it), the path for learned per-sample noise.
 ``--only CASE`` runs one case (forward + backward, float64) and prints the process's peak
 resident memory, e.g. ``--only "native lie_euler, cov"``.
 
@@ -29,6 +32,7 @@ from collections.abc import Callable
 
 import torch
 
+import imukit
 import imukit.torch as it
 
 warnings.filterwarnings("ignore", category=FutureWarning)  # pypose uses torch.jit.script at import
@@ -42,22 +46,17 @@ def inputs(batch: int, n: int, dtype: torch.dtype, device: str, grad: bool) -> t
     return tuple(x.to(device).requires_grad_(grad) for x in (dt, gyro, accel))
 
 
-def ours(scheme: str, cov: bool, method: str = "native") -> Callable[..., torch.Tensor]:
+def ours(scheme: str, cov: bool, method: str = "native", per_sample: bool = False) -> Callable[..., torch.Tensor]:
     def run(dt: torch.Tensor, gyro: torch.Tensor, accel: torch.Tensor) -> torch.Tensor:
         if not cov:
             d = it.preintegrate(dt, gyro, accel, scheme=scheme, method=method)
             return d.delta_rotation.sum() + d.delta_velocity.sum() + d.delta_position.sum()
-        per_sample = (1e-4 / dt)[..., None].expand(*dt.shape, 3)
-        d = it.preintegrate(
-            dt,
-            gyro,
-            accel,
-            scheme=scheme,
-            gyro_cov=per_sample,
-            accel_cov=per_sample,
-            return_covariance=True,
-            method=method,
-        )
+        if per_sample:
+            given = (1e-4 / dt)[..., None].expand(*dt.shape, 3)
+            noise = {"gyro_cov": given, "accel_cov": given}
+        else:
+            noise = {"noise": torch.tensor([1e-2, 1e-2], dtype=dt.dtype)}
+        d = it.preintegrate(dt, gyro, accel, scheme=scheme, return_covariance=True, method=method, **noise)
         return d.delta_velocity.sum() + d.covariance.sum()  # type: ignore[union-attr]
 
     return run
@@ -92,22 +91,25 @@ def time_case(
     return statistics.median(time_once(f, args, backward, device) for _ in range(repeats))
 
 
-def cases(scan: bool) -> dict[str, Callable[..., torch.Tensor]]:
+def cases(scan: bool, per_sample: bool = False) -> dict[str, Callable[..., torch.Tensor]]:
     out = {}
     for cov in (False, True):
         tag = "cov" if cov else "no cov"
         out[f"native lie_euler, {tag}"] = ours("lie_euler", cov)
         out[f"native midpoint, {tag}"] = ours("midpoint", cov)
+        if cov and per_sample:
+            out["native lie_euler, per-sample cov"] = ours("lie_euler", cov, per_sample=True)
+            out["native midpoint, per-sample cov"] = ours("midpoint", cov, per_sample=True)
         if scan:
             out[f"scan lie_euler, {tag}"] = ours("lie_euler", cov, "scan")
         out[f"pypose IMUPreintegrator, {tag}"] = pypose(cov)
     return out
 
 
-def cpu(batch: int, n: int, repeats: int, scan: bool) -> None:
+def cpu(batch: int, n: int, repeats: int, scan: bool, per_sample: bool) -> None:
     print(f"CPU, {torch.get_num_threads()} threads, batch {batch} × {n} samples, ns per sample")
     print(f"(median of {repeats} alternated runs, no separate warm-up; load average before: {os.getloadavg()[0]:.1f})")
-    runs = cases(scan)
+    runs = cases(scan, per_sample)
     keys = [
         (name, backward, dtype)
         for name in runs
@@ -131,7 +133,7 @@ def cpu(batch: int, n: int, repeats: int, scan: bool) -> None:
 
 
 def only(name: str, batch: int, n: int, repeats: int) -> None:
-    f = cases(scan=True)[name]
+    f = cases(scan=True, per_sample=True)[name]
     seconds = time_case(f, inputs(batch, n, torch.float64, "cpu", True), True, repeats, "cpu")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     ns = seconds / (batch * n) * 1e9
@@ -169,14 +171,19 @@ def main() -> None:
     parser.add_argument("--gpu-batch", type=int, default=4096)
     parser.add_argument("--gpu-only", action="store_true")
     parser.add_argument("--scan", action="store_true", help="also time the torch scan on CPU")
+    parser.add_argument("--per-sample", action="store_true", help="also time per-sample noise covariances")
+    parser.add_argument("--threads", type=int, help="torch and imukit threads (default: torch's)")
     parser.add_argument("--only", help="one case, forward + backward float64, with its peak memory")
     a = parser.parse_args()
+    if a.threads:
+        torch.set_num_threads(a.threads)
+        imukit.set_num_threads(a.threads)
     print(f"torch {torch.__version__}")
     if a.only:
         only(a.only, a.batch, a.samples, a.repeats)
         return
     if not a.gpu_only:
-        cpu(a.batch, a.samples, a.repeats, a.scan)
+        cpu(a.batch, a.samples, a.repeats, a.scan, a.per_sample)
     gpu(a.gpu_batch, 1000, a.repeats)
 
 

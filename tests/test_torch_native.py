@@ -5,7 +5,9 @@
   both schemes, with covariance and bias Jacobian.
 - ``torch.autograd.gradcheck`` (float64) of the Rust backward for every differentiable input
   (``dt``, ``gyro``, ``accel``, ``bias``, noise densities, per-sample covariances, the initial
-  state), covariance, bias Jacobian and per-step outputs included, at zero rates and masked samples.
+  state), covariance, bias Jacobian and per-step outputs included, at zero rates and masked samples;
+  densities alone take the kernels' densities path (``σ²`` per window), checked the same way and
+  against the same noise given per sample (forward and gradients, ``dt``'s through ``σ²/dt``).
 - Its gradients equal autograd through the torch scan (a second, independent derivative) to 1e-10.
 - float32 inputs are widened: the result is the float64 result of the same (rounded) inputs.
 - ``mask`` (either end padded) equals each window run alone, on both paths.
@@ -98,6 +100,49 @@ def test_gradcheck_native_preintegrate(scheme: str, per_step: bool) -> None:
         return tuple(out)
 
     assert torch.autograd.gradcheck(f, inputs)
+
+
+# Windows padded at either end: a midpoint window's first sample owns the next interval's step.
+PADDED = torch.tensor([[True] * 6, [False, True, True, True, True, False], [False, False, True, True, True, True]])
+
+
+@pytest.mark.parametrize("per_step", [False, True])
+@pytest.mark.parametrize("scheme", ["midpoint", "lie_euler"])
+def test_gradcheck_native_noise_densities(scheme: str, per_step: bool) -> None:
+    c = case((3,), 6, seed=16)
+    densities = torch.tensor([[1.7e-2, 2.0e-1], [3e-2, 1e-1], [2e-2, 5e-2]], dtype=torch.float64)
+
+    def f(dt, gyro, accel, bias, noise):
+        out = it.preintegrate(
+            dt, gyro, accel, bias=bias, noise=noise, mask=PADDED, scheme=scheme, method="native",
+            return_covariance=True, return_jacobian=True, per_step=per_step,
+        )  # fmt: skip
+        return tuple(out)
+
+    assert torch.autograd.gradcheck(f, _leaves(c.dt, c.gyro, c.accel, c.bias, densities))
+
+
+@pytest.mark.parametrize("scheme", ["midpoint", "lie_euler"])
+def test_native_densities_equal_the_same_noise_per_sample(scheme: str) -> None:
+    c = case((3,), 50, seed=17)
+    sigma = torch.tensor([1.7e-2, 2.0e-1], dtype=torch.float64)
+    results = []
+    for per_sample in (False, True):
+        dt, gyro, accel, noise = _leaves(c.dt, c.gyro, c.accel, sigma)
+        # Each sample's own step (midpoint: the one it ends; the first sample the one it starts).
+        own = torch.cat((dt[:, 1:2], dt[:, 1:]), 1) if scheme == "midpoint" else dt
+        given = {"gyro_cov": (noise[0] ** 2 / own)[..., None].expand(3, 50, 3)}
+        given["accel_cov"] = (noise[1] ** 2 / own)[..., None].expand(3, 50, 3)
+        out = it.preintegrate(
+            dt, gyro, accel, scheme=scheme, method="native", return_covariance=True, per_step=True,
+            **(given if per_sample else {"noise": noise}),
+        )  # fmt: skip
+        loss = sum((torch.sin(3.0 * x) * (1 + k)).sum() for k, x in enumerate(out) if x is not None)
+        results.append((out.covariance, torch.autograd.grad(loss, (dt, gyro, accel, noise))))
+    (cov, grads), (cov_ref, grads_ref) = results
+    assert gap(cov, cov_ref, relative=True) < 1e-13
+    for a, b in zip(grads, grads_ref):
+        assert gap(a, b, relative=True) < 1e-12
 
 
 def test_gradcheck_native_integrate_and_attitude() -> None:

@@ -3,7 +3,7 @@
 //! are the buffers of contiguous torch tensors that autograd holds for the call (the issue's
 //! zero-copy contract); the GIL is released while the kernels run.
 
-use imukit::adjoint::{self, Outputs, Windows};
+use imukit::adjoint::{self, Noise, Outputs, Windows};
 use numpy::{PyArray3, PyArrayMethods, PyReadonlyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
@@ -17,13 +17,18 @@ struct Buffers<'a, 'py> {
     a: &'a PyReadonlyArrayDyn<'py, f64>,
     a_end: &'a Option<PyReadonlyArrayDyn<'py, f64>>,
     cov: &'a Option<(PyReadonlyArrayDyn<'py, f64>, PyReadonlyArrayDyn<'py, f64>)>,
+    densities: &'a Option<PyReadonlyArray2<'py, f64>>,
 }
 
 impl<'a> Buffers<'a, '_> {
     fn windows(&self, py: Python<'a>) -> PyResult<(usize, Windows<'a>)> {
-        let cov = match self.cov {
-            Some((g, a)) => Some((contiguous(py, "gyro_cov", g)?, contiguous(py, "accel_cov", a)?)),
-            None => None,
+        let noise = match (self.cov, self.densities) {
+            (Some((g, a)), _) => Some(Noise::Samples(
+                contiguous(py, "gyro_cov", g)?,
+                contiguous(py, "accel_cov", a)?,
+            )),
+            (None, Some(q)) => Some(Noise::Densities(contiguous(py, "noise", q)?)),
+            (None, None) => None,
         };
         let a_end = match self.a_end {
             Some(a) => Some(contiguous(py, "accel", a)?),
@@ -35,7 +40,7 @@ impl<'a> Buffers<'a, '_> {
             w: contiguous(py, "gyro", self.w)?,
             a: contiguous(py, "accel", self.a)?,
             a_end,
-            cov,
+            noise,
         };
         Ok((self.h.shape()[0], windows))
     }
@@ -43,9 +48,10 @@ impl<'a> Buffers<'a, '_> {
 
 /// Without `bar`: the records `(windows, n or 1, width)` of `imukit::adjoint::forward`; with
 /// `bar` (their cotangents): the input cotangents `(windows, n, grad_width)` of
-/// `imukit::adjoint::backward`.
+/// `imukit::adjoint::backward`. The noise: `gyro_cov` and `accel_cov` per sample, else
+/// `noise_density` `(windows, 2)` variance densities.
 #[pyfunction]
-#[pyo3(signature = (h, w, a, *, bar, a_end, gyro_cov, accel_cov, per_step, covariance, jacobian))]
+#[pyo3(signature = (h, w, a, *, bar, a_end, gyro_cov, accel_cov, noise_density, per_step, covariance, jacobian))]
 #[allow(clippy::too_many_arguments)] // the kernel's buffers and output switches, by keyword
 pub(crate) fn preint_adjoint<'py>(
     py: Python<'py>,
@@ -56,6 +62,7 @@ pub(crate) fn preint_adjoint<'py>(
     a_end: Option<PyReadonlyArrayDyn<'py, f64>>,
     gyro_cov: Option<PyReadonlyArrayDyn<'py, f64>>,
     accel_cov: Option<PyReadonlyArrayDyn<'py, f64>>,
+    noise_density: Option<PyReadonlyArray2<'py, f64>>,
     per_step: bool,
     covariance: bool,
     jacobian: bool,
@@ -67,6 +74,7 @@ pub(crate) fn preint_adjoint<'py>(
         a: &a,
         a_end: &a_end,
         cov: &cov,
+        densities: &noise_density,
     };
     let (count, x) = buffers.windows(py)?;
     let outputs = Outputs {

@@ -144,8 +144,9 @@ def get_num_threads() -> int: ...
 def simd_path() -> str: ...
 
 # imukit.torch's CPU kernels (crates/imukit/src/adjoint): C-contiguous float64 buffers read in
-# place, h (B, N), w / a / a_end (B, N, 3), covariances (B, N, 3, 3); without bar the records
-# (B, N or 1, width), with bar (their cotangents) the input cotangents (B, N, grad_width).
+# place, h (B, N), w / a / a_end (B, N, 3), covariances (B, N, 3, 3) or noise_density (B, 2)
+# (variance densities); without bar the records (B, N or 1, width), with bar (their
+# cotangents) the input cotangents (B, N, grad_width).
 def preint_adjoint(
     h: _Rows,
     w: _Rows,
@@ -155,6 +156,7 @@ def preint_adjoint(
     a_end: _Rows | None,
     gyro_cov: _Rows | None,
     accel_cov: _Rows | None,
+    noise_density: _Rows | None,
     per_step: bool,
     covariance: bool,
     jacobian: bool,

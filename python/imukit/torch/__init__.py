@@ -47,7 +47,7 @@ from imukit import _core
 from imukit._errors import ParameterError
 from imukit.preint import PreintParams
 from imukit.torch import _native, _scan, _steps
-from imukit.torch._inputs import choice, like, samples
+from imukit.torch._inputs import choice, like, noise_blocks, samples
 from imukit.torch._so3 import quat_multiply, quat_to_matrix
 
 __all__ = ["Preintegrated", "State", "integrate", "integrate_attitude", "preintegrate"]
@@ -134,7 +134,6 @@ def preintegrate(
         noise=noise,
         gyro_cov=gyro_cov,
         accel_cov=accel_cov,
-        scheme=scheme,
     )
     linear = return_covariance or return_jacobian
     method = _method(method, s.gyro)
@@ -150,7 +149,7 @@ def preintegrate(
     if linear:
         eye = torch.eye(3, dtype=rot.dtype, device=rot.device).expand_as(rot[:1])
         before = torch.cat((eye, rot[:-1]))
-        maps = _steps.linear(iv, before, s.cov if return_covariance else None, scheme)
+        maps = _steps.linear(iv, before, noise_blocks(s, scheme) if return_covariance else None, scheme)
         lin = _compose(_steps.compose_linear, maps, keep=per_step, method=method)
         cov = lin[1][..., :9, :9] if return_covariance else None
         jac = lin[-1][..., :9, :] if return_jacobian else None

@@ -94,7 +94,6 @@ def samples(
     noise: Any = None,
     gyro_cov: Any = None,
     accel_cov: Any = None,
-    scheme: str = "lie_euler",
 ) -> tuple[Samples, torch.Size]:
     """The inputs broadcast to one batch shape B and laid out sequence first, and B."""
     w = vectors(gyro, "gyro")
@@ -134,24 +133,19 @@ def samples(
     dts = seq(d[..., None], 1)[..., 0]
     valid = torch.arange(n, device=w.device).view(n, *([1] * first)) < count
     valid = (valid & seq(keep[..., None], 1)[..., 0]).expand(n, *batch)
-    cov = None
-    if covs or dens is not None:
-        cov = _noise(dts, valid, dens, covs, batch, seq, scheme)
-    return Samples(dts, seq(w, 1), seq(a, 1), valid, b.expand(*batch, 6), cov), batch
+    per_sample = {name: seq(c, 2) for name, c in covs.items()}
+    dens = None if dens is None else dens.expand(*batch, 2)
+    return Samples(dts, seq(w, 1), seq(a, 1), valid, b.expand(*batch, 6), dens, **per_sample), batch
 
 
-def _noise(
-    dts: torch.Tensor,
-    valid: torch.Tensor,
-    dens: torch.Tensor | None,
-    covs: dict[str, torch.Tensor],
-    batch: torch.Size,
-    seq: Any,
-    scheme: str,
-) -> torch.Tensor:
-    """Each sample's 6×6 white-noise covariance ``[gyro, accel]``, zero where masked. From the
-    densities: ``σ²/h I`` with h the sample's interval (midpoint: the one it ends, the first
-    sample's the one it starts), as the Rust kernels (docs/conventions.md, row 11)."""
+def noise_blocks(s: Samples, scheme: str) -> torch.Tensor | None:
+    """Each sample's 6×6 white-noise covariance ``[gyro, accel]`` (N, *B, 6, 6), zero where masked;
+    None without noise. From the densities: ``σ²/h I`` with h the sample's interval (midpoint: the
+    one it ends, a window's first sample the one it starts), as the Rust kernels
+    (docs/conventions.md, row 11)."""
+    if s.densities is None and s.gyro_cov is None and s.accel_cov is None:
+        return None
+    dts, valid = s.dt, s.valid
     own = dts
     if scheme == "midpoint" and dts.shape[0] > 1:
         # A window's first sample (no sample before it in the window) takes the interval it starts.
@@ -160,11 +154,11 @@ def _noise(
     own = torch.where(valid, own, torch.ones_like(own))
     eye = torch.eye(3, dtype=dts.dtype, device=dts.device)
     blocks = []
-    for i, name in enumerate(("gyro_cov", "accel_cov")):
-        if name in covs:
-            block = seq(covs[name], 2)
-        elif dens is not None:
-            var = dens.expand(*batch, 2)[..., i] ** 2 / own
+    for i, given in enumerate((s.gyro_cov, s.accel_cov)):
+        if given is not None:
+            block = given
+        elif s.densities is not None:
+            var = s.densities[..., i] ** 2 / own
             block = var[..., None, None] * eye
         else:
             block = torch.zeros(*own.shape, 3, 3, dtype=dts.dtype, device=dts.device)

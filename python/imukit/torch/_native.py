@@ -6,7 +6,10 @@ contiguous float64 CPU input reaches Rust as is; broadcast, strided or float32 i
 made contiguous float64 by torch (float32 is widened, and the outputs narrowed back: the kernels
 compute in float64). What differs per scheme is prepared here in torch, where autograd carries it:
 bias subtraction, masking (a step of 0), the midpoint rate ``½(ω₀ + ω₁)``; the kernels see each
-interval's ``h``, ``ω̂``, specific forces and noise covariances (module docs of ``adjoint``).
+interval's ``h``, ``ω̂``, specific forces and the noise: the variance densities ``σ²`` per window
+when the noise is densities only (the kernels discretise them, ``σ²/h``, and return their
+cotangents: nothing per sample is built in torch), else each sample's covariance blocks
+(``_inputs.noise_blocks``: per-sample ``gyro_cov`` / ``accel_cov``) (module docs of ``adjoint``).
 
 Covered: every output of both schemes (deltas, covariance, bias Jacobian, per step or final);
 ``integrate_attitude``'s ``exp`` scheme is the euler rotation (``rk2`` has no kernel).
@@ -20,6 +23,7 @@ import numpy as np
 import torch
 
 from imukit import _core
+from imukit.torch._inputs import noise_blocks
 from imukit.torch._steps import Samples, rates
 
 
@@ -37,13 +41,13 @@ def _buffer(x: torch.Tensor) -> _Array:
 
 def _buffers(inputs: tuple[Any, ...]) -> tuple[_Array, _Array, _Array, dict[str, Any]]:
     """``h, w, a`` and the optional buffers by keyword, as the kernels take them."""
-    h, w, a, a_end, cov_g, cov_a = inputs
-    optional = {"a_end": a_end, "gyro_cov": cov_g, "accel_cov": cov_a}
+    h, w, a, a_end, cov_g, cov_a, q = inputs
+    optional = {"a_end": a_end, "gyro_cov": cov_g, "accel_cov": cov_a, "noise_density": q}
     return _buffer(h), _buffer(w), _buffer(a), {k: None if x is None else _buffer(x) for k, x in optional.items()}
 
 
 class _Kernel(torch.autograd.Function):
-    """``records = forward(h, w, a, a_end, Σ_g, Σ_a)`` (B, S, width); the backward is the Rust
+    """``records = forward(h, w, a, a_end, Σ_g, Σ_a, σ²)`` (B, S, width); the backward is the Rust
     reverse sweep. Not twice differentiable."""
 
     @staticmethod
@@ -61,9 +65,13 @@ class _Kernel(torch.autograd.Function):
         h, w, a, optional = _buffers(inputs)
         bar_buffer = bar.contiguous().numpy()
         g = torch.from_numpy(_core.preint_adjoint(h, w, a, bar=bar_buffer, **optional, **ctx.options))
-        widths = [1, 3, 3] + ([3] if inputs[3] is not None else []) + ([9, 9] if inputs[4] is not None else [])
-        parts = iter(torch.split(g, widths, dim=-1))
-        return (None, *(None if x is None else next(parts).reshape(x.shape) for x in inputs))
+        widths = [1, 3, 3, 3, 9, 9, 2]
+        parts = iter(torch.split(g, [k for k, x in zip(widths, inputs) if x is not None], dim=-1))
+        grads = [None if x is None else next(parts) for x in inputs]
+        q = grads[-1]
+        if q is not None:
+            grads[-1] = q.sum(1)  # each interval's share of its window's densities
+        return (None, *(None if gx is None else gx.reshape(x.shape) for x, gx in zip(inputs, grads)))
 
 
 def preintegrate(
@@ -77,12 +85,16 @@ def preintegrate(
         """Sequence-first (N, *B, ...) to (B, N, ...) float64."""
         return x.movedim(0, first).reshape(-1, n, *x.shape[first + 1 :]).to(torch.float64)
 
-    cov_g = cov_a = None
-    if s.cov is not None:
-        cov_g, cov_a = windows(s.cov[..., :3, :3]), windows(s.cov[..., 3:, 3:])
+    cov_g = cov_a = q = None
+    if covariance and s.densities is not None and s.gyro_cov is None and s.accel_cov is None:
+        q = (s.densities**2).reshape(-1, 2).to(torch.float64)
+    elif covariance:
+        cov = noise_blocks(s, scheme)
+        if cov is not None:
+            cov_g, cov_a = windows(cov[..., :3, :3]), windows(cov[..., 3:, 3:])
     a_end = windows(a1) if scheme == "midpoint" else None
     options = {"per_step": per_step, "covariance": covariance, "jacobian": jacobian}
-    records = _Kernel.apply(options, windows(h), windows(w), windows(a0), a_end, cov_g, cov_a)
+    records = _Kernel.apply(options, windows(h), windows(w), windows(a0), a_end, cov_g, cov_a, q)
     records = records.to(s.dt.dtype).reshape(*batch, *((n,) if per_step else ()), -1)
     lead = records.shape[:-1]
     rot, vel, pos = records[..., :9].reshape(*lead, 3, 3), records[..., 9:12], records[..., 12:15]

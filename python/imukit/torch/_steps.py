@@ -37,14 +37,18 @@ Elements = tuple[torch.Tensor, ...]
 
 class Samples(NamedTuple):
     """Inputs with the sequence first: ``dt`` (N, *B), ``gyro``, ``accel`` (N, *B, 3), ``valid`` (N, *B)
-    bool, ``bias`` (*B, 6) ``[b_g, b_a]``, ``cov`` (N, *B, 6, 6) per-sample noise or None."""
+    bool, ``bias`` (*B, 6) ``[b_g, b_a]``; the white noise as given: ``densities`` (*B, 2)
+    ``[σ_g, σ_a]``, ``gyro_cov``, ``accel_cov`` (N, *B, 3, 3) per sample (each replaces its
+    density), or None (``_inputs.noise_blocks`` makes each sample's 6×6 covariance of them)."""
 
     dt: torch.Tensor
     gyro: torch.Tensor
     accel: torch.Tensor
     valid: torch.Tensor
     bias: torch.Tensor
-    cov: torch.Tensor | None
+    densities: torch.Tensor | None = None
+    gyro_cov: torch.Tensor | None = None
+    accel_cov: torch.Tensor | None = None
 
 
 class Interval(NamedTuple):

@@ -12,13 +12,20 @@
 //! | `a_end` | 3 | midpoint only: the specific force at its end |
 //! | `cov_g`, `cov_a` | 9 | the covariance of its gyro / accelerometer white noise (3×3) |
 //!
+//! or, instead of `cov_g`, `cov_a`, one pair per window `[σ_g², σ_a²]` of variance densities
+//! ([`Noise::Densities`], the common case, with no per-sample buffers): each sample's covariance
+//! is then `σ²/h I`, `h` the step it owns (docs/conventions.md, row 11): its interval's, or for
+//! midpoint a window's first sample (whose own interval is an identity step, `h = 0`) the next
+//! interval's; a sample that owns no step (masked) has no noise.
+//!
 //! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
 //! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
 //! Jacobian in both schemes.
 //! [`forward`] writes one record per interval (`per_step`) or per window:
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
-//! Σ̄_g (9), Σ̄_a (9, if cov)]`: it re-runs each window forward, keeping the state before every
+//! Σ̄_g (9), Σ̄_a (9, if per-sample noise)]` or, with densities, `[…, σ̄²_g, σ̄²_a]`, the interval's
+//! share of its window's density cotangents (their sum over the window is the cotangent): it re-runs each window forward, keeping the state before every
 //! interval (one window at a time per thread: O(n) memory per thread, none between the passes),
 //! then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
 //! the thread count.
@@ -47,8 +54,17 @@ pub struct Windows<'a> {
     pub a: &'a [f64],
     /// Midpoint: specific forces at the intervals' ends `(windows, n, 3)`.
     pub a_end: Option<&'a [f64]>,
-    /// Gyro and accelerometer noise covariances `(windows, n, 3, 3)` each.
-    pub cov: Option<(&'a [f64], &'a [f64])>,
+    /// The white noise, if any.
+    pub noise: Option<Noise<'a>>,
+}
+
+/// Where each sample's white-noise covariance comes from (module docs).
+#[derive(Debug, Clone, Copy)]
+pub enum Noise<'a> {
+    /// Gyro and accelerometer covariances `(windows, n, 3, 3)` each, per sample.
+    Samples(&'a [f64], &'a [f64]),
+    /// Variance densities `[σ_g², σ_a²]` `(windows, 2)`, per window.
+    Densities(&'a [f64]),
 }
 
 /// What [`forward`] returns and [`backward`] differentiates.
@@ -76,10 +92,11 @@ impl Outputs {
         }
     }
 
-    fn linear(&self) -> Linear {
+    fn linear(&self, noise: Option<Noise<'_>>) -> Linear {
         Linear {
             cov: self.covariance,
             jac: self.jacobian,
+            symmetric: matches!(noise, Some(Noise::Densities(_))),
         }
     }
 }
@@ -87,7 +104,12 @@ impl Outputs {
 impl Windows<'_> {
     /// Numbers per record of [`backward`]'s input cotangents.
     pub fn grad_width(&self) -> usize {
-        7 + if self.a_end.is_some() { 3 } else { 0 } + if self.cov.is_some() { 18 } else { 0 }
+        let noise = match self.noise {
+            None => 0,
+            Some(Noise::Samples(..)) => 18,
+            Some(Noise::Densities(_)) => 2,
+        };
+        7 + if self.a_end.is_some() { 3 } else { 0 } + noise
     }
 
     /// The number of windows, after checking every buffer's length and every value.
@@ -99,7 +121,7 @@ impl Windows<'_> {
                 got: "0".into(),
             });
         }
-        if out.covariance && self.cov.is_none() {
+        if out.covariance && self.noise.is_none() {
             return Err(Error::Parameter {
                 name: "covariance",
                 expected: "noise covariances",
@@ -107,15 +129,19 @@ impl Windows<'_> {
             });
         }
         let windows = self.h.len() / self.n;
-        let mut buffers = vec![("dt", self.h, 1), ("gyro", self.w, 3), ("accel", self.a, 3)];
+        // (name, buffer, numbers per row, rows per window)
+        let n = self.n;
+        let mut buffers = vec![("dt", self.h, 1, n), ("gyro", self.w, 3, n), ("accel", self.a, 3, n)];
         if let Some(a) = self.a_end {
-            buffers.push(("accel", a, 3));
+            buffers.push(("accel", a, 3, n));
         }
-        if let Some((g, a)) = self.cov {
-            buffers.extend([("gyro_cov", g, 9), ("accel_cov", a, 9)]);
+        match self.noise {
+            Some(Noise::Samples(g, a)) => buffers.extend([("gyro_cov", g, 9, n), ("accel_cov", a, 9, n)]),
+            Some(Noise::Densities(q)) => buffers.push(("noise", q, 2, 1)),
+            None => {}
         }
-        for (name, x, width) in buffers {
-            if x.len() != windows * self.n * width {
+        for (name, x, width, rows) in buffers {
+            if x.len() != windows * rows * width {
                 return Err(Error::RowLength {
                     len: x.len(),
                     row: width,
@@ -136,16 +162,37 @@ impl Windows<'_> {
         Ok(windows)
     }
 
+    /// The interval whose step sample `k`'s density is discretised over, and that step (module
+    /// docs): a midpoint window's first sample owns the next interval's.
+    fn own_step(&self, k: usize) -> (usize, f64) {
+        if self.h[k] == 0.0 && self.a_end.is_some() && k + 1 < self.n {
+            (k + 1, self.h[k + 1])
+        } else {
+            (k, self.h[k])
+        }
+    }
+
     fn interval(&self, k: usize) -> Interval {
         let v = |x: &[f64]| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
         let m = |x: &[f64]| Matrix3::from_row_slice(&x[9 * k..9 * k + 9]);
+        let (cov_g, cov_a) = match self.noise {
+            None => (Matrix3::zeros(), Matrix3::zeros()),
+            Some(Noise::Samples(g, a)) => (m(g), m(a)),
+            Some(Noise::Densities(q)) => match self.own_step(k).1 {
+                h if h > 0.0 => (
+                    Matrix3::from_diagonal_element(q[0] / h),
+                    Matrix3::from_diagonal_element(q[1] / h),
+                ),
+                _ => (Matrix3::zeros(), Matrix3::zeros()),
+            },
+        };
         Interval {
             h: self.h[k],
             w: v(self.w),
             a: v(self.a),
             a_end: self.a_end.map(v),
-            cov_g: self.cov.map_or(Matrix3::zeros(), |c| m(c.0)),
-            cov_a: self.cov.map_or(Matrix3::zeros(), |c| m(c.1)),
+            cov_g,
+            cov_a,
         }
     }
 }
@@ -202,7 +249,10 @@ fn window<'a>(x: &Windows<'a>, b: usize) -> Windows<'a> {
         w: part(x.w, 3),
         a: part(x.a, 3),
         a_end: x.a_end.map(|a| part(a, 3)),
-        cov: x.cov.map(|(g, a)| (part(g, 9), part(a, 9))),
+        noise: x.noise.map(|noise| match noise {
+            Noise::Samples(g, a) => Noise::Samples(part(g, 9), part(a, 9)),
+            Noise::Densities(q) => Noise::Densities(&q[2 * b..2 * b + 2]),
+        }),
     }
 }
 
@@ -218,7 +268,7 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
             output: out.len(),
         });
     }
-    let linear = outputs.linear();
+    let linear = outputs.linear(x.noise);
     out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
         let x = window(x, b);
         let mut s = State::start();
@@ -249,7 +299,7 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
             output: bar.len(),
         });
     }
-    let linear = outputs.linear();
+    let linear = outputs.linear(x.noise);
     grad.par_chunks_mut(x.n * gw).enumerate().try_for_each(|(b, g)| {
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
@@ -271,9 +321,22 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
                 row[7..10].copy_from_slice(ib.a_end.as_slice());
                 at = 10;
             }
-            if x.cov.is_some() {
-                row[at..at + 9].copy_from_slice(ib.cov_g.transpose().as_slice());
-                row[at + 9..at + 18].copy_from_slice(ib.cov_a.transpose().as_slice());
+            match x.noise {
+                Some(Noise::Samples(..)) => {
+                    row[at..at + 9].copy_from_slice(ib.cov_g.transpose().as_slice());
+                    row[at + 9..at + 18].copy_from_slice(ib.cov_a.transpose().as_slice());
+                }
+                Some(Noise::Densities(q)) => {
+                    // Σ = σ²/h I: σ̄² = tr(Σ̄)/h, h̄ −= σ² tr(Σ̄)/h² on the step the sample owns.
+                    let (j, own) = x.own_step(k);
+                    if own > 0.0 {
+                        let (tg, ta) = (ib.cov_g.trace() / own, ib.cov_a.trace() / own);
+                        row[at] = tg;
+                        row[at + 1] = ta;
+                        g[j * gw] -= (q[0] * tg + q[1] * ta) / own;
+                    }
+                }
+                None => {}
             }
             cot = match outputs.per_step && k > 0 {
                 true => add(&prev, &read(&bar[(k - 1) * width..k * width], outputs)),

@@ -21,7 +21,9 @@
 //! `P̄ = AᵀP̄'A`, `Ā += P̄'APᵀ + P̄'ᵀAP + UB₀Xᵀ + J̄'Jᵀ` (`U = P̄' + P̄'ᵀ`), `X̄ = AᵀUB₀`,
 //! `S̄ = B₀ᵀP̄'B₀`, `J̄ = AᵀJ̄'`, `Σ̄ = B₁ᵀP̄'B₁ + B₁ᵀX̄' + S̄'`; `Ā`, `B̄_s` then reach `ΔR`, `E`,
 //! `J_r`, the specific forces and `h` through their blocks, and `E`, `J_r` reach `ω` and `h`
-//! through `φ = ωh` (`so3.rs`).
+//! through `φ = ωh` (`so3.rs`). With symmetric noise (densities) `P` is symmetric, so
+//! `P̄'APᵀ + P̄'ᵀAP = UAP`, `B̄₁ = UB₁Σ` and `Σ̄`'s symmetric part is `½B₁ᵀUB₁`: one product each
+//! instead of two.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -100,6 +102,9 @@ pub(super) struct IntervalBar {
 pub(super) struct Linear {
     pub cov: bool,
     pub jac: bool,
+    /// The noise covariances are symmetric (from densities), hence every `P`: the reverse sweep
+    /// folds `P̄'` and `P̄'ᵀ` into `U = P̄' + P̄'ᵀ` and returns `Σ̄`'s symmetric part.
+    pub symmetric: bool,
 }
 
 /// The quantities of an interval both directions use.
@@ -370,19 +375,32 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
         if linear.cov {
             let (pb, q) = (&bar.cov, noise(x));
             prev.cov = l.sandwich_t(pb);
-            // P̄'APᵀ + P̄'ᵀAP, first six columns.
-            let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
-            lb.a += pba * s.cov.fixed_rows::<6>(0).transpose() + pbta * s.cov.fixed_columns::<6>(0);
-            lb.b1 += pb * l.b1 * q.transpose() + pb.transpose() * l.b1 * q;
-            q_bar += l.b1.transpose() * pb * l.b1;
+            let u = pb + pb.transpose();
+            // U is symmetric: UA = (AᵀU)ᵀ.
+            let ua = l.at_mul(&u).transpose();
+            if linear.symmetric {
+                // P = Pᵀ, Σ = Σᵀ: P̄'APᵀ + P̄'ᵀAP = UAP, P̄'B₁Σᵀ + P̄'ᵀB₁Σ = UB₁Σ, and the
+                // symmetric part of B₁ᵀP̄'B₁ is ½B₁ᵀUB₁.
+                let ub1 = u * l.b1;
+                lb.a += ua * s.cov.fixed_columns::<6>(0);
+                lb.b1 += ub1 * q;
+                q_bar += l.b1.tr_mul(&ub1) * 0.5;
+            } else {
+                // P̄'APᵀ + P̄'ᵀAP, first six columns.
+                let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
+                lb.a += pba * s.cov.fixed_rows::<6>(0).transpose() + pbta * s.cov.fixed_columns::<6>(0);
+                lb.b1 += pb * l.b1 * q.transpose() + pb.transpose() * l.b1 * q;
+                q_bar += l.b1.transpose() * pb * l.b1;
+            }
             if let Some(b0) = &l.b0 {
-                let u = pb + pb.transpose();
                 let ub0 = u * b0;
                 lb.a += ub0 * s.cross.fixed_rows::<6>(0).transpose();
                 prev.cross = l.at_mul(&ub0);
-                // U is symmetric: UA = (AᵀU)ᵀ.
-                lb.b0 +=
-                    l.at_mul(&u).transpose() * s.cross + pb * b0 * s.last.transpose() + pb.transpose() * b0 * s.last;
+                lb.b0 += ua * s.cross
+                    + match linear.symmetric {
+                        true => ub0 * s.last,
+                        false => pb * b0 * s.last.transpose() + pb.transpose() * b0 * s.last,
+                    };
                 prev.last = b0.transpose() * pb * b0;
                 // X' = B₁Σ, S' = Σ.
                 lb.b1 += bar.cross * q.transpose();

@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::*;
-use crate::imu::Noise;
+use crate::imu;
 use crate::preint::Preintegrator;
 
 /// A reproducible stream in [-1, 1).
@@ -25,6 +25,8 @@ struct Data {
     a_end: Vec<f64>,
     g: Vec<f64>,
     c: Vec<f64>,
+    /// Variance densities `[σ_g², σ_a²]` per window.
+    q: Vec<f64>,
 }
 
 fn data(windows: usize, n: usize) -> Data {
@@ -36,17 +38,21 @@ fn data(windows: usize, n: usize) -> Data {
         a_end: numbers(3 * m, 4).iter().map(|x| 5.0 * x).collect(),
         g: numbers(9 * m, 5),
         c: numbers(9 * m, 6),
+        q: numbers(2 * windows, 8).iter().map(|x| 1e-3 * (1.5 + x)).collect(),
     }
 }
 
-fn windows<'a>(d: &'a Data, n: usize, midpoint: bool) -> Windows<'a> {
+fn windows<'a>(d: &'a Data, n: usize, midpoint: bool, densities: bool) -> Windows<'a> {
     Windows {
         n,
         h: &d.h,
         w: &d.w,
         a: &d.a,
         a_end: midpoint.then_some(&d.a_end[..]),
-        cov: Some((&d.g[..], &d.c[..])),
+        noise: Some(match densities {
+            true => Noise::Densities(&d.q),
+            false => Noise::Samples(&d.g, &d.c),
+        }),
     }
 }
 
@@ -57,15 +63,23 @@ fn loss(x: &Windows<'_>, outputs: &Outputs, bar: &[f64]) -> Result<f64> {
     Ok(out.iter().zip(bar).map(|(o, b)| o * b).sum())
 }
 
-fn check(midpoint: bool, per_step: bool) -> Result<()> {
+/// `data` with a window's first interval an identity step (a padded midpoint window: its first
+/// sample owns the next interval's step).
+fn padded(count: usize, n: usize) -> Data {
+    let mut d = data(count, n);
+    d.h[n] = 0.0;
+    d
+}
+
+fn check(midpoint: bool, per_step: bool, densities: bool) -> Result<()> {
     let (count, n) = (2, 4);
     let outputs = Outputs {
         per_step,
         covariance: true,
         jacobian: true,
     };
-    let d = data(count, n);
-    let x = windows(&d, n, midpoint);
+    let d = padded(count, n);
+    let x = windows(&d, n, midpoint, densities);
     let bar = numbers(count * outputs.records(n) * outputs.width(), 7);
     let mut grad = vec![0.0; count * n * x.grad_width()];
     backward(&x, &outputs, &bar, &mut grad)?;
@@ -78,25 +92,40 @@ fn check(midpoint: bool, per_step: bool) -> Result<()> {
     } else {
         7
     };
-    fields.extend([("g", 9, at), ("c", 9, at + 9)]);
+    if densities {
+        fields.push(("q", 2, at));
+    } else {
+        fields.extend([("g", 9, at), ("c", 9, at + 9)]);
+    }
     for (name, width, offset) in fields {
-        for i in 0..count * n * width {
+        // A window's density cotangent is the sum of its intervals' shares.
+        let rows = if name == "q" { 1 } else { n };
+        for i in 0..count * rows * width {
+            if name == "h" && i == n {
+                continue; // the identity step: steps are ≥ 0 (and σ²/h has a kink at 0)
+            }
             let eps = 1e-6;
             let at = |delta: f64| {
-                let mut e = data(count, n);
+                let mut e = padded(count, n);
                 let buffer = match name {
                     "h" => &mut e.h,
                     "w" => &mut e.w,
                     "a" => &mut e.a,
                     "a_end" => &mut e.a_end,
                     "g" => &mut e.g,
+                    "q" => &mut e.q,
                     _ => &mut e.c,
                 };
                 buffer[i] += delta;
-                loss(&windows(&e, n, midpoint), &outputs, &bar)
+                loss(&windows(&e, n, midpoint, densities), &outputs, &bar)
             };
             let numeric = (at(eps)? - at(-eps)?) / (2.0 * eps);
-            let got = grad[(i / width) * gw + offset + i % width];
+            let got = match rows {
+                1 => (0..n)
+                    .map(|k| grad[((i / width) * n + k) * gw + offset + i % width])
+                    .sum(),
+                _ => grad[(i / width) * gw + offset + i % width],
+            };
             let tol = 1e-6 * (1.0 + numeric.abs());
             assert!(
                 (numeric - got).abs() < tol,
@@ -109,18 +138,26 @@ fn check(midpoint: bool, per_step: bool) -> Result<()> {
 
 #[test]
 fn reverse_matches_central_differences_euler_with_covariance() -> Result<()> {
-    check(false, false)?;
-    check(false, true)
+    check(false, false, false)?;
+    check(false, true, false)
+}
+
+#[test]
+fn reverse_matches_central_differences_with_noise_densities() -> Result<()> {
+    for (midpoint, per_step) in [(false, false), (false, true), (true, false), (true, true)] {
+        check(midpoint, per_step, true)?;
+    }
+    Ok(())
 }
 
 #[test]
 fn reverse_matches_central_differences_midpoint_with_covariance() -> Result<()> {
-    check(true, false)?;
-    check(true, true)
+    check(true, false, false)?;
+    check(true, true, false)
 }
 
 /// Euler deltas, covariance and bias Jacobian equal the streaming preintegrator's (isotropic
-/// white noise `σ²/h`), per step.
+/// white noise `σ²/h`, given per sample or as densities), per step.
 #[test]
 fn forward_equals_preintegrator() -> Result<()> {
     let n = 50;
@@ -134,43 +171,41 @@ fn forward_equals_preintegrator() -> Result<()> {
             })
             .collect()
     };
-    let (g, c) = (iso(sg), iso(sa));
-    let x = Windows {
-        n,
-        h: &d.h,
-        w: &d.w,
-        a: &d.a,
-        a_end: None,
-        cov: Some((&g, &c)),
-    };
-    let outputs = Outputs {
-        per_step: true,
-        covariance: true,
-        jacobian: true,
-    };
-    let mut out = vec![0.0; n * outputs.width()];
-    forward(&x, &outputs, &mut out)?;
-    let noise = Noise {
-        gyro_density: sg,
-        accel_density: sa,
-        gyro_random_walk: 0.0,
-        accel_random_walk: 0.0,
-    };
-    let mut p = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), noise);
-    for k in 0..n {
-        let v = |s: &[f64]| Vector3::new(s[3 * k], s[3 * k + 1], s[3 * k + 2]);
-        p.integrate_measurement(&v(&d.a), &v(&d.w), d.h[k]);
-        let s = read(&out[k * outputs.width()..(k + 1) * outputs.width()], &outputs);
-        let close = |a: &[f64], b: &[f64], what: &str| {
-            let scale = b.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
-            let worst = a.iter().zip(b).fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
-            assert!(worst < 1e-12 * scale, "{what} at {k}: {worst}");
+    let (g, c, q) = (iso(sg), iso(sa), [sg * sg, sa * sa]);
+    for noise in [Noise::Samples(&g, &c), Noise::Densities(&q)] {
+        let x = Windows {
+            noise: Some(noise),
+            ..windows(&d, n, false, false)
         };
-        close(s.r.as_slice(), p.delta_rotation.as_slice(), "ΔR");
-        close(s.v.as_slice(), p.delta_velocity.as_slice(), "Δv");
-        close(s.p.as_slice(), p.delta_position.as_slice(), "Δp");
-        close(s.cov.as_slice(), p.covariance().as_slice(), "covariance");
-        close(s.jac.as_slice(), p.bias_jacobian().as_slice(), "bias Jacobian");
+        let outputs = Outputs {
+            per_step: true,
+            covariance: true,
+            jacobian: true,
+        };
+        let mut out = vec![0.0; n * outputs.width()];
+        forward(&x, &outputs, &mut out)?;
+        let densities = imu::Noise {
+            gyro_density: sg,
+            accel_density: sa,
+            gyro_random_walk: 0.0,
+            accel_random_walk: 0.0,
+        };
+        let mut p = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), densities);
+        for k in 0..n {
+            let v = |s: &[f64]| Vector3::new(s[3 * k], s[3 * k + 1], s[3 * k + 2]);
+            p.integrate_measurement(&v(&d.a), &v(&d.w), d.h[k]);
+            let s = read(&out[k * outputs.width()..(k + 1) * outputs.width()], &outputs);
+            let close = |a: &[f64], b: &[f64], what: &str| {
+                let scale = b.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+                let worst = a.iter().zip(b).fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(worst < 1e-12 * scale, "{what} at {k}: {worst}");
+            };
+            close(s.r.as_slice(), p.delta_rotation.as_slice(), "ΔR");
+            close(s.v.as_slice(), p.delta_velocity.as_slice(), "Δv");
+            close(s.p.as_slice(), p.delta_position.as_slice(), "Δp");
+            close(s.cov.as_slice(), p.covariance().as_slice(), "covariance");
+            close(s.jac.as_slice(), p.bias_jacobian().as_slice(), "bias Jacobian");
+        }
     }
     Ok(())
 }
@@ -182,7 +217,7 @@ fn refuses_bad_input() {
     h[1] = -0.1;
     let x = Windows {
         h: &h,
-        ..windows(&d, 3, false)
+        ..windows(&d, 3, false, false)
     };
     let outputs = Outputs {
         per_step: false,
@@ -198,7 +233,7 @@ fn refuses_bad_input() {
     w[4] = f64::NAN;
     let x = Windows {
         w: &w,
-        ..windows(&d, 3, false)
+        ..windows(&d, 3, false, false)
     };
     let err = forward(&x, &outputs, &mut out).err();
     assert_eq!(err.map(|e| (e.argument(), e.index())), Some((Some("gyro"), Some(1))));
