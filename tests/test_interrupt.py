@@ -3,7 +3,7 @@ deferred a KeyboardInterrupt for 11.6 s, until it returned. Long kernels (strapd
 preintegration, attitude integration, the filters' ``run``, the simulator) now run on a thread of
 their own while the calling thread runs the signal handlers every 20 ms; the kernel polls a cancel
 flag every 65,536 samples (the simulator: every chunk of rows; ``preintegrate_windows``: every block of
-4096 windows).
+at most 4096 windows and about 2^17 samples).
 """
 
 from __future__ import annotations

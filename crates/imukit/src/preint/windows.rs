@@ -39,7 +39,7 @@ pub fn preintegrate_windows_clipped(
 }
 
 /// [`preintegrate_windows_clipped`] of `(boundaries, template)`, stopping with
-/// [`Error::Interrupted`] when `cancel` is set (polled before each block of 4096 windows).
+/// [`Error::Interrupted`] when `cancel` is set (polled before each block of windows: at most 4096 and about 2^17 samples).
 pub fn preintegrate_windows_clipped_cancellable(
     samples: &Samples<'_>,
     clipped: Option<&ClipMask<'_>>,
@@ -50,9 +50,10 @@ pub fn preintegrate_windows_clipped_cancellable(
     // One state (a few kB) per window: 20,000,000 windows would need 51.7 GB.
     let m = boundaries.len() - 1;
     let mut windows = try_vec(m, "windows").map_err(|e| e.in_argument("boundaries"))?;
-    for first in (0..m).step_by(WINDOWS_PER_BLOCK) {
+    let block = windows_per_block(samples.t.len(), m);
+    for first in (0..m).step_by(block) {
         cancel.check(0)?;
-        let edges = &boundaries[first..(first + WINDOWS_PER_BLOCK + 1).min(m + 1)];
+        let edges = &boundaries[first..(first + block + 1).min(m + 1)];
         windows.par_extend(
             edges
                 .par_windows(2)
@@ -88,6 +89,18 @@ pub struct WindowsOut<'a> {
 /// kB each) while leaving every core enough windows to share.
 const WINDOWS_PER_BLOCK: usize = 4096;
 
+/// Samples a block should hold at most, so that an interrupt is seen within a few tens of
+/// milliseconds even for long windows (4096 windows of 100 samples with the bias walk took ~1 s on
+/// a loaded machine).
+const SAMPLES_PER_BLOCK: usize = 1 << 17;
+
+/// Windows per block for `m` windows over `n` samples: [`WINDOWS_PER_BLOCK`], fewer when the
+/// windows are long (never fewer than 64, so that the cores still share a block).
+fn windows_per_block(n: usize, m: usize) -> usize {
+    let per_window = n.div_ceil(m.max(1)).max(1);
+    (SAMPLES_PER_BLOCK / per_window).clamp(64, WINDOWS_PER_BLOCK)
+}
+
 /// [`preintegrate_windows_clipped`] written into `out` (one row per window) instead of returned as
 /// states: the kernel behind one call for a whole record of windows. On an error the rows of
 /// `out` are unspecified.
@@ -102,7 +115,7 @@ pub fn preintegrate_windows_into(
 }
 
 /// [`preintegrate_windows_into`] of `(boundaries, template)`, stopping with
-/// [`Error::Interrupted`] when `cancel` is set (polled before each block of 4096 windows).
+/// [`Error::Interrupted`] when `cancel` is set (polled before each block of windows: at most 4096 and about 2^17 samples).
 pub fn preintegrate_windows_cancellable(
     samples: &Samples<'_>,
     clipped: Option<&ClipMask<'_>>,
@@ -140,9 +153,10 @@ pub fn preintegrate_windows_cancellable(
         bias_jacobian,
         mut covariance_combined,
     } = out;
-    for first in (0..m).step_by(WINDOWS_PER_BLOCK) {
+    let block = windows_per_block(samples.t.len(), m);
+    for first in (0..m).step_by(block) {
         cancel.check(0)?;
-        let edges = &boundaries[first..(first + WINDOWS_PER_BLOCK + 1).min(m + 1)];
+        let edges = &boundaries[first..(first + block + 1).min(m + 1)];
         let windows: Vec<Preintegrator> = edges
             .par_windows(2)
             .map(|w| window(samples, clipped, w[0], w[1], template))
