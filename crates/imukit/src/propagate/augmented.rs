@@ -145,8 +145,10 @@ pub(super) fn run(
     let arm = so3::hat(&model.lever_arm);
     let rotating = options.earth_rate != Vector3::zeros();
     // The weights of the readings at k and k + 1 in the step's velocity and attitude: the
-    // midpoint averages both ends, the other schemes' first-order step reads sample k.
-    let weights = if options.scheme == Scheme::Midpoint {
+    // midpoint averages both ends; so does rk4 to within its cubic's outer taps (Simpson over
+    // the interval with the cubic's mid value weighs k−1, k, k+1, k+2 as −1, 13, 13, −1 over 24);
+    // lie_euler and exp read sample k.
+    let weights = if matches!(options.scheme, Scheme::Midpoint | Scheme::Rk4) {
         [0.5, 0.5]
     } else {
         [1.0, 0.0]
