@@ -23,7 +23,8 @@
 //! `J_r`, the specific forces and `h` through their blocks, and `E`, `J_r` reach `ω` and `h`
 //! through `φ = ωh` (`so3.rs`). With symmetric noise (densities) `P` is symmetric, so
 //! `P̄'APᵀ + P̄'ᵀAP = UAP`, `B̄₁ = UB₁Σ` and `Σ̄`'s symmetric part is `½B₁ᵀUB₁`: one product each
-//! instead of two.
+//! instead of two. Euler's `B₁` is block-diagonal by row groups (`θ` ← gyro, `v, p` ← accel) and
+//! `Σ` block-diagonal, so `B₁ΣB₁ᵀ`, `B̄₁` and `Σ̄` take only `P`'s and `P̄`'s diagonal blocks.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -177,6 +178,17 @@ fn put(m: &mut Mat96, i: usize, j: usize, b: &Matrix3<f64>) {
     m.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(b);
 }
 
+/// `m[i.., j..] += b`.
+fn add_block<const R: usize, const C: usize, const RM: usize, const CM: usize>(
+    m: &mut SMatrix<f64, RM, CM>,
+    i: usize,
+    j: usize,
+    b: &SMatrix<f64, R, C>,
+) {
+    let mut v = m.fixed_view_mut::<R, C>(i, j);
+    v += b;
+}
+
 fn sub96(m: &Mat96, i: usize, j: usize) -> Matrix3<f64> {
     m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()
 }
@@ -228,6 +240,33 @@ fn linearize(r0: &Matrix3<f64>, x: &Interval, p: &Parts) -> Lin {
     }
 }
 
+/// Euler's `B₁` by row groups, `diag(B_θ, B_vp)`: `B_θ = −hJ_r` (gyro → θ, 3×3) and
+/// `B_vp = −h[R₀; ½hR₀]` (accel → v, p, 6×3); its other blocks are zero.
+fn euler_blocks(b1: &Mat96) -> (Matrix3<f64>, SMatrix<f64, 6, 3>) {
+    (
+        b1.fixed_view::<3, 3>(0, 0).into_owned(),
+        b1.fixed_view::<6, 3>(3, 3).into_owned(),
+    )
+}
+
+/// The cotangents of one diagonal block `B` of a block-diagonal `B₁` and of its noise `Σ`, from
+/// `P̄`'s matching diagonal block: `B̄ = P̄BΣᵀ + P̄ᵀBΣ`, `Σ̄ = BᵀP̄B` (symmetric: `UBΣ` and
+/// `½BᵀUB`, `U = P̄ + P̄ᵀ`, module docs).
+fn noise_input_reverse<const R: usize>(
+    pb: &SMatrix<f64, R, R>,
+    b: &SMatrix<f64, R, 3>,
+    q: &Matrix3<f64>,
+    symmetric: bool,
+) -> (SMatrix<f64, R, 3>, Matrix3<f64>) {
+    if symmetric {
+        let ub = (pb + pb.transpose()) * b;
+        (ub * q, b.tr_mul(&ub) * 0.5)
+    } else {
+        let (pbb, pbtb) = (pb * b, pb.tr_mul(b));
+        (pbb * q.transpose() + pbtb * q, b.tr_mul(&pbb))
+    }
+}
+
 fn noise(x: &Interval) -> Mat6 {
     let mut q = Mat6::zeros();
     q.fixed_view_mut::<3, 3>(0, 0).copy_from(&x.cov_g);
@@ -252,7 +291,16 @@ pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
     let l = linearize(&s.r, x, &p);
     if linear.cov {
         let q = noise(x);
-        let mut cov = l.sandwich(&s.cov) + l.b1 * q * l.b1.transpose();
+        let mut cov = l.sandwich(&s.cov);
+        match &l.b0 {
+            None => {
+                // Euler's B₁ is block-diagonal (module docs): B₁ΣB₁ᵀ = diag(B_θΣ_gB_θᵀ, B_vpΣ_aB_vpᵀ).
+                let (th, vp) = euler_blocks(&l.b1);
+                add_block(&mut cov, 0, 0, &(th * x.cov_g * th.transpose()));
+                add_block(&mut cov, 3, 3, &(vp * x.cov_a * vp.transpose()));
+            }
+            Some(_) => cov += l.b1 * q * l.b1.transpose(),
+        }
         if let Some(b0) = &l.b0 {
             let axb = l.a_mul(&s.cross) * b0.transpose();
             cov += axb + axb.transpose() + b0 * s.last * b0.transpose();
@@ -381,16 +429,43 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
             if linear.symmetric {
                 // P = Pᵀ, Σ = Σᵀ: P̄'APᵀ + P̄'ᵀAP = UAP, P̄'B₁Σᵀ + P̄'ᵀB₁Σ = UB₁Σ, and the
                 // symmetric part of B₁ᵀP̄'B₁ is ½B₁ᵀUB₁.
-                let ub1 = u * l.b1;
                 lb.a += ua * s.cov.fixed_columns::<6>(0);
-                lb.b1 += ub1 * q;
-                q_bar += l.b1.tr_mul(&ub1) * 0.5;
             } else {
                 // P̄'APᵀ + P̄'ᵀAP, first six columns.
                 let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
                 lb.a += pba * s.cov.fixed_rows::<6>(0).transpose() + pbta * s.cov.fixed_columns::<6>(0);
-                lb.b1 += pb * l.b1 * q.transpose() + pb.transpose() * l.b1 * q;
-                q_bar += l.b1.transpose() * pb * l.b1;
+            }
+            match &l.b0 {
+                None => {
+                    // Euler: only B₁'s diagonal blocks and Σ̄'s are read, and they see only P̄'s
+                    // diagonal blocks (P̄_θθ, P̄_vp,vp).
+                    let (th, vp) = euler_blocks(&l.b1);
+                    let (tg, qg) = noise_input_reverse(
+                        &pb.fixed_view::<3, 3>(0, 0).into_owned(),
+                        &th,
+                        &x.cov_g,
+                        linear.symmetric,
+                    );
+                    let (ta, qa) = noise_input_reverse(
+                        &pb.fixed_view::<6, 6>(3, 3).into_owned(),
+                        &vp,
+                        &x.cov_a,
+                        linear.symmetric,
+                    );
+                    add_block(&mut lb.b1, 0, 0, &tg);
+                    add_block(&mut lb.b1, 3, 3, &ta);
+                    add_block(&mut q_bar, 0, 0, &qg);
+                    add_block(&mut q_bar, 3, 3, &qa);
+                }
+                Some(_) if linear.symmetric => {
+                    let ub1 = u * l.b1;
+                    lb.b1 += ub1 * q;
+                    q_bar += l.b1.tr_mul(&ub1) * 0.5;
+                }
+                Some(_) => {
+                    lb.b1 += pb * l.b1 * q.transpose() + pb.transpose() * l.b1 * q;
+                    q_bar += l.b1.transpose() * pb * l.b1;
+                }
             }
             if let Some(b0) = &l.b0 {
                 let ub0 = u * b0;
