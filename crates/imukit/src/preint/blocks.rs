@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::mat3::M3;
+use crate::mat3::{mul, mul_t, mul_t_symmetric, M3};
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
@@ -22,43 +22,27 @@ pub(super) type Cross = [[Matrix3<f64>; 2]; 3];
 
 pub(super) const ZERO_CROSS: Cross = [[Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0); 2]; 3];
 
-/// The covariance blocks in padded form (`mat3::M3`), as the per-sample kernels hold them.
-pub(super) type Padded = [M3; 6];
-
-/// A cross covariance in padded form.
-pub(super) type PaddedCross = [[M3; 2]; 3];
-
-/// The padded form of the covariance blocks.
-#[inline(always)]
-pub(super) fn padded(cov: &CovarianceBlocks) -> Padded {
-    cov.each_ref().map(M3::of)
-}
-
-/// The padded form of a cross covariance.
-#[inline(always)]
-pub(super) fn padded_cross(x: &Cross) -> PaddedCross {
-    x.each_ref().map(|row| row.each_ref().map(M3::of))
-}
-
-/// Back from the padded form (covariance blocks or cross covariance rows).
-#[inline(always)]
-pub(super) fn unpadded<const N: usize>(blocks: &[M3; N]) -> [Matrix3<f64>; N] {
-    blocks.each_ref().map(M3::matrix)
-}
-
-/// Back from the padded form of a cross covariance.
-#[inline(always)]
-pub(super) fn unpadded_cross(x: &PaddedCross) -> Cross {
-    x.each_ref().map(unpadded)
-}
-
 /// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ` for the euler scheme's own white noise
 /// (`B = [0; ΔR h; ½ ΔR h²]`, `C = [J_r h; 0; 0]`, `Σ_a = var_a I`, `Σ_g = var_g I`): `B Σ_a Bᵀ`
 /// reduces to multiples of I because ΔR is orthonormal. With zero variances, `A Σ Aᵀ` alone.
 #[inline(always)]
-pub(super) fn propagate(cov: &Padded, phi: &M3, m: &M3, jr: &M3, h: f64, var_a: f64, var_g: f64) -> Padded {
-    let [tt, tv, tp, vv, vp, pp] = *cov;
-    let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
+pub(super) fn propagate(
+    cov: &CovarianceBlocks,
+    phi: &Matrix3<f64>,
+    m: &Matrix3<f64>,
+    jr: &Matrix3<f64>,
+    h: f64,
+    var_a: f64,
+    var_g: f64,
+) -> CovarianceBlocks {
+    // In padded 3×3 blocks (`mat3::M3`): the same operations as on `Matrix3`, vectorised.
+    let [tt, tv, tp, vv, vp, pp] = cov.each_ref().map(M3::of);
+    let (vt, pt, pv) = (
+        M3::of_transpose(&cov[1]),
+        M3::of_transpose(&cov[2]),
+        M3::of_transpose(&cov[4]),
+    );
+    let (phi, m, jr) = (M3::of(phi), M3::of(m), M3::of(jr));
     let half_h2 = 0.5 * h * h;
     // Rows of A Σ.
     let phi_tt = phi.mul(&tt);
@@ -71,16 +55,16 @@ pub(super) fn propagate(cov: &Padded, phi: &M3, m: &M3, jr: &M3, h: f64, var_a: 
     let a_pv = m_tv * half_h2 + vv * h + pv;
     let a_pp = m_tp * half_h2 + vp * h + pp;
     // (A Σ) Aᵀ, upper blocks.
-    let phi_tt_mt = phi_tt.mul_t(m);
-    let new_tt = phi_tt.mul_t_symmetric(phi) + jr.mul_t_symmetric(jr) * (var_g * h * h);
+    let phi_tt_mt = phi_tt.mul_t(&m);
+    let new_tt = phi_tt.mul_t_symmetric(&phi) + jr.mul_t_symmetric(&jr) * (var_g * h * h);
     let phi_tv = phi.mul(&tv);
     let new_tv = phi_tt_mt * h + phi_tv;
     let new_tp = phi_tt_mt * half_h2 + phi_tv * h + phi.mul(&tp);
-    let a_vt_mt = a_vt.mul_t(m);
+    let a_vt_mt = a_vt.mul_t(&m);
     let new_vv = (a_vt_mt * h + a_vv).plus_identity(var_a * h * h);
     let new_vp = (a_vt_mt * half_h2 + a_vv * h + a_vp).plus_identity(var_a * h * half_h2);
-    let new_pp = (a_pt.mul_t(m) * half_h2 + a_pv * h + a_pp).plus_identity(var_a * half_h2 * half_h2);
-    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()]
+    let new_pp = (a_pt.mul_t(&m) * half_h2 + a_pv * h + a_pp).plus_identity(var_a * half_h2 * half_h2);
+    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()].map(|b| b.matrix())
 }
 
 /// `R [a]×` by columns: column j is `R (a × e_j)`, a difference of two columns of R (27 flops
@@ -91,22 +75,20 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[c1 * a.z - c2 * a.y, c2 * a.x - c0 * a.z, c0 * a.y - c1 * a.x])
 }
 
-/// The diagonal blocks `θθ`, `vv`, `pp` made exactly symmetric against rounding (`(b + bᵀ)/2`).
+/// `(b + bᵀ)/2`: keeps the diagonal blocks exactly symmetric against rounding.
 #[inline(always)]
-pub(super) fn symmetric_diagonal(cov: &mut Padded) {
-    for d in [0, 3, 5] {
-        cov[d] = cov[d].symmetric();
-    }
+pub(super) fn symmetric(b: Matrix3<f64>) -> Matrix3<f64> {
+    (b + b.transpose()) * 0.5
 }
 
 /// `A X` for a 9×6 cross covariance `X`.
 #[inline(always)]
-pub(super) fn transition(x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCross {
+pub(super) fn transition(x: &Cross, phi: &Matrix3<f64>, m: &Matrix3<f64>, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
-    let m_tg = m.mul(&xtg);
+    let m_tg = mul(m, &xtg);
     [
-        [phi.mul(&xtg), M3::ZERO],
+        [mul(phi, &xtg), Matrix3::zeros()],
         [m_tg * h + xvg, xva],
         [m_tg * half_h2 + xvg * h + xpg, xva * h + xpa],
     ]
@@ -115,19 +97,19 @@ pub(super) fn transition(x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCro
 /// A step's 9×6 input matrix `G = [[tg, 0], [vg, va], [h/2 vg, h/2 va]]` (columns `[gyro, accel]`).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Input {
-    pub tg: M3,
-    pub vg: M3,
-    pub va: M3,
+    pub tg: Matrix3<f64>,
+    pub vg: Matrix3<f64>,
+    pub va: Matrix3<f64>,
     pub half_h: f64,
 }
 
 impl Input {
     /// `G diag(s_g I, s_a I)` as a cross covariance.
     #[inline(always)]
-    pub fn scaled(&self, s_g: f64, s_a: f64) -> PaddedCross {
+    pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
         let (vg, va) = (self.vg * s_g, self.va * s_a);
         [
-            [self.tg * s_g, M3::ZERO],
+            [self.tg * s_g, Matrix3::zeros()],
             [vg, va],
             [vg * self.half_h, va * self.half_h],
         ]
@@ -135,11 +117,11 @@ impl Input {
 
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
     #[inline(always)]
-    pub fn add_quadratic(&self, cov: &mut Padded, s_g: f64, s_a: f64) {
-        let tv = self.tg.mul_t(&self.vg) * s_g;
-        let vv = self.vg.mul_t_symmetric(&self.vg) * s_g + self.va.mul_t_symmetric(&self.va) * s_a;
+    pub fn add_quadratic(&self, cov: &mut CovarianceBlocks, s_g: f64, s_a: f64) {
+        let tv = mul_t(&self.tg, &self.vg) * s_g;
+        let vv = mul_t_symmetric(&self.vg, &self.vg) * s_g + mul_t_symmetric(&self.va, &self.va) * s_a;
         let c = self.half_h;
-        cov[0] += self.tg.mul_t_symmetric(&self.tg) * s_g;
+        cov[0] += mul_t_symmetric(&self.tg, &self.tg) * s_g;
         cov[1] += tv;
         cov[2] += tv * c;
         cov[3] += vv;
@@ -149,18 +131,18 @@ impl Input {
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
     #[inline(always)]
-    pub fn add_cross(&self, cov: &mut Padded, y: &PaddedCross) {
+    pub fn add_cross(&self, cov: &mut CovarianceBlocks, y: &Cross) {
         let c = self.half_h;
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
         let u = [
-            y[0][0].mul_t(&self.vg), // y's θ-row accelerometer block is zero
-            y[1][0].mul_t(&self.vg) + y[1][1].mul_t(&self.va),
-            y[2][0].mul_t(&self.vg) + y[2][1].mul_t(&self.va),
+            mul_t(&y[0][0], &self.vg), // y's θ-row accelerometer block is zero
+            mul_t(&y[1][0], &self.vg) + mul_t(&y[1][1], &self.va),
+            mul_t(&y[2][0], &self.vg) + mul_t(&y[2][1], &self.va),
         ];
-        let y0t = y[0][0].mul_t(&self.tg);
+        let y0t = mul_t(&y[0][0], &self.tg);
         cov[0] += y0t + y0t.transpose();
-        cov[1] += u[0] + self.tg.mul_t(&y[1][0]);
-        cov[2] += u[0] * c + self.tg.mul_t(&y[2][0]);
+        cov[1] += u[0] + mul_t(&self.tg, &y[1][0]);
+        cov[2] += u[0] * c + mul_t(&self.tg, &y[2][0]);
         cov[3] += u[1] + u[1].transpose();
         cov[4] += u[1] * c + u[2].transpose();
         cov[5] += (u[2] + u[2].transpose()) * c;
@@ -169,7 +151,7 @@ impl Input {
 
 /// Block-wise `a + b` for cross covariances.
 #[inline(always)]
-pub(super) fn add(a: &PaddedCross, b: &PaddedCross) -> PaddedCross {
+pub(super) fn add(a: &Cross, b: &Cross) -> Cross {
     std::array::from_fn(|i| [a[i][0] + b[i][0], a[i][1] + b[i][1]])
 }
 
