@@ -3,14 +3,14 @@
 //! Written out: nalgebra's generic product compiles to about twice the instructions, and these run
 //! tens of times per IMU sample. Two forms:
 //!
-//! - on nalgebra's `Matrix3` (`mul`, `mul_t`, `mul_t_symmetric`), for the occasional product;
+//! - on nalgebra's `Matrix3` (`mul`), for the occasional product;
 //! - on [`M3`], a 3×3 block held as three columns padded to four lanes and aligned to 32 bytes, for
 //!   the per-sample kernels: a column operation is one 256-bit instruction on the AVX paths (two
 //!   128-bit ones on the baseline), with no shuffles to gather 3-element columns. Each element is
-//!   computed with the same operations in the same order as the `Matrix3` form, so both give the
-//!   same bits.
+//!   computed with the same operations in the same order as the `Matrix3` forms (`mul` and the
+//!   references in the tests), so both give the same bits.
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
 use nalgebra::Matrix3;
 
@@ -18,21 +18,6 @@ use nalgebra::Matrix3;
 #[inline(always)]
 pub(crate) fn mul(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
     Matrix3::from_fn(|r, c| a[(r, 0)] * b[(0, c)] + a[(r, 1)] * b[(1, c)] + a[(r, 2)] * b[(2, c)])
-}
-
-/// `a bᵀ` for 3×3 blocks.
-#[inline(always)]
-pub(crate) fn mul_t(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
-    Matrix3::from_fn(|r, c| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)])
-}
-
-/// `a bᵀ` for 3×3 blocks whose product is known to be symmetric (as `X S Xᵀ` with `a = X S`):
-/// the upper triangle, mirrored, so the result is exactly symmetric at two thirds of the cost.
-#[inline(always)]
-pub(crate) fn mul_t_symmetric(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
-    let d = |r: usize, c: usize| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)];
-    let (xy, xz, yz) = (d(0, 1), d(0, 2), d(1, 2));
-    Matrix3::new(d(0, 0), xy, xz, xy, d(1, 1), yz, xz, yz, d(2, 2))
 }
 
 /// A column of [`M3`]: three values and a zero lane.
@@ -83,12 +68,6 @@ impl M3 {
     #[inline(always)]
     pub fn of(m: &Matrix3<f64>) -> M3 {
         M3(std::array::from_fn(|c| Col([m[(0, c)], m[(1, c)], m[(2, c)], 0.0])))
-    }
-
-    /// The block of `mᵀ`.
-    #[inline(always)]
-    pub fn of_transpose(m: &Matrix3<f64>) -> M3 {
-        M3(std::array::from_fn(|c| Col([m[(c, 0)], m[(c, 1)], m[(c, 2)], 0.0])))
     }
 
     /// Back to nalgebra.
@@ -171,6 +150,13 @@ impl Add for M3 {
     }
 }
 
+impl AddAssign for M3 {
+    #[inline(always)]
+    fn add_assign(&mut self, o: M3) {
+        *self = *self + o;
+    }
+}
+
 impl Sub for M3 {
     type Output = M3;
     #[inline(always)]
@@ -201,6 +187,19 @@ mod tests {
 
     use super::M3;
 
+    /// `a bᵀ` for 3×3 blocks.
+    fn mul_t(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
+        Matrix3::from_fn(|r, c| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)])
+    }
+
+    /// `a bᵀ` for 3×3 blocks whose product is known to be symmetric (as `X S Xᵀ` with `a = X S`):
+    /// the upper triangle, mirrored, so the result is exactly symmetric at two thirds of the cost.
+    fn mul_t_symmetric(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
+        let d = |r: usize, c: usize| a[(r, 0)] * b[(c, 0)] + a[(r, 1)] * b[(c, 1)] + a[(r, 2)] * b[(c, 2)];
+        let (xy, xz, yz) = (d(0, 1), d(0, 2), d(1, 2));
+        Matrix3::new(d(0, 0), xy, xz, xy, d(1, 1), yz, xz, yz, d(2, 2))
+    }
+
     /// The padded form gives the `Matrix3` form's bits (same operations, same order).
     #[test]
     fn padded_blocks_match_the_matrix_forms_bit_for_bit() {
@@ -208,12 +207,14 @@ mod tests {
         let b = Matrix3::new(1.1, 0.2, -0.3, 0.45, -0.9, 1.7, 0.05, 2.2, -1.4);
         let (pa, pb) = (M3::of(&a), M3::of(&b));
         assert_eq!(pa.mul(&pb).matrix(), super::mul(&a, &b));
-        assert_eq!(pa.mul_t(&pb).matrix(), super::mul_t(&a, &b));
-        assert_eq!(pa.mul_t_symmetric(&pa).matrix(), super::mul_t_symmetric(&a, &a));
-        assert_eq!(M3::of_transpose(&a).matrix(), a.transpose());
+        assert_eq!(pa.mul_t(&pb).matrix(), mul_t(&a, &b));
+        assert_eq!(pa.mul_t_symmetric(&pa).matrix(), mul_t_symmetric(&a, &a));
         assert_eq!(pa.transpose().matrix(), a.transpose());
         assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);
         assert_eq!(pa.plus_identity(0.7).matrix(), a + Matrix3::identity() * 0.7);
         assert_eq!((pa * 1.3 - pb + -pa).matrix(), a * 1.3 - b + -a);
+        let mut acc = pa;
+        acc += pb;
+        assert_eq!(acc.matrix(), a + b);
     }
 }

@@ -199,7 +199,7 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     }
     let q = |d: f64| d * d * h;
     p[V][V] = p[V][V].plus_identity(q(noise.accel_density));
-    p[TH][TH] = p[TH][TH] + jr.mul_t(&jr) * q(noise.gyro_density);
+    p[TH][TH] += jr.mul_t(&jr) * q(noise.gyro_density);
     p[BA][BA] = p[BA][BA].plus_identity(q(noise.accel_random_walk));
     p[BG][BG] = p[BG][BG].plus_identity(q(noise.gyro_random_walk));
     for i in P..=BG {
@@ -220,12 +220,12 @@ fn coriolis_blocks(p: &mut Blocks, omega: &Vector3<f64>, h: f64) {
     let (d_pv, d_vv) = (M3::of(&(w * (-h * h))), M3::of(&(Matrix3::identity() - w * (2.0 * h))));
     let [row_p, row_v, ..] = p;
     for (pj, vj) in row_p.iter_mut().zip(row_v.iter_mut()) {
-        *pj = *pj + d_pv.mul(vj);
+        *pj += d_pv.mul(vj);
         *vj = d_vv.mul(vj);
     }
     for row in p.iter_mut() {
         let av = row[V];
-        row[P] = row[P] + av.mul_t(&d_pv);
+        row[P] += av.mul_t(&d_pv);
         row[V] = av.mul_t(&d_vv);
     }
 }

@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::mat3::{mul, mul_t, mul_t_symmetric, M3};
+use crate::mat3::M3;
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
@@ -22,27 +22,62 @@ pub(super) type Cross = [[Matrix3<f64>; 2]; 3];
 
 pub(super) const ZERO_CROSS: Cross = [[Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0); 2]; 3];
 
+/// The covariance blocks in padded form (`mat3::M3`), as the per-sample kernels hold them.
+pub(super) type Padded = [M3; 6];
+
+/// A cross covariance in padded form.
+pub(super) type PaddedCross = [[M3; 2]; 3];
+
+// The conversions are written out: `array::map` over blocks this size stays out of line (a call
+// and copies per block; the midpoint kernel ran at twice main's time with it).
+
+/// The padded form of the covariance blocks.
+#[inline(always)]
+pub(super) fn padded(c: &CovarianceBlocks) -> Padded {
+    [
+        M3::of(&c[0]),
+        M3::of(&c[1]),
+        M3::of(&c[2]),
+        M3::of(&c[3]),
+        M3::of(&c[4]),
+        M3::of(&c[5]),
+    ]
+}
+
+/// The padded form of a cross covariance.
+#[inline(always)]
+pub(super) fn padded_cross(x: &Cross) -> PaddedCross {
+    let row = |i: usize| [M3::of(&x[i][0]), M3::of(&x[i][1])];
+    [row(0), row(1), row(2)]
+}
+
+/// Back from the padded form of the covariance blocks.
+#[inline(always)]
+pub(super) fn unpadded(c: &Padded) -> CovarianceBlocks {
+    [
+        c[0].matrix(),
+        c[1].matrix(),
+        c[2].matrix(),
+        c[3].matrix(),
+        c[4].matrix(),
+        c[5].matrix(),
+    ]
+}
+
+/// Back from the padded form of a cross covariance.
+#[inline(always)]
+pub(super) fn unpadded_cross(x: &PaddedCross) -> Cross {
+    let row = |i: usize| [x[i][0].matrix(), x[i][1].matrix()];
+    [row(0), row(1), row(2)]
+}
+
 /// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ` for the euler scheme's own white noise
 /// (`B = [0; ΔR h; ½ ΔR h²]`, `C = [J_r h; 0; 0]`, `Σ_a = var_a I`, `Σ_g = var_g I`): `B Σ_a Bᵀ`
 /// reduces to multiples of I because ΔR is orthonormal. With zero variances, `A Σ Aᵀ` alone.
 #[inline(always)]
-pub(super) fn propagate(
-    cov: &CovarianceBlocks,
-    phi: &Matrix3<f64>,
-    m: &Matrix3<f64>,
-    jr: &Matrix3<f64>,
-    h: f64,
-    var_a: f64,
-    var_g: f64,
-) -> CovarianceBlocks {
-    // In padded 3×3 blocks (`mat3::M3`): the same operations as on `Matrix3`, vectorised.
-    let [tt, tv, tp, vv, vp, pp] = cov.each_ref().map(M3::of);
-    let (vt, pt, pv) = (
-        M3::of_transpose(&cov[1]),
-        M3::of_transpose(&cov[2]),
-        M3::of_transpose(&cov[4]),
-    );
-    let (phi, m, jr) = (M3::of(phi), M3::of(m), M3::of(jr));
+pub(super) fn propagate(cov: &Padded, phi: &M3, m: &M3, jr: &M3, h: f64, var_a: f64, var_g: f64) -> Padded {
+    let [tt, tv, tp, vv, vp, pp] = *cov;
+    let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
     let half_h2 = 0.5 * h * h;
     // Rows of A Σ.
     let phi_tt = phi.mul(&tt);
@@ -55,16 +90,16 @@ pub(super) fn propagate(
     let a_pv = m_tv * half_h2 + vv * h + pv;
     let a_pp = m_tp * half_h2 + vp * h + pp;
     // (A Σ) Aᵀ, upper blocks.
-    let phi_tt_mt = phi_tt.mul_t(&m);
-    let new_tt = phi_tt.mul_t_symmetric(&phi) + jr.mul_t_symmetric(&jr) * (var_g * h * h);
+    let phi_tt_mt = phi_tt.mul_t(m);
+    let new_tt = phi_tt.mul_t_symmetric(phi) + jr.mul_t_symmetric(jr) * (var_g * h * h);
     let phi_tv = phi.mul(&tv);
     let new_tv = phi_tt_mt * h + phi_tv;
     let new_tp = phi_tt_mt * half_h2 + phi_tv * h + phi.mul(&tp);
-    let a_vt_mt = a_vt.mul_t(&m);
+    let a_vt_mt = a_vt.mul_t(m);
     let new_vv = (a_vt_mt * h + a_vv).plus_identity(var_a * h * h);
     let new_vp = (a_vt_mt * half_h2 + a_vv * h + a_vp).plus_identity(var_a * h * half_h2);
-    let new_pp = (a_pt.mul_t(&m) * half_h2 + a_pv * h + a_pp).plus_identity(var_a * half_h2 * half_h2);
-    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()].map(|b| b.matrix())
+    let new_pp = (a_pt.mul_t(m) * half_h2 + a_pv * h + a_pp).plus_identity(var_a * half_h2 * half_h2);
+    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()]
 }
 
 /// `R [a]×` by columns: column j is `R (a × e_j)`, a difference of two columns of R (27 flops
@@ -75,20 +110,22 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[c1 * a.z - c2 * a.y, c2 * a.x - c0 * a.z, c0 * a.y - c1 * a.x])
 }
 
-/// `(b + bᵀ)/2`: keeps the diagonal blocks exactly symmetric against rounding.
+/// The diagonal blocks `θθ`, `vv`, `pp` made exactly symmetric against rounding (`(b + bᵀ)/2`).
 #[inline(always)]
-pub(super) fn symmetric(b: Matrix3<f64>) -> Matrix3<f64> {
-    (b + b.transpose()) * 0.5
+pub(super) fn symmetric_diagonal(cov: &mut Padded) {
+    for d in [0, 3, 5] {
+        cov[d] = cov[d].symmetric();
+    }
 }
 
 /// `A X` for a 9×6 cross covariance `X`.
 #[inline(always)]
-pub(super) fn transition(x: &Cross, phi: &Matrix3<f64>, m: &Matrix3<f64>, h: f64) -> Cross {
+pub(super) fn transition(x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
-    let m_tg = mul(m, &xtg);
+    let m_tg = m.mul(&xtg);
     [
-        [mul(phi, &xtg), Matrix3::zeros()],
+        [phi.mul(&xtg), M3::ZERO],
         [m_tg * h + xvg, xva],
         [m_tg * half_h2 + xvg * h + xpg, xva * h + xpa],
     ]
@@ -97,19 +134,19 @@ pub(super) fn transition(x: &Cross, phi: &Matrix3<f64>, m: &Matrix3<f64>, h: f64
 /// A step's 9×6 input matrix `G = [[tg, 0], [vg, va], [h/2 vg, h/2 va]]` (columns `[gyro, accel]`).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Input {
-    pub tg: Matrix3<f64>,
-    pub vg: Matrix3<f64>,
-    pub va: Matrix3<f64>,
+    pub tg: M3,
+    pub vg: M3,
+    pub va: M3,
     pub half_h: f64,
 }
 
 impl Input {
     /// `G diag(s_g I, s_a I)` as a cross covariance.
     #[inline(always)]
-    pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
+    pub fn scaled(&self, s_g: f64, s_a: f64) -> PaddedCross {
         let (vg, va) = (self.vg * s_g, self.va * s_a);
         [
-            [self.tg * s_g, Matrix3::zeros()],
+            [self.tg * s_g, M3::ZERO],
             [vg, va],
             [vg * self.half_h, va * self.half_h],
         ]
@@ -117,11 +154,11 @@ impl Input {
 
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
     #[inline(always)]
-    pub fn add_quadratic(&self, cov: &mut CovarianceBlocks, s_g: f64, s_a: f64) {
-        let tv = mul_t(&self.tg, &self.vg) * s_g;
-        let vv = mul_t_symmetric(&self.vg, &self.vg) * s_g + mul_t_symmetric(&self.va, &self.va) * s_a;
+    pub fn add_quadratic(&self, cov: &mut Padded, s_g: f64, s_a: f64) {
+        let tv = self.tg.mul_t(&self.vg) * s_g;
+        let vv = self.vg.mul_t_symmetric(&self.vg) * s_g + self.va.mul_t_symmetric(&self.va) * s_a;
         let c = self.half_h;
-        cov[0] += mul_t_symmetric(&self.tg, &self.tg) * s_g;
+        cov[0] += self.tg.mul_t_symmetric(&self.tg) * s_g;
         cov[1] += tv;
         cov[2] += tv * c;
         cov[3] += vv;
@@ -131,18 +168,18 @@ impl Input {
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
     #[inline(always)]
-    pub fn add_cross(&self, cov: &mut CovarianceBlocks, y: &Cross) {
+    pub fn add_cross(&self, cov: &mut Padded, y: &PaddedCross) {
         let c = self.half_h;
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
         let u = [
-            mul_t(&y[0][0], &self.vg), // y's θ-row accelerometer block is zero
-            mul_t(&y[1][0], &self.vg) + mul_t(&y[1][1], &self.va),
-            mul_t(&y[2][0], &self.vg) + mul_t(&y[2][1], &self.va),
+            y[0][0].mul_t(&self.vg), // y's θ-row accelerometer block is zero
+            y[1][0].mul_t(&self.vg) + y[1][1].mul_t(&self.va),
+            y[2][0].mul_t(&self.vg) + y[2][1].mul_t(&self.va),
         ];
-        let y0t = mul_t(&y[0][0], &self.tg);
+        let y0t = y[0][0].mul_t(&self.tg);
         cov[0] += y0t + y0t.transpose();
-        cov[1] += u[0] + mul_t(&self.tg, &y[1][0]);
-        cov[2] += u[0] * c + mul_t(&self.tg, &y[2][0]);
+        cov[1] += u[0] + self.tg.mul_t(&y[1][0]);
+        cov[2] += u[0] * c + self.tg.mul_t(&y[2][0]);
         cov[3] += u[1] + u[1].transpose();
         cov[4] += u[1] * c + u[2].transpose();
         cov[5] += (u[2] + u[2].transpose()) * c;
@@ -151,8 +188,9 @@ impl Input {
 
 /// Block-wise `a + b` for cross covariances.
 #[inline(always)]
-pub(super) fn add(a: &Cross, b: &Cross) -> Cross {
-    std::array::from_fn(|i| [a[i][0] + b[i][0], a[i][1] + b[i][1]])
+pub(super) fn add(a: &PaddedCross, b: &PaddedCross) -> PaddedCross {
+    let row = |i: usize| [a[i][0] + b[i][0], a[i][1] + b[i][1]];
+    [row(0), row(1), row(2)]
 }
 
 /// The 9×9 matrix of the blocks.

@@ -29,7 +29,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::blocks::{self, Cross, Input, ZERO_CROSS};
 use super::{Covariance9, Preintegrator};
-use crate::mat3::mul;
+use crate::mat3::{mul, M3};
 use crate::so3;
 
 /// One sample as the midpoint scheme remembers it.
@@ -137,45 +137,53 @@ impl Preintegrator {
         let q1 = [q[0] * scale[0], q[1] * scale[1]];
         let q0 = prev.var.unwrap_or([q[0] * prev.scale[0], q[1] * prev.scale[1]]);
         let half_h = 0.5 * h;
-        let input = |r_s: &Matrix3<f64>| Input {
-            tg: -s.jr * half_h,
-            vg: s.k * h,
-            va: -r_s * half_h,
+        // In padded blocks (`mat3::M3`) from here to the stored blocks.
+        let (phi, m, jr, k, r0, r1) = (
+            M3::of(&s.phi),
+            M3::of(&s.m),
+            M3::of(&s.jr),
+            M3::of(&s.k),
+            M3::of(&s.r0),
+            M3::of(&s.r1),
+        );
+        let input = |r_s: &M3| Input {
+            tg: -jr * half_h,
+            vg: k * h,
+            va: -*r_s * half_h,
             half_h,
         };
-        let (b0, b1) = (input(&s.r0), input(&s.r1));
+        let (b0, b1) = (input(&r0), input(&r1));
         let g_b = Input {
-            tg: -s.jr * h,
-            vg: s.k * (2.0 * h),
-            va: -(s.r0 + s.r1) * half_h,
+            tg: -jr * h,
+            vg: k * (2.0 * h),
+            va: -(r0 + r1) * half_h,
             half_h,
         };
 
         // Covariance, with the shared sample's correlation (module docs).
-        let y_end = blocks::transition(&self.ends.end_cross, &s.phi, &s.m, h);
-        let mut cov = blocks::propagate(&self.covariance, &s.phi, &s.m, &s.jr, h, 0.0, 0.0);
+        let y_end = blocks::transition(&blocks::padded_cross(&self.ends.end_cross), &phi, &m, h);
+        let mut cov = blocks::propagate(&blocks::padded(&self.covariance), &phi, &m, &jr, h, 0.0, 0.0);
         // B_0 q_0 B_0ᵀ + B_1 q_1 B_1ᵀ in one: the gyro columns are equal, and each accelerometer
         // block (−½h R_s) has the Gram matrix ¼h² I, as −½h I does.
         let pair = Input {
-            va: Matrix3::identity() * half_h,
+            va: M3::ZERO.plus_identity(half_h),
             ..b0
         };
         pair.add_quadratic(&mut cov, q0[0] + q1[0], q0[1] + q1[1]);
         b0.add_cross(&mut cov, &y_end);
-        for d in [0, 3, 5] {
-            cov[d] = blocks::symmetric(cov[d]);
-        }
+        blocks::symmetric_diagonal(&mut cov);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step(&mut cov, &s.phi, &s.m, &g_b, &self.noise);
+            walk.step(&mut cov, &phi, &m, &g_b, &self.noise);
         }
-        self.covariance = cov;
-        let moved_start = blocks::transition(&self.ends.start_cross, &s.phi, &s.m, h);
-        self.ends.start_cross = match prev.var {
+        self.covariance = blocks::unpadded(&cov);
+        let moved_start = blocks::transition(&blocks::padded_cross(&self.ends.start_cross), &phi, &m, h);
+        self.ends.start_cross = blocks::unpadded_cross(&match prev.var {
             None => blocks::add(&moved_start, &b0.scaled(q0[0], q0[1])),
             Some(_) => moved_start,
-        };
-        self.ends.end_cross = b1.scaled(q1[0], q1[1]);
-        self.jac = blocks::add(&blocks::transition(&self.jac, &s.phi, &s.m, h), &g_b.scaled(1.0, 1.0));
+        });
+        self.ends.end_cross = blocks::unpadded_cross(&b1.scaled(q1[0], q1[1]));
+        let jac = blocks::transition(&blocks::padded_cross(&self.jac), &phi, &m, h);
+        self.jac = blocks::unpadded_cross(&blocks::add(&jac, &g_b.scaled(1.0, 1.0)));
 
         // Deltas.
         let acc = (s.r0 * s.a0 + s.r1 * s.a1) * 0.5;

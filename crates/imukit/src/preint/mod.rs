@@ -48,7 +48,7 @@ use crate::imu::Noise;
 use crate::mat3::{mul, M3};
 use crate::so3;
 pub use batch::CHUNK;
-use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
+use blocks::{CovarianceBlocks, Cross, Input, Padded, ZERO_CROSS};
 pub use continuity::{End, Ends};
 pub use lever::LeverNoise;
 pub use midpoint::MidpointStepMatrices;
@@ -172,15 +172,13 @@ impl BiasWalk {
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    fn step(&mut self, cov: &mut CovarianceBlocks, phi: &Matrix3<f64>, m: &Matrix3<f64>, g_b: &Input, noise: &Noise) {
+    fn step(&mut self, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
         let h = 2.0 * g_b.half_h;
-        let y = blocks::transition(&self.cross, phi, m, h);
+        let y = blocks::transition(&blocks::padded_cross(&self.cross), phi, m, h);
         g_b.add_cross(cov, &y);
         g_b.add_quadratic(cov, self.var_gyro, self.var_accel);
-        for d in [0, 3, 5] {
-            cov[d] = blocks::symmetric(cov[d]);
-        }
-        self.cross = blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel));
+        blocks::symmetric_diagonal(cov);
+        self.cross = blocks::unpadded_cross(&blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel)));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
         self.var_accel += noise.accel_random_walk * noise.accel_random_walk * h;
     }
@@ -407,29 +405,30 @@ impl Preintegrator {
         // Covariance first: A, B, C use the state before the update.
         let var_a = self.noise.accel_density * self.noise.accel_density / h * scale[1];
         let var_g = self.noise.gyro_density * self.noise.gyro_density / h * scale[0];
-        let m = -r_a_cross;
-        self.covariance = blocks::propagate(&self.covariance, &step_t, &m, &jr, h, var_a, var_g);
+        // In padded blocks (`mat3::M3`) from here to the stored blocks.
+        let (rp, jr_p, phi) = (M3::of(&r), M3::of(&jr), M3::of(&step_t));
+        let m = -M3::of(&r_a_cross);
+        let mut cov = blocks::propagate(&blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
         if let Some(walk) = self.bias_walk.as_mut() {
             let g_b = Input {
-                tg: -jr * h,
-                vg: Matrix3::zeros(),
-                va: -r * h,
+                tg: -jr_p * h,
+                vg: M3::ZERO,
+                va: -rp * h,
                 half_h: 0.5 * h,
             };
-            walk.step(&mut self.covariance, &step_t, &m, &g_b, &self.noise);
+            walk.step(&mut cov, &phi, &m, &g_b, &self.noise);
         }
+        self.covariance = blocks::unpadded(&cov);
 
         // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
-        // In padded blocks (`mat3::M3`), as the covariance.
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac.each_ref().map(|row| row.each_ref().map(M3::of));
-        let (rp, jr_h) = (M3::of(&r), M3::of(&jr) * h);
+        let [[jtg, _], [jvg, jva], [jpg, jpa]] = blocks::padded_cross(&self.jac);
+        let jr_h = jr_p * h;
         let ra_drot = M3::of(&r_a_cross).mul(&jtg);
-        self.jac = [
-            [M3::of(&step_t).mul(&jtg) - jr_h, M3::ZERO],
+        self.jac = blocks::unpadded_cross(&[
+            [phi.mul(&jtg) - jr_h, M3::ZERO],
             [jvg - ra_drot * h, jva - rp * h],
             [jpg + jvg * h - ra_drot * half_h2, jpa + jva * h - rp * half_h2],
-        ]
-        .map(|row| row.map(|b| b.matrix()));
+        ]);
 
         // Deltas.
         let ra = r * a;
