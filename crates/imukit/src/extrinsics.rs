@@ -83,12 +83,7 @@ pub fn to_body(
     let rate = |k: usize| r * (samples.gyro_at(k) - bias.gyro);
     for k in 0..n {
         let w = rate(k);
-        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-        let alpha = if hi > lo {
-            (rate(hi) - rate(lo)) / (samples.t[hi] - samples.t[lo])
-        } else {
-            Vector3::zeros()
-        };
+        let alpha = alpha_span(samples.t, k).map_or(Vector3::zeros(), |(lo, hi, dt)| (rate(hi) - rate(lo)) / dt);
         let arm = pose.lever_arm;
         let specific = r * (samples.accel_at(k) - bias.accel);
         let a = specific - alpha.cross(&arm) - w.cross(&w.cross(&arm));
@@ -99,6 +94,20 @@ pub fn to_body(
         accel[k] = a.into();
     }
     Ok(())
+}
+
+/// The samples and span of sample `k`'s angular-acceleration difference (module docs):
+/// `α_k = (ω_hi − ω_lo) / Δ` with `(lo, hi, Δ)`, central inside, one-sided at the first and last
+/// sample; `None` for a single sample (no difference: `α = 0`).
+pub fn alpha_span(t: &[f64], k: usize) -> Option<(usize, usize, f64)> {
+    let (lo, hi) = (k.saturating_sub(1), (k + 1).min(t.len().saturating_sub(1)));
+    (hi > lo).then(|| (lo, hi, t[hi] - t[lo]))
+}
+
+/// [`alpha_span`] as the weights of a linear map: `α_k = (ω_hi − ω_lo) · w` with `(lo, hi, w)`;
+/// `(k, k, 0)` for a single sample.
+pub fn alpha_weights(t: &[f64], k: usize) -> (usize, usize, f64) {
+    alpha_span(t, k).map_or((k, k, 0.0), |(lo, hi, dt)| (lo, hi, 1.0 / dt))
 }
 
 /// `D(ω) = ∂(ω × (ω × r))/∂ω = −[ω × r]× − [ω]× [r]×`, the centripetal term's sensitivity to the

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use super::merge::composition;
 use super::{clipped_at, BiasJacobian, ClipMask, Covariance15, Covariance9, Preintegrator, Scheme};
 use crate::error::{Error, Result};
-use crate::extrinsics::SensorPose;
+use crate::extrinsics::{alpha_weights, centripetal_sensitivity, SensorPose};
 use crate::imu::Samples;
 use crate::so3;
 
@@ -74,10 +74,7 @@ struct Batch<'a> {
 impl Batch<'_> {
     /// `[M_k,k−1, M_kk, M_k,k+1]` (module docs).
     fn noise_map(&self, k: usize) -> [Matrix3<f64>; 3] {
-        let n = self.samples.len();
-        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-        let t = self.samples.t();
-        let w = if hi > lo { 1.0 / (t[hi] - t[lo]) } else { 0.0 };
+        let (lo, hi, w) = alpha_weights(self.samples.t(), k);
         let arm = so3::hat(&self.arm) * w;
         let mut out = [Matrix3::zeros(); 3];
         out[lo + 1 - k] -= arm;
@@ -86,10 +83,9 @@ impl Batch<'_> {
         out
     }
 
-    /// `D(ω_k)`, from `δ(ω×(ω×r)) = δω×(ω×r) + ω×(δω×r)`.
+    /// `D(ω_k)` (the conversion's own derivative, `extrinsics::centripetal_sensitivity`).
     fn centripetal(&self, k: usize) -> Matrix3<f64> {
-        let w = self.samples.gyro_at(k);
-        -so3::hat(&w.cross(&self.arm)) - so3::hat(&w) * so3::hat(&self.arm)
+        centripetal_sensitivity(&self.samples.gyro_at(k), &self.arm)
     }
 
     /// The variance of noise `key` (module docs).

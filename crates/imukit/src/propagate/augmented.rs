@@ -28,8 +28,9 @@
 //! C_0⁺ = F C_1 + G_1 S_k,  C_1⁺ = F C_2 + G_2 S_{k+1},  C_2⁺ = G_3 S_{k+2}
 //! ```
 //!
-//! exactly for the linearised step (no bound, no white-noise approximation of α). `rk4` and `exp`
-//! take the first-order step's weights.
+//! exactly for the linearised step (no bound, no white-noise approximation of α). `rk4` takes the
+//! midpoint's weights (its Simpson rule to within the cubic's outer taps), `exp` the first-order
+//! step's.
 //!
 //! **`F`.** In a fixed world, the exact Jacobian of the first-order step ([`super::step_jacobians`])
 //! with the lever arm's `∂/∂δb_g` blocks (`h Σ c_j R_j D_j`, the readings' weights), then the
@@ -42,7 +43,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::{step_jacobians, Covariance, Model};
 use crate::ellipsoid_errors::error_rates;
-use crate::extrinsics::centripetal_sensitivity;
+use crate::extrinsics::{alpha_weights, centripetal_sensitivity};
 use crate::imu::{Bias, NavState, Noise, Samples};
 use crate::strapdown::{Options, Scheme, Stepper};
 use crate::{ellipsoid, so3, Result};
@@ -103,13 +104,6 @@ impl State {
             *c = d * *c;
         }
     }
-}
-
-/// `α̃_j`'s coefficients `(lo, hi, 1/Δ)` on `w_lo` (−) and `w_hi` (+): the central difference,
-/// one-sided at the first and last sample ([`crate::extrinsics::to_body`]).
-fn alpha_coefficients(t: &[f64], j: usize) -> (usize, usize, f64) {
-    let (lo, hi) = (j.saturating_sub(1), (j + 1).min(t.len() - 1));
-    (lo, hi, 1.0 / (t[hi] - t[lo]))
 }
 
 /// Integrates the mean (strapdown's stepper, or [`ellipsoid::run`] for a frame that follows the
@@ -191,7 +185,7 @@ pub(super) fn run(
                 block += m * (h * c);
             };
             v(*j, *rd);
-            let (lo, hi, inv) = alpha_coefficients(t, *j);
+            let (lo, hi, inv) = alpha_weights(t, *j);
             v(lo, ra * inv);
             v(hi, -ra * inv);
             let mut theta = g[slot(*j)].fixed_view_mut::<3, 3>(6, 0);
