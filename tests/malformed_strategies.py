@@ -47,13 +47,11 @@ class Stats:
     cases: int = 0
     entries: set[str] = field(default_factory=set)  # the public names the cases went through
     failures: int = 0
-    known: set[str] = field(default_factory=set)  # findings in code owned elsewhere, reported
 
     def summary(self) -> str:
-        known = f"; {len(self.known)} known finding(s) outside the corpus owner's files" if self.known else ""
         return (
             f"malformed-input corpus: {self.cases:,} cases through {len(self.entries)} public entry points, "
-            f"{self.failures} failures{known}"
+            f"{self.failures} failures"
         )
 
 
@@ -355,7 +353,9 @@ def mask_mutations(mask: np.ndarray) -> list[Mutation]:
         Mutation("negative strides", _negative(mask), Expect.SAME, mask.copy()),
         Mutation("all False", np.zeros(n, dtype=bool), Expect.EITHER),
         Mutation("float 0/1", mask.astype(np.float64), Expect.RAISE),
-        Mutation("int 0/1", mask.astype(np.int64), Expect.RAISE),
+        # An integer 0/1 array is a mask (MATLAB logical, uint8 columns); a float one may be weights.
+        Mutation("int 0/1", mask.astype(np.int64), Expect.SAME, mask.copy()),
+        Mutation("int 0/2", mask.astype(np.int64) * 2, Expect.RAISE),
         Mutation("one too long", np.ones(n + 1, dtype=bool), Expect.RAISE),
         Mutation("2-d", mask[None], Expect.RAISE),
         Mutation("object dtype", np.array(mask, dtype=object), Expect.RAISE),

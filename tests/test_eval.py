@@ -180,6 +180,14 @@ def test_rmse_degrees_and_extra_mask(estimate: Rotation) -> None:
     first = np.arange(N) < 10
     assert err.rmse(first).n_samples == 10
     assert err.rmse(first.astype(np.uint8)).n_samples == 10  # MATLAB logical masks arrive as uint8
+    # one rule for both places a mask enters: integer 0/1 counts as booleans, floats and 2s do not
+    aligned = ik.eval.attitude_error(estimate, truth, mask=first.astype(np.uint8), align_heading=True)
+    assert aligned.rmse().n_samples == 10
+    for bad in (first.astype(np.float64), first.astype(np.int64) * 2):
+        with pytest.raises(ik.DTypeError, match=r"^mask: expected a boolean array"):
+            err.rmse(bad)
+        with pytest.raises(ik.DTypeError, match=r"^mask: expected a boolean array"):
+            ik.eval.attitude_error(estimate, truth, mask=bad)
 
 
 def test_agrees_with_qmt_reference(rng: np.random.Generator, estimate: Rotation) -> None:

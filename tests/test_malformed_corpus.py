@@ -1232,15 +1232,6 @@ if hasattr(ik.eval, "ape"):  # imukit.eval's trajectory metrics (issue 8)
 
 # ----------------------------------------------------------------------------- the tests
 
-# Findings in modules this corpus's author does not own (issue 9 work split), reported to their
-# owners: "<entry>: <argument> <- <mutation>" prefix -> what is wrong.
-KNOWN_ELSEWHERE = {
-    "eval.attitude_error: rmse_mask <- int 0/1": "AttitudeError.rmse takes an int 0/1 mask as booleans, "
-    "where attitude_error(mask=) refuses it with DTypeError",
-    "eval.attitude_error: mask <- int 0/1": "attitude_error(mask=) takes an int 0/1 mask as booleans but "
-    "refuses a float 0/1 one (DTypeError); AttitudeError.rmse(mask) takes both",
-}
-
 
 @pytest.mark.parametrize("corpus_entry", ENTRIES, ids=[e.name for e in ENTRIES])
 def test_malformed_inputs(corpus_entry: Entry) -> None:
@@ -1277,11 +1268,6 @@ def test_malformed_inputs(corpus_entry: Entry) -> None:
             if problem:
                 failures.append(problem)
     run()
-    for problem in list(failures):
-        known = [k for k in KNOWN_ELSEWHERE if problem.startswith(k)]
-        if known:
-            failures.remove(problem)
-            STATS.known.add(known[0])
     STATS.failures += len(failures)
     assert not failures, f"{len(failures)} failing cases:\n" + "\n".join(sorted(set(failures))[:40])
 

@@ -179,7 +179,8 @@ def attitude_error(
         the vertical). This shifts every ψ by exactly −δ and leaves the inclination unchanged.
     mask
         Boolean ``(N,)`` selecting the samples for the heading offset and for :meth:`AttitudeError.rmse`
-        (e.g. BROAD's ``movement``); default all samples.
+        (e.g. BROAD's ``movement``); default all samples. An integer array of only 0 and 1 (a MATLAB
+        logical, a uint8 column) counts as booleans; a float array is refused, as it may hold weights.
 
     Returns
     -------
