@@ -35,6 +35,7 @@
 mod batch;
 mod blocks;
 mod continuity;
+mod lanes;
 mod lever;
 mod merge;
 mod midpoint;
