@@ -35,7 +35,6 @@
 mod batch;
 mod blocks;
 mod continuity;
-mod lanes;
 mod lever;
 mod merge;
 mod midpoint;
