@@ -5,8 +5,11 @@ Each path runs in its own process (the choice is made once per process), one thr
 ``--rounds`` times; each cell is the median over rounds of the median over ``--repeats`` calls, in
 ns per sample. The peer rows (GTSAM's per-sample Python loop for preintegration, the euler and
 combined forms) run in the parent, between the rounds, so the ratios compare the same load.
+The ``preintegrate_windows`` rows time windows of ``WINDOW`` samples on one and two threads (the
+floor of a two-thread row is per two cores).
 
-Usage: ``python bench/bench_simd.py [--n 200000] [--gtsam-n 20000] [--rounds 3] [--repeats 5]``.
+Usage: ``python bench/bench_simd.py [--n 200000] [--gtsam-n 20000] [--rounds 3] [--repeats 5]
+[--only windows]``.
 """
 
 from __future__ import annotations
@@ -40,7 +43,15 @@ KERNELS = {
     "propagate (15×15 each sample)": (2000, 136, 150),
     "integrate midpoint": (200, 136, 25),
     "integrate_attitude": (120, 64, None),
+    "preintegrate_windows euler, 1 thread": (1300, 56, None),
+    "preintegrate_windows euler, 2 threads": (1300, 56, None),
 }
+# The rows with a GTSAM peer.
+PEER_ROWS = ("preintegrate euler (9×9 + 9×6)", "preintegrate combined (15×15)")
+# Samples per window of the ``preintegrate_windows`` rows (keyframes at 1 Hz of 200 Hz data).
+WINDOW = 200
+# Rows whose floor is shared by two cores.
+TWO_THREADS = {name for name in KERNELS if name.endswith("2 threads")}
 # One core's double-precision peak at the clock of this host's EPYC (2 FMA pipes × 4 lanes × 2
 # flops at ~3 GHz): the floor is flops / FLOPS_PER_NS, the byte traffic is far below bandwidth.
 FLOPS_PER_NS = 48.0
@@ -59,13 +70,27 @@ def cases(n: int) -> dict[str, Callable[[], object]]:
         names[3]: lambda: ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise),
         names[4]: lambda: ik.integrate(imu, initial=initial, scheme="midpoint"),
         names[5]: lambda: ik.integrate_attitude(t, gyro, threads=1),
+        **windows_cases(t, gyro, accel, noise, names[6:]),
     }
 
 
-def child(n: int, repeats: int) -> None:
+def windows_cases(
+    t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, noise: ik.ImuNoise, names: list[str]
+) -> dict[str, Callable[[], object]]:
+    """``preintegrate_windows`` (euler) over windows of ``WINDOW`` samples, one and two threads."""
+    imu = ik.ImuData(t, gyro, accel)
+    boundaries = t[::WINDOW]
+    params = ik.PreintParams(noise, scheme="lie_euler")
+    return {
+        name: (lambda k=k: ik.preintegrate_windows(imu, boundaries, params, threads=k))
+        for name, k in zip(names, (1, 2), strict=True)
+    }
+
+
+def child(n: int, repeats: int, only: str) -> None:
     """One path's row, as JSON on stdout."""
     row = {"path": ik.simd_path()}
-    row.update({name: median_s(f, repeats) / n * 1e9 for name, f in cases(n).items()})
+    row.update({name: median_s(f, repeats) / n * 1e9 for name, f in cases(n).items() if only in name})
     print(json.dumps(row))
 
 
@@ -99,10 +124,11 @@ def main() -> None:
     parser.add_argument("--gtsam-n", type=int, default=20_000)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--only", default="", help="run the kernels whose name contains this")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        child(args.n, args.repeats)
+        child(args.n, args.repeats, args.only)
         return
     runs: dict[str, list[dict[str, float]]] = {p: [] for p in PATHS}
     peers: list[dict[str, float]] = []
@@ -111,22 +137,26 @@ def main() -> None:
         for path in PATHS:
             env = dict(os.environ, IMUKIT_SIMD=path, RAYON_NUM_THREADS="1")
             command = [sys.executable, __file__, "--child", f"--n={args.n}", f"--repeats={args.repeats}"]
+            command.append(f"--only={args.only}")
             out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout
             row = json.loads(out)
             used[path] = row.pop("path")
             runs[path].append(row)
-        peers.append(gtsam_rows(args.gtsam_n))
+        if any(args.only in name for name in PEER_ROWS):
+            peers.append(gtsam_rows(args.gtsam_n))
     print(f"paths in use: {used}; n = {args.n:,}, {args.rounds} alternated rounds, one thread")
     header = "| kernel | flops | bytes | floor ns | " + " | ".join(PATHS) + " | target | peer ns | peer/best |"
     print(header)
     print("|" + "---|" * (header.count("|") - 1))
     for name, (flops, nbytes, target) in KERNELS.items():
+        if args.only not in name:
+            continue
         cells = [float(np.median([r[name] for r in runs[p]])) for p in PATHS]
         peer = [p[name] for p in peers if name in p]
         peer_ns = float(np.median(peer)) if peer else None
         ratio = f"{peer_ns / min(cells):.1f}×" if peer_ns else "—"
         print(
-            f"| {name} | {flops} | {nbytes} | {flops / FLOPS_PER_NS:.0f} | "
+            f"| {name} | {flops} | {nbytes} | {flops / FLOPS_PER_NS / (2 if name in TWO_THREADS else 1):.0f} | "
             + " | ".join(f"{c:.0f}" for c in cells)
             + f" | {target or '—'} | {f'{peer_ns:.0f}' if peer_ns else '—'} | {ratio} |"
         )
