@@ -6,6 +6,7 @@ Usage::
     python bench/robust_tune.py                       # per-trial and per-group table, online + offline, vs vqf
     python bench/robust_tune.py --set tau_acc_s=2.5   # the same with parameters changed
     python bench/robust_tune.py --cv                  # grid search: all-trials and leave-one-group-out scores
+    python bench/robust_tune.py --cv --grid field     # the same over the magnetic thresholds
     python bench/robust_tune.py --speed               # 10^6 samples: Robust vs vqf.VQF.updateBatch / offlineVQF
     python bench/robust_tune.py --field               # the field seen through the true attitude, per trial
 
@@ -31,12 +32,25 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "tapping+vibration": ("24", "27"),
     "magnets": ("28", "32", "34"),
 }
-# The grid of --cv: each parameter's candidates (the default among them).
-GRID: dict[str, tuple[float, ...]] = {
-    "tau_acc_s": (2.0, 3.0),
-    "tau_mag_s": (9.0, 20.0),
-    "bias_window_s": (1.0, 2.0, 4.0),
-    "bias_forgetting_s": (100.0, 1000.0),
+# The grids of --cv (--grid NAME): each parameter's candidates (the default among them).
+GRIDS: dict[str, dict[str, tuple[float, ...]]] = {
+    "filter": {
+        "tau_acc_s": (2.0, 3.0),
+        "tau_mag_s": (9.0, 20.0),
+        "bias_window_s": (1.0, 2.0, 4.0),
+        "bias_forgetting_s": (100.0, 1000.0),
+    },
+    # The magnetic thresholds (9D only: 6D does not change).
+    "field": {
+        "tau_mag_s": (9.0, 14.0, 20.0),
+        "mag_dip_rad": tuple(np.radians([10.0, 15.0, 25.0])),
+        "mag_norm_fraction": (0.1, 0.15),
+    },
+    "dip": {
+        "tau_mag_s": (14.0, 20.0),
+        "mag_dip_rad": tuple(np.radians([20.0, 25.0, 35.0, 45.0])),
+        "mag_norm_fraction": (0.1, 0.15),
+    },
 }
 Runner = Callable[[Trial, bool], np.ndarray]
 
@@ -116,12 +130,12 @@ def objective(s6: dict[str, float], s9: dict[str, float]) -> float:
     return float(np.mean(list(s6.values())) + np.mean(list(s9.values())) / 4.0)
 
 
-def cross_validate(trs: list[Trial], offline: bool) -> None:
-    """Grid search; the best on all trials, and for each group the best on the other three scored
-    on the held-out group."""
-    keys = list(GRID)
+def cross_validate(trs: list[Trial], offline: bool, grid: dict[str, tuple[float, ...]]) -> None:
+    """Grid search over ``grid``; the best on all trials, and for each group the best on the other
+    three scored on the held-out group."""
+    keys = list(grid)
     results = []
-    for values in itertools.product(*(GRID[k] for k in keys)):
+    for values in itertools.product(*(grid[k] for k in keys)):
         params = dict(zip(keys, values, strict=True))
         run = robust_runner(offline, **params)
         results.append((params, score(run, trs, False), score(run, trs, True)))
@@ -248,6 +262,7 @@ def main() -> None:
     parser.add_argument("--no-vqf", action="store_true", help="leave vqf out of the table")
     parser.add_argument("--cv", action="store_true", help="grid search with leave-one-group-out scores")
     parser.add_argument("--offline", action="store_true", help="with --cv: tune the smoother")
+    parser.add_argument("--grid", choices=sorted(GRIDS), default="filter", help="with --cv: which grid")
     parser.add_argument("--speed", action="store_true", help="timing, 10^6 samples")
     parser.add_argument("--field", action="store_true", help="the field through the true attitude, per trial")
     args = parser.parse_args()
@@ -259,7 +274,7 @@ def main() -> None:
     if args.field:
         field_report(trs)
     elif args.cv:
-        cross_validate(trs, args.offline)
+        cross_validate(trs, args.offline, GRIDS[args.grid])
     else:
         report(trs, params, not args.no_vqf)
 

@@ -86,7 +86,7 @@ class Robust:
         ``"ENU"`` (default) or ``"NED"``.
     **params
         Any field of ``imukit._core.RobustParams`` (``Robust.DEFAULTS`` lists them with their
-        defaults), e.g. ``tau_acc_s`` (3 s), ``tau_mag_s``.
+        defaults), e.g. ``tau_acc_s``, ``tau_mag_s``, ``mag_dip_rad``.
     """
 
     DEFAULTS = PARAMS

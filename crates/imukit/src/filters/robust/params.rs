@@ -73,7 +73,7 @@ impl Default for RobustParams {
             rest_duration_s: 1.5,
             rest_tau_s: 0.5,
             mag_norm_fraction: 0.1,
-            mag_dip_rad: 10.0 * deg,
+            mag_dip_rad: 25.0 * deg,
             mag_max_rejection_s: 60.0,
             mag_slow_factor: 2.0,
             mag_new_field_s: 20.0,

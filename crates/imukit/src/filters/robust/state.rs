@@ -130,8 +130,6 @@ state!(
     rest_sum_time: f64 = ["rest_sum_time"],
     /// Whether the current still segment has been declared rest.
     rest_segment: bool = ["rest_segment"],
-    /// Sum of the gyro over the window, `Σ ω dt` [rad].
-    win_gyro: Vector3<f64> = ["win_gyro_x", "win_gyro_y", "win_gyro_z"],
     /// Sum of the corrections over the window (x, y: inclination; z: heading) [rad].
     win_corr: Vector3<f64> = ["win_corr_x", "win_corr_y", "win_corr_z"],
     /// Sum of the loops' responses to the rotation, `S` with `C = −S b + O` [s].
@@ -182,7 +180,6 @@ impl Default for RobustState {
             rest_sum: Vector3::zeros(),
             rest_sum_time: 0.0,
             rest_segment: false,
-            win_gyro: Vector3::zeros(),
             win_corr: Vector3::zeros(),
             win_rot: Matrix3::zeros(),
             win_off: Vector3::zeros(),
