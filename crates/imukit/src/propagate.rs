@@ -287,7 +287,7 @@ fn block_step(p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &NavState) {
 }
 
 /// The default model's loop, `fn $name(run, x0, p, visit)`: the strapdown stepper with
-/// [`block_step`] as its visitor. Written out once per instruction-set path of [`crate::simd`]
+/// [`block_step`] as its visitor. Written out for the baseline and the AVX2 paths of [`crate::simd`]
 /// (the features as there) because a closure inherits the target features of the function it is
 /// written in, and the stepper's loop does not inline one this large: a closure written in a
 /// `simd_dispatch!` body would run on the baseline target whatever the path.
@@ -309,23 +309,17 @@ block_loop!(
     #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
     avx2_loop
 );
-block_loop!(
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,fma,bmi1,bmi2")]
-    avx512_loop
-);
 
-/// [`block_loop`] on the process's path ([`crate::simd::path`]).
+/// [`block_loop`] on the process's path ([`crate::simd::path`]); the AVX-512 path takes the AVX2
+/// copy, which ran about 1.5× faster (LLVM packs pairs of padded columns into 512-bit registers
+/// at the cost of shuffles; docs/performance.md).
 fn run_blocks(run: &BlockRun<'_>, x0: NavState, p: &mut Blocks, visit: &mut Visit<'_>) -> Result<NavState> {
     match crate::simd::path() {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: `path()` is `Avx512` only where the CPU has every feature `avx512_loop` enables.
+        // SAFETY: `path()` is `Avx2` or `Avx512` only where the CPU has every feature `avx2_loop`
+        // enables.
         #[allow(unsafe_code)]
-        Path::Avx512 => unsafe { avx512_loop(run, x0, p, visit) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `path()` is `Avx2` only where the CPU has every feature `avx2_loop` enables.
-        #[allow(unsafe_code)]
-        Path::Avx2 => unsafe { avx2_loop(run, x0, p, visit) },
+        Path::Avx2 | Path::Avx512 => unsafe { avx2_loop(run, x0, p, visit) },
         _ => baseline_loop(run, x0, p, visit),
     }
 }
