@@ -43,6 +43,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use crate::earth::LocalLevel;
 use crate::imu::{Bias, NavState, Noise, Samples};
 use crate::mat3::M3;
+use crate::simd::Path;
 use crate::strapdown::{self, Options, StatesOut, Stepper};
 use crate::{so3, Cancel, Error, Result};
 
@@ -130,7 +131,9 @@ pub fn impulse_covariance(noise: &Noise, h: f64) -> SMatrix<f64, 12, 12> {
 }
 
 /// The covariance as 5×5 blocks of 3×3, the form the propagation works in (padded blocks,
-/// `mat3::M3`, so that the block algebra runs in whole vector registers).
+/// `mat3::M3`, so that the block algebra runs in whole vector registers). The step reads and
+/// writes only the upper block triangle `i ≤ j` (a lower block is the transpose of its mirror,
+/// [`block`]); the blocks below it are stale but for [`coriolis_blocks`], which fills them first.
 type Blocks = [[M3; 5]; 5];
 const P: usize = 0;
 const V: usize = 1;
@@ -138,61 +141,86 @@ const TH: usize = 2;
 const BA: usize = 3;
 const BG: usize = 4;
 
+/// Block `(i, j)` of the symmetric covariance held in the upper triangle of `b`.
+#[inline(always)]
+fn block(b: &Blocks, i: usize, j: usize) -> M3 {
+    if i <= j {
+        b[i][j]
+    } else {
+        b[j][i].transpose()
+    }
+}
+
+/// The blocks of `c`, the upper triangle of `(c + cᵀ)/2` (`c` itself when it is symmetric).
 fn to_blocks(c: &Covariance) -> Blocks {
-    std::array::from_fn(|i| std::array::from_fn(|j| M3::of(&c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned())))
+    let full: Blocks =
+        std::array::from_fn(|i| std::array::from_fn(|j| M3::of(&c.fixed_view::<3, 3>(3 * i, 3 * j).into_owned())));
+    std::array::from_fn(|i| std::array::from_fn(|j| (full[i][j] + full[j][i].transpose()) * 0.5))
 }
 
 #[inline]
 fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
     // Row-major 15×15.
-    for (i, row) in b.iter().enumerate() {
-        for (j, block) in row.iter().enumerate() {
+    for i in P..=BG {
+        for j in P..=BG {
+            let m = block(b, i, j);
             for r in 0..3 {
                 for c in 0..3 {
-                    out[15 * (3 * i + r) + 3 * j + c] = block.0[c].0[r];
+                    out[15 * (3 * i + r) + 3 * j + c] = m.0[c].0[r];
                 }
             }
         }
     }
 }
 
-#[allow(clippy::needless_range_loop)] // block indices name error-state components (P, V, TH, …)
 /// `P ← F_x P F_xᵀ + F_i Q_i F_iᵀ` using the block structure of `F_x` (module docs): only the
 /// blocks of `A = F_x P` that the upper block triangle of `A F_xᵀ` reads are formed, with
-/// `R [â]×` and `R` shared between the δp and δv rows; the lower triangle is mirrored.
-// Per sample: inlined into each instruction-set copy of the strapdown loop (crate::simd).
+/// `R [â]×` and `R` shared between the δp and δv rows ([`Blocks`]: the upper triangle only).
+// Per sample: inlined into each instruction-set copy of the loop ([`block_loop`]).
+#[allow(clippy::needless_range_loop)] // block indices name error-state components (P, V, TH, …)
 #[inline(always)]
 fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     let half_h2 = 0.5 * h * h;
     let (r, a_cross, phi_t, jr) = (M3::of(&b.r), M3::of(&b.a_cross), M3::of(&b.phi_t), M3::of(&b.jr));
-    let ra = r.mul(&a_cross);
-    // n_j = R ([â]× P_θj + P_aj): the common part of rows δp and δv of F_x P.
-    let n = |j: usize, p: &Blocks| ra.mul(&p[TH][j]) + r.mul(&p[BA][j]);
-    let theta_row = |j: usize, p: &Blocks| phi_t.mul(&p[TH][j]) - jr.mul(&p[BG][j]) * h;
-    // Row δp of A: all five block columns; row δv: columns δv…; row δθ: columns δθ….
-    let mut a_p = [M3::ZERO; 5];
-    let mut a_v = [M3::ZERO; 5];
-    let mut a_th = [M3::ZERO; 5];
-    for j in P..=BG {
-        let nj = n(j, p);
-        a_p[j] = p[P][j] + p[V][j] * h - nj * half_h2;
-        if j >= V {
-            a_v[j] = p[V][j] - nj * h;
-        }
-        if j >= TH {
-            a_th[j] = theta_row(j, p);
-        }
-    }
+    let (ra, h_jr) = (r.mul(&a_cross), jr * h);
+    // Row δp of A: all five block columns; row δv: columns δv…; row δθ: columns δθ…, with
+    // n_j = R ([â]× P_θj + P_aj) the common part of rows δp and δv. Array literals, not loops
+    // over zeroed arrays (those stayed `memset` calls).
+    let u = &*p;
+    // Lower blocks P_ij = U_jiᵀ enter through `mul_t` (X P_ij = X U_jiᵀ) or one transpose.
+    let n = [
+        ra.mul_t(&u[P][TH]) + r.mul_t(&u[P][BA]),
+        ra.mul_t(&u[V][TH]) + r.mul_t(&u[V][BA]),
+        ra.mul(&u[TH][TH]) + r.mul_t(&u[TH][BA]),
+        ra.mul(&u[TH][BA]) + r.mul(&u[BA][BA]),
+        ra.mul(&u[TH][BG]) + r.mul(&u[BA][BG]),
+    ];
+    let row_p = |j: usize, p_vj: M3| u[P][j] + p_vj * h - n[j] * half_h2;
+    let row_v = |j: usize| u[V][j] - n[j] * h;
+    let a_p = [
+        row_p(P, u[P][V].transpose()),
+        row_p(V, u[V][V]),
+        row_p(TH, u[V][TH]),
+        row_p(BA, u[V][BA]),
+        row_p(BG, u[V][BG]),
+    ];
+    let a_v = [M3::ZERO, row_v(V), row_v(TH), row_v(BA), row_v(BG)];
+    let a_th = [
+        M3::ZERO,
+        M3::ZERO,
+        phi_t.mul(&u[TH][TH]) - h_jr.mul_t(&u[TH][BG]),
+        phi_t.mul(&u[TH][BA]) - h_jr.mul_t(&u[BA][BG]),
+        phi_t.mul(&u[TH][BG]) - h_jr.mul(&u[BG][BG]),
+    ];
     // P' = A F_xᵀ on the upper block triangle.
-    let n_t = |a: &[M3; 5]| (a[TH].mul_t(&a_cross) + a[BA]).mul_t(&r);
-    let theta_col = |a: &[M3; 5]| a[TH].mul_t(&phi_t) - a[BG].mul_t(&jr) * h;
-    let (np, nv) = (n_t(&a_p), n_t(&a_v));
+    let np = (a_p[TH].mul_t(&a_cross) + a_p[BA]).mul_t(&r);
+    let nv = (a_v[TH].mul_t(&a_cross) + a_v[BA]).mul_t(&r);
     p[P][P] = a_p[P] + a_p[V] * h - np * half_h2;
     p[P][V] = a_p[V] - np * h;
     p[V][V] = a_v[V] - nv * h;
-    p[P][TH] = theta_col(&a_p);
-    p[V][TH] = theta_col(&a_v);
-    p[TH][TH] = theta_col(&a_th);
+    p[P][TH] = a_p[TH].mul_t(&phi_t) - a_p[BG].mul_t(&h_jr);
+    p[V][TH] = a_v[TH].mul_t(&phi_t) - a_v[BG].mul_t(&h_jr);
+    p[TH][TH] = a_th[TH].mul_t(&phi_t) - a_th[BG].mul_t(&h_jr);
     for (i, row) in [(P, &a_p), (V, &a_v), (TH, &a_th)] {
         p[i][BA] = row[BA];
         p[i][BG] = row[BG];
@@ -202,12 +230,9 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     p[TH][TH] += jr.mul_t(&jr) * q(noise.gyro_density);
     p[BA][BA] = p[BA][BA].plus_identity(q(noise.accel_random_walk));
     p[BG][BG] = p[BG][BG].plus_identity(q(noise.gyro_random_walk));
-    for i in P..=BG {
-        // Exact symmetry on the diagonal blocks, mirrored blocks below it.
-        p[i][i] = p[i][i].symmetric();
-        for j in i + 1..=BG {
-            p[j][i] = p[i][j].transpose();
-        }
+    for d in P..=BG {
+        // Exact symmetry on the diagonal blocks.
+        p[d][d] = p[d][d].symmetric();
     }
 }
 
@@ -215,7 +240,14 @@ fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
 /// but for the post-step `δv` column, `D_pv = −h² [Ω]×`, `D_vv = I − 2h [Ω]×`, the Coriolis
 /// acceleration `−2 Ω × δv` of the velocity error (Groves 2013, §14.2, the local-level error model
 /// without its transport and gravity-gradient terms). Applied after the inertial step so that the default path pays nothing.
+#[allow(clippy::needless_range_loop)] // block indices name error-state components
+#[inline(always)]
 fn coriolis_blocks(p: &mut Blocks, omega: &Vector3<f64>, h: f64) {
+    for i in P..=BG {
+        for j in 0..i {
+            p[i][j] = p[j][i].transpose();
+        }
+    }
     let w = so3::hat(omega);
     let (d_pv, d_vv) = (M3::of(&(w * (-h * h))), M3::of(&(Matrix3::identity() - w * (2.0 * h))));
     let [row_p, row_v, ..] = p;
@@ -227,6 +259,68 @@ fn coriolis_blocks(p: &mut Blocks, omega: &Vector3<f64>, h: f64) {
         let av = row[V];
         row[P] += av.mul_t(&d_pv);
         row[V] = av.mul_t(&d_vv);
+    }
+}
+
+/// What the default model's step reads besides the covariance.
+struct BlockRun<'a> {
+    samples: &'a Samples<'a>,
+    bias: &'a Bias,
+    noise: &'a Noise,
+    options: &'a Options,
+}
+
+/// Called after each step with `k`, the state at `k + 1` and the covariance.
+type Visit<'v> = dyn FnMut(usize, &NavState, &Blocks) -> Result<()> + 'v;
+
+/// The covariance step from sample k at state `x` (module docs).
+#[inline(always)]
+fn block_step(p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &NavState) {
+    let s = run.samples;
+    let h = s.t[k + 1] - s.t[k];
+    let w_hat = s.gyro_at(k) - run.bias.gyro;
+    let a_hat = s.accel_at(k) - run.bias.accel;
+    propagate_blocks(p, &StepBlocks::new(x, &w_hat, &a_hat, h), run.noise, h);
+    if run.options.earth_rate != Vector3::zeros() {
+        coriolis_blocks(p, &run.options.earth_rate, h);
+    }
+}
+
+/// The default model's loop, `fn $name(run, x0, p, visit)`: the strapdown stepper with
+/// [`block_step`] as its visitor. Written out for the baseline and the AVX2 paths of [`crate::simd`]
+/// (the features as there) because a closure inherits the target features of the function it is
+/// written in, and the stepper's loop does not inline one this large: a closure written in a
+/// `simd_dispatch!` body would run on the baseline target whatever the path.
+macro_rules! block_loop {
+    ($(#[$meta:meta])* $name:ident) => {
+        $(#[$meta])*
+        fn $name(run: &BlockRun<'_>, x0: NavState, p: &mut Blocks, visit: &mut Visit<'_>) -> Result<NavState> {
+            Stepper::new(*run.samples, *run.bias, *run.options).run(x0, |k, x, next| {
+                block_step(p, run, k, x);
+                visit(k, next, p)
+            })
+        }
+    };
+}
+
+block_loop!(baseline_loop);
+block_loop!(
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
+    avx2_loop
+);
+
+/// [`block_loop`] on the process's path ([`crate::simd::path`]); the AVX-512 path takes the AVX2
+/// copy, which ran about 1.5× faster (LLVM packs pairs of padded columns into 512-bit registers
+/// at the cost of shuffles; docs/performance.md).
+fn run_blocks(run: &BlockRun<'_>, x0: NavState, p: &mut Blocks, visit: &mut Visit<'_>) -> Result<NavState> {
+    match crate::simd::path() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `path()` is `Avx2` or `Avx512` only where the CPU has every feature `avx2_loop`
+        // enables.
+        #[allow(unsafe_code)]
+        Path::Avx2 | Path::Avx512 => unsafe { avx2_loop(run, x0, p, visit) },
+        _ => baseline_loop(run, x0, p, visit),
     }
 }
 
@@ -354,21 +448,19 @@ pub fn propagate_model(
         cancel.check(k)
     };
     let (x, last) = if *model == Model::default() {
-        let rotating = options.earth_rate != Vector3::zeros();
-        let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, x, next| {
-            let h = samples.t[k + 1] - samples.t[k];
-            let w_hat = samples.gyro_at(k) - bias.gyro;
-            let a_hat = samples.accel_at(k) - bias.accel;
-            propagate_blocks(&mut p, &StepBlocks::new(x, &w_hat, &a_hat, h), noise, h);
-            if rotating {
-                coriolis_blocks(&mut p, &options.earth_rate, h);
-            }
-            sink(k, next, &|out| write_blocks(&p, out))
-        })?;
+        let run = BlockRun {
+            samples,
+            bias,
+            noise,
+            options,
+        };
+        let mut visit = |k: usize, next: &NavState, p: &Blocks| sink(k, next, &|out| write_blocks(p, out));
+        let x = run_blocks(&run, *initial, &mut p, &mut visit)?;
         let mut last = Covariance::zeros();
-        for (i, row) in p.iter().enumerate() {
-            for (j, block) in row.iter().enumerate() {
-                last.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&block.matrix());
+        for i in P..=BG {
+            for j in P..=BG {
+                last.fixed_view_mut::<3, 3>(3 * i, 3 * j)
+                    .copy_from(&block(&p, i, j).matrix());
             }
         }
         (x, last)
