@@ -37,9 +37,18 @@ pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'
 }
 
 /// Whether every value is finite: `v · 0` is 0 for a finite `v` and NaN otherwise, and a NaN
-/// stays in the sum, so the test is one vectorisable pass (the rows are still in cache).
+/// stays in a sum. Eight independent sums, so the pass is not one chain of dependent additions
+/// (the rows are still in cache).
 fn all_finite(values: &[f64]) -> bool {
-    values.iter().fold(0.0, |sum, v| sum + v * 0.0) == 0.0
+    let mut lanes = [0.0; 8];
+    let blocks = values.chunks_exact(8);
+    let rest = blocks.remainder();
+    for block in blocks {
+        for (lane, v) in lanes.iter_mut().zip(block) {
+            *lane += v * 0.0;
+        }
+    }
+    lanes.iter().chain(rest).all(|v| v.is_finite())
 }
 
 /// [`evaluate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled per chunk of
