@@ -145,7 +145,6 @@ fn stream(seed: u64, triad: u64, process: Process, chunk: usize) -> Xoshiro256Pl
     Xoshiro256PlusPlus::from_seed(bytes)
 }
 
-#[inline(always)]
 fn normal3(rng: &mut Xoshiro256PlusPlus) -> Vector3<f64> {
     Vector3::from_fn(|_, _| StandardNormal.sample(rng))
 }
@@ -186,8 +185,7 @@ pub fn measure(
     measure_in_place(t, out, model, seed, triad, bias_out)
 }
 
-/// [`measure`] with the ideal readings in `values`, replaced by the measured ones (on an error,
-/// `values` and `bias_out` are partly overwritten: the checks of the values run in the same pass).
+/// [`measure`] with the ideal readings in `values`, replaced by the measured ones.
 pub fn measure_in_place(
     t: &[f64],
     values: &mut [f64],
@@ -228,6 +226,9 @@ pub fn measure_in_place_cancellable(
         }
     }
     crate::time::check_increasing(t).map_err(|e| e.in_argument("t"))?;
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite { index: i / 3 }.in_argument("ideal"));
+    }
     let turn_on = normal3(&mut stream(seed, triad, Process::TurnOn, 0)) * model.turn_on_sigma;
     let fixed = model.bias + turn_on;
     let walk_on = model.random_walk > 0.0;
@@ -274,50 +275,35 @@ pub fn measure_in_place_cancellable(
 
     // Pass 3 (parallel): join the chunks, add the fixed bias and the white noise, form the readings
     // (skipping the terms that are off: most simulations have neither scale errors nor limits).
-    // Each chunk reports its first non-finite ideal row and its first overflowed reading, so the
-    // checks cost no pass of their own and the error names the first sample whatever the thread
-    // count (a non-finite ideal reading before any overflow).
     let ideal_sensor = model.matrix == Matrix3::identity();
     let clean = model.range == f64::INFINITY && model.resolution == 0.0;
     let limit = |v: f64| quantise(v.clamp(-model.range, model.range), model.resolution);
-    let finite = |x: &Vector3<f64>| x.x.is_finite() && x.y.is_finite() && x.z.is_finite();
-    let bad: Vec<(Option<usize>, Option<usize>)> = bias_out
+    bias_out
         .par_chunks_mut(3 * CHUNK)
         .zip(values.par_chunks_mut(3 * CHUNK))
         .enumerate()
-        .map(|(c, (bias, readings))| {
+        .try_for_each(|(c, (bias, readings))| {
             cancel.check(0)?;
             let (w_start, g_start) = starts[c];
             let mut white = stream(seed, triad, Process::White, c);
-            let (mut decay, mut bad_ideal, mut overflow) = (1.0, None, None);
+            let mut decay = 1.0;
             for (i, (b, u)) in bias.chunks_exact_mut(3).zip(readings.chunks_exact_mut(3)).enumerate() {
-                let k = c * CHUNK + i;
-                let h = step(t, k);
+                let h = step(t, c * CHUNK + i);
                 let b_k = Vector3::from_column_slice(b) + w_start + g_start * decay + fixed;
                 b.copy_from_slice(b_k.as_slice());
                 let ideal = Vector3::from_column_slice(u);
-                if bad_ideal.is_none() && !finite(&ideal) {
-                    bad_ideal = Some(k);
-                }
                 let scaled = if ideal_sensor { ideal } else { model.matrix * ideal };
                 let reading = scaled + b_k + normal3(&mut white) * (model.density / h.sqrt());
                 let reading = if clean { reading } else { reading.map(limit) };
-                if overflow.is_none() && !finite(&reading) {
-                    overflow = Some(k);
-                }
                 u.copy_from_slice(reading.as_slice());
                 if gm_on {
                     decay *= (-h / model.gauss_markov_tau).exp();
                 }
             }
-            Ok((bad_ideal, overflow))
-        })
-        .collect::<Result<_>>()?;
-    if let Some(index) = bad.iter().find_map(|b| b.0) {
-        return Err(Error::NonFinite { index }.in_argument("ideal"));
-    }
-    match bad.iter().find_map(|b| b.1) {
-        Some(index) => Err(Error::Overflow { index }.in_argument(overflow_culprit(t, model))),
+            Ok(())
+        })?;
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument(overflow_culprit(t, model))),
         None => Ok(()),
     }
 }
