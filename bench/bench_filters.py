@@ -25,6 +25,7 @@ import imukit as ik
 from _timing import median_s, synthetic_imu
 
 TARGET_NS = {"6D": 35.0, "9D": 50.0}
+TARGET_RATIO_9D = 7.0
 
 
 def main() -> None:
@@ -97,8 +98,23 @@ def main() -> None:
         dim = "9D" if "9D" in peer else "6D"
         ratios = ", ".join(f"{ns / ours[f'{name} {dim}']:.1f}x vs {name}" for name in ("Mahony", "Madgwick"))
         print(f"{peer:<24} {ns:10.1f} ns/sample   ({ratios})")
+    issue20_table(ours, peers)
     if not args.no_robust:
         robust_vs_vqf(imu, mag, args.repeats, clock)
+
+
+def issue20_table(ours: dict[str, float], peers: dict[str, float]) -> None:
+    """Issue 20's rows of the filters, as its table: ns/sample, vqf of the same sensor set in the
+    same run, the ratio, and whether the targets (ns, and ≥ 7× vqf for 9D) are met."""
+    print("\n| kernel | ns/sample | vqf same run | vqf / ours | target |")
+    print("|---|---|---|---|---|")
+    for name in ("Mahony", "Madgwick"):
+        for dim in ("6D", "9D"):
+            ns, peer = ours[f"{name} {dim}"], peers.get(f"vqf {dim} (updateBatch)")
+            target = f"≤ {TARGET_NS[dim]:.0f}" + (f", ≥ {TARGET_RATIO_9D:.0f}× vqf" if dim == "9D" else "")
+            met = ns <= TARGET_NS[dim] and (dim == "6D" or (peer is not None and peer / ns >= TARGET_RATIO_9D))
+            shown = ("—", "—") if peer is None else (f"{peer:.0f}", f"{peer / ns:.1f}×")
+            print(f"| {name} {dim} | {ns:.1f} | {shown[0]} | {shown[1]} | {target}: {'met' if met else 'MISSED'} |")
 
 
 def robust_vs_vqf(imu: ik.ImuData, mag: np.ndarray, repeats: int, clock: Callable[[], float]) -> None:

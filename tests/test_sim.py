@@ -184,3 +184,13 @@ def test_sensor_errors_reach_the_core_by_field_name_whatever_their_number_types(
 def test_gravity_default_is_the_cores() -> None:
     default = inspect.signature(ik.sim.simulate).parameters["gravity"].default
     assert default is ik.imu.GRAVITY and ik.GRAVITY == ik.imu.GRAVITY == _core.GRAVITY == (0.0, 0.0, -9.81)
+
+
+def test_a_motion_beyond_float64_is_refused_naming_the_motion_parameters() -> None:
+    """The core checks the truth as it writes it (no numpy pass): z = c t overflows after 1.8 s."""
+    with pytest.raises(ik.NonFiniteError) as info:
+        ik.sim.simulate(ik.sim.Helix(climb_rate=1e308), rate=10, duration=3)
+    assert "climb_rate" in str(info.value.argument)
+    assert "beyond float64 over [0.0, 3.0] s" in str(info.value)
+    imu, _ = ik.sim.simulate(ik.sim.Helix(climb_rate=1e308), rate=10, duration=1.7)  # finite up to here
+    assert np.isfinite(imu.accel).all()

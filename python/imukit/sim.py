@@ -209,13 +209,19 @@ class Waypoints:
             raise NonFiniteError(f"times / rotations: the rotation spline cannot be evaluated ({e})") from None
         accel = self._position(t, 2)
         specific_force = rot.inv().apply(accel - gravity)
-        return (
+        truth = (
             self._position(t),
             self._position(t, 1),
             rot.as_quat(),
             np.ascontiguousarray(self._rotation(t, 1)),  # scipy's rate is body-frame: R(t)ᵀ Ṙ(t)
             specific_force,
         )
+        # A sum is finite when every element is (one pass, no temporary); only when it is not, look
+        # closer: huge finite values can overflow the sum (inf − inf warns: silenced, it is the test).
+        with np.errstate(over="ignore", invalid="ignore"):
+            if not all(np.isfinite(a.sum()) or np.isfinite(a).all() for a in truth):
+                raise NonFiniteError("the motion is beyond float64", argument="trajectory")
+        return truth
 
 
 def _parameter_names(motion: object) -> list[str]:
@@ -389,15 +395,15 @@ def simulate(
             f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
         )
     moving = frame if frame is not None and frame.transport else None
-    truth = trajectory._truth(t, np.zeros(3) if moving is not None else g, count)
-    # A sum is finite when every element is (one pass, no temporary); only when it is not, look
-    # closer: huge finite values can overflow the sum (inf − inf warns: silenced, it is the test).
-    with np.errstate(over="ignore", invalid="ignore"):
-        finite = all(np.isfinite(a.sum()) or np.isfinite(a).all() for a in truth)
-    if not finite:
+    try:
+        # The core checks its values as it writes them (no pass of its own); Waypoints checks here.
+        position, velocity, quat, gyro, accel = trajectory._truth(t, np.zeros(3) if moving is not None else g, count)
+    except NonFiniteError as exc:
+        if exc.argument != "trajectory":
+            raise
         names = " / ".join(_parameter_names(trajectory))
-        raise NonFiniteError(f"the motion is beyond float64 over [{t[0]!r}, {t[-1]!r}] s", argument=names)
-    position, velocity, quat, gyro, accel = truth
+        span = f"[{float(t[0])!r}, {float(t[-1])!r}] s"
+        raise NonFiniteError(f"the motion is beyond float64 over {span}", argument=names) from exc
     if moving is not None:
         mid_position, mid_velocity, *_ = trajectory._truth(0.5 * (t[1:] + t[:-1]), np.zeros(3), count)
         origin = [moving.latitude, 0.0, moving.height]
@@ -409,7 +415,7 @@ def simulate(
             if exc.argument != "trajectory":
                 raise
             names = " / ".join(_parameter_names(trajectory))
-            at = t[exc.index or 0]
+            at = float(t[exc.index or 0])
             raise NonFiniteError(f"the motion reaches a pole or overflows at {at!r} s", argument=names) from exc
     elif frame is not None:
         _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)

@@ -267,3 +267,57 @@ fn scale_misalignment_bias_saturation_and_quantisation() {
     let e = measure(&t, &nan, &SensorModel::default(), 1, 1, &mut out, &mut bias).unwrap_err();
     assert!(e.to_string().starts_with("ideal: element 1"), "{e}");
 }
+
+#[test]
+fn a_motion_beyond_float64_names_its_first_sample_whatever_the_chunk() {
+    // z = c t leaves float64 beyond t = 1.797 s, at row 7364 (in the second chunk of evaluate's
+    // 4096 rows, while every chunk after it is wholly non-finite).
+    let t: Vec<f64> = (0..10_000).map(|k| k as f64 / 4096.0).collect();
+    let n = t.len();
+    let motion = Motion::Helix {
+        center: Vector3::zeros(),
+        radius: 1.0,
+        angular_rate: 0.5,
+        climb_rate: 1e308,
+    };
+    let mut buffers = [
+        vec![0.0; 3 * n],
+        vec![0.0; 3 * n],
+        vec![0.0; 4 * n],
+        vec![0.0; 3 * n],
+        vec![0.0; 3 * n],
+    ];
+    let [p, v, q, w, a] = &mut buffers;
+    let out = Truth {
+        position: p,
+        velocity: v,
+        rotation: q,
+        gyro: w,
+        accel: a,
+    };
+    let err = evaluate(&motion, &t, &Vector3::new(0.0, 0.0, -9.81), out).unwrap_err();
+    assert_eq!(err.argument(), Some("trajectory"));
+    let first = t.iter().position(|&x| !(1e308 * x).is_finite()).unwrap();
+    assert!(first > 4096 && first < 8192);
+    assert_eq!(err.index(), Some(first));
+}
+
+#[test]
+fn measure_names_the_first_bad_ideal_row_before_any_overflow() {
+    let n = 3 * CHUNK;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+    let mut ideal = vec![0.0; 3 * n];
+    ideal[3 * (2 * CHUNK + 5) + 1] = f64::NAN;
+    let mut bias = vec![0.0; 3 * n];
+    let model = SensorModel {
+        density: 1e307,
+        ..SensorModel::default()
+    };
+    // Every reading overflows (σ/√h = 1e308): the non-finite ideal row is still what is named.
+    let err = imukit::sim::measure_in_place(&t, &mut ideal.clone(), &model, 1, 0, &mut bias).unwrap_err();
+    assert_eq!((err.argument(), err.index()), (Some("ideal"), Some(2 * CHUNK + 5)));
+    ideal[3 * (2 * CHUNK + 5) + 1] = 0.0;
+    let err = imukit::sim::measure_in_place(&t, &mut ideal, &model, 1, 0, &mut bias).unwrap_err();
+    assert_eq!(err.argument(), Some("density"));
+    assert!(err.index().is_some_and(|k| k < CHUNK));
+}

@@ -29,9 +29,26 @@ pub struct Truth<'a> {
     pub accel: &'a mut [f64],
 }
 
-/// Evaluates `motion` at the times `t` (finite) into `out`, in parallel.
+/// Evaluates `motion` at the times `t` (finite) into `out`, in parallel. A motion whose values
+/// leave float64 at some sample (huge amplitudes or rates) is an [`Error::NonFinite`] naming the
+/// first such sample, in the argument `trajectory`.
 pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'_>) -> Result<()> {
     evaluate_cancellable(motion, t, gravity, out, &Cancel::new())
+}
+
+/// Whether every value is finite: `v · 0` is 0 for a finite `v` and NaN otherwise, and a NaN
+/// stays in a sum. Eight independent sums, so the pass is not one chain of dependent additions
+/// (the rows are still in cache).
+fn all_finite(values: &[f64]) -> bool {
+    let mut lanes = [0.0; 8];
+    let blocks = values.chunks_exact(8);
+    let rest = blocks.remainder();
+    for block in blocks {
+        for (lane, v) in lanes.iter_mut().zip(block) {
+            *lane += v * 0.0;
+        }
+    }
+    lanes.iter().chain(rest).all(|v| v.is_finite())
 }
 
 /// [`evaluate`], stopping with [`Error::Interrupted`] when `cancel` is set (polled per chunk of
@@ -63,13 +80,17 @@ pub fn evaluate_cancellable(
         return Err(Error::NonFinite { index: k }.in_argument("t"));
     }
     const ROWS: usize = 4096;
-    t.par_chunks(ROWS)
+    // Each chunk reports its first row with a value beyond float64, so the error names the first
+    // such sample whatever the thread count.
+    let bad: Vec<Option<usize>> = t
+        .par_chunks(ROWS)
         .zip(out.position.par_chunks_mut(3 * ROWS))
         .zip(out.velocity.par_chunks_mut(3 * ROWS))
         .zip(out.rotation.par_chunks_mut(4 * ROWS))
         .zip(out.gyro.par_chunks_mut(3 * ROWS))
         .zip(out.accel.par_chunks_mut(3 * ROWS))
-        .try_for_each(|(((((ts, p), v), q), w), a)| {
+        .enumerate()
+        .map(|(c, (((((ts, p), v), q), w), a))| {
             cancel.check(0)?;
             for (i, &tk) in ts.iter().enumerate() {
                 let x = motion.at(tk);
@@ -80,8 +101,23 @@ pub fn evaluate_cancellable(
                 w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
                 a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
             }
-            Ok(())
+            if [&*p, &*v, &*q, &*w, &*a].iter().all(|x| all_finite(x)) {
+                return Ok(None);
+            }
+            let row = (0..ts.len()).find(|&i| {
+                let rows = [&p[3 * i..3 * i + 3], &v[3 * i..3 * i + 3], &q[4 * i..4 * i + 4]];
+                !rows
+                    .iter()
+                    .chain([&w[3 * i..3 * i + 3], &a[3 * i..3 * i + 3]].iter())
+                    .all(|x| all_finite(x))
+            });
+            Ok(row.map(|i| c * ROWS + i))
         })
+        .collect::<Result<_>>()?;
+    match bad.into_iter().flatten().next() {
+        Some(index) => Err(Error::NonFinite { index }.in_argument("trajectory")),
+        None => Ok(()),
+    }
 }
 
 /// Turns the ideal readings of a trajectory given in a world frame that rotates at `earth_rate`
