@@ -6,9 +6,14 @@
 //! - on nalgebra's `Matrix3` (`mul`), for the occasional product;
 //! - on [`M3`], a 3×3 block held as three columns padded to four lanes and aligned to 32 bytes, for
 //!   the per-sample kernels: a column operation is one 256-bit instruction on the AVX paths (two
-//!   128-bit ones on the baseline), with no shuffles to gather 3-element columns. Each element is
-//!   computed with the same operations in the same order as the `Matrix3` forms (`mul` and the
-//!   references in the tests), so both give the same bits.
+//!   128-bit ones on the baseline), with no shuffles to gather 3-element columns.
+//!
+//! The `M3` products and axpys come in two roundings, chosen by a `const FMA: bool` (the
+//! dispatched kernel's, `crate::simd`): `false` rounds each product and each sum, as the
+//! `Matrix3` forms do (`mul` and the references in the tests: same bits); `true` fuses each
+//! `a·b + c` into one fused multiply-add (one rounding), for the AVX paths, where it is one
+//! instruction (on the baseline target it would be a library call). Every sum runs in the same
+//! order in both, so they differ by rounding only (≤ 1 ulp per fused operation).
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
@@ -29,6 +34,22 @@ impl Col {
     #[inline(always)]
     fn zip(self, other: Col, f: impl Fn(f64, f64) -> f64) -> Col {
         Col(std::array::from_fn(|i| f(self.0[i], other.0[i])))
+    }
+
+    /// `self s + acc`, fused when `FMA` (module docs).
+    #[inline(always)]
+    fn mul_add<const FMA: bool>(self, s: f64, acc: Col) -> Col {
+        if FMA {
+            self.zip(acc, |x, y| x.mul_add(s, y))
+        } else {
+            self.zip(acc, |x, y| x * s + y)
+        }
+    }
+
+    /// `a[0] s[0] + a[1] s[1] + a[2] s[2]`, summed left to right (fused when `FMA`).
+    #[inline(always)]
+    fn combine<const FMA: bool>(a: &[Col; 3], s: [f64; 3]) -> Col {
+        a[2].mul_add::<FMA>(s[2], a[1].mul_add::<FMA>(s[1], a[0] * s[0]))
     }
 }
 
@@ -84,22 +105,41 @@ impl M3 {
     /// `self b`.
     #[inline(always)]
     pub fn mul(&self, b: &M3) -> M3 {
-        let [a0, a1, a2] = self.0;
-        b.map_cols(|_, bc| a0 * bc.0[0] + a1 * bc.0[1] + a2 * bc.0[2])
+        self.mul_with::<false>(b)
+    }
+
+    /// `self b`, fused when `FMA` (module docs).
+    #[inline(always)]
+    pub fn mul_with<const FMA: bool>(&self, b: &M3) -> M3 {
+        b.map_cols(|_, bc| Col::combine::<FMA>(&self.0, [bc.0[0], bc.0[1], bc.0[2]]))
     }
 
     /// `self bᵀ`.
     #[inline(always)]
     pub fn mul_t(&self, b: &M3) -> M3 {
-        let [a0, a1, a2] = self.0;
-        let [b0, b1, b2] = b.0;
-        M3(std::array::from_fn(|c| a0 * b0.0[c] + a1 * b1.0[c] + a2 * b2.0[c]))
+        self.mul_t_with::<false>(b)
     }
 
-    /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (as [`mul_t_symmetric`]).
+    /// `self bᵀ`, fused when `FMA`.
     #[inline(always)]
-    pub fn mul_t_symmetric(&self, b: &M3) -> M3 {
-        self.mul_t(b).mirror_upper()
+    pub fn mul_t_with<const FMA: bool>(&self, b: &M3) -> M3 {
+        let [b0, b1, b2] = b.0;
+        M3(std::array::from_fn(|c| {
+            Col::combine::<FMA>(&self.0, [b0.0[c], b1.0[c], b2.0[c]])
+        }))
+    }
+
+    /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (as the `Matrix3` form in the
+    /// tests), fused when `FMA`.
+    #[inline(always)]
+    pub fn mul_t_symmetric_with<const FMA: bool>(&self, b: &M3) -> M3 {
+        self.mul_t_with::<FMA>(b).mirror_upper()
+    }
+
+    /// `self s + acc`, fused when `FMA`.
+    #[inline(always)]
+    pub fn mul_add<const FMA: bool>(&self, s: f64, acc: &M3) -> M3 {
+        acc.map_cols(|c, x| self.0[c].mul_add::<FMA>(s, x))
     }
 
     /// The transpose.
@@ -208,7 +248,7 @@ mod tests {
         let (pa, pb) = (M3::of(&a), M3::of(&b));
         assert_eq!(pa.mul(&pb).matrix(), super::mul(&a, &b));
         assert_eq!(pa.mul_t(&pb).matrix(), mul_t(&a, &b));
-        assert_eq!(pa.mul_t_symmetric(&pa).matrix(), mul_t_symmetric(&a, &a));
+        assert_eq!(pa.mul_t_symmetric_with::<false>(&pa).matrix(), mul_t_symmetric(&a, &a));
         assert_eq!(pa.transpose().matrix(), a.transpose());
         assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);
         assert_eq!(pa.plus_identity(0.7).matrix(), a + Matrix3::identity() * 0.7);
@@ -216,5 +256,25 @@ mod tests {
         let mut acc = pa;
         acc += pb;
         assert_eq!(acc.matrix(), a + b);
+    }
+
+    /// The fused forms round each `a·b + c` once, in the unfused form's order: equal to a scalar
+    /// `mul_add` chain bit for bit, and within rounding of the unfused product.
+    #[test]
+    fn fused_blocks_are_scalar_fma_chains_in_the_same_order() {
+        let a = Matrix3::new(0.3, -1.2, 2.5, 0.7, 0.1, -0.4, -2.2, 1.9, 0.6);
+        let b = Matrix3::new(1.1, 0.2, -0.3, 0.45, -0.9, 1.7, 0.05, 2.2, -1.4);
+        let (pa, pb) = (M3::of(&a), M3::of(&b));
+        let chain = |r: usize, x: [f64; 3]| a[(r, 2)].mul_add(x[2], a[(r, 1)].mul_add(x[1], a[(r, 0)] * x[0]));
+        let ab = Matrix3::from_fn(|r, c| chain(r, [b[(0, c)], b[(1, c)], b[(2, c)]]));
+        let abt = Matrix3::from_fn(|r, c| chain(r, [b[(c, 0)], b[(c, 1)], b[(c, 2)]]));
+        assert_eq!(pa.mul_with::<true>(&pb).matrix(), ab);
+        assert_eq!(pa.mul_t_with::<true>(&pb).matrix(), abt);
+        assert_eq!(
+            pa.mul_add::<true>(0.3, &pb).matrix(),
+            a.zip_map(&b, |x, y| x.mul_add(0.3, y))
+        );
+        let gap = (pa.mul_with::<true>(&pb).matrix() - a * b).amax();
+        assert!(gap < 1e-14 * (a.abs() * b.abs()).amax(), "{gap:e}");
     }
 }

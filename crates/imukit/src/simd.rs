@@ -14,9 +14,14 @@
 //! one it has below it, never to an instruction the CPU cannot run.
 //!
 //! The paths compute the same operations in the same order (no fast-math: LLVM neither contracts
-//! `a·b + c` into an FMA nor reassociates sums), so their results are equal bit for bit; the
-//! tests (`tests/test_simd_paths.py`) hold them to 1e-12 relative, which a change of summation
-//! order would still pass.
+//! `a·b + c` into an FMA nor reassociates sums), so their results are equal bit for bit, except
+//! in kernels that ask for fused multiply-adds: the form `fn name<const FMA: bool>(…)` of the
+//! macro compiles its body with `FMA = true` on the AVX paths and `false` on the baseline, and the
+//! body passes it on (the preintegration step fuses its 3×3 block algebra, `mat3`). Those kernels
+//! differ between paths by rounding only: each fused `a·b + c` rounds once where the baseline
+//! rounds twice, sums in the same order. The tests (`tests/test_simd_paths.py`) hold every path to
+//! 1e-12 relative of the baseline (measured for the fused preintegration: ≤ 3e-15 in deltas,
+//! covariances and bias Jacobians; a wrong lane or a dropped term would be far above it).
 //!
 //! A kernel adopts the dispatch by wrapping its entry loop (a free function) in
 //! [`simd_dispatch!`](crate::simd_dispatch); everything the loop calls is inlined into each copy
@@ -103,8 +108,9 @@ pub fn path() -> Path {
 
 /// Defines `fn $name(args) -> R { body }` compiled once per [`Path`] and dispatched on [`path`]
 /// (the module docs). Free functions with plain `ident: Type` arguments; lifetimes may be named
-/// after the name (`fn run<'a>(…)`), or one bounded type parameter (`fn run<L: Law>(…)`), and
-/// `impl Trait` argument types are accepted.
+/// after the name (`fn run<'a>(…)`), or one bounded type parameter (`fn run<L: Law>(…)`), or one
+/// `const FMA: bool` (`fn run<const FMA: bool>(…)`: the body sees `true` on the AVX paths, `false`
+/// on the baseline, and decides what to fuse), and `impl Trait` argument types are accepted.
 ///
 /// ```
 /// imukit::simd_dispatch! {
@@ -118,23 +124,23 @@ pub fn path() -> Path {
 #[macro_export]
 macro_rules! simd_dispatch {
     (
-        @emit [$($generics:tt)*]
+        @emit [$($generics:tt)*] [$($extra:tt)*] [$($fast:tt)*] [$($plain:tt)*]
         $(#[$meta:meta])*
         $vis:vis fn $name:ident ($($arg:ident : $ty:ty),*) -> $ret:ty $body:block
     ) => {
         $(#[$meta])*
         $vis fn $name<$($generics)*>($($arg: $ty),*) -> $ret {
             #[inline(always)]
-            fn portable<$($generics)*>($($arg: $ty),*) -> $ret $body
+            fn portable<$($generics)* $($extra)*>($($arg: $ty),*) -> $ret $body
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,fma,bmi1,bmi2")]
             fn avx512<$($generics)*>($($arg: $ty),*) -> $ret {
-                portable($($arg),*)
+                portable$($fast)*($($arg),*)
             }
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
             fn avx2<$($generics)*>($($arg: $ty),*) -> $ret {
-                portable($($arg),*)
+                portable$($fast)*($($arg),*)
             }
             match $crate::simd::path() {
                 #[cfg(target_arch = "x86_64")]
@@ -145,21 +151,27 @@ macro_rules! simd_dispatch {
                 // SAFETY: `path()` is `Avx2` only where the CPU has every feature `avx2` enables.
                 #[allow(unsafe_code)]
                 $crate::simd::Path::Avx2 => unsafe { avx2($($arg),*) },
-                _ => portable($($arg),*),
+                _ => portable$($plain)*($($arg),*),
             }
         }
     };
     (
         $(#[$meta:meta])*
+        $vis:vis fn $name:ident <const $fma:ident : bool> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
+    ) => {
+        $crate::simd_dispatch!(@emit [] [const $fma: bool] [::<true>] [::<false>] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+    };
+    (
+        $(#[$meta:meta])*
         $vis:vis fn $name:ident $(<$($lt:lifetime),+>)? ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
-        $crate::simd_dispatch!(@emit [$($($lt),+)?] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+        $crate::simd_dispatch!(@emit [$($($lt),+)?] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
     };
     (
         $(#[$meta:meta])*
         $vis:vis fn $name:ident <$t:ident : $bound:path> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
-        $crate::simd_dispatch!(@emit [$t: $bound] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+        $crate::simd_dispatch!(@emit [$t: $bound] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
     };
 }
 

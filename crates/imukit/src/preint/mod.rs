@@ -172,11 +172,11 @@ impl BiasWalk {
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    fn step(&mut self, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
+    fn step<const FMA: bool>(&mut self, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
         let h = 2.0 * g_b.half_h;
-        let y = blocks::transition(&blocks::padded_cross(&self.cross), phi, m, h);
-        g_b.add_cross(cov, &y);
-        g_b.add_quadratic(cov, self.var_gyro, self.var_accel);
+        let y = blocks::transition::<FMA>(&blocks::padded_cross(&self.cross), phi, m, h);
+        g_b.add_cross::<FMA>(cov, &y);
+        g_b.add_quadratic::<FMA>(cov, self.var_gyro, self.var_accel);
         blocks::symmetric_diagonal(cov);
         self.cross = blocks::unpadded_cross(&blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel)));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
@@ -217,6 +217,14 @@ pub struct Preintegrator {
     boundary: Ends,
     /// Intervals since ΔR was last projected onto SO(3) (see [`PROJECT_EVERY`]).
     since_projection: u32,
+}
+
+crate::simd_dispatch! {
+    /// One step of `p` ([`Preintegrator::integrate_measurement_clipped`]) per instruction-set path,
+    /// its block algebra fused on the AVX paths (`mat3`'s module docs).
+    fn step<const FMA: bool>(p: &mut Preintegrator, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, clipped: Clipped) -> () {
+        p.step_with::<FMA>(accel, gyro, h, clipped)
+    }
 }
 
 /// ΔR is a product of exact rotations, so it leaves SO(3) by rounding only, about 1e-16 an
@@ -365,7 +373,8 @@ impl Preintegrator {
     /// [`Preintegrator::integrate_measurement`] of a sample whose sensors `clipped` flags as
     /// saturated: its white-noise densities are multiplied by
     /// [`Preintegrator::saturation_noise_factor`] (module docs); the deltas are the same.
-    // Inlined into each instruction-set copy of the batch loops (crate::simd).
+    // Inlined into the batch loops; the step itself is dispatched here, per sample, so that every
+    // caller (batch, windows, streaming) runs the same path's rounding (`step` below).
     #[inline(always)]
     pub fn integrate_measurement_clipped(
         &mut self,
@@ -374,10 +383,16 @@ impl Preintegrator {
         h: f64,
         clipped: Clipped,
     ) {
+        step(self, accel, gyro, h, clipped);
+    }
+
+    /// One step with the block algebra fused (`FMA`) or not (`mat3`'s module docs).
+    #[inline(always)]
+    fn step_with<const FMA: bool>(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, clipped: Clipped) {
         let scale = self.variance_scale(clipped);
         match self.scheme {
-            Scheme::Euler => self.integrate_euler(accel, gyro, h, scale),
-            Scheme::Midpoint => self.integrate_midpoint(accel, gyro, h, scale),
+            Scheme::Euler => self.integrate_euler::<FMA>(accel, gyro, h, scale),
+            Scheme::Midpoint => self.integrate_midpoint::<FMA>(accel, gyro, h, scale),
         }
     }
 
@@ -393,7 +408,7 @@ impl Preintegrator {
     }
 
     #[inline(always)]
-    fn integrate_euler(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
+    fn integrate_euler<const FMA: bool>(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
         let a = accel - self.bias_accel;
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
@@ -408,7 +423,7 @@ impl Preintegrator {
         // In padded blocks (`mat3::M3`) from here to the stored blocks.
         let (rp, jr_p, phi) = (M3::of(&r), M3::of(&jr), M3::of(&step_t));
         let m = -M3::of(&r_a_cross);
-        let mut cov = blocks::propagate(&blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
+        let mut cov = blocks::propagate::<FMA>(&blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
         if let Some(walk) = self.bias_walk.as_mut() {
             let g_b = Input {
                 tg: -jr_p * h,
@@ -416,18 +431,22 @@ impl Preintegrator {
                 va: -rp * h,
                 half_h: 0.5 * h,
             };
-            walk.step(&mut cov, &phi, &m, &g_b, &self.noise);
+            walk.step::<FMA>(&mut cov, &phi, &m, &g_b, &self.noise);
         }
         self.covariance = blocks::unpadded(&cov);
 
         // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
         let [[jtg, _], [jvg, jva], [jpg, jpa]] = blocks::padded_cross(&self.jac);
         let jr_h = jr_p * h;
-        let ra_drot = M3::of(&r_a_cross).mul(&jtg);
+        // `x + y h − z s` runs as `(x + y h) − z s` (the unfused order).
+        let ra_drot = M3::of(&r_a_cross).mul_with::<FMA>(&jtg);
         self.jac = blocks::unpadded_cross(&[
-            [phi.mul(&jtg) - jr_h, M3::ZERO],
-            [jvg - ra_drot * h, jva - rp * h],
-            [jpg + jvg * h - ra_drot * half_h2, jpa + jva * h - rp * half_h2],
+            [phi.mul_with::<FMA>(&jtg) - jr_h, M3::ZERO],
+            [ra_drot.mul_add::<FMA>(-h, &jvg), rp.mul_add::<FMA>(-h, &jva)],
+            [
+                ra_drot.mul_add::<FMA>(-half_h2, &jvg.mul_add::<FMA>(h, &jpg)),
+                rp.mul_add::<FMA>(-half_h2, &jva.mul_add::<FMA>(h, &jpa)),
+            ],
         ]);
 
         // Deltas.
