@@ -23,7 +23,8 @@
 //! `J_r`, the specific forces and `h` through their blocks, and `E`, `J_r` reach `ω` and `h`
 //! through `φ = ωh` (`so3.rs`). With symmetric noise (densities) `P` is symmetric, so
 //! `P̄'APᵀ + P̄'ᵀAP = UAP`, `B̄₁ = UB₁Σ` and `Σ̄`'s symmetric part is `½B₁ᵀUB₁`: one product each
-//! instead of two. Euler's `B₁` is block-diagonal by row groups (`θ` ← gyro, `v, p` ← accel) and
+//! instead of two; and since only `P̄`'s symmetric part then reaches any input, `P̄ = ½AᵀUA`
+//! reuses `UA`. Euler's `B₁` is block-diagonal by row groups (`θ` ← gyro, `v, p` ← accel) and
 //! `Σ` block-diagonal, so `B₁ΣB₁ᵀ`, `B̄₁` and `Σ̄` take only `P`'s and `P̄`'s diagonal blocks.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -450,10 +451,15 @@ pub(super) fn reverse(s: &Before, x: &Interval, bar: &State, linear: Linear) -> 
         };
         if linear.cov {
             let (pb, q) = (&bar.cov, noise(x));
-            prev.cov = l.sandwich_t(pb);
             let u = pb + pb.transpose();
             // U is symmetric: UA = (AᵀU)ᵀ.
             let ua = l.at_mul(&u).transpose();
+            // Symmetric noise: every P is symmetric, so only P̄'s symmetric part ½U reaches the
+            // inputs, and P̄ = ½AᵀUA reuses UA (module docs).
+            prev.cov = match linear.symmetric {
+                true => l.at_mul(&ua) * 0.5,
+                false => l.sandwich_t(pb),
+            };
             if linear.symmetric {
                 // P = Pᵀ, Σ = Σᵀ: P̄'APᵀ + P̄'ᵀAP = UAP, P̄'B₁Σᵀ + P̄'ᵀB₁Σ = UB₁Σ, and the
                 // symmetric part of B₁ᵀP̄'B₁ is ½B₁ᵀUB₁.
