@@ -145,6 +145,37 @@ def test_native_densities_equal_the_same_noise_per_sample(scheme: str) -> None:
         assert gap(a, b, relative=True) < 1e-12
 
 
+@pytest.mark.parametrize("scheme", ["lie_euler", "midpoint"])
+def test_zero_length_interval_gets_no_noise(scheme: str) -> None:
+    """dt = 0 on a valid sample, one rule on every path (docs/torch.md, "dt = 0"): σ²/0 is never
+    formed. The kernels' densities, the per-sample blocks built in torch (accelerometer density
+    beside a zero gyro covariance, refused as σ²/0 before) and the scan agree and are finite, with
+    finite gradients; lie_euler's covariance is the limit of a vanishing step."""
+    c = case((2,), 12, seed=5)
+    dt = c.dt.clone()
+    dt[:, 4] = 0.0
+    sigma = torch.tensor([1.7e-2, 2.0e-1], dtype=torch.float64)
+    accel_only = torch.tensor([0.0, 2.0e-1], dtype=torch.float64)
+    zero_gyro = torch.zeros(2, 12, 3, dtype=torch.float64)
+
+    def cov(step, method, **noise):
+        gyro = c.gyro.clone().requires_grad_()
+        out = it.preintegrate(step, gyro, c.accel, scheme=scheme, method=method, return_covariance=True, **noise)
+        (grad,) = torch.autograd.grad(out.covariance.sum(), gyro)
+        assert torch.isfinite(grad).all()
+        return out.covariance
+
+    native = cov(dt, "native", noise=sigma)
+    assert torch.isfinite(native).all()
+    assert gap(native, cov(dt, "scan", noise=sigma), relative=True) < 1e-12
+    blocks = cov(dt, "native", noise=sigma, gyro_cov=zero_gyro)
+    assert gap(blocks, cov(dt, "native", noise=accel_only), relative=True) < 1e-13
+    if scheme == "lie_euler":
+        near = dt.clone()
+        near[:, 4] = 1e-10
+        assert gap(native, cov(near, "native", noise=sigma), relative=True) < 1e-8
+
+
 def test_gradcheck_native_integrate_and_attitude() -> None:
     c = case((2,), 6, seed=12)
     r0 = torch.linalg.matrix_exp(torch.tensor([[0.0, -0.5, -0.2], [0.5, 0.0, -0.3], [0.2, 0.3, 0.0]]).double())

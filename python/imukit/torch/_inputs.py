@@ -12,7 +12,7 @@ import torch
 from imukit._errors import DTypeError, ParameterError, ShapeError
 from imukit._names import canonical
 from imukit.imu import ImuNoise
-from imukit.torch._steps import Samples
+from imukit.torch._steps import Samples, rates
 
 _FLOATS = (torch.float32, torch.float64)
 
@@ -140,28 +140,29 @@ def samples(
 
 def noise_blocks(s: Samples, scheme: str) -> torch.Tensor | None:
     """Each sample's 6×6 white-noise covariance ``[gyro, accel]`` (N, *B, 6, 6), zero where masked;
-    None without noise. From the densities: ``σ²/h I`` with h the sample's interval (midpoint: the
-    one it ends, a window's first sample the one it starts), as the Rust kernels
-    (docs/conventions.md, row 11)."""
+    None without noise. From the densities: ``σ²/h I`` with h the step the sample owns, the Rust
+    kernels' rule (``adjoint`` module docs, docs/conventions.md row 11): its interval's (lie_euler:
+    the one it starts; midpoint: the one it ends) or, for midpoint when that one is empty (a
+    window's first sample, a repeated time stamp), the next interval's; a sample that owns no step
+    of positive length (masked, or dt = 0) has no noise (docs/torch.md, "dt = 0")."""
     if s.densities is None and s.gyro_cov is None and s.accel_cov is None:
         return None
-    dts, valid = s.dt, s.valid
-    own = dts
-    if scheme == "midpoint" and dts.shape[0] > 1:
-        # A window's first sample (no sample before it in the window) takes the interval it starts.
-        starts = ~torch.cat((torch.zeros_like(valid[:1]), valid[:-1]))
-        own = torch.where(starts, torch.cat((dts[1:], dts[-1:])), dts)
-    own = torch.where(valid, own, torch.ones_like(own))
-    eye = torch.eye(3, dtype=dts.dtype, device=dts.device)
+    valid = s.valid
+    own = rates(s, scheme)[0]  # each interval's step, 0 where masked
+    if scheme == "midpoint":
+        own = torch.where(own > 0, own, torch.cat((own[1:], torch.zeros_like(own[:1]))))
+    owns = own > 0
+    own = torch.where(owns, own, torch.ones_like(own))  # no 0 division, even where not taken
+    eye = torch.eye(3, dtype=own.dtype, device=own.device)
     blocks = []
     for i, given in enumerate((s.gyro_cov, s.accel_cov)):
         if given is not None:
-            block = given
+            block = torch.where(valid[..., None, None], given, torch.zeros_like(given))
         elif s.densities is not None:
-            var = s.densities[..., i] ** 2 / own
+            var = torch.where(owns, s.densities[..., i] ** 2 / own, torch.zeros_like(own))
             block = var[..., None, None] * eye
         else:
-            block = torch.zeros(*own.shape, 3, 3, dtype=dts.dtype, device=dts.device)
-        blocks.append(torch.where(valid[..., None, None], block, torch.zeros_like(block)))
+            block = torch.zeros(*own.shape, 3, 3, dtype=own.dtype, device=own.device)
+        blocks.append(block)
     zero = torch.zeros_like(blocks[0])
     return torch.cat((torch.cat((blocks[0], zero), -1), torch.cat((zero, blocks[1]), -1)), -2)

@@ -25,9 +25,9 @@
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
 //! Σ̄_g (9), Σ̄_a (9, if per-sample noise)]` or, with densities, `[…, σ̄²_g, σ̄²_a]`, the interval's
-//! share of its window's density cotangents (their sum over the window is the cotangent): it re-runs each window forward, keeping the state before every
-//! interval (one window at a time per thread: O(n) memory per thread, none between the passes),
-//! then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
+//! share of its window's density cotangents (their sum over the window is the cotangent): it re-runs each window forward, keeping of
+//! the state before every interval what the reverse step reads (a tape, one window at a time per
+//! thread: O(n) memory per thread, none between the passes), then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
 //! the thread count.
 
 mod so3;
@@ -39,7 +39,7 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use step::{Interval, Linear, Mat9, Mat96, State};
+use step::{Before, Interval, Linear, Mat6, Mat9, Mat96, State};
 
 /// A batch of windows (module docs).
 #[derive(Debug, Clone, Copy)]
@@ -239,6 +239,83 @@ fn add(a: &State, b: &State) -> State {
     }
 }
 
+/// The states before each interval of one window, of each only what [`step::reverse`] reads
+/// ([`Before`]), flat: `ΔR`, `Δv` (12 numbers); with the covariance `P`'s first six columns (54),
+/// its first six rows (54, non-symmetric noise only), midpoint's `X` and `S` (90); with the bias
+/// Jacobian `J`'s first six rows (36). Lie_euler with densities keeps 66 numbers per interval, not
+/// a whole [`State`] (255): the tape of a 1,000-interval window stays in a core's cache.
+struct Tape {
+    linear: Linear,
+    midpoint: bool,
+    width: usize,
+    data: Vec<f64>,
+}
+
+impl Tape {
+    fn new(linear: Linear, midpoint: bool, n: usize) -> Tape {
+        let cov = 54 + if linear.symmetric { 0 } else { 54 } + if midpoint { 90 } else { 0 };
+        let width = 12 + if linear.cov { cov } else { 0 } + if linear.jac { 36 } else { 0 };
+        Tape {
+            linear,
+            midpoint,
+            width,
+            data: Vec::with_capacity(n * width),
+        }
+    }
+
+    fn push(&mut self, s: &State) {
+        let d = &mut self.data;
+        d.extend_from_slice(s.r.as_slice());
+        d.extend_from_slice(s.v.as_slice());
+        if self.linear.cov {
+            // Column-major: the first six columns are the first 54 numbers.
+            d.extend_from_slice(&s.cov.as_slice()[..54]);
+            if !self.linear.symmetric {
+                d.extend(s.cov.fixed_rows::<6>(0).transpose().iter());
+            }
+            if self.midpoint {
+                d.extend_from_slice(s.cross.as_slice());
+                d.extend_from_slice(s.last.as_slice());
+            }
+        }
+        if self.linear.jac {
+            d.extend(s.jac.fixed_rows::<6>(0).iter());
+        }
+    }
+
+    fn get(&self, k: usize) -> Before {
+        let mut at = k * self.width;
+        let mut take = |len: usize| {
+            let x = &self.data[at..at + len];
+            at += len;
+            x
+        };
+        let mut b = Before {
+            r: Matrix3::from_column_slice(take(9)),
+            v: Vector3::from_column_slice(take(3)),
+            cov_cols: Mat96::zeros(),
+            cov_rows: Mat96::zeros(),
+            jac: Mat6::zeros(),
+            cross: Mat96::zeros(),
+            last: Mat6::zeros(),
+        };
+        if self.linear.cov {
+            b.cov_cols = Mat96::from_column_slice(take(54));
+            if !self.linear.symmetric {
+                b.cov_rows = Mat96::from_column_slice(take(54));
+            }
+            if self.midpoint {
+                b.cross = Mat96::from_column_slice(take(54));
+                b.last = Mat6::from_column_slice(take(36));
+            }
+        }
+        if self.linear.jac {
+            b.jac = Mat6::from_column_slice(take(36));
+        }
+        b
+    }
+}
+
 /// The window `b` of `x`.
 fn window<'a>(x: &Windows<'a>, b: usize) -> Windows<'a> {
     let n = x.n;
@@ -303,15 +380,15 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
     grad.par_chunks_mut(x.n * gw).enumerate().try_for_each(|(b, g)| {
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
-        let mut before = Vec::with_capacity(x.n);
+        let mut tape = Tape::new(linear, x.a_end.is_some(), x.n);
         let mut s = State::start();
         for k in 0..x.n {
-            before.push(s);
+            tape.push(&s);
             s = step::forward(&s, &x.interval(k), linear);
         }
         let mut cot = read(&bar[(records - 1) * width..], outputs);
         for k in (0..x.n).rev() {
-            let (prev, ib) = step::reverse(&before[k], &x.interval(k), &cot, linear);
+            let (prev, ib) = step::reverse(&tape.get(k), &x.interval(k), &cot, linear);
             let row = &mut g[k * gw..(k + 1) * gw];
             row[0] = ib.h;
             row[1..4].copy_from_slice(ib.w.as_slice());

@@ -13,24 +13,41 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::so3::hat;
 
-/// Where the closed forms' cancellation (≈ 10⁻¹⁶/t relative in `C'`) meets the series'
-/// truncation (≈ t⁴/10⁷): both about 10⁻¹³ here.
 /// Where the closed forms' cancellation (≈ 10⁻¹⁷/t² relative in `C'`, from `θ − sin θ`) meets the
 /// truncation of [`SERIES_TERMS`] terms (< 10⁻¹⁵ relative): θ = 0.5.
 const SERIES_BELOW: f64 = 0.25;
-const SERIES_TERMS: i32 = 10;
+const SERIES_TERMS: usize = 10;
 
-/// `Σₖ (−t)ᵏ/(2k + m)!` and its derivative in t: A (m = 1), B (m = 2), C (m = 3).
-fn series(t: f64, m: i32) -> (f64, f64) {
+/// `(−1)ᵏ/(2k + m)!` for k < [`SERIES_TERMS`], at compile time (the series are evaluated once
+/// per interval and way: no factorial or power at run time).
+const fn series_coefficients(m: usize) -> [f64; SERIES_TERMS] {
+    let mut c = [0.0; SERIES_TERMS];
+    let mut inv_factorial = 1.0;
+    let mut i = 2;
+    while i <= m {
+        inv_factorial /= i as f64;
+        i += 1;
+    }
+    let mut k = 0;
+    while k < SERIES_TERMS {
+        c[k] = if k % 2 == 0 { inv_factorial } else { -inv_factorial };
+        inv_factorial /= ((2 * k + m + 1) * (2 * k + m + 2)) as f64;
+        k += 1;
+    }
+    c
+}
+
+/// The series of A (m = 1), B (m = 2), C (m = 3).
+const SERIES: [[f64; SERIES_TERMS]; 3] = [series_coefficients(1), series_coefficients(2), series_coefficients(3)];
+
+/// `Σₖ cₖtᵏ` and its derivative in t, by Horner's rule.
+fn series(t: f64, c: &[f64; SERIES_TERMS]) -> (f64, f64) {
     let (mut value, mut slope) = (0.0, 0.0);
-    let mut inv_factorial: f64 = (1..=m).map(f64::from).product::<f64>().recip();
-    for k in 0..SERIES_TERMS {
-        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-        value += sign * t.powi(k) * inv_factorial;
+    for (k, &ck) in c.iter().enumerate().rev() {
+        value = value * t + ck;
         if k > 0 {
-            slope += sign * f64::from(k) * t.powi(k - 1) * inv_factorial;
+            slope = slope * t + k as f64 * ck;
         }
-        inv_factorial /= f64::from((2 * k + m + 1) * (2 * k + m + 2));
     }
     (value, slope)
 }
@@ -48,7 +65,7 @@ struct Coefficients {
 
 fn coefficients(t: f64) -> Coefficients {
     if t < SERIES_BELOW {
-        let ((a, a_t), (b, b_t), (c, c_t)) = (series(t, 1), series(t, 2), series(t, 3));
+        let ((a, a_t), (b, b_t), (c, c_t)) = (series(t, &SERIES[0]), series(t, &SERIES[1]), series(t, &SERIES[2]));
         return Coefficients { a, b, c, a_t, b_t, c_t };
     }
     let th = t.sqrt();

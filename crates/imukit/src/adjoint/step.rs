@@ -23,7 +23,8 @@
 //! `J_r`, the specific forces and `h` through their blocks, and `E`, `J_r` reach `ω` and `h`
 //! through `φ = ωh` (`so3.rs`). With symmetric noise (densities) `P` is symmetric, so
 //! `P̄'APᵀ + P̄'ᵀAP = UAP`, `B̄₁ = UB₁Σ` and `Σ̄`'s symmetric part is `½B₁ᵀUB₁`: one product each
-//! instead of two. Euler's `B₁` is block-diagonal by row groups (`θ` ← gyro, `v, p` ← accel) and
+//! instead of two; and since only `P̄`'s symmetric part then reaches any input, `P̄ = ½AᵀUA`
+//! reuses `UA`. Euler's `B₁` is block-diagonal by row groups (`θ` ← gyro, `v, p` ← accel) and
 //! `Σ` block-diagonal, so `B₁ΣB₁ᵀ`, `B̄₁` and `Σ̄` take only `P`'s and `P̄`'s diagonal blocks.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -73,6 +74,24 @@ impl State {
             last: Mat6::zeros(),
         }
     }
+}
+
+/// What [`reverse`] reads of the state before its interval: `ΔR`, `Δv` and, of the linear parts,
+/// only what the cotangents of `A`'s variable blocks and of `B₀` need (a window's backward keeps
+/// one per interval, `mod.rs`'s tape, so it stays small). Parts a call does not carry are zero.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Before {
+    pub r: Matrix3<f64>,
+    pub v: Vector3<f64>,
+    /// `P`'s first six columns.
+    pub cov_cols: Mat96,
+    /// `P`'s first six rows, transposed (non-symmetric noise only).
+    pub cov_rows: Mat96,
+    /// `J`'s first six rows.
+    pub jac: Mat6,
+    /// Midpoint: `X` and `S`.
+    pub cross: Mat96,
+    pub last: Mat6,
 }
 
 /// One interval's inputs.
@@ -315,7 +334,8 @@ pub(super) fn forward(s: &State, x: &Interval, linear: Linear) -> State {
     next
 }
 
-/// Cotangents of `A` (its first six columns, where its variable blocks are), `B₀`, `B₁`.
+/// Cotangents of `A` (its first six columns, where its variable blocks are; only those blocks
+/// [`linearization_reverse`] reads are filled, [`add_a_bar`]), `B₀`, `B₁`.
 struct LinBar {
     a: Mat96,
     b0: Mat96,
@@ -382,6 +402,15 @@ fn linearization_reverse(r0: &Matrix3<f64>, x: &Interval, p: &Parts, l: &Lin, ba
     }
 }
 
+/// `Ā += X Y` on the blocks of `Ā` that [`linearization_reverse`] reads: the first block column
+/// (`E`, `hM`, `½h²M`) and the `(p, v)` block `hI` (its trace).
+fn add_a_bar<const C: usize>(a: &mut Mat96, x: &SMatrix<f64, 9, C>, y: &SMatrix<f64, C, 6>) {
+    let mut first = a.fixed_columns_mut::<3>(0);
+    first += x * y.fixed_columns::<3>(0);
+    let mut pv = a.fixed_view_mut::<3, 3>(6, 3);
+    pv += x.fixed_rows::<3>(6) * y.fixed_columns::<3>(3);
+}
+
 /// Cotangents gathered while reversing one interval.
 struct Reverse {
     r: Matrix3<f64>,
@@ -394,7 +423,7 @@ struct Reverse {
 }
 
 /// The cotangents before interval `x` (state `s`) and of its inputs, given `bar`, those after it.
-pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (State, IntervalBar) {
+pub(super) fn reverse(s: &Before, x: &Interval, bar: &State, linear: Linear) -> (State, IntervalBar) {
     let p = parts(x);
     let h = x.h;
     let ra = s.r * p.alpha;
@@ -422,18 +451,24 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
         };
         if linear.cov {
             let (pb, q) = (&bar.cov, noise(x));
-            prev.cov = l.sandwich_t(pb);
             let u = pb + pb.transpose();
             // U is symmetric: UA = (AᵀU)ᵀ.
             let ua = l.at_mul(&u).transpose();
+            // Symmetric noise: every P is symmetric, so only P̄'s symmetric part ½U reaches the
+            // inputs, and P̄ = ½AᵀUA reuses UA (module docs).
+            prev.cov = match linear.symmetric {
+                true => l.at_mul(&ua) * 0.5,
+                false => l.sandwich_t(pb),
+            };
             if linear.symmetric {
                 // P = Pᵀ, Σ = Σᵀ: P̄'APᵀ + P̄'ᵀAP = UAP, P̄'B₁Σᵀ + P̄'ᵀB₁Σ = UB₁Σ, and the
                 // symmetric part of B₁ᵀP̄'B₁ is ½B₁ᵀUB₁.
-                lb.a += ua * s.cov.fixed_columns::<6>(0);
+                add_a_bar(&mut lb.a, &ua, &s.cov_cols);
             } else {
                 // P̄'APᵀ + P̄'ᵀAP, first six columns.
                 let (pba, pbta) = (l.at_mul(&pb.transpose()).transpose(), l.at_mul(pb).transpose());
-                lb.a += pba * s.cov.fixed_rows::<6>(0).transpose() + pbta * s.cov.fixed_columns::<6>(0);
+                add_a_bar(&mut lb.a, &pba, &s.cov_rows);
+                add_a_bar(&mut lb.a, &pbta, &s.cov_cols);
             }
             match &l.b0 {
                 None => {
@@ -469,7 +504,7 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
             }
             if let Some(b0) = &l.b0 {
                 let ub0 = u * b0;
-                lb.a += ub0 * s.cross.fixed_rows::<6>(0).transpose();
+                add_a_bar(&mut lb.a, &ub0, &s.cross.fixed_rows::<6>(0).transpose());
                 prev.cross = l.at_mul(&ub0);
                 lb.b0 += ua * s.cross
                     + match linear.symmetric {
@@ -484,7 +519,7 @@ pub(super) fn reverse(s: &State, x: &Interval, bar: &State, linear: Linear) -> (
         }
         if linear.jac {
             prev.jac = l.at_mul(&bar.jac);
-            lb.a += bar.jac * s.jac.fixed_rows::<6>(0).transpose();
+            add_a_bar(&mut lb.a, &bar.jac, &s.jac.transpose());
             lb.b1 += bar.jac;
             lb.b0 += bar.jac;
         }
