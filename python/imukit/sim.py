@@ -230,6 +230,11 @@ def _parameter_names(motion: object) -> list[str]:
     return ["times", "positions", "rotations"]
 
 
+def _motion_error(motion: object, message: str) -> NonFiniteError:
+    """The core's error about the track it computed, put on the motion's parameters (which the user set)."""
+    return NonFiniteError(message, argument=" / ".join(_parameter_names(motion)))
+
+
 Motion = Union[Static, ConstantTwist, Helix, FigureEight, VioEllipse, Waypoints]
 """Every trajectory :func:`simulate` accepts."""
 
@@ -401,9 +406,8 @@ def simulate(
     except NonFiniteError as exc:
         if exc.argument != "trajectory":
             raise
-        names = " / ".join(_parameter_names(trajectory))
-        span = f"[{float(t[0])!r}, {float(t[-1])!r}] s"
-        raise NonFiniteError(f"the motion is beyond float64 over {span}", argument=names) from exc
+        over = f"[{float(t[0])!r}, {float(t[-1])!r}] s"
+        raise _motion_error(trajectory, f"the motion is beyond float64 over {over}") from exc
     if moving is not None:
         mid_position, mid_velocity, *_ = trajectory._truth(0.5 * (t[1:] + t[:-1]), np.zeros(3), count)
         origin = [moving.latitude, 0.0, moving.height]
@@ -414,9 +418,8 @@ def simulate(
         except NonFiniteError as exc:  # the core names the track; the user set the motion's parameters
             if exc.argument != "trajectory":
                 raise
-            names = " / ".join(_parameter_names(trajectory))
             at = float(t[exc.index or 0])
-            raise NonFiniteError(f"the motion reaches a pole or overflows at {at!r} s", argument=names) from exc
+            raise _motion_error(trajectory, f"the motion reaches a pole or overflows at {at!r} s") from exc
     elif frame is not None:
         _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
     if body_from_sensor is not None:
