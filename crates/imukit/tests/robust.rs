@@ -255,25 +255,25 @@ fn sustained_acceleration_leaks_in_bounded_and_leaves() {
     assert!(after < 0.07, "{after}"); // 0.057° measured
 }
 
-#[test]
-fn bias_estimated_and_sigma_consistent_over_seeds() {
+/// Bias errors of 8 seeds × 6D / 9D: rests of `rest_s` seconds then 25 s of turning, five times;
+/// the error in the world (x, y horizontal, z vertical) at the end of the fifth rest, per run
+/// and axis, and how many of the σ checks (second half, every 5 s) have `|error| ≤ 2σ`.
+fn bias_errors(rest_s: f64) -> (Vec<[f64; 3]>, usize, usize) {
     let deg = 1f64.to_radians();
     let bias = Vector3::new(1.0, -1.0, 1.0) * deg;
-    // Rest 5 s, then 25 s turning and 5 s rest, repeated.
+    let period = rest_s + 25.0;
     let omega = |t: f64| {
-        if t % 30.0 < 5.0 {
+        if t % period < rest_s {
             Vector3::zeros()
         } else {
             turning(t)
         }
     };
-    let mut covered = 0;
-    let mut total = 0;
-    let (mut worst, mut sum_sq) = ([0.0f64; 3], [0.0f64; 3]);
+    let (mut errors, mut covered, mut total) = (Vec::new(), 0, 0);
     for nine in [false, true] {
         for seed in 0..8 {
             let r = simulate(
-                150.0,
+                4.0 * period + rest_s,
                 tilted(),
                 omega,
                 |_| Vector3::zeros(),
@@ -282,14 +282,11 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
                 (0.003, 0.03, seed),
             );
             let out = run(&filter(), &r, nine, false);
-            let k = (124.9 * RATE) as usize; // the end of a rest phase
-                                             // The error in the world: horizontal (x, y) and vertical (z) axes.
-            let err = r.truth[k] * (Vector3::from(out.bias[k]) - bias);
+            let k = r.t.len() - 10; // 0.1 s before the end of the fifth rest
+            let err = r.truth[k] * (Vector3::from(out.bias[k]) - bias) / deg;
+            errors.push([err.x, err.y, err.z]);
             for i in 0..3 {
                 assert!(out.bias_sigma[k][i] < 0.06 * deg && out.bias_sigma[k][i] > 0.0);
-                worst[i] = worst[i].max(err[i].abs() / deg);
-                sum_sq[i] += (err[i] / deg).powi(2);
-                // σ over the second half, sampled every 5 s
                 for m in (r.t.len() / 2..r.t.len()).step_by(500) {
                     total += 1;
                     if (out.bias[m][i] - bias[i]).abs() <= 2.0 * out.bias_sigma[m][i] {
@@ -299,16 +296,47 @@ fn bias_estimated_and_sigma_consistent_over_seeds() {
             }
         }
     }
+    (errors, covered, total)
+}
+
+/// Per axis: the worst |error| and the RMS over the runs [°/s].
+fn worst_and_rms(errors: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let (mut worst, mut rms) = ([0.0f64; 3], [0.0f64; 3]);
+    for i in 0..3 {
+        worst[i] = errors.iter().fold(0.0, |a: f64, e| a.max(e[i].abs()));
+        rms[i] = (errors.iter().map(|e| e[i] * e[i]).sum::<f64>() / errors.len() as f64).sqrt();
+    }
+    (worst, rms)
+}
+
+#[test]
+fn bias_estimated_and_sigma_consistent_over_seeds() {
+    // At rest the estimate is the mean gyro since the sensor went still, whose error has σ =
+    // 0.17 °/s / √(100 T) per axis for T seconds of still data (gyro noise 0.003 rad/s per sample
+    // at 100 Hz): the floor of any estimator. Stillness is found about 1.3 s after a stop (after
+    // 24 °/s of turning; 2.1 s before the bias came off the low-passed gyro, filters_robust.md),
+    // so 5 s rests leave T ≈ 3.7 s, σ ≈ 0.009 °/s, and the worst of 16 runs × 2 horizontal axes
+    // lands near 2.5σ ≈ 0.022 °/s: the issue's 0.02 °/s is then luck, not a property. With 10 s
+    // rests, T ≈ 8.7 s, σ ≈ 0.006 °/s and 0.02 °/s is 3.4σ, which an estimator near the floor
+    // meets: that is the issue's test.
+    let (errors, covered, total) = bias_errors(10.0);
+    let (worst, rms) = worst_and_rms(&errors);
     // 2σ covers 95% of a Gaussian error; a σ too small by half would cover about 68%.
     assert!(covered as f64 >= 0.9 * total as f64, "{covered} of {total}");
-    // The issue asks 0.02 °/s. Measured over these 16 runs: RMS 0.010 (x, y), worst 0.026 (x,
-    // seed 1) and 0.014 (vertical); RMS 0.012 / 0.008 (x / y). The limit is the rest data: a 5 s rest phase leaves about 3 s
-    // after detection, whose mean gyro has σ = 0.17 °/s / √300 = 0.010 °/s per axis
-    // (docs/filters_robust.md); 20% worse fails.
-    let rms = |i: usize| (sum_sq[i] / 16.0).sqrt();
-    assert!(rms(0).max(rms(1)) < 0.0145, "RMS {} {}", rms(0), rms(1));
-    assert!(worst[0].max(worst[1]) < 0.031, "worst horizontal {worst:?}");
-    assert!(worst[2] < 0.017, "worst vertical {worst:?}");
+    // Measured: worst 0.0159 / 0.0105 / 0.0101 °/s (x, y, z), RMS 0.0089 / 0.0064 / 0.0056;
+    // coverage 720 of 720 (σ is conservative). The x RMS is 1.5 times the floor: the rest noise
+    // of the filter (0.06 °/s per second, set for real sensors) is 3.5 times this simulation's
+    // 0.017, so the estimate from motion before the rest keeps some weight. RMS 20% worse fails.
+    assert!(worst.iter().all(|&w| w < 0.02), "worst {worst:?} RMS {rms:?}");
+    assert!(rms.iter().all(|&r| r < 0.0107), "RMS {rms:?}");
+    // 5 s rests (the earlier version of this test), at their measured bounds (20% margin):
+    // worst 0.0236 / 0.0148 / 0.0154 °/s, RMS 0.0111 / 0.0084 / 0.0095, coverage 624 of 624.
+    let (errors, covered, total) = bias_errors(5.0);
+    let (worst, rms) = worst_and_rms(&errors);
+    assert!(covered as f64 >= 0.9 * total as f64, "{covered} of {total}");
+    assert!(worst[0].max(worst[1]) < 0.0283, "worst {worst:?} RMS {rms:?}");
+    assert!(worst[2] < 0.0185, "worst {worst:?} RMS {rms:?}");
+    assert!(rms.iter().all(|&r| r < 0.0133), "RMS {rms:?}");
 }
 
 #[test]

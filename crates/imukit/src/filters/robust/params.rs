@@ -31,7 +31,8 @@ pub struct RobustParams {
     pub bias_rest_window_s: f64,
     /// The bias estimate is clipped to ± this per axis [rad/s].
     pub bias_clip_rad_s: f64,
-    /// Rest: `‖ω − ω̄‖` and `‖ω̄‖` below this [rad/s] (`ω̄` the first-order low pass of the gyro).
+    /// Rest: `‖ω − ω̄‖` and `‖ω̄ − b̂‖` below this [rad/s] (`ω̄` the first-order low pass of the
+    /// gyro, `b̂` the bias estimate).
     pub rest_gyro_rad_s: f64,
     /// Rest: `‖a − ā‖` below this [m/s²] (`ā` the first-order low pass of the accelerometer).
     pub rest_accel: f64,

@@ -243,14 +243,17 @@ fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector3<f6
 }
 
 /// First-order low passes of gyro and accelerometer; rest once both stay close to them (and the
-/// gyro small) for `rest_duration_s`.
+/// gyro, less the bias estimate, small) for `rest_duration_s`. The bias is taken off `ω̄`
+/// because the raw `‖ω̄‖` of a sensor at rest is `‖b‖`: with a 1 °/s bias per axis (√3 °/s) it
+/// has to decay to within 0.27 °/s of the 2 °/s threshold, which took 2.1 s of a 5 s rest after
+/// 24 °/s of turning (`docs/filters_robust.md`, bias).
 #[inline(always)]
 fn rest_detection(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vector3<f64>, accel: &Vector3<f64>) {
     s.rest_gyro += (gyro - s.rest_gyro) * c.rest;
     s.rest_accel += (accel - s.rest_accel) * c.rest;
     let th = p.rest_gyro_rad_s * p.rest_gyro_rad_s;
     let still = (gyro - s.rest_gyro).norm_squared() < th
-        && s.rest_gyro.norm_squared() < th
+        && (s.rest_gyro - s.bias).norm_squared() < th
         && (accel - s.rest_accel).norm_squared() < p.rest_accel * p.rest_accel;
     s.rest_time = if still { s.rest_time + c.dt } else { 0.0 };
     s.rest = s.rest_time >= p.rest_duration_s;
