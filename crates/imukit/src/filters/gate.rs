@@ -61,6 +61,9 @@ pub(crate) struct Gates {
     gravity: f64,
     cos_angle: f64,
     cos_dip: f64,
+    /// `|‖a‖ − g| ≤ norm` as `raw_lo² ≤ ‖a‖² ≤ raw_hi²` (no square root of the raw sample).
+    raw_lo2: f64,
+    raw_hi2: f64,
 }
 
 impl Gates {
@@ -72,12 +75,14 @@ impl Gates {
             cos_angle: accel.map_or(-1.0, |r| r.angle_rad.cos()),
             // cos is decreasing on [0, π], where |δ − δ₀| lies; a threshold beyond π rejects nothing.
             cos_dip: mag.map_or(-1.0, |r| r.dip_rad.min(std::f64::consts::PI).cos()),
+            raw_lo2: accel.map_or(0.0, |r| (gravity - r.norm).max(0.0).powi(2)),
+            raw_hi2: accel.map_or(0.0, |r| (gravity + r.norm).powi(2)),
         }
     }
 
     /// The unit direction of `accel` (the vector the law uses, `accel_norm` its norm; a zero one
-    /// is never used) if the sample is used. With a low pass, `raw_norm` is the unfiltered
-    /// sample's norm and the norm test is on it: a sustained acceleration changes the raw norm at
+    /// is never used) if the sample is used. With a low pass, `raw_sq` is the unfiltered
+    /// sample's squared norm and the norm test is on it: a sustained acceleration changes the raw norm at
     /// once, while the filtered vector turns slowly and a law whose correction rate does not
     /// shrink with the error (Madgwick's) would follow it below any angle threshold; the angle
     /// test stays on the filtered vector, since the raw direction swings with every movement of
@@ -89,7 +94,7 @@ impl Gates {
         s: &mut CommonState,
         accel: &Vector3<f64>,
         accel_norm: f64,
-        raw_norm: f64,
+        raw_sq: f64,
         up_pred: &Vector3<f64>,
         ramping: bool,
         dt: f64,
@@ -115,7 +120,7 @@ impl Gates {
                         s.accel_drift = true;
                     }
                     let angle = s.accel_drift || dir.dot(up_pred) >= self.cos_angle;
-                    (raw_norm - self.gravity).abs() <= r.norm && calm && angle
+                    (self.raw_lo2..=self.raw_hi2).contains(&raw_sq) && calm && angle
                 })
             },
         );
@@ -145,7 +150,8 @@ impl Gates {
         if !usable {
             return None;
         }
-        let (dip_sin, dip_cos) = dip(mag, norm, up_pred);
+        let inv = 1.0 / norm;
+        let (dip_sin, dip_cos) = dip_scaled(mag, inv, up_pred);
         if s.mag_norm <= 0.0 {
             learn(s, norm, dip_sin, dip_cos);
         }
@@ -157,11 +163,11 @@ impl Gates {
             })
         });
         match verdict {
-            Verdict::Accept => Some(mag * (1.0 / norm)),
+            Verdict::Accept => Some(mag * inv),
             Verdict::Reject => None,
             Verdict::Recover => {
                 learn(s, norm, dip_sin, dip_cos);
-                Some(mag * (1.0 / norm))
+                Some(mag * inv)
             }
         }
     }
@@ -178,6 +184,12 @@ pub(crate) fn learn(s: &mut CommonState, norm: f64, dip_sin: f64, dip_cos: f64) 
 /// direction of up (δ ∈ [−π/2, π/2], so cos δ ≥ 0).
 #[inline]
 pub(crate) fn dip(m: &Vector3<f64>, m_norm: f64, up_b: &Vector3<f64>) -> (f64, f64) {
-    let s = (-(m.dot(up_b)) / m_norm).clamp(-1.0, 1.0);
+    dip_scaled(m, 1.0 / m_norm, up_b)
+}
+
+/// [`dip`] given `1/‖m‖` (the gate divides once for the dip and the direction).
+#[inline(always)]
+fn dip_scaled(m: &Vector3<f64>, inv_norm: f64, up_b: &Vector3<f64>) -> (f64, f64) {
+    let s = (-(m.dot(up_b)) * inv_norm).clamp(-1.0, 1.0);
     (s, (1.0 - s * s).sqrt())
 }

@@ -165,15 +165,42 @@ fn check_overflow(s: &CommonState, index: usize) -> Result<()> {
     }
 }
 
-/// Both stages of the accelerometer low pass ([`AccelLowPass`]) one step towards `accel`; the
-/// filtered vector. A state without one (zero: an `initial` attitude, a restored older state)
-/// starts it at this sample.
+/// The factors of one step that depend only on `dt` and the options (the low pass's and rest
+/// detection's `dt / (τ + dt)`, the bias follower's `min(dt / τ, 1)`), divided out only when `dt`
+/// changes: a batch at a fixed rate divides once, not three times a sample.
+#[derive(Debug, Clone, Copy, Default)]
+struct Rates {
+    dt: f64,
+    low_pass: f64,
+    rest: f64,
+    follow: f64,
+}
+
+impl Rates {
+    /// The factors for `dt` (> 0), from the cache when `dt` is the last one's.
+    #[inline(always)]
+    fn at(&mut self, o: &Options, dt: f64) -> Self {
+        if dt != self.dt {
+            let alpha = |tau_s: f64| dt / (tau_s + dt);
+            *self = Self {
+                dt,
+                low_pass: o.acc_lowpass.map_or(0.0, |lp| alpha(lp.tau_s)),
+                rest: o.rest_detection.map_or(0.0, |r| alpha(r.tau_s)),
+                follow: o.rest_detection.map_or(0.0, |r| (dt / r.tau_s).min(1.0)),
+            };
+        }
+        *self
+    }
+}
+
+/// Both stages of the accelerometer low pass ([`AccelLowPass`]) one step towards `accel`
+/// (`alpha = dt / (τ + dt)`); the filtered vector. A state without one (zero: an `initial`
+/// attitude, a restored older state) starts it at this sample.
 #[inline(always)]
-fn low_pass(s: &mut CommonState, accel: &Vector3<f64>, tau_s: f64, dt: f64) -> Vector3<f64> {
+fn low_pass(s: &mut CommonState, accel: &Vector3<f64>, alpha: f64) -> Vector3<f64> {
     if s.acc_lp2 == Vector3::zeros() {
         (s.acc_lp1, s.acc_lp2) = (*accel, *accel);
     }
-    let alpha = dt / (tau_s + dt);
     s.acc_lp1 += (accel - s.acc_lp1) * alpha;
     s.acc_lp2 += (s.acc_lp1 - s.acc_lp2) * alpha;
     s.acc_lp2
@@ -233,7 +260,7 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
-        self.step(state, gyro, accel, mag, dt);
+        self.step(state, gyro, accel, mag, dt, &mut Rates::default());
         check_overflow(&state.common, 0)
     }
 
@@ -246,6 +273,7 @@ impl<L: Law> Filter<L> {
         accel: &Vector3<f64>,
         mag: Option<&Vector3<f64>>,
         dt: f64,
+        rates: &mut Rates,
     ) {
         let o = &self.options;
         let s = &mut state.common;
@@ -262,24 +290,22 @@ impl<L: Law> Filter<L> {
             }
             return;
         }
+        let rates = rates.at(o, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
         let (north_pred, up_pred) = o.world.predicted(&s.q);
-        let accel_norm = accel.norm();
-        let accel_dir = match o.acc_lowpass {
-            Some(lp) => {
-                let f = low_pass(s, accel, lp.tau_s, dt);
-                self.gates
-                    .accelerometer(s, &f, f.norm(), accel_norm, &up_pred, ramping, dt)
-            }
-            None => self
-                .gates
-                .accelerometer(s, accel, accel_norm, accel_norm, &up_pred, ramping, dt),
+        let raw_sq = accel.norm_squared();
+        let accel_dir = if o.acc_lowpass.is_some() {
+            let f = low_pass(s, accel, rates.low_pass);
+            self.gates.accelerometer(s, &f, f.norm(), raw_sq, &up_pred, ramping, dt)
+        } else {
+            self.gates
+                .accelerometer(s, accel, raw_sq.sqrt(), raw_sq, &up_pred, ramping, dt)
         };
         let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
 
         if let Some(r) = o.rest_detection {
-            let alpha = dt / (r.tau_s + dt);
+            let alpha = rates.rest;
             s.gyro_lp += (gyro - s.gyro_lp) * alpha;
             s.rest_accel_lp += (accel - s.rest_accel_lp) * alpha;
             // Capped: a finite 1e300 m/s² sample must not make the state infinite.
@@ -300,7 +326,7 @@ impl<L: Law> Filter<L> {
                 s.rest = 0.0;
             }
             if s.rest >= r.duration_s {
-                s.bias += (gyro - s.bias) * (dt / r.tau_s).min(1.0);
+                s.bias += (gyro - s.bias) * rates.follow;
             }
         }
 
@@ -414,6 +440,7 @@ impl<L: Law> Filter<L> {
         cancel: &Cancel,
     ) -> Result<()> {
         let mut previous = state.common.time;
+        let mut rates = Rates::default();
         for (k, (&t, (q_out, b_out))) in inputs
             .t
             .iter()
@@ -450,14 +477,14 @@ impl<L: Law> Filter<L> {
             }
             if k == 0 && !continued {
                 if !state.common.initialized {
-                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0);
+                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, &mut rates);
                 }
             } else {
                 let dt = t - previous;
                 if dt.is_nan() || dt <= 0.0 {
                     return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
                 }
-                self.step(state, &gyro, &accel, mag.as_ref(), dt);
+                self.step(state, &gyro, &accel, mag.as_ref(), dt, &mut rates);
                 check_overflow(&state.common, k)?;
             }
             // Keep the stamp itself (summing the steps would drift from it by rounding).
