@@ -51,6 +51,8 @@ pub(crate) trait Lanes: Copy {
     fn scale(self, a: Col, s: f64) -> Col;
     /// `a s + acc`, fused or not (the implementation's rule).
     fn scale_add(self, a: Col, s: f64, acc: Col) -> Col;
+    /// `a + b`.
+    fn add(self, a: Col, b: Col) -> Col;
 }
 
 /// Plain arrays, each product and each sum rounded: the baseline path (the `Matrix3` forms' bits).
@@ -66,6 +68,11 @@ impl Lanes for Unfused {
     #[inline(always)]
     fn scale_add(self, a: Col, s: f64, acc: Col) -> Col {
         a.zip(acc, |x, y| x * s + y)
+    }
+
+    #[inline(always)]
+    fn add(self, a: Col, b: Col) -> Col {
+        a + b
     }
 }
 
@@ -109,6 +116,10 @@ impl Lanes for Fused {
             self.0
                 .mul_add_f64x4(Fused::load(a), self.0.splat_f64x4(s), Fused::load(acc)),
         )
+    }
+    #[inline(always)]
+    fn add(self, a: Col, b: Col) -> Col {
+        Fused::store(self.0.add_f64x4(Fused::load(a), Fused::load(b)))
     }
 }
 
@@ -235,6 +246,22 @@ impl M3 {
         ])
     }
 
+    /// `self s` in `l`'s lanes.
+    #[inline(always)]
+    pub fn scale_with<L: Lanes>(&self, l: L, s: f64) -> M3 {
+        M3([l.scale(self.0[0], s), l.scale(self.0[1], s), l.scale(self.0[2], s)])
+    }
+
+    /// `self + o` in `l`'s lanes.
+    #[inline(always)]
+    pub fn add_with<L: Lanes>(&self, l: L, o: &M3) -> M3 {
+        M3([
+            l.add(self.0[0], o.0[0]),
+            l.add(self.0[1], o.0[1]),
+            l.add(self.0[2], o.0[2]),
+        ])
+    }
+
     /// The transpose.
     #[inline(always)]
     pub fn transpose(&self) -> M3 {
@@ -349,6 +376,12 @@ mod tests {
         assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);
         assert_eq!(pa.plus_identity(0.7).matrix(), a + Matrix3::identity() * 0.7);
         assert_eq!((pa * 1.3 - pb + -pa).matrix(), a * 1.3 - b + -a);
+        assert_eq!(
+            pa.scale_with(super::Unfused, 1.3)
+                .add_with(super::Unfused, &pb)
+                .matrix(),
+            a * 1.3 + b
+        );
         let mut acc = pa;
         acc += pb;
         assert_eq!(acc.matrix(), a + b);
@@ -373,6 +406,9 @@ mod tests {
             pa.mul_add(l, 0.3, &pb).matrix(),
             a.zip_map(&b, |x, y| x.mul_add(0.3, y))
         );
+        // Sums and scalings have one rounding either way: the unfused bits.
+        assert_eq!(pa.add_with(l, &pb).matrix(), a + b);
+        assert_eq!(pa.scale_with(l, -1.3).matrix(), a * -1.3);
         let gap = (pa.mul_with(l, &pb).matrix() - a * b).amax();
         assert!(gap < 1e-14 * (a.abs() * b.abs()).amax(), "{gap:e}");
     }

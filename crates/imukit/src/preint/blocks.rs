@@ -94,7 +94,7 @@ pub(super) fn propagate<L: Lanes>(
     // dispatched copy's target features.
     #[inline(always)]
     fn axpy2<L: Lanes>(l: L, x: &M3, s: f64, y: &M3, t: f64, z: &M3) -> M3 {
-        y.mul_add(l, t, &(*x * s)) + *z
+        y.mul_add(l, t, &x.scale_with(l, s)).add_with(l, z)
     }
     // Rows of A Σ.
     let phi_tt = phi.mul_with(l, &tt);
@@ -145,7 +145,10 @@ pub(super) fn transition<L: Lanes>(l: L, x: &PaddedCross, phi: &M3, m: &M3, h: f
     [
         [phi.mul_with(l, &xtg), M3::ZERO],
         [m_tg.mul_add(l, h, &xvg), xva],
-        [xvg.mul_add(l, h, &(m_tg * half_h2)) + xpg, xva.mul_add(l, h, &xpa)],
+        [
+            xvg.mul_add(l, h, &m_tg.scale_with(l, half_h2)).add_with(l, &xpg),
+            xva.mul_add(l, h, &xpa),
+        ],
     ]
 }
 
@@ -173,17 +176,17 @@ impl Input {
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
     #[inline(always)]
     pub fn add_quadratic<L: Lanes>(&self, l: L, cov: &mut Padded, s_g: f64, s_a: f64) {
-        let tv = self.tg.mul_t_with(l, &self.vg) * s_g;
+        let tv = self.tg.mul_t_with(l, &self.vg).scale_with(l, s_g);
         let vv = self.va.mul_t_symmetric_with(l, &self.va).mul_add(
             l,
             s_a,
-            &(self.vg.mul_t_symmetric_with(l, &self.vg) * s_g),
+            &self.vg.mul_t_symmetric_with(l, &self.vg).scale_with(l, s_g),
         );
         let c = self.half_h;
         cov[0] = self.tg.mul_t_symmetric_with(l, &self.tg).mul_add(l, s_g, &cov[0]);
-        cov[1] += tv;
+        cov[1] = cov[1].add_with(l, &tv);
         cov[2] = tv.mul_add(l, c, &cov[2]);
-        cov[3] += vv;
+        cov[3] = cov[3].add_with(l, &vv);
         cov[4] = vv.mul_add(l, c, &cov[4]);
         cov[5] = vv.mul_add(l, c * c, &cov[5]);
     }
@@ -196,15 +199,15 @@ impl Input {
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
         let u = [
             y[0][0].mul_t_with(l, vg), // y's θ-row accelerometer block is zero
-            y[1][0].mul_t_with(l, vg) + y[1][1].mul_t_with(l, va),
-            y[2][0].mul_t_with(l, vg) + y[2][1].mul_t_with(l, va),
+            y[1][0].mul_t_with(l, vg).add_with(l, &y[1][1].mul_t_with(l, va)),
+            y[2][0].mul_t_with(l, vg).add_with(l, &y[2][1].mul_t_with(l, va)),
         ];
         let y0t = y[0][0].mul_t_with(l, &self.tg);
         cov[0] += y0t + y0t.transpose();
-        cov[1] += u[0] + self.tg.mul_t_with(l, &y[1][0]);
-        cov[2] += u[0].mul_add(l, c, &self.tg.mul_t_with(l, &y[2][0]));
+        cov[1] = cov[1].add_with(l, &u[0].add_with(l, &self.tg.mul_t_with(l, &y[1][0])));
+        cov[2] = cov[2].add_with(l, &u[0].mul_add(l, c, &self.tg.mul_t_with(l, &y[2][0])));
         cov[3] += u[1] + u[1].transpose();
-        cov[4] += u[1].mul_add(l, c, &u[2].transpose());
+        cov[4] = cov[4].add_with(l, &u[1].mul_add(l, c, &u[2].transpose()));
         cov[5] += (u[2] + u[2].transpose()) * c;
     }
 }
