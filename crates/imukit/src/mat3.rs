@@ -8,12 +8,14 @@
 //!   the per-sample kernels: a column operation is one 256-bit instruction on the AVX paths (two
 //!   128-bit ones on the baseline), with no shuffles to gather 3-element columns.
 //!
-//! The `M3` products and axpys come in two roundings, chosen by a `const FMA: bool` (the
-//! dispatched kernel's, `crate::simd`): `false` rounds each product and each sum, as the
-//! `Matrix3` forms do (`mul` and the references in the tests: same bits); `true` fuses each
-//! `a·b + c` into one fused multiply-add (one rounding), for the AVX paths, where it is one
-//! instruction (on the baseline target it would be a library call). Every sum runs in the same
-//! order in both, so they differ by rounding only (≤ 1 ulp per fused operation).
+//! The `M3` products and axpys take their column arithmetic from a [`Lanes`] value: [`Unfused`]
+//! (plain arrays) rounds each product and each sum, as the `Matrix3` forms do (`mul` and the
+//! references in the tests: same bits), for the baseline path; [`Fused`] (a `pulp` AVX2+FMA
+//! token) holds a column in one 256-bit register and fuses each `a·b + c` into one fused
+//! multiply-add (one rounding), for the AVX paths. LLVM does not vectorise the plain arrays'
+//! lanes on its own (the dispatched AVX2 step was three quarters scalar arithmetic), hence the
+//! explicit vectors. Every sum runs in the same order in both, so they differ by rounding only
+//! (≤ 1 ulp per fused operation). A dispatched kernel picks its lanes with `with_lanes!`.
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
@@ -36,22 +38,109 @@ impl Col {
         Col(std::array::from_fn(|i| f(self.0[i], other.0[i])))
     }
 
-    /// `self s + acc`, fused when `FMA` (module docs).
+    /// `a[0] s[0] + a[1] s[1] + a[2] s[2]`, summed left to right (fused as `l` fuses).
     #[inline(always)]
-    fn mul_add<const FMA: bool>(self, s: f64, acc: Col) -> Col {
-        if FMA {
-            self.zip(acc, |x, y| x.mul_add(s, y))
-        } else {
-            self.zip(acc, |x, y| x * s + y)
-        }
-    }
-
-    /// `a[0] s[0] + a[1] s[1] + a[2] s[2]`, summed left to right (fused when `FMA`).
-    #[inline(always)]
-    fn combine<const FMA: bool>(a: &[Col; 3], s: [f64; 3]) -> Col {
-        a[2].mul_add::<FMA>(s[2], a[1].mul_add::<FMA>(s[1], a[0] * s[0]))
+    fn combine<L: Lanes>(l: L, a: &[Col; 3], s: [f64; 3]) -> Col {
+        l.scale_add(a[2], s[2], l.scale_add(a[1], s[1], l.scale(a[0], s[0])))
     }
 }
+
+/// 4-lane f64 arithmetic on a [`Col`]: how the block algebra's column operations compile.
+pub(crate) trait Lanes: Copy {
+    /// `a s`.
+    fn scale(self, a: Col, s: f64) -> Col;
+    /// `a s + acc`, fused or not (the implementation's rule).
+    fn scale_add(self, a: Col, s: f64, acc: Col) -> Col;
+    /// `a + b`.
+    fn add(self, a: Col, b: Col) -> Col;
+}
+
+/// Plain arrays, each product and each sum rounded: the baseline path (the `Matrix3` forms' bits).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Unfused;
+
+impl Lanes for Unfused {
+    #[inline(always)]
+    fn scale(self, a: Col, s: f64) -> Col {
+        Col(a.0.map(|x| x * s))
+    }
+
+    #[inline(always)]
+    fn scale_add(self, a: Col, s: f64, acc: Col) -> Col {
+        a.zip(acc, |x, y| x * s + y)
+    }
+
+    #[inline(always)]
+    fn add(self, a: Col, b: Col) -> Col {
+        a + b
+    }
+}
+
+/// One 256-bit AVX2 register per column, `a s + acc` one fused multiply-add: the AVX paths. LLVM
+/// keeps the plain arrays' lanes in scalar registers (three quarters of the dispatched step's
+/// arithmetic was scalar), so the vectors are spelled out; the token proves the CPU has AVX2+FMA.
+#[cfg(target_arch = "x86_64")]
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Fused(pulp::x86::V3);
+
+#[cfg(target_arch = "x86_64")]
+impl Fused {
+    /// The fused lanes, where the CPU has AVX2 and FMA.
+    #[inline(always)]
+    pub fn try_new() -> Option<Fused> {
+        pulp::x86::V3::try_new().map(Fused)
+    }
+
+    #[inline(always)]
+    fn load(a: Col) -> pulp::f64x4 {
+        let [x, y, z, w] = a.0;
+        pulp::f64x4(x, y, z, w)
+    }
+
+    #[inline(always)]
+    fn store(v: pulp::f64x4) -> Col {
+        Col([v.0, v.1, v.2, v.3])
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for Fused {
+    #[inline(always)]
+    fn scale(self, a: Col, s: f64) -> Col {
+        Fused::store(self.0.mul_f64x4(Fused::load(a), self.0.splat_f64x4(s)))
+    }
+
+    #[inline(always)]
+    fn scale_add(self, a: Col, s: f64, acc: Col) -> Col {
+        Fused::store(
+            self.0
+                .mul_add_f64x4(Fused::load(a), self.0.splat_f64x4(s), Fused::load(acc)),
+        )
+    }
+    #[inline(always)]
+    fn add(self, a: Col, b: Col) -> Col {
+        Fused::store(self.0.add_f64x4(Fused::load(a), Fused::load(b)))
+    }
+}
+
+/// Runs `body` with `l` the fused lanes when `fma` (a dispatched AVX copy, `crate::simd`) and the
+/// CPU has them, [`Unfused`] otherwise.
+macro_rules! with_lanes {
+    ($fma:expr, |$l:ident| $body:expr) => {{
+        #[cfg(target_arch = "x86_64")]
+        let fused = if $fma { $crate::mat3::Fused::try_new() } else { None };
+        #[cfg(not(target_arch = "x86_64"))]
+        let fused: Option<$crate::mat3::Unfused> = None;
+        match fused {
+            Some($l) => $body,
+            None => {
+                let $l = $crate::mat3::Unfused;
+                $body
+            }
+        }
+    }};
+}
+pub(crate) use with_lanes;
 
 impl Add for Col {
     type Output = Col;
@@ -105,41 +194,72 @@ impl M3 {
     /// `self b`.
     #[inline(always)]
     pub fn mul(&self, b: &M3) -> M3 {
-        self.mul_with::<false>(b)
+        self.mul_with(Unfused, b)
     }
 
-    /// `self b`, fused when `FMA` (module docs).
+    /// `self b` in `l`'s lanes (module docs). No closure calls a lane operation: a closure is
+    /// compiled without the dispatched copy's target features.
     #[inline(always)]
-    pub fn mul_with<const FMA: bool>(&self, b: &M3) -> M3 {
-        b.map_cols(|_, bc| Col::combine::<FMA>(&self.0, [bc.0[0], bc.0[1], bc.0[2]]))
+    pub fn mul_with<L: Lanes>(&self, l: L, b: &M3) -> M3 {
+        let col = |c: usize| -> [f64; 3] { [b.0[c].0[0], b.0[c].0[1], b.0[c].0[2]] };
+        let (c0, c1, c2) = (col(0), col(1), col(2));
+        M3([
+            Col::combine(l, &self.0, c0),
+            Col::combine(l, &self.0, c1),
+            Col::combine(l, &self.0, c2),
+        ])
     }
 
     /// `self bᵀ`.
     #[inline(always)]
     pub fn mul_t(&self, b: &M3) -> M3 {
-        self.mul_t_with::<false>(b)
+        self.mul_t_with(Unfused, b)
     }
 
-    /// `self bᵀ`, fused when `FMA`.
+    /// `self bᵀ` in `l`'s lanes.
     #[inline(always)]
-    pub fn mul_t_with<const FMA: bool>(&self, b: &M3) -> M3 {
+    pub fn mul_t_with<L: Lanes>(&self, l: L, b: &M3) -> M3 {
         let [b0, b1, b2] = b.0;
-        M3(std::array::from_fn(|c| {
-            Col::combine::<FMA>(&self.0, [b0.0[c], b1.0[c], b2.0[c]])
-        }))
+        let row = |c: usize| -> [f64; 3] { [b0.0[c], b1.0[c], b2.0[c]] };
+        let (r0, r1, r2) = (row(0), row(1), row(2));
+        M3([
+            Col::combine(l, &self.0, r0),
+            Col::combine(l, &self.0, r1),
+            Col::combine(l, &self.0, r2),
+        ])
     }
 
     /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (as the `Matrix3` form in the
-    /// tests), fused when `FMA`.
+    /// tests), in `l`'s lanes.
     #[inline(always)]
-    pub fn mul_t_symmetric_with<const FMA: bool>(&self, b: &M3) -> M3 {
-        self.mul_t_with::<FMA>(b).mirror_upper()
+    pub fn mul_t_symmetric_with<L: Lanes>(&self, l: L, b: &M3) -> M3 {
+        self.mul_t_with(l, b).mirror_upper()
     }
 
-    /// `self s + acc`, fused when `FMA`.
+    /// `self s + acc` in `l`'s lanes.
     #[inline(always)]
-    pub fn mul_add<const FMA: bool>(&self, s: f64, acc: &M3) -> M3 {
-        acc.map_cols(|c, x| self.0[c].mul_add::<FMA>(s, x))
+    pub fn mul_add<L: Lanes>(&self, l: L, s: f64, acc: &M3) -> M3 {
+        M3([
+            l.scale_add(self.0[0], s, acc.0[0]),
+            l.scale_add(self.0[1], s, acc.0[1]),
+            l.scale_add(self.0[2], s, acc.0[2]),
+        ])
+    }
+
+    /// `self s` in `l`'s lanes.
+    #[inline(always)]
+    pub fn scale_with<L: Lanes>(&self, l: L, s: f64) -> M3 {
+        M3([l.scale(self.0[0], s), l.scale(self.0[1], s), l.scale(self.0[2], s)])
+    }
+
+    /// `self + o` in `l`'s lanes.
+    #[inline(always)]
+    pub fn add_with<L: Lanes>(&self, l: L, o: &M3) -> M3 {
+        M3([
+            l.add(self.0[0], o.0[0]),
+            l.add(self.0[1], o.0[1]),
+            l.add(self.0[2], o.0[2]),
+        ])
     }
 
     /// The transpose.
@@ -248,11 +368,20 @@ mod tests {
         let (pa, pb) = (M3::of(&a), M3::of(&b));
         assert_eq!(pa.mul(&pb).matrix(), super::mul(&a, &b));
         assert_eq!(pa.mul_t(&pb).matrix(), mul_t(&a, &b));
-        assert_eq!(pa.mul_t_symmetric_with::<false>(&pa).matrix(), mul_t_symmetric(&a, &a));
+        assert_eq!(
+            pa.mul_t_symmetric_with(super::Unfused, &pa).matrix(),
+            mul_t_symmetric(&a, &a)
+        );
         assert_eq!(pa.transpose().matrix(), a.transpose());
         assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);
         assert_eq!(pa.plus_identity(0.7).matrix(), a + Matrix3::identity() * 0.7);
         assert_eq!((pa * 1.3 - pb + -pa).matrix(), a * 1.3 - b + -a);
+        assert_eq!(
+            pa.scale_with(super::Unfused, 1.3)
+                .add_with(super::Unfused, &pb)
+                .matrix(),
+            a * 1.3 + b
+        );
         let mut acc = pa;
         acc += pb;
         assert_eq!(acc.matrix(), a + b);
@@ -268,13 +397,19 @@ mod tests {
         let chain = |r: usize, x: [f64; 3]| a[(r, 2)].mul_add(x[2], a[(r, 1)].mul_add(x[1], a[(r, 0)] * x[0]));
         let ab = Matrix3::from_fn(|r, c| chain(r, [b[(0, c)], b[(1, c)], b[(2, c)]]));
         let abt = Matrix3::from_fn(|r, c| chain(r, [b[(c, 0)], b[(c, 1)], b[(c, 2)]]));
-        assert_eq!(pa.mul_with::<true>(&pb).matrix(), ab);
-        assert_eq!(pa.mul_t_with::<true>(&pb).matrix(), abt);
+        let Some(l) = super::Fused::try_new() else {
+            return; // no AVX2+FMA on this CPU: the fused lanes never run here
+        };
+        assert_eq!(pa.mul_with(l, &pb).matrix(), ab);
+        assert_eq!(pa.mul_t_with(l, &pb).matrix(), abt);
         assert_eq!(
-            pa.mul_add::<true>(0.3, &pb).matrix(),
+            pa.mul_add(l, 0.3, &pb).matrix(),
             a.zip_map(&b, |x, y| x.mul_add(0.3, y))
         );
-        let gap = (pa.mul_with::<true>(&pb).matrix() - a * b).amax();
+        // Sums and scalings have one rounding either way: the unfused bits.
+        assert_eq!(pa.add_with(l, &pb).matrix(), a + b);
+        assert_eq!(pa.scale_with(l, -1.3).matrix(), a * -1.3);
+        let gap = (pa.mul_with(l, &pb).matrix() - a * b).amax();
         assert!(gap < 1e-14 * (a.abs() * b.abs()).amax(), "{gap:e}");
     }
 }

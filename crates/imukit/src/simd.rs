@@ -17,7 +17,8 @@
 //! `a·b + c` into an FMA nor reassociates sums), so their results are equal bit for bit, except
 //! in kernels that ask for fused multiply-adds: the form `fn name<const FMA: bool>(…)` of the
 //! macro compiles its body with `FMA = true` on the AVX paths and `false` on the baseline, and the
-//! body passes it on (the preintegration step fuses its 3×3 block algebra, `mat3`). Those kernels
+//! body passes it on (the preintegration step runs its 3×3 block algebra in 256-bit vectors with
+//! fused multiply-adds, `mat3::Lanes`). Those kernels
 //! differ between paths by rounding only: each fused `a·b + c` rounds once where the baseline
 //! rounds twice, sums in the same order. The tests (`tests/test_simd_paths.py`) hold every path to
 //! 1e-12 relative of the baseline (measured for the fused preintegration: ≤ 3e-15 in deltas,

@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::mat3::M3;
+use crate::mat3::{Lanes, M3};
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
 pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
@@ -76,7 +76,8 @@ pub(super) fn unpadded_cross(x: &PaddedCross) -> Cross {
 /// reduces to multiples of I because ΔR is orthonormal. With zero variances, `A Σ Aᵀ` alone.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn propagate<const FMA: bool>(
+pub(super) fn propagate<L: Lanes>(
+    l: L,
     cov: &Padded,
     phi: &M3,
     m: &M3,
@@ -89,29 +90,33 @@ pub(super) fn propagate<const FMA: bool>(
     let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
     let half_h2 = 0.5 * h * h;
     // `x s + y t + z` as `(x s + y t) + z`: the sums' order of the unfused form, so that the
-    // baseline path keeps its bits.
-    let axpy2 = |x: &M3, s: f64, y: &M3, t: f64, z: &M3| y.mul_add::<FMA>(t, &(*x * s)) + *z;
+    // baseline path keeps its bits. A nested fn, not a closure: a closure is compiled without the
+    // dispatched copy's target features.
+    #[inline(always)]
+    fn axpy2<L: Lanes>(l: L, x: &M3, s: f64, y: &M3, t: f64, z: &M3) -> M3 {
+        y.mul_add(l, t, &x.scale_with(l, s)).add_with(l, z)
+    }
     // Rows of A Σ.
-    let phi_tt = phi.mul_with::<FMA>(&tt);
-    let m_tt = m.mul_with::<FMA>(&tt);
-    let (m_tv, m_tp) = (m.mul_with::<FMA>(&tv), m.mul_with::<FMA>(&tp));
-    let a_vt = m_tt.mul_add::<FMA>(h, &vt);
-    let a_vv = m_tv.mul_add::<FMA>(h, &vv);
-    let a_vp = m_tp.mul_add::<FMA>(h, &vp);
-    let a_pt = axpy2(&m_tt, half_h2, &vt, h, &pt);
-    let a_pv = axpy2(&m_tv, half_h2, &vv, h, &pv);
-    let a_pp = axpy2(&m_tp, half_h2, &vp, h, &pp);
+    let phi_tt = phi.mul_with(l, &tt);
+    let m_tt = m.mul_with(l, &tt);
+    let (m_tv, m_tp) = (m.mul_with(l, &tv), m.mul_with(l, &tp));
+    let a_vt = m_tt.mul_add(l, h, &vt);
+    let a_vv = m_tv.mul_add(l, h, &vv);
+    let a_vp = m_tp.mul_add(l, h, &vp);
+    let a_pt = axpy2(l, &m_tt, half_h2, &vt, h, &pt);
+    let a_pv = axpy2(l, &m_tv, half_h2, &vv, h, &pv);
+    let a_pp = axpy2(l, &m_tp, half_h2, &vp, h, &pp);
     // (A Σ) Aᵀ, upper blocks.
-    let phi_tt_mt = phi_tt.mul_t_with::<FMA>(m);
-    let gyro = jr.mul_t_symmetric_with::<FMA>(jr);
-    let new_tt = gyro.mul_add::<FMA>(var_g * h * h, &phi_tt.mul_t_symmetric_with::<FMA>(phi));
-    let phi_tv = phi.mul_with::<FMA>(&tv);
-    let new_tv = phi_tt_mt.mul_add::<FMA>(h, &phi_tv);
-    let new_tp = axpy2(&phi_tt_mt, half_h2, &phi_tv, h, &phi.mul_with::<FMA>(&tp));
-    let a_vt_mt = a_vt.mul_t_with::<FMA>(m);
-    let new_vv = a_vt_mt.mul_add::<FMA>(h, &a_vv).plus_identity(var_a * h * h);
-    let new_vp = axpy2(&a_vt_mt, half_h2, &a_vv, h, &a_vp).plus_identity(var_a * h * half_h2);
-    let new_pp = axpy2(&a_pt.mul_t_with::<FMA>(m), half_h2, &a_pv, h, &a_pp).plus_identity(var_a * half_h2 * half_h2);
+    let phi_tt_mt = phi_tt.mul_t_with(l, m);
+    let gyro = jr.mul_t_symmetric_with(l, jr);
+    let new_tt = gyro.mul_add(l, var_g * h * h, &phi_tt.mul_t_symmetric_with(l, phi));
+    let phi_tv = phi.mul_with(l, &tv);
+    let new_tv = phi_tt_mt.mul_add(l, h, &phi_tv);
+    let new_tp = axpy2(l, &phi_tt_mt, half_h2, &phi_tv, h, &phi.mul_with(l, &tp));
+    let a_vt_mt = a_vt.mul_t_with(l, m);
+    let new_vv = a_vt_mt.mul_add(l, h, &a_vv).plus_identity(var_a * h * h);
+    let new_vp = axpy2(l, &a_vt_mt, half_h2, &a_vv, h, &a_vp).plus_identity(var_a * h * half_h2);
+    let new_pp = axpy2(l, &a_pt.mul_t_with(l, m), half_h2, &a_pv, h, &a_pp).plus_identity(var_a * half_h2 * half_h2);
     [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()]
 }
 
@@ -133,16 +138,16 @@ pub(super) fn symmetric_diagonal(cov: &mut Padded) {
 
 /// `A X` for a 9×6 cross covariance `X`.
 #[inline(always)]
-pub(super) fn transition<const FMA: bool>(x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCross {
+pub(super) fn transition<L: Lanes>(l: L, x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
-    let m_tg = m.mul_with::<FMA>(&xtg);
+    let m_tg = m.mul_with(l, &xtg);
     [
-        [phi.mul_with::<FMA>(&xtg), M3::ZERO],
-        [m_tg.mul_add::<FMA>(h, &xvg), xva],
+        [phi.mul_with(l, &xtg), M3::ZERO],
+        [m_tg.mul_add(l, h, &xvg), xva],
         [
-            xvg.mul_add::<FMA>(h, &(m_tg * half_h2)) + xpg,
-            xva.mul_add::<FMA>(h, &xpa),
+            xvg.mul_add(l, h, &m_tg.scale_with(l, half_h2)).add_with(l, &xpg),
+            xva.mul_add(l, h, &xpa),
         ],
     ]
 }
@@ -170,41 +175,39 @@ impl Input {
 
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
     #[inline(always)]
-    pub fn add_quadratic<const FMA: bool>(&self, cov: &mut Padded, s_g: f64, s_a: f64) {
-        let tv = self.tg.mul_t_with::<FMA>(&self.vg) * s_g;
-        let vv = self
-            .va
-            .mul_t_symmetric_with::<FMA>(&self.va)
-            .mul_add::<FMA>(s_a, &(self.vg.mul_t_symmetric_with::<FMA>(&self.vg) * s_g));
+    pub fn add_quadratic<L: Lanes>(&self, l: L, cov: &mut Padded, s_g: f64, s_a: f64) {
+        let tv = self.tg.mul_t_with(l, &self.vg).scale_with(l, s_g);
+        let vv = self.va.mul_t_symmetric_with(l, &self.va).mul_add(
+            l,
+            s_a,
+            &self.vg.mul_t_symmetric_with(l, &self.vg).scale_with(l, s_g),
+        );
         let c = self.half_h;
-        cov[0] = self
-            .tg
-            .mul_t_symmetric_with::<FMA>(&self.tg)
-            .mul_add::<FMA>(s_g, &cov[0]);
-        cov[1] += tv;
-        cov[2] = tv.mul_add::<FMA>(c, &cov[2]);
-        cov[3] += vv;
-        cov[4] = vv.mul_add::<FMA>(c, &cov[4]);
-        cov[5] = vv.mul_add::<FMA>(c * c, &cov[5]);
+        cov[0] = self.tg.mul_t_symmetric_with(l, &self.tg).mul_add(l, s_g, &cov[0]);
+        cov[1] = cov[1].add_with(l, &tv);
+        cov[2] = tv.mul_add(l, c, &cov[2]);
+        cov[3] = cov[3].add_with(l, &vv);
+        cov[4] = vv.mul_add(l, c, &cov[4]);
+        cov[5] = vv.mul_add(l, c * c, &cov[5]);
     }
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
     #[inline(always)]
-    pub fn add_cross<const FMA: bool>(&self, cov: &mut Padded, y: &PaddedCross) {
+    pub fn add_cross<L: Lanes>(&self, l: L, cov: &mut Padded, y: &PaddedCross) {
         let c = self.half_h;
         let (vg, va) = (&self.vg, &self.va);
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
         let u = [
-            y[0][0].mul_t_with::<FMA>(vg), // y's θ-row accelerometer block is zero
-            y[1][0].mul_t_with::<FMA>(vg) + y[1][1].mul_t_with::<FMA>(va),
-            y[2][0].mul_t_with::<FMA>(vg) + y[2][1].mul_t_with::<FMA>(va),
+            y[0][0].mul_t_with(l, vg), // y's θ-row accelerometer block is zero
+            y[1][0].mul_t_with(l, vg).add_with(l, &y[1][1].mul_t_with(l, va)),
+            y[2][0].mul_t_with(l, vg).add_with(l, &y[2][1].mul_t_with(l, va)),
         ];
-        let y0t = y[0][0].mul_t_with::<FMA>(&self.tg);
+        let y0t = y[0][0].mul_t_with(l, &self.tg);
         cov[0] += y0t + y0t.transpose();
-        cov[1] += u[0] + self.tg.mul_t_with::<FMA>(&y[1][0]);
-        cov[2] += u[0].mul_add::<FMA>(c, &self.tg.mul_t_with::<FMA>(&y[2][0]));
+        cov[1] = cov[1].add_with(l, &u[0].add_with(l, &self.tg.mul_t_with(l, &y[1][0])));
+        cov[2] = cov[2].add_with(l, &u[0].mul_add(l, c, &self.tg.mul_t_with(l, &y[2][0])));
         cov[3] += u[1] + u[1].transpose();
-        cov[4] += u[1].mul_add::<FMA>(c, &u[2].transpose());
+        cov[4] = cov[4].add_with(l, &u[1].mul_add(l, c, &u[2].transpose()));
         cov[5] += (u[2] + u[2].transpose()) * c;
     }
 }

@@ -29,7 +29,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::blocks::{self, Cross, Input, ZERO_CROSS};
 use super::{Covariance9, Preintegrator};
-use crate::mat3::{mul, M3};
+use crate::mat3::{mul, Lanes, M3};
 use crate::so3;
 
 /// One sample as the midpoint scheme remembers it.
@@ -118,8 +118,9 @@ impl Preintegrator {
     }
 
     #[inline(always)]
-    pub(super) fn integrate_midpoint<const FMA: bool>(
+    pub(super) fn integrate_midpoint<L: Lanes>(
         &mut self,
+        l: L,
         accel: &Vector3<f64>,
         gyro: &Vector3<f64>,
         h: f64,
@@ -167,28 +168,28 @@ impl Preintegrator {
         };
 
         // Covariance, with the shared sample's correlation (module docs).
-        let y_end = blocks::transition::<FMA>(&blocks::padded_cross(&self.ends.end_cross), &phi, &m, h);
-        let mut cov = blocks::propagate::<FMA>(&blocks::padded(&self.covariance), &phi, &m, &jr, h, 0.0, 0.0);
+        let y_end = blocks::transition(l, &blocks::padded_cross(&self.ends.end_cross), &phi, &m, h);
+        let mut cov = blocks::propagate(l, &blocks::padded(&self.covariance), &phi, &m, &jr, h, 0.0, 0.0);
         // B_0 q_0 B_0ᵀ + B_1 q_1 B_1ᵀ in one: the gyro columns are equal, and each accelerometer
         // block (−½h R_s) has the Gram matrix ¼h² I, as −½h I does.
         let pair = Input {
             va: M3::ZERO.plus_identity(half_h),
             ..b0
         };
-        pair.add_quadratic::<FMA>(&mut cov, q0[0] + q1[0], q0[1] + q1[1]);
-        b0.add_cross::<FMA>(&mut cov, &y_end);
+        pair.add_quadratic(l, &mut cov, q0[0] + q1[0], q0[1] + q1[1]);
+        b0.add_cross(l, &mut cov, &y_end);
         blocks::symmetric_diagonal(&mut cov);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step::<FMA>(&mut cov, &phi, &m, &g_b, &self.noise);
+            walk.step(l, &mut cov, &phi, &m, &g_b, &self.noise);
         }
         self.covariance = blocks::unpadded(&cov);
-        let moved_start = blocks::transition::<FMA>(&blocks::padded_cross(&self.ends.start_cross), &phi, &m, h);
+        let moved_start = blocks::transition(l, &blocks::padded_cross(&self.ends.start_cross), &phi, &m, h);
         self.ends.start_cross = blocks::unpadded_cross(&match prev.var {
             None => blocks::add(&moved_start, &b0.scaled(q0[0], q0[1])),
             Some(_) => moved_start,
         });
         self.ends.end_cross = blocks::unpadded_cross(&b1.scaled(q1[0], q1[1]));
-        let jac = blocks::transition::<FMA>(&blocks::padded_cross(&self.jac), &phi, &m, h);
+        let jac = blocks::transition(l, &blocks::padded_cross(&self.jac), &phi, &m, h);
         self.jac = blocks::unpadded_cross(&blocks::add(&jac, &g_b.scaled(1.0, 1.0)));
 
         // Deltas.

@@ -45,7 +45,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::error::{Error, Result};
 use crate::imu::Noise;
-use crate::mat3::{mul, M3};
+use crate::mat3::{mul, Lanes, M3};
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, Padded, ZERO_CROSS};
@@ -172,11 +172,11 @@ impl BiasWalk {
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    fn step<const FMA: bool>(&mut self, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
+    fn step<L: Lanes>(&mut self, l: L, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
         let h = 2.0 * g_b.half_h;
-        let y = blocks::transition::<FMA>(&blocks::padded_cross(&self.cross), phi, m, h);
-        g_b.add_cross::<FMA>(cov, &y);
-        g_b.add_quadratic::<FMA>(cov, self.var_gyro, self.var_accel);
+        let y = blocks::transition(l, &blocks::padded_cross(&self.cross), phi, m, h);
+        g_b.add_cross(l, cov, &y);
+        g_b.add_quadratic(l, cov, self.var_gyro, self.var_accel);
         blocks::symmetric_diagonal(cov);
         self.cross = blocks::unpadded_cross(&blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel)));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
@@ -223,7 +223,7 @@ crate::simd_dispatch! {
     /// One step of `p` ([`Preintegrator::integrate_measurement_clipped`]) per instruction-set path,
     /// its block algebra fused on the AVX paths (`mat3`'s module docs).
     fn step<const FMA: bool>(p: &mut Preintegrator, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, clipped: Clipped) -> () {
-        p.step_with::<FMA>(accel, gyro, h, clipped)
+        crate::mat3::with_lanes!(FMA, |l| p.step_with(l, accel, gyro, h, clipped))
     }
 }
 
@@ -386,13 +386,13 @@ impl Preintegrator {
         step(self, accel, gyro, h, clipped);
     }
 
-    /// One step with the block algebra fused (`FMA`) or not (`mat3`'s module docs).
+    /// One step with the block algebra in `l`'s lanes, fused or not (`mat3`'s module docs).
     #[inline(always)]
-    fn step_with<const FMA: bool>(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, clipped: Clipped) {
+    fn step_with<L: Lanes>(&mut self, l: L, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, clipped: Clipped) {
         let scale = self.variance_scale(clipped);
         match self.scheme {
-            Scheme::Euler => self.integrate_euler::<FMA>(accel, gyro, h, scale),
-            Scheme::Midpoint => self.integrate_midpoint::<FMA>(accel, gyro, h, scale),
+            Scheme::Euler => self.integrate_euler(l, accel, gyro, h, scale),
+            Scheme::Midpoint => self.integrate_midpoint(l, accel, gyro, h, scale),
         }
     }
 
@@ -408,7 +408,7 @@ impl Preintegrator {
     }
 
     #[inline(always)]
-    fn integrate_euler<const FMA: bool>(&mut self, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
+    fn integrate_euler<L: Lanes>(&mut self, l: L, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64, scale: [f64; 2]) {
         let a = accel - self.bias_accel;
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
@@ -423,7 +423,7 @@ impl Preintegrator {
         // In padded blocks (`mat3::M3`) from here to the stored blocks.
         let (rp, jr_p, phi) = (M3::of(&r), M3::of(&jr), M3::of(&step_t));
         let m = -M3::of(&r_a_cross);
-        let mut cov = blocks::propagate::<FMA>(&blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
+        let mut cov = blocks::propagate(l, &blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
         if let Some(walk) = self.bias_walk.as_mut() {
             let g_b = Input {
                 tg: -jr_p * h,
@@ -431,7 +431,7 @@ impl Preintegrator {
                 va: -rp * h,
                 half_h: 0.5 * h,
             };
-            walk.step::<FMA>(&mut cov, &phi, &m, &g_b, &self.noise);
+            walk.step(l, &mut cov, &phi, &m, &g_b, &self.noise);
         }
         self.covariance = blocks::unpadded(&cov);
 
@@ -439,13 +439,13 @@ impl Preintegrator {
         let [[jtg, _], [jvg, jva], [jpg, jpa]] = blocks::padded_cross(&self.jac);
         let jr_h = jr_p * h;
         // `x + y h − z s` runs as `(x + y h) − z s` (the unfused order).
-        let ra_drot = M3::of(&r_a_cross).mul_with::<FMA>(&jtg);
+        let ra_drot = M3::of(&r_a_cross).mul_with(l, &jtg);
         self.jac = blocks::unpadded_cross(&[
-            [phi.mul_with::<FMA>(&jtg) - jr_h, M3::ZERO],
-            [ra_drot.mul_add::<FMA>(-h, &jvg), rp.mul_add::<FMA>(-h, &jva)],
+            [phi.mul_with(l, &jtg) - jr_h, M3::ZERO],
+            [ra_drot.mul_add(l, -h, &jvg), rp.mul_add(l, -h, &jva)],
             [
-                ra_drot.mul_add::<FMA>(-half_h2, &jvg.mul_add::<FMA>(h, &jpg)),
-                rp.mul_add::<FMA>(-half_h2, &jva.mul_add::<FMA>(h, &jpa)),
+                ra_drot.mul_add(l, -half_h2, &jvg.mul_add(l, h, &jpg)),
+                rp.mul_add(l, -half_h2, &jva.mul_add(l, h, &jpa)),
             ],
         ]);
 
