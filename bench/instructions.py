@@ -5,7 +5,8 @@ callgrind (exact, independent of the machine's load; this host has no hardware c
 Each kernel runs once on ``--n`` samples (the inputs of ``bench/_timing.synthetic_imu``, one thread)
 under ``valgrind --tool=callgrind --toggle-collect=<entry>``, so only the entry's call tree is
 counted, inclusive of its callees (preintegration: ``Preintegrator::integrate_samples_cancellable``,
-i.e. the validation, the dispatched loop and the finiteness check; propagate: the whole Rust call);
+i.e. the validation, the dispatched loop and the finiteness check; propagate: the whole Rust call
+under the glue's interruptible runner);
 the count is divided by the number of samples.
 
 Usage: ``python bench/instructions.py [--n 50000] [--paths baseline avx2]``.
@@ -26,7 +27,9 @@ KERNELS = {
     "preintegrate euler": ("dict(scheme='lie_euler')", "*integrate_samples_cancellable*"),
     "preintegrate midpoint": ("dict(scheme='midpoint')", "*integrate_samples_cancellable*"),
     "preintegrate combined": ("dict(scheme='lie_euler', combined=True)", "*integrate_samples_cancellable*"),
-    "propagate": (None, "*propagate_cancellable*"),
+    # The whole Rust call: a pattern on propagate_model would also match its closures, and
+    # callgrind toggles collection off again on entering them.
+    "propagate": (None, "*_core::threads::interruptible*"),
 }
 
 CHILD = """
@@ -68,6 +71,8 @@ def count(kernel: str, path: str, n: int) -> float:
         summary = re.search(r"^summary: (\d+)", out.read_text(), re.MULTILINE)
         if summary is None:
             raise RuntimeError(f"no summary in callgrind's output for {kernel} on {path}")
+        if int(summary.group(1)) == 0:
+            raise RuntimeError(f"{entry} matched no call for {kernel} on {path}: the kernel was renamed?")
         return int(summary.group(1)) / n
 
 
