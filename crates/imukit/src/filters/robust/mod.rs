@@ -388,7 +388,7 @@ fn non_finite(k: usize, t: f64, gyro: &Vector3<f64>, accel: &Vector3<f64>, mag: 
 
 /// Finite input so large that the state overflowed.
 fn check_overflow(s: &RobustState, index: usize) -> Result<()> {
-    let sum = s.q.coords.sum() + s.bias.sum() + s.lp_s1.sum() + s.heading;
+    let sum = s.q.coords.sum() + s.bias.sum() + s.lp_s1.sum() + s.heading.sum();
     if sum.is_finite() {
         Ok(())
     } else {

@@ -32,13 +32,12 @@
 //! Flags: rest where either pass detects it (detection needs `rest_duration_s` of history, which
 //! each pass has on its own side); disturbed where both passes reject the field.
 
-use std::f64::consts::{PI, TAU};
+use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-
-use super::step::{compose, from_world, to_world, Coefs};
+use super::step::{compose, from_world, to_up, to_world, turn, yawed, Coefs};
 use super::{Outputs, Robust, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
+use crate::lie::series::atan2;
 use crate::quat::exp;
 use crate::Result;
 
@@ -205,26 +204,34 @@ impl Robust {
             a_i[k] = coefs.butter(a_i[k], &mut s1, &mut s2);
         }
         for (o, a) in out.iter_mut().zip(&a_i) {
-            let tilt = UnitQuaternion::rotation_between(a, &Vector3::z()).unwrap_or_else(UnitQuaternion::identity);
-            *o = (tilt * quat(o)).coords.into();
+            if let Some(tilt) = to_up(a) {
+                *o = (tilt * quat(o)).coords.into();
+            }
         }
     }
 
     /// 9D: the heading of `out` (internal ENU) replaced by that of the passes `fwd`, `bwd` (in the
-    /// world), `h = h_f + w_k wrap(h_b − h_f)`, each `h` the angle about the vertical from `out`'s.
+    /// world), `h = h_f + w_k wrap(h_b − h_f)`, each `h` the angle about the vertical from `out`'s
+    /// (the twist of `pass ⊗ out⁻¹` about z). Kept as half-angle pairs (as the step's heading):
+    /// `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)` with `Δ/2` the angle of the pair `Rz(h_b) ⊗ Rz(h_f)⁻¹` taken
+    /// with `w ≥ 0` (which is the wrap), one `atan2` per sample.
     fn fuse_headings(&self, fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], out: &mut [[f64; 4]]) {
-        let offset = |pass: &[f64; 4], q: &UnitQuaternion<f64>| {
+        let twist = |pass: &[f64; 4], q: &UnitQuaternion<f64>| {
             let d = from_world(self.world, &quat(pass)) * q.inverse();
-            2.0 * d.k.atan2(d.w)
+            let n2 = d.w * d.w + d.k * d.k;
+            if n2 > 0.0 {
+                Vector2::new(d.w, d.k) / n2.sqrt()
+            } else {
+                Vector2::new(1.0, 0.0)
+            }
         };
         for (k, o) in out.iter_mut().enumerate() {
             let q = quat(o);
-            let (hf, hb) = (offset(&fwd[k], &q), offset(&bwd[k], &q));
-            let d = hb - hf;
-            let h = hf + weights[k] * (d - TAU * ((d + PI) / TAU).floor());
-            *o = (UnitQuaternion::from_axis_angle(&Vector3::z_axis(), h) * q)
-                .coords
-                .into();
+            let (tf, tb) = (twist(&fwd[k], &q), twist(&bwd[k], &q));
+            let rel = Vector2::new(tb.x * tf.x + tb.y * tf.y, tb.y * tf.x - tb.x * tf.y);
+            let half = if rel.x < 0.0 { -rel } else { rel };
+            let delta = 2.0 * atan2(half.y, half.x);
+            *o = yawed(&turn(&tf, weights[k] * delta), &q).coords.into();
         }
     }
 }

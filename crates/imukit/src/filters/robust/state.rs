@@ -91,8 +91,10 @@ state!(
     q_gyro: UnitQuaternion<f64> = ["q_gyro_x", "q_gyro_y", "q_gyro_z", "q_gyro_w"],
     /// Inclination correction `I` → `E'` (ENU up to heading).
     q_incl: UnitQuaternion<f64> = ["q_incl_x", "q_incl_y", "q_incl_z", "q_incl_w"],
-    /// Heading offset `E'` → ENU about the vertical [rad].
-    heading: f64 = ["heading"],
+    /// Heading offset `E'` → ENU about the vertical, `Rz(ψ)` as the unit pair `(cos ψ/2, sin ψ/2)`
+    /// (the w, z of its quaternion; w ≥ 0, i.e. ψ ∈ [−π, π]): turned by a small rotation each
+    /// sample, without trigonometry.
+    heading: Vector2<f64> = ["heading_w", "heading_z"],
     /// False until the specific-force low pass has been set to its first input.
     lp_ready: bool = ["lp_ready"],
     /// First delay element of the Butterworth low pass (per axis, frame `I`).
@@ -142,14 +144,14 @@ state!(
     mag_ready: bool = ["mag_ready"],
     /// Reference field norm `m₀`.
     mag_norm: f64 = ["mag_norm"],
-    /// Reference dip angle `δ₀` [rad].
-    mag_dip: f64 = ["mag_dip"],
+    /// Reference dip angle `δ₀` as `(sin δ₀, cos δ₀)`.
+    mag_dip: Vector2<f64> = ["mag_dip_sin", "mag_dip_cos"],
     /// Seconds of uninterrupted rejection.
     mag_rejected: f64 = ["mag_rejected"],
     /// Candidate new field: norm.
     cand_norm: f64 = ["cand_norm"],
-    /// Candidate new field: dip [rad].
-    cand_dip: f64 = ["cand_dip"],
+    /// Candidate new field: dip as `(sin δ, cos δ)`.
+    cand_dip: Vector2<f64> = ["cand_dip_sin", "cand_dip_cos"],
     /// Seconds of turning the candidate has held.
     cand_time: f64 = ["cand_time"],
     /// Whether the last sample was at rest.
@@ -167,7 +169,7 @@ impl Default for RobustState {
             q,
             q_gyro: q,
             q_incl: q,
-            heading: 0.0,
+            heading: Vector2::new(1.0, 0.0),
             lp_ready: false,
             lp_s1: Vector3::zeros(),
             lp_s2: Vector3::zeros(),
@@ -192,10 +194,10 @@ impl Default for RobustState {
             win_mag_time: 0.0,
             mag_ready: false,
             mag_norm: 0.0,
-            mag_dip: 0.0,
+            mag_dip: Vector2::zeros(),
             mag_rejected: 0.0,
             cand_norm: 0.0,
-            cand_dip: 0.0,
+            cand_dip: Vector2::zeros(),
             cand_time: 0.0,
             rest: false,
             mag_disturbed: false,
@@ -205,7 +207,8 @@ impl Default for RobustState {
 
 impl RobustState {
     /// A state from stored values ([`Fields::values`] order): every number finite and each
-    /// quaternion unit within 1e-9 (then kept bit for bit). Errors name the argument `state`.
+    /// quaternion and the heading pair unit within 1e-9 (then kept bit for bit). Errors name the
+    /// argument `state`.
     pub fn restored(values: &[f64]) -> crate::Result<Self> {
         let bad = |expected: &'static str| crate::Error::Parameter {
             name: "state",
@@ -217,10 +220,10 @@ impl RobustState {
         }
         let s = Self::from_values(values).ok_or_else(|| bad("the fields of a RobustState"))?;
         let unit = |q: &UnitQuaternion<f64>| (q.norm_squared() - 1.0).abs() < 1e-9;
-        if unit(&s.q) && unit(&s.q_gyro) && unit(&s.q_incl) {
+        if unit(&s.q) && unit(&s.q_gyro) && unit(&s.q_incl) && (s.heading.norm_squared() - 1.0).abs() < 1e-9 {
             Ok(s)
         } else {
-            Err(bad("unit quaternions"))
+            Err(bad("unit quaternions and heading pair"))
         }
     }
 }

@@ -7,7 +7,9 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
 
 use super::params::RobustParams;
 use super::state::RobustState;
+use crate::filters::gate::dip;
 use crate::filters::{initial_attitude, World};
+use crate::lie::series::{atan2, half_angle};
 use crate::quat::{exp, multiply};
 
 /// The coefficients that depend on the step `dt` only, recomputed when it changes by more than
@@ -27,6 +29,8 @@ pub(super) struct Coefs {
     rest: f64,
     mag: f64,
     mag_slow: f64,
+    /// `cos θ` of the dip threshold θ = `mag_dip_rad` (−∞ for θ ≥ π, where every dip is near).
+    cos_dip: f64,
 }
 
 impl Coefs {
@@ -51,6 +55,11 @@ impl Coefs {
             rest: first_order(p.rest_tau_s),
             mag: first_order(p.tau_mag_s),
             mag_slow: first_order(p.tau_mag_s * p.mag_slow_factor),
+            cos_dip: if p.mag_dip_rad < std::f64::consts::PI {
+                p.mag_dip_rad.cos()
+            } else {
+                f64::NEG_INFINITY
+            },
         }
     }
 
@@ -124,18 +133,39 @@ pub(super) fn compose(q: &UnitQuaternion<f64>, r: &UnitQuaternion<f64>) -> UnitQ
     UnitQuaternion::new_unchecked(p * (0.5 * (3.0 - p.norm_squared())))
 }
 
-/// Rotation about the vertical by `psi` [rad].
-#[inline(always)]
-fn yaw(psi: f64) -> UnitQuaternion<f64> {
+/// The heading `Rz(ψ)` as the pair `(cos ψ/2, sin ψ/2)` (the w, z of its quaternion).
+fn heading_of(psi: f64) -> Vector2<f64> {
     let (s, c) = (0.5 * psi).sin_cos();
-    UnitQuaternion::new_unchecked(Quaternion::new(c, 0.0, 0.0, s))
+    Vector2::new(c, s)
 }
 
-/// `x` wrapped to (−π, π].
+/// The heading pair `h` turned by `angle` [rad] about the vertical, `Rz(angle) ⊗ h`: the half-angle
+/// rotation by `series::half_angle` (its series below 0.5 rad, exact to rounding and no libm call;
+/// the heading loop's `k e` is ~1e-3 rad), renormalised by one Newton step and with `w ≥ 0`, i.e.
+/// `ψ ∈ [−π, π]` (the angle's wrap).
 #[inline(always)]
-fn wrap(x: f64) -> f64 {
-    use std::f64::consts::{PI, TAU};
-    x - TAU * ((x + PI) / TAU).floor()
+pub(super) fn turn(h: &Vector2<f64>, angle: f64) -> Vector2<f64> {
+    let (k, c) = half_angle(angle * angle);
+    let s = angle * k;
+    let p = Vector2::new(h.x * c - h.y * s, h.y * c + h.x * s);
+    let p = p * (0.5 * (3.0 - p.norm_squared()));
+    if p.x < 0.0 {
+        -p
+    } else {
+        p
+    }
+}
+
+/// `Rz(ψ) ⊗ q` for the heading pair `h` (both unit: the product is, to rounding).
+#[inline(always)]
+pub(super) fn yawed(h: &Vector2<f64>, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let (c, s) = (h.x, h.y);
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        c * q.w - s * q.k,
+        c * q.i - s * q.j,
+        c * q.j + s * q.i,
+        c * q.k + s * q.w,
+    ))
 }
 
 /// Sets up `s` at the first sample: attitude from `initial` (internal ENU) or from the
@@ -149,7 +179,7 @@ pub(super) fn initialise(
 ) {
     s.q_gyro = initial.unwrap_or_else(|| initial_attitude(World::Enu, accel, None));
     s.q_incl = UnitQuaternion::identity();
-    s.heading = 0.0;
+    s.heading = Vector2::new(1.0, 0.0);
     s.bias_cov = Matrix3::identity() * p.bias_sigma_init_rad_s.powi(2);
     s.rest_gyro = *gyro;
     s.rest_accel = *accel;
@@ -177,7 +207,7 @@ pub(super) fn step<const LEARN: bool>(
         if let Some(m) = mag {
             let m_e = s.q_gyro * m;
             if m_e.x != 0.0 || m_e.y != 0.0 {
-                s.heading = m_e.x.atan2(m_e.y);
+                s.heading = heading_of(m_e.x.atan2(m_e.y));
             }
         }
     }
@@ -201,7 +231,7 @@ pub(super) fn step<const LEARN: bool>(
     let mut heading_gain = None;
     if let Some(m) = mag {
         if let Some((gain, err)) = magnetometer(p, c, s, &(r6 * m), gyro) {
-            s.heading = wrap(s.heading + gain * err);
+            s.heading = turn(&s.heading, gain * err);
             corr.z = gain * err;
             heading_gain = Some(gain);
         }
@@ -209,11 +239,7 @@ pub(super) fn step<const LEARN: bool>(
     if LEARN && dt > 0.0 {
         bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
     }
-    let q = if mag.is_some() {
-        compose(&yaw(s.heading), &q6)
-    } else {
-        q6
-    };
+    let q = if mag.is_some() { yawed(&s.heading, &q6) } else { q6 };
     s.q = to_world(world, &q);
 }
 
@@ -222,24 +248,34 @@ pub(super) fn step<const LEARN: bool>(
 #[inline(always)]
 fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector3<f64> {
     let a_f = c.butter(*a_i, &mut s.lp_s1, &mut s.lp_s2);
-    // The rotation taking the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0)
-    // (half-angle identity).
-    let a_e = s.q_incl * a_f;
-    let an = a_e.norm();
-    // A zero or overflowing (finite but huge) specific force has no direction.
-    if an > 1e-9 && an.is_finite() {
-        let n = a_e / an;
-        let w = 1.0 + n.z;
-        let qc = if w > 1e-9 {
-            let k = 1.0 / (2.0 * w).sqrt();
-            Quaternion::new(w * k, n.y * k, -n.x * k, 0.0)
-        } else {
-            Quaternion::new(0.0, 1.0, 0.0, 0.0)
-        };
-        s.q_incl = compose(&UnitQuaternion::new_unchecked(qc), &s.q_incl);
-        return Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0);
+    match to_up(&(s.q_incl * a_f)) {
+        Some(qc) => {
+            s.q_incl = compose(&qc, &s.q_incl);
+            Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0)
+        }
+        None => Vector3::zeros(),
     }
-    Vector3::zeros()
+}
+
+/// The smallest rotation taking the direction of `a` to up (z), none for a zero or overflowing
+/// (finite but huge) `a`, which has no direction; 180° about x for `a` pointing down.
+#[inline(always)]
+pub(super) fn to_up(a: &Vector3<f64>) -> Option<UnitQuaternion<f64>> {
+    let an = a.norm();
+    if !(an > 1e-9 && an.is_finite()) {
+        return None;
+    }
+    // The rotation taking the unit n to z is ∝ (1 + n_z, n × z) = (1 + n_z, n_y, −n_x, 0)
+    // (half-angle identity, no trigonometry).
+    let n = a / an;
+    let w = 1.0 + n.z;
+    let q = if w > 1e-9 {
+        let k = 1.0 / (2.0 * w).sqrt();
+        Quaternion::new(w * k, n.y * k, -n.x * k, 0.0)
+    } else {
+        Quaternion::new(0.0, 1.0, 0.0, 0.0)
+    };
+    Some(UnitQuaternion::new_unchecked(q))
 }
 
 /// First-order low passes of gyro and accelerometer; rest once both stay close to them (and the
@@ -274,21 +310,24 @@ fn magnetometer(
     if norm.is_nan() || norm <= 0.0 {
         return None;
     }
-    // Dip below the horizontal, E' vertical being z.
-    let dip = (-m_e.z / norm).clamp(-1.0, 1.0).asin();
-    let near = |n0: f64, d0: f64| (norm - n0).abs() <= p.mag_norm_fraction * n0 && (dip - d0).abs() <= p.mag_dip_rad;
+    // Dip δ below the horizontal (E' vertical being z) as (sin δ, cos δ): with δ, δ₀ ∈ [−π/2, π/2],
+    // |δ − δ₀| ≤ θ exactly when cos(δ − δ₀) = cos δ cos δ₀ + sin δ sin δ₀ ≥ cos θ (cos decreases
+    // on [0, π]), which needs no asin.
+    let (dip_sin, dip_cos) = dip(m_e, norm, &Vector3::z());
+    let dip = Vector2::new(dip_sin, dip_cos);
+    let near = |n0: f64, d0: &Vector2<f64>| (norm - n0).abs() <= p.mag_norm_fraction * n0 && dip.dot(d0) >= c.cos_dip;
     if !s.mag_ready {
         (s.mag_norm, s.mag_dip, s.mag_ready) = (norm, dip, true);
         (s.cand_norm, s.cand_dip, s.cand_time) = (norm, dip, 0.0);
     }
-    if near(s.cand_norm, s.cand_dip) {
+    if near(s.cand_norm, &s.cand_dip) {
         if gyro.norm_squared() > p.mag_new_field_gyro_rad_s * p.mag_new_field_gyro_rad_s {
             s.cand_time += c.dt;
         }
     } else {
         (s.cand_norm, s.cand_dip, s.cand_time) = (norm, dip, 0.0);
     }
-    let mut accepted = near(s.mag_norm, s.mag_dip);
+    let mut accepted = near(s.mag_norm, &s.mag_dip);
     if !accepted && s.cand_time >= p.mag_new_field_s {
         (s.mag_norm, s.mag_dip) = (s.cand_norm, s.cand_dip);
         accepted = true;
@@ -307,8 +346,12 @@ fn magnetometer(
     if m_e.x == 0.0 && m_e.y == 0.0 {
         return None;
     }
-    // North is +y: the heading that turns the horizontal field onto it.
-    Some((gain, wrap(m_e.x.atan2(m_e.y) - s.heading)))
+    // North is +y: the error is the angle from it of the horizontal field turned by the heading,
+    // `Rz(ψ) m` with (cos ψ, sin ψ) = (w² − z², 2 w z) of the pair (the field's own angle less ψ,
+    // wrapped; small once converged, where `series::atan2` needs no libm call).
+    let (w, z) = (s.heading.x, s.heading.y);
+    let (cos, sin) = (w * w - z * z, 2.0 * w * z);
+    Some((gain, atan2(cos * m_e.x - sin * m_e.y, sin * m_e.x + cos * m_e.y)))
 }
 
 /// Accumulates one sample into the bias window and, when the window is full, makes one Kalman
