@@ -38,13 +38,19 @@ GRIDS: dict[str, dict[str, tuple[float, ...]]] = {
         "tau_acc_s": (2.0, 3.0),
         "tau_mag_s": (9.0, 20.0),
         "bias_window_s": (1.0, 2.0, 4.0),
-        "bias_forgetting_s": (100.0, 1000.0),
+        "bias_forgetting_s": (1600.0, 16000.0),  # the random walks of 100 s (VQF's) and 1000 s at σ_init 0.5 °/s
     },
     # The magnetic thresholds (9D only: 6D does not change).
     "field": {
         "tau_mag_s": (9.0, 14.0, 20.0),
         "mag_dip_rad": tuple(np.radians([10.0, 15.0, 25.0])),
         "mag_norm_fraction": (0.1, 0.15),
+    },
+    # Rest detection (issue 15: rest under vibration).
+    "rest": {
+        "rest_noise_tau_s": (0.02, 0.05, 0.1),
+        "rest_gyro_rad_s": tuple(float(x) for x in np.radians([1.0, 2.0, 3.0])),
+        "rest_accel": (0.25, 0.5),
     },
     "dip": {
         "tau_mag_s": (14.0, 20.0),

@@ -15,7 +15,7 @@
 //! | heading (9D) | `ψ ← ψ + k e`, `e` the angle of the horizontal field from north (+y) in `E'`, `k = 1 − exp(−dt/τ_mag)`: about the vertical only, so the field never tilts the estimate |
 //! | magnetic disturbance | norm `|‖m‖ − m₀| ≤ f m₀` and dip `|δ − δ₀| ≤ θ` against the reference learned at the first sample; rejected at most `mag_max_rejection_s`, then used at `mag_slow_factor × τ_mag`; a homogeneous field held while turning for `mag_new_field_s` becomes the reference |
 //! | bias | Kalman filter on `b` (random walk): at rest the mean gyro of the rest segment (`H = I`, noise `σ_rest²/T`) every `bias_rest_window_s` and at its end; in motion per window of `bias_window_s` the mean correction rate (`H = −Σ R dt / T`, x, y from inclination, z from heading); clipped to `±bias_clip_rad_s` |
-//! | rest | `‖ω − ω̄‖`, `‖ω̄‖ < rest_gyro_rad_s` and `‖a − ā‖ < rest_accel` (first-order low passes, `rest_tau_s`) for `rest_duration_s` |
+//! | rest | `‖ω̃ − ω̄‖ < rest_gyro_rad_s`, `‖ω̄ − b̂‖² < rest_gyro_rad_s² + 9 tr P` and `‖ã − ā‖ < rest_accel` for `rest_duration_s` (first-order low passes: `ω̄`, `ā` over `rest_tau_s`, `ω̃`, `ã` over `rest_noise_tau_s`, which takes noise and vibration off); a raw sample beyond 4× the rms deviation ends it at once |
 //! | first sample | initialises: tilt from the accelerometer, yaw 0 (6D) or heading from the field (9D), unless an initial attitude is given; output as is |
 //! | outputs per sample | `q_wb`, `b̂`, `σ_b = √diag P`, rest flag, magnetic-disturbance flag, after that sample |
 //! | offline | [`Robust::smooth`]: forward and backward (time-reversed) passes' biases fused; the specific force in `I` filtered forward then backward (zero phase) for the inclination; 9D heading of both passes fused |

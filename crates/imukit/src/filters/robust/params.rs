@@ -31,15 +31,19 @@ pub struct RobustParams {
     pub bias_rest_window_s: f64,
     /// The bias estimate is clipped to ± this per axis [rad/s].
     pub bias_clip_rad_s: f64,
-    /// Rest: `‖ω − ω̄‖` and `‖ω̄ − b̂‖` below this [rad/s] (`ω̄` the first-order low pass of the
-    /// gyro, `b̂` the bias estimate).
+    /// Rest: `‖ω̃ − ω̄‖` below this, and `‖ω̄ − b̂‖` below it widened by the bias uncertainty
+    /// [rad/s] (`ω̃`, `ω̄` the gyro low-passed with `rest_noise_tau_s` and `rest_tau_s`, `b̂` the
+    /// bias estimate).
     pub rest_gyro_rad_s: f64,
-    /// Rest: `‖a − ā‖` below this [m/s²] (`ā` the first-order low pass of the accelerometer).
+    /// Rest: `‖ã − ā‖` below this [m/s²] (the accelerometer low-passed as the gyro).
     pub rest_accel: f64,
     /// Rest: time the thresholds must hold [s].
     pub rest_duration_s: f64,
-    /// Time constant of the rest-detection low passes [s].
+    /// Time constant of the rest-detection low passes `ω̄`, `ā` (the window means) [s].
     pub rest_tau_s: f64,
+    /// Time constant of the low passes `ω̃`, `ã` that take sensor noise and vibration off the
+    /// samples the rest tests compare with the window means [s].
+    pub rest_noise_tau_s: f64,
     /// Magnetic disturbance: relative threshold on `|‖m‖ − m₀|/m₀`.
     pub mag_norm_fraction: f64,
     /// Magnetic disturbance: threshold on the dip-angle change `|δ − δ₀|` [rad].
@@ -63,16 +67,17 @@ impl Default for RobustParams {
             tau_acc_s: 2.0,
             tau_mag_s: 20.0,
             bias_window_s: 4.0,
-            bias_sigma_init_rad_s: 0.5 * deg,
-            bias_forgetting_s: 1000.0,
+            bias_sigma_init_rad_s: 2.0 * deg,
+            bias_forgetting_s: 16000.0,
             bias_sigma_motion_rad_s: 0.2 * deg,
             bias_sigma_rest_rad_s: 0.06 * deg,
             bias_rest_window_s: 1.0,
-            bias_clip_rad_s: 2.0 * deg,
+            bias_clip_rad_s: 6.0 * deg,
             rest_gyro_rad_s: 2.0 * deg,
             rest_accel: 0.5,
             rest_duration_s: 1.5,
             rest_tau_s: 0.5,
+            rest_noise_tau_s: 0.05,
             mag_norm_fraction: 0.1,
             mag_dip_rad: 25.0 * deg,
             mag_max_rejection_s: 60.0,
@@ -125,6 +130,7 @@ named!(
     rest_accel,
     rest_duration_s,
     rest_tau_s,
+    rest_noise_tau_s,
     mag_norm_fraction,
     mag_dip_rad,
     mag_max_rejection_s,

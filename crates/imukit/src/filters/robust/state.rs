@@ -109,6 +109,12 @@ state!(
     rest_gyro: Vector3<f64> = ["rest_gyro_x", "rest_gyro_y", "rest_gyro_z"],
     /// Low-passed accelerometer of rest detection [m/s²].
     rest_accel: Vector3<f64> = ["rest_accel_x", "rest_accel_y", "rest_accel_z"],
+    /// Gyro of rest detection with noise and vibration low-passed off [rad/s].
+    rest_gyro_smooth: Vector3<f64> = ["rest_gyro_smooth_x", "rest_gyro_smooth_y", "rest_gyro_smooth_z"],
+    /// Accelerometer of rest detection with noise and vibration low-passed off [m/s²].
+    rest_accel_smooth: Vector3<f64> = ["rest_accel_smooth_x", "rest_accel_smooth_y", "rest_accel_smooth_z"],
+    /// Mean squares of the raw deviations `‖ω − ω̄‖²`, `‖a − ā‖²` (low-passed as `ω̄`).
+    rest_ms: Vector2<f64> = ["rest_gyro_ms", "rest_accel_ms"],
     /// Seconds the rest thresholds have held.
     rest_time: f64 = ["rest_time"],
     /// Butterworth delay elements of the rows x, y of `R_E'b` (the correction loop's response to
@@ -177,6 +183,9 @@ impl Default for RobustState {
             bias_cov: Matrix3::zeros(),
             rest_gyro: Vector3::zeros(),
             rest_accel: Vector3::zeros(),
+            rest_gyro_smooth: Vector3::zeros(),
+            rest_accel_smooth: Vector3::zeros(),
+            rest_ms: Vector2::zeros(),
             rest_time: 0.0,
             win_time: 0.0,
             rest_sum: Vector3::zeros(),

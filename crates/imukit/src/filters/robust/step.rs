@@ -27,6 +27,7 @@ pub(super) struct Coefs {
     a1: f64,
     a2: f64,
     rest: f64,
+    rest_noise: f64,
     mag: f64,
     mag_slow: f64,
     /// `cos θ` of the dip threshold θ = `mag_dip_rad` (−∞ for θ ≥ π, where every dip is near).
@@ -53,6 +54,7 @@ impl Coefs {
             a1: 2.0 * (k * k - 1.0) * n,
             a2: (1.0 - std::f64::consts::SQRT_2 * k + k * k) * n,
             rest: first_order(p.rest_tau_s),
+            rest_noise: first_order(p.rest_noise_tau_s),
             mag: first_order(p.tau_mag_s),
             mag_slow: first_order(p.tau_mag_s * p.mag_slow_factor),
             cos_dip: if p.mag_dip_rad < std::f64::consts::PI {
@@ -181,8 +183,8 @@ pub(super) fn initialise(
     s.q_incl = UnitQuaternion::identity();
     s.heading = Vector2::new(1.0, 0.0);
     s.bias_cov = Matrix3::identity() * p.bias_sigma_init_rad_s.powi(2);
-    s.rest_gyro = *gyro;
-    s.rest_accel = *accel;
+    (s.rest_gyro, s.rest_gyro_smooth) = (*gyro, *gyro);
+    (s.rest_accel, s.rest_accel_smooth) = (*accel, *accel);
     s.initialized = true;
 }
 
@@ -278,19 +280,46 @@ pub(super) fn to_up(a: &Vector3<f64>) -> Option<UnitQuaternion<f64>> {
     Some(UnitQuaternion::new_unchecked(q))
 }
 
-/// First-order low passes of gyro and accelerometer; rest once both stay close to them (and the
-/// gyro, less the bias estimate, small) for `rest_duration_s`. The bias is taken off `ω̄`
-/// because the raw `‖ω̄‖` of a sensor at rest is `‖b‖`: with a 1 °/s bias per axis (√3 °/s) it
-/// has to decay to within 0.27 °/s of the 2 °/s threshold, which took 2.1 s of a 5 s rest after
-/// 24 °/s of turning (`docs/filters_robust.md`, bias).
+/// Rest: the gyro and accelerometer, low-passed over `rest_noise_tau_s` (`ω̃`, `ã`), stay
+/// close to their window means (`ω̄`, `ā`, low-passed over `rest_tau_s`) and the mean gyro is a
+/// bias the estimate allows, for `rest_duration_s`.
+///
+/// The samples are low-passed before the comparison because the raw deviation `‖ω − ω̄‖` is
+/// mostly sensor noise and vibration: a drone's rotors on the ground give 2 °/s per sample (EuRoC
+/// V1_02) and a raw test never finds rest; `ω̃` keeps `√(α/(2 − α))` of white noise (α = the
+/// step's gain; 0.45 °/s there), passes motion below its 3.2 Hz cut-off and makes the thresholds
+/// act on the noise density, whatever the sample rate.
+///
+/// The mean test is `‖ω̄ − b̂‖² < rest_gyro² + 9 tr P` (P the bias covariance): a sensor at rest
+/// reads its bias, which is within 3σ of the estimate. Taken as `‖ω̄ − b̂‖ < rest_gyro` alone it
+/// never held before the bias was known when the bias exceeds the threshold (EuRoC: 4.45 °/s);
+/// once a rest has measured the bias, P is small and the test is the plain one. The bias is taken
+/// off `ω̄` because the raw `‖ω̄‖` of a sensor at rest is `‖b‖` (`docs/filters_robust.md`, bias).
+///
+/// `ω̃` lags the start of a motion by about `rest_noise_tau_s`, and the rest mean would take in
+/// those samples (BROAD 6D heading 2.46° → 2.56°): as in Mahony's rest detection, one raw sample
+/// beyond 4× the rms deviation seen so far (floored at a tenth of the threshold) ends the rest at
+/// once. Vibration raises the rms with it, so it does not end a rest under vibration.
 #[inline(always)]
 fn rest_detection(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vector3<f64>, accel: &Vector3<f64>) {
     s.rest_gyro += (gyro - s.rest_gyro) * c.rest;
     s.rest_accel += (accel - s.rest_accel) * c.rest;
+    s.rest_gyro_smooth += (gyro - s.rest_gyro_smooth) * c.rest_noise;
+    s.rest_accel_smooth += (accel - s.rest_accel_smooth) * c.rest_noise;
     let th = p.rest_gyro_rad_s * p.rest_gyro_rad_s;
-    let still = (gyro - s.rest_gyro).norm_squared() < th
-        && (s.rest_gyro - s.bias).norm_squared() < th
-        && (accel - s.rest_accel).norm_squared() < p.rest_accel * p.rest_accel;
+    let a2 = p.rest_accel * p.rest_accel;
+    // Capped: a finite 1e300 m/s² sample must not make the state infinite.
+    let dev = Vector2::new(
+        (gyro - s.rest_gyro).norm_squared(),
+        (accel - s.rest_accel).norm_squared(),
+    )
+    .map(|x| x.min(f64::MAX));
+    let onset = dev.x >= 16.0 * s.rest_ms.x.max(th / 100.0) || dev.y >= 16.0 * s.rest_ms.y.max(a2 / 100.0);
+    s.rest_ms += (dev - s.rest_ms) * c.rest;
+    let still = !onset
+        && (s.rest_gyro_smooth - s.rest_gyro).norm_squared() < th
+        && (s.rest_gyro - s.bias).norm_squared() < th + 9.0 * s.bias_cov.trace()
+        && (s.rest_accel_smooth - s.rest_accel).norm_squared() < a2;
     s.rest_time = if still { s.rest_time + c.dt } else { 0.0 };
     s.rest = s.rest_time >= p.rest_duration_s;
 }
