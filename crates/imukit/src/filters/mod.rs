@@ -145,7 +145,7 @@ pub struct Inputs<'a> {
 
 /// `Exp(φ)` of one filter step: [`crate::quat::exp`] with the shorter series of
 /// [`series::half_angle_small`] below θ = 0.01 rad (the same rotation to the last bit or so;
-/// the step is a chain of dependent operations, and this shortens it by seven multiply-adds).
+/// the step is a chain of dependent operations, and this shortens it by three multiply-adds).
 #[inline(always)]
 fn exp_step(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
     let (k, w) = series::half_angle_small(phi.norm_squared());

@@ -120,7 +120,7 @@ pub fn half_angle(theta_sq: f64) -> (f64, f64) {
 /// [`half_angle`] with shorter series below θ² = 1e-4 (θ < 0.01 rad, an attitude filter's gyro
 /// step at 100 Hz up to 1 rad/s): in `x² = θ²/4 < 2.5e-5`, sin x/x through x⁴ and cos x through
 /// x⁶, whose first omitted terms are below 4e-18 and 1e-23, a quarter of the last bit at most;
-/// two and three multiply-adds on the dependency chain instead of six. Above, [`half_angle`].
+/// two and three multiply-adds on the dependency chain instead of five and six. Above, [`half_angle`].
 #[inline(always)]
 pub fn half_angle_small(theta_sq: f64) -> (f64, f64) {
     if theta_sq < 1e-4 {
@@ -240,30 +240,12 @@ mod tests {
         }
     }
 
-    /// Both branches of the half-angle coefficients against 50-digit values (mpmath).
+    /// Both branches of the half-angle coefficients, and the short series of `half_angle_small`
+    /// on both sides of its switch (θ = 0.01), against 50-digit values (mpmath): within the last
+    /// bit of the values.
     #[test]
     #[allow(clippy::excessive_precision)] // the references are quoted as computed
     fn half_angle_matches_high_precision_values() {
-        // (θ, sin(θ/2)/θ, cos(θ/2))
-        let cases = [
-            (1e-8, 0.4999999999999999979167, 0.9999999999999999875),
-            (0.1, 0.4997916927067832879487, 0.9987502603949662465629),
-            (0.4999, 0.4948099886461344949577, 0.9689247906974618291559),
-            (0.5001, 0.4948058479630740395059, 0.9689000503015466853613),
-            (3.0, 0.3324983288680181436472, 0.07073720166770291008819),
-        ];
-        for (theta, k, w) in cases {
-            let (k_ours, w_ours) = half_angle(theta * theta);
-            assert!((k_ours - k).abs() < 2e-16, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
-            assert!((w_ours - w).abs() < 2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
-        }
-    }
-
-    /// The short series of `half_angle_small` on both sides of its switch (θ = 0.01), against
-    /// 50-digit values (mpmath): within the last bit of the values (≈ 0.5 and ≈ 1).
-    #[test]
-    #[allow(clippy::excessive_precision)] // the references are quoted as computed
-    fn half_angle_small_matches_high_precision_values() {
         // (θ, sin(θ/2)/θ, cos(θ/2))
         let cases = [
             (1e-8, 0.4999999999999999979167, 0.9999999999999999875),
@@ -271,11 +253,16 @@ mod tests {
             (0.0099999, 0.4999979167109371859516, 0.9999875002760393533155),
             (0.0100001, 0.4999979166276040609514, 0.9999874997760414366463),
             (0.1, 0.4997916927067832879487, 0.9987502603949662465629),
+            (0.4999, 0.4948099886461344949577, 0.9689247906974618291559),
+            (0.5001, 0.4948058479630740395059, 0.9689000503015466853613),
+            (3.0, 0.3324983288680181436472, 0.07073720166770291008819),
         ];
-        for (theta, k, w) in cases {
-            let (k_ours, w_ours) = half_angle_small(theta * theta);
-            assert!((k_ours - k).abs() < 6e-17, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
-            assert!((w_ours - w).abs() < 1.2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
+        for f in [half_angle, half_angle_small] {
+            for (theta, k, w) in cases {
+                let (k_ours, w_ours) = f(theta * theta);
+                assert!((k_ours - k).abs() < 2e-16, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
+                assert!((w_ours - w).abs() < 2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
+            }
         }
     }
 
