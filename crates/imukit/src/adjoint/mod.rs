@@ -20,7 +20,10 @@
 //!
 //! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
 //! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
-//! Jacobian in both schemes.
+//! Jacobian in both schemes. The common case — lie_euler, noise as densities, the final record's
+//! covariance without the bias Jacobian — runs `euler.rs` instead: the same numbers (to rounding)
+//! with the covariance's rotation error in the window's start frame, where the step is five 3×3
+//! products instead of two structured 9×9 passes.
 //! [`forward`] writes one record per interval (`per_step`) or per window:
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
