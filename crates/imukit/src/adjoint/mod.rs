@@ -20,7 +20,10 @@
 //!
 //! The interval step is `step.rs` (Forster et al. 2017; the midpoint scheme of
 //! `preint/midpoint.rs`, with its shared-sample noise correlation), deltas, covariance and bias
-//! Jacobian in both schemes.
+//! Jacobian in both schemes. The common case — lie_euler, noise as densities, the final record's
+//! covariance without the bias Jacobian — runs `euler.rs` instead: the same numbers (to rounding)
+//! with the covariance's rotation error in the window's start frame, where the step is five 3×3
+//! products instead of two structured 9×9 passes.
 //! [`forward`] writes one record per interval (`per_step`) or per window:
 //! `[ΔR (9, row-major), Δv (3), Δp (3), P (81, if cov), J (54, if jac)]`. [`backward`] takes the
 //! cotangents of those records and writes per interval `[h̄, w̄ (3), ā (3), ā_end (3, midpoint),
@@ -30,6 +33,7 @@
 //! thread: O(n) memory per thread, none between the passes), then sweeps back. Windows run in parallel (rayon); each window's arithmetic is independent of
 //! the thread count.
 
+mod euler;
 mod so3;
 mod step;
 #[cfg(test)]
@@ -160,6 +164,17 @@ impl Windows<'_> {
             });
         }
         Ok(windows)
+    }
+
+    /// The densities when `euler.rs` runs this call: lie_euler, noise as densities, the
+    /// covariance of the final record without the bias Jacobian (`imukit.torch`'s common case).
+    fn euler_densities(&self, out: &Outputs) -> Option<&[f64]> {
+        match self.noise {
+            Some(Noise::Densities(q)) if self.a_end.is_none() && out.covariance && !out.jacobian && !out.per_step => {
+                Some(q)
+            }
+            _ => None,
+        }
     }
 
     /// The interval whose step sample `k`'s density is discretised over, and that step (module
@@ -348,6 +363,9 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
     let linear = outputs.linear(x.noise);
     out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
         let x = window(x, b);
+        if let Some(q) = x.euler_densities(outputs) {
+            return euler::forward(&x, q, outputs, o, b);
+        }
         let mut s = State::start();
         for k in 0..x.n {
             s = step::forward(&s, &x.interval(k), linear);
@@ -380,6 +398,9 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
     grad.par_chunks_mut(x.n * gw).enumerate().try_for_each(|(b, g)| {
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
+        if let Some(q) = x.euler_densities(outputs) {
+            return euler::backward(&x, q, outputs, bar, g, b);
+        }
         let mut tape = Tape::new(linear, x.a_end.is_some(), x.n);
         let mut s = State::start();
         for k in 0..x.n {

@@ -72,12 +72,19 @@ fn padded(count: usize, n: usize) -> Data {
 }
 
 fn check(midpoint: bool, per_step: bool, densities: bool) -> Result<()> {
+    check_outputs(
+        midpoint,
+        densities,
+        Outputs {
+            per_step,
+            covariance: true,
+            jacobian: true,
+        },
+    )
+}
+
+fn check_outputs(midpoint: bool, densities: bool, outputs: Outputs) -> Result<()> {
     let (count, n) = (2, 4);
-    let outputs = Outputs {
-        per_step,
-        covariance: true,
-        jacobian: true,
-    };
     let d = padded(count, n);
     let x = windows(&d, n, midpoint, densities);
     let bar = numbers(count * outputs.records(n) * outputs.width(), 7);
@@ -146,6 +153,64 @@ fn reverse_matches_central_differences_euler_with_covariance() -> Result<()> {
 fn reverse_matches_central_differences_with_noise_densities() -> Result<()> {
     for (midpoint, per_step) in [(false, false), (false, true), (true, false), (true, true)] {
         check(midpoint, per_step, true)?;
+    }
+    Ok(())
+}
+
+/// `euler.rs`'s path (lie_euler, densities, final covariance without the Jacobian).
+#[test]
+fn reverse_matches_central_differences_euler_densities_final() -> Result<()> {
+    let outputs = Outputs {
+        per_step: false,
+        covariance: true,
+        jacobian: false,
+    };
+    check_outputs(false, true, outputs)
+}
+
+/// `euler.rs` (covariance in the start frame) equals `step.rs` (body frame, the path taken with
+/// the bias Jacobian): records and input cotangents, over 200 intervals with a padded start.
+#[test]
+fn euler_densities_path_equals_the_general_step() -> Result<()> {
+    let (count, n) = (3, 200);
+    let d = padded(count, n);
+    let x = windows(&d, n, false, true);
+    let fast = Outputs {
+        per_step: false,
+        covariance: true,
+        jacobian: false,
+    };
+    let general = Outputs { jacobian: true, ..fast };
+    let (wf, wg) = (fast.width(), general.width());
+    let mut rf = vec![0.0; count * wf];
+    let mut rg = vec![0.0; count * wg];
+    forward(&x, &fast, &mut rf)?;
+    forward(&x, &general, &mut rg)?;
+    // The general record with the Jacobian's 54 numbers dropped.
+    let rg_cut: Vec<f64> = rg.chunks(wg).flat_map(|r| r[..wf].to_vec()).collect();
+    let close = |a: &[f64], b: &[f64], what: &str| {
+        let scale = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let worst = a.iter().zip(b).fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(worst <= 1e-13 * scale, "{what}: {worst} of {scale}");
+    };
+    for w in 0..count {
+        let (a, b) = (&rf[w * wf..(w + 1) * wf], &rg_cut[w * wf..(w + 1) * wf]);
+        close(&a[..15], &b[..15], "deltas");
+        close(&a[15..], &b[15..], "covariance");
+    }
+    // Cotangents: the same numbers on the shared fields, zero on the Jacobian.
+    let bar = numbers(count * wf, 7);
+    let bar_g: Vec<f64> = bar
+        .chunks(wf)
+        .flat_map(|r| r.iter().copied().chain([0.0; 54]))
+        .collect();
+    let gw = x.grad_width();
+    let (mut gf, mut gg) = (vec![0.0; count * n * gw], vec![0.0; count * n * gw]);
+    backward(&x, &fast, &bar, &mut gf)?;
+    backward(&x, &general, &bar_g, &mut gg)?;
+    for (field, range) in [("h", 0..1), ("w", 1..4), ("a", 4..7), ("q", 7..9)] {
+        let pick = |g: &[f64]| -> Vec<f64> { g.chunks(gw).flat_map(|r| r[range.clone()].to_vec()).collect() };
+        close(&pick(&gf), &pick(&gg), field);
     }
     Ok(())
 }
