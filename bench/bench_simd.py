@@ -8,8 +8,11 @@ combined forms) run in the parent, between the rounds, so the ratios compare the
 The ``preintegrate_windows`` rows time windows of ``WINDOW`` samples on one and two threads (the
 floor of a two-thread row is per two cores).
 
+With ``--cpu`` every cell (the peers' too) is the process's CPU time (``time.process_time``), what a
+loaded machine inflates least.
+
 Usage: ``python bench/bench_simd.py [--n 200000] [--gtsam-n 20000] [--rounds 3] [--repeats 5]
-[--only windows]``.
+[--only windows] [--cpu]``.
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ KERNELS = {
     "preintegrate midpoint": (2400, 56, 150),
     "preintegrate combined (15×15)": (2100, 56, 180),
     "propagate (15×15 each sample)": (2000, 136, 150),
+    # The same step with one covariance in 1000 written: the step without the output's 1.8 kB a sample.
+    "propagate (15×15, every 1000th kept)": (2000, 136, None),
     "integrate midpoint": (200, 136, 25),
     "integrate_attitude": (120, 64, None),
     "preintegrate_windows euler, 1 thread": (1300, 56, None),
@@ -68,9 +73,12 @@ def cases(n: int) -> dict[str, Callable[[], object]]:
         names[1]: lambda: ik.preintegrate(imu, noise=noise, scheme="midpoint", threads=1),
         names[2]: lambda: ik.preintegrate(imu, noise=noise, scheme="lie_euler", combined=True, threads=1),
         names[3]: lambda: ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise),
-        names[4]: lambda: ik.integrate(imu, initial=initial, scheme="midpoint"),
-        names[5]: lambda: ik.integrate_attitude(t, gyro, threads=1),
-        **windows_cases(t, gyro, accel, noise, names[6:]),
+        names[4]: lambda: ik.propagate(
+            imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise, covariance_every=1000
+        ),
+        names[5]: lambda: ik.integrate(imu, initial=initial, scheme="midpoint"),
+        names[6]: lambda: ik.integrate_attitude(t, gyro, threads=1),
+        **windows_cases(t, gyro, accel, noise, names[7:]),
     }
 
 
@@ -87,14 +95,14 @@ def windows_cases(
     }
 
 
-def child(n: int, repeats: int, only: str) -> None:
+def child(n: int, repeats: int, only: str, clock: Callable[[], float]) -> None:
     """One path's row, as JSON on stdout."""
     row = {"path": ik.simd_path()}
-    row.update({name: median_s(f, repeats) / n * 1e9 for name, f in cases(n).items() if only in name})
+    row.update({name: median_s(f, repeats, clock) / n * 1e9 for name, f in cases(n).items() if only in name})
     print(json.dumps(row))
 
 
-def gtsam_rows(n: int) -> dict[str, float]:
+def gtsam_rows(n: int, clock: Callable[[], float]) -> dict[str, float]:
     """ns per sample of GTSAM's Python loops (euler: the manifold class; combined)."""
     if gtsam is None:
         return {}
@@ -107,10 +115,10 @@ def gtsam_rows(n: int) -> dict[str, float]:
     def loop(make: Callable[[], object]) -> float:
         pim = make()
         step = pim.integrateMeasurement  # type: ignore[attr-defined]
-        start = time.perf_counter()
+        start = clock()
         for k in range(n - 1):
             step(accel[k], gyro[k], steps[k])
-        return (time.perf_counter() - start) / (n - 1) * 1e9
+        return (clock() - start) / (n - 1) * 1e9
 
     return {
         "preintegrate euler (9×9 + 9×6)": loop(lambda: gtsam.PreintegratedImuMeasurementsManifold(params)),
@@ -125,10 +133,12 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--only", default="", help="run the kernels whose name contains this")
+    parser.add_argument("--cpu", action="store_true", help="time CPU, not wall-clock, time")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    clock = time.process_time if args.cpu else time.perf_counter
     if args.child:
-        child(args.n, args.repeats, args.only)
+        child(args.n, args.repeats, args.only, clock)
         return
     runs: dict[str, list[dict[str, float]]] = {p: [] for p in PATHS}
     peers: list[dict[str, float]] = []
@@ -138,13 +148,15 @@ def main() -> None:
             env = dict(os.environ, IMUKIT_SIMD=path, RAYON_NUM_THREADS="1")
             command = [sys.executable, __file__, "--child", f"--n={args.n}", f"--repeats={args.repeats}"]
             command.append(f"--only={args.only}")
+            command += ["--cpu"] if args.cpu else []
             out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout
             row = json.loads(out)
             used[path] = row.pop("path")
             runs[path].append(row)
         if any(args.only in name for name in PEER_ROWS):
-            peers.append(gtsam_rows(args.gtsam_n))
-    print(f"paths in use: {used}; n = {args.n:,}, {args.rounds} alternated rounds, one thread")
+            peers.append(gtsam_rows(args.gtsam_n, clock))
+    what = "CPU" if args.cpu else "wall-clock"
+    print(f"paths in use: {used}; n = {args.n:,}, {args.rounds} alternated rounds, one thread, {what} time")
     header = "| kernel | flops | bytes | floor ns | " + " | ".join(PATHS) + " | target | peer ns | peer/best |"
     print(header)
     print("|" + "---|" * (header.count("|") - 1))

@@ -42,7 +42,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::earth::LocalLevel;
 use crate::imu::{Bias, NavState, Noise, Samples};
-use crate::mat3::M3;
+use crate::mat3::{Lanes, M3};
 use crate::simd::Path;
 use crate::strapdown::{self, Options, StatesOut, Stepper};
 use crate::{so3, Cancel, Error, Result};
@@ -158,17 +158,21 @@ fn to_blocks(c: &Covariance) -> Blocks {
     std::array::from_fn(|i| std::array::from_fn(|j| (full[i][j] + full[j][i].transpose()) * 0.5))
 }
 
+/// The covariance as a row-major 15×15, each element stored once: row `r` of a lower block
+/// `(i, j)`, `j < i`, is column `r` of the stored `U_ji` (three contiguous values, no transposed
+/// block formed); row `r` of an upper one is gathered from its columns.
 #[inline]
 fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
-    // Row-major 15×15.
-    for i in P..=BG {
-        for j in P..=BG {
-            let m = block(b, i, j);
-            for r in 0..3 {
-                for c in 0..3 {
-                    out[15 * (3 * i + r) + 3 * j + c] = m.0[c].0[r];
-                }
-            }
+    for (row, out_row) in out.as_chunks_mut::<15>().0.iter_mut().enumerate() {
+        let (i, r) = (row / 3, row % 3);
+        for (j, cell) in out_row.as_chunks_mut::<3>().0.iter_mut().enumerate() {
+            *cell = if j < i {
+                let c = &b[j][i].0[r].0;
+                [c[0], c[1], c[2]]
+            } else {
+                let u = &b[i][j].0;
+                [u[0].0[r], u[1].0[r], u[2].0[r]]
+            };
         }
     }
 }
@@ -179,55 +183,75 @@ fn write_blocks(b: &Blocks, out: &mut [f64; 225]) {
 // Per sample: inlined into each instruction-set copy of the loop ([`block_loop`]).
 #[allow(clippy::needless_range_loop)] // block indices name error-state components (P, V, TH, …)
 #[inline(always)]
-fn propagate_blocks(p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
+fn propagate_blocks<L: Lanes>(l: L, p: &mut Blocks, b: &StepBlocks, noise: &Noise, h: f64) {
     let half_h2 = 0.5 * h * h;
     let (r, a_cross, phi_t, jr) = (M3::of(&b.r), M3::of(&b.a_cross), M3::of(&b.phi_t), M3::of(&b.jr));
-    let (ra, h_jr) = (r.mul(&a_cross), jr * h);
+    let (ra, h_jr) = (r.mul_with(l, &a_cross), jr.scale_with(l, h));
     // Row δp of A: all five block columns; row δv: columns δv…; row δθ: columns δθ…, with
     // n_j = R ([â]× P_θj + P_aj) the common part of rows δp and δv. Array literals, not loops
-    // over zeroed arrays (those stayed `memset` calls).
+    // over zeroed arrays (those stayed `memset` calls). The block algebra runs in `l`'s lanes
+    // (fused on the AVX paths, `mat3`'s module docs); nested fns, not closures, for the same
+    // reason.
     let u = &*p;
+    #[inline(always)]
+    fn sum<L: Lanes>(l: L, x: M3, y: M3) -> M3 {
+        x.add_with(l, &y)
+    }
     // Lower blocks P_ij = U_jiᵀ enter through `mul_t` (X P_ij = X U_jiᵀ) or one transpose.
     let n = [
-        ra.mul_t(&u[P][TH]) + r.mul_t(&u[P][BA]),
-        ra.mul_t(&u[V][TH]) + r.mul_t(&u[V][BA]),
-        ra.mul(&u[TH][TH]) + r.mul_t(&u[TH][BA]),
-        ra.mul(&u[TH][BA]) + r.mul(&u[BA][BA]),
-        ra.mul(&u[TH][BG]) + r.mul(&u[BA][BG]),
+        sum(l, ra.mul_t_with(l, &u[P][TH]), r.mul_t_with(l, &u[P][BA])),
+        sum(l, ra.mul_t_with(l, &u[V][TH]), r.mul_t_with(l, &u[V][BA])),
+        sum(l, ra.mul_with(l, &u[TH][TH]), r.mul_t_with(l, &u[TH][BA])),
+        sum(l, ra.mul_with(l, &u[TH][BA]), r.mul_with(l, &u[BA][BA])),
+        sum(l, ra.mul_with(l, &u[TH][BG]), r.mul_with(l, &u[BA][BG])),
     ];
-    let row_p = |j: usize, p_vj: M3| u[P][j] + p_vj * h - n[j] * half_h2;
-    let row_v = |j: usize| u[V][j] - n[j] * h;
+    // `u_pj + p_vj h − n_j h²/2` and `u_vj − n_j h`.
+    #[inline(always)]
+    fn row_p<L: Lanes>(l: L, u_pj: &M3, p_vj: &M3, n_j: &M3, h: f64, half_h2: f64) -> M3 {
+        n_j.mul_add(l, -half_h2, &p_vj.mul_add(l, h, u_pj))
+    }
     let a_p = [
-        row_p(P, u[P][V].transpose()),
-        row_p(V, u[V][V]),
-        row_p(TH, u[V][TH]),
-        row_p(BA, u[V][BA]),
-        row_p(BG, u[V][BG]),
+        row_p(l, &u[P][P], &u[P][V].transpose(), &n[P], h, half_h2),
+        row_p(l, &u[P][V], &u[V][V], &n[V], h, half_h2),
+        row_p(l, &u[P][TH], &u[V][TH], &n[TH], h, half_h2),
+        row_p(l, &u[P][BA], &u[V][BA], &n[BA], h, half_h2),
+        row_p(l, &u[P][BG], &u[V][BG], &n[BG], h, half_h2),
     ];
-    let a_v = [M3::ZERO, row_v(V), row_v(TH), row_v(BA), row_v(BG)];
+    let a_v = [
+        M3::ZERO,
+        n[V].mul_add(l, -h, &u[V][V]),
+        n[TH].mul_add(l, -h, &u[V][TH]),
+        n[BA].mul_add(l, -h, &u[V][BA]),
+        n[BG].mul_add(l, -h, &u[V][BG]),
+    ];
+    // `x yᵀ − z wᵀ`.
+    #[inline(always)]
+    fn diff<L: Lanes>(l: L, x: M3, z: M3) -> M3 {
+        z.mul_add(l, -1.0, &x)
+    }
     let a_th = [
         M3::ZERO,
         M3::ZERO,
-        phi_t.mul(&u[TH][TH]) - h_jr.mul_t(&u[TH][BG]),
-        phi_t.mul(&u[TH][BA]) - h_jr.mul_t(&u[BA][BG]),
-        phi_t.mul(&u[TH][BG]) - h_jr.mul(&u[BG][BG]),
+        diff(l, phi_t.mul_with(l, &u[TH][TH]), h_jr.mul_t_with(l, &u[TH][BG])),
+        diff(l, phi_t.mul_with(l, &u[TH][BA]), h_jr.mul_t_with(l, &u[BA][BG])),
+        diff(l, phi_t.mul_with(l, &u[TH][BG]), h_jr.mul_with(l, &u[BG][BG])),
     ];
     // P' = A F_xᵀ on the upper block triangle.
-    let np = (a_p[TH].mul_t(&a_cross) + a_p[BA]).mul_t(&r);
-    let nv = (a_v[TH].mul_t(&a_cross) + a_v[BA]).mul_t(&r);
-    p[P][P] = a_p[P] + a_p[V] * h - np * half_h2;
-    p[P][V] = a_p[V] - np * h;
-    p[V][V] = a_v[V] - nv * h;
-    p[P][TH] = a_p[TH].mul_t(&phi_t) - a_p[BG].mul_t(&h_jr);
-    p[V][TH] = a_v[TH].mul_t(&phi_t) - a_v[BG].mul_t(&h_jr);
-    p[TH][TH] = a_th[TH].mul_t(&phi_t) - a_th[BG].mul_t(&h_jr);
+    let np = sum(l, a_p[TH].mul_t_with(l, &a_cross), a_p[BA]).mul_t_with(l, &r);
+    let nv = sum(l, a_v[TH].mul_t_with(l, &a_cross), a_v[BA]).mul_t_with(l, &r);
+    p[P][P] = np.mul_add(l, -half_h2, &a_p[V].mul_add(l, h, &a_p[P]));
+    p[P][V] = np.mul_add(l, -h, &a_p[V]);
+    p[V][V] = nv.mul_add(l, -h, &a_v[V]);
+    p[P][TH] = diff(l, a_p[TH].mul_t_with(l, &phi_t), a_p[BG].mul_t_with(l, &h_jr));
+    p[V][TH] = diff(l, a_v[TH].mul_t_with(l, &phi_t), a_v[BG].mul_t_with(l, &h_jr));
+    p[TH][TH] = diff(l, a_th[TH].mul_t_with(l, &phi_t), a_th[BG].mul_t_with(l, &h_jr));
     for (i, row) in [(P, &a_p), (V, &a_v), (TH, &a_th)] {
         p[i][BA] = row[BA];
         p[i][BG] = row[BG];
     }
     let q = |d: f64| d * d * h;
     p[V][V] = p[V][V].plus_identity(q(noise.accel_density));
-    p[TH][TH] += jr.mul_t(&jr) * q(noise.gyro_density);
+    p[TH][TH] = jr.mul_t_with(l, &jr).mul_add(l, q(noise.gyro_density), &p[TH][TH]);
     p[BA][BA] = p[BA][BA].plus_identity(q(noise.accel_random_walk));
     p[BG][BG] = p[BG][BG].plus_identity(q(noise.gyro_random_walk));
     for d in P..=BG {
@@ -275,12 +299,12 @@ type Visit<'v> = dyn FnMut(usize, &NavState, &Blocks) -> Result<()> + 'v;
 
 /// The covariance step from sample k at state `x` (module docs).
 #[inline(always)]
-fn block_step(p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &NavState) {
+fn block_step<L: Lanes>(l: L, p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &NavState) {
     let s = run.samples;
     let h = s.t[k + 1] - s.t[k];
     let w_hat = s.gyro_at(k) - run.bias.gyro;
     let a_hat = s.accel_at(k) - run.bias.accel;
-    propagate_blocks(p, &StepBlocks::new(x, &w_hat, &a_hat, h), run.noise, h);
+    propagate_blocks(l, p, &StepBlocks::new(x, &w_hat, &a_hat, h), run.noise, h);
     if run.options.earth_rate != Vector3::zeros() {
         coriolis_blocks(p, &run.options.earth_rate, h);
     }
@@ -292,22 +316,26 @@ fn block_step(p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &NavState) {
 /// written in, and the stepper's loop does not inline one this large: a closure written in a
 /// `simd_dispatch!` body would run on the baseline target whatever the path.
 macro_rules! block_loop {
-    ($(#[$meta:meta])* $name:ident) => {
+    ($(#[$meta:meta])* $name:ident, $fma:expr) => {
         $(#[$meta])*
         fn $name(run: &BlockRun<'_>, x0: NavState, p: &mut Blocks, visit: &mut Visit<'_>) -> Result<NavState> {
-            Stepper::new(*run.samples, *run.bias, *run.options).run(x0, |k, x, next| {
-                block_step(p, run, k, x);
-                visit(k, next, p)
-            })
+            crate::mat3::with_lanes!($fma, |l| Stepper::new(*run.samples, *run.bias, *run.options).run(
+                x0,
+                |k, x, next| {
+                    block_step(l, p, run, k, x);
+                    visit(k, next, p)
+                }
+            ))
         }
     };
 }
 
-block_loop!(baseline_loop);
+block_loop!(baseline_loop, false);
 block_loop!(
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
-    avx2_loop
+    avx2_loop,
+    true
 );
 
 /// [`block_loop`] on the process's path ([`crate::simd::path`]); the AVX-512 path takes the AVX2

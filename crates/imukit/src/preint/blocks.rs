@@ -12,80 +12,33 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::mat3::{Lanes, M3};
 
-/// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance.
-pub(super) type CovarianceBlocks = [Matrix3<f64>; 6];
+/// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance, held in padded form
+/// (`mat3::M3`) between steps: the per-sample kernels read and write them with no conversion
+/// (no conversion to and from `Matrix3` per step: shuffles on the AVX paths).
+pub(super) type CovarianceBlocks = [M3; 6];
 
 /// A 9×6 matrix as 3×3 blocks: rows `[θ, v, p]`, columns `[gyro, accel]`. Its θ-row accelerometer
 /// block is always zero (no accelerometer input reaches δθ, and `A` keeps it so): the products
 /// below skip it.
-pub(super) type Cross = [[Matrix3<f64>; 2]; 3];
+pub(super) type Cross = [[M3; 2]; 3];
 
-pub(super) const ZERO_CROSS: Cross = [[Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0); 2]; 3];
-
-/// The covariance blocks in padded form (`mat3::M3`), as the per-sample kernels hold them.
-pub(super) type Padded = [M3; 6];
-
-/// A cross covariance in padded form.
-pub(super) type PaddedCross = [[M3; 2]; 3];
-
-// The conversions are written out: `array::map` over blocks this size stays out of line (a call
-// and copies per block; the midpoint kernel ran at twice main's time with it).
-
-/// The padded form of the covariance blocks.
-#[inline(always)]
-pub(super) fn padded(c: &CovarianceBlocks) -> Padded {
-    [
-        M3::of(&c[0]),
-        M3::of(&c[1]),
-        M3::of(&c[2]),
-        M3::of(&c[3]),
-        M3::of(&c[4]),
-        M3::of(&c[5]),
-    ]
-}
-
-/// The padded form of a cross covariance.
-#[inline(always)]
-pub(super) fn padded_cross(x: &Cross) -> PaddedCross {
-    let row = |i: usize| [M3::of(&x[i][0]), M3::of(&x[i][1])];
-    [row(0), row(1), row(2)]
-}
-
-/// Back from the padded form of the covariance blocks.
-#[inline(always)]
-pub(super) fn unpadded(c: &Padded) -> CovarianceBlocks {
-    [
-        c[0].matrix(),
-        c[1].matrix(),
-        c[2].matrix(),
-        c[3].matrix(),
-        c[4].matrix(),
-        c[5].matrix(),
-    ]
-}
-
-/// Back from the padded form of a cross covariance.
-#[inline(always)]
-pub(super) fn unpadded_cross(x: &PaddedCross) -> Cross {
-    let row = |i: usize| [x[i][0].matrix(), x[i][1].matrix()];
-    [row(0), row(1), row(2)]
-}
+pub(super) const ZERO_CROSS: Cross = [[M3::ZERO; 2]; 3];
 
 /// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ` for the euler scheme's own white noise
 /// (`B = [0; ΔR h; ½ ΔR h²]`, `C = [J_r h; 0; 0]`, `Σ_a = var_a I`, `Σ_g = var_g I`): `B Σ_a Bᵀ`
-/// reduces to multiples of I because ΔR is orthonormal. With zero variances, `A Σ Aᵀ` alone.
+/// reduces to multiples of I because ΔR is orthonormal. `gyro` is `(J_r, var_g)`; with `None` and
+/// `var_a = 0`, `A Σ Aᵀ` alone (the midpoint scheme adds its noise itself), without the `J_r J_rᵀ`
+/// product.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn propagate<L: Lanes>(
     l: L,
-    cov: &Padded,
+    cov: &CovarianceBlocks,
     phi: &M3,
     m: &M3,
-    jr: &M3,
     h: f64,
     var_a: f64,
-    var_g: f64,
-) -> Padded {
+    gyro: Option<(&M3, f64)>,
+) -> CovarianceBlocks {
     let [tt, tv, tp, vv, vp, pp] = *cov;
     let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
     let half_h2 = 0.5 * h * h;
@@ -108,8 +61,11 @@ pub(super) fn propagate<L: Lanes>(
     let a_pp = axpy2(l, &m_tp, half_h2, &vp, h, &pp);
     // (A Σ) Aᵀ, upper blocks.
     let phi_tt_mt = phi_tt.mul_t_with(l, m);
-    let gyro = jr.mul_t_symmetric_with(l, jr);
-    let new_tt = gyro.mul_add(l, var_g * h * h, &phi_tt.mul_t_symmetric_with(l, phi));
+    let phi_tt_phit = phi_tt.mul_t_symmetric_with(l, phi);
+    let new_tt = match gyro {
+        Some((jr, var_g)) => jr.mul_t_symmetric_with(l, jr).mul_add(l, var_g * h * h, &phi_tt_phit),
+        None => phi_tt_phit,
+    };
     let phi_tv = phi.mul_with(l, &tv);
     let new_tv = phi_tt_mt.mul_add(l, h, &phi_tv);
     let new_tp = axpy2(l, &phi_tt_mt, half_h2, &phi_tv, h, &phi.mul_with(l, &tp));
@@ -130,7 +86,7 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
 
 /// The diagonal blocks `θθ`, `vv`, `pp` made exactly symmetric against rounding (`(b + bᵀ)/2`).
 #[inline(always)]
-pub(super) fn symmetric_diagonal(cov: &mut Padded) {
+pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
     for d in [0, 3, 5] {
         cov[d] = cov[d].symmetric();
     }
@@ -138,7 +94,7 @@ pub(super) fn symmetric_diagonal(cov: &mut Padded) {
 
 /// `A X` for a 9×6 cross covariance `X`.
 #[inline(always)]
-pub(super) fn transition<L: Lanes>(l: L, x: &PaddedCross, phi: &M3, m: &M3, h: f64) -> PaddedCross {
+pub(super) fn transition<L: Lanes>(l: L, x: &Cross, phi: &M3, m: &M3, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
     let m_tg = m.mul_with(l, &xtg);
@@ -164,7 +120,7 @@ pub(super) struct Input {
 impl Input {
     /// `G diag(s_g I, s_a I)` as a cross covariance.
     #[inline(always)]
-    pub fn scaled(&self, s_g: f64, s_a: f64) -> PaddedCross {
+    pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
         let (vg, va) = (self.vg * s_g, self.va * s_a);
         [
             [self.tg * s_g, M3::ZERO],
@@ -173,15 +129,16 @@ impl Input {
         ]
     }
 
-    /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`).
+    /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`). `va_gram` is `Some(c)`
+    /// where `va vaᵀ = c I` is known (`va` a multiple of a rotation, or of I): no product for it.
     #[inline(always)]
-    pub fn add_quadratic<L: Lanes>(&self, l: L, cov: &mut Padded, s_g: f64, s_a: f64) {
+    pub fn add_quadratic<L: Lanes>(&self, l: L, cov: &mut CovarianceBlocks, s_g: f64, s_a: f64, va_gram: Option<f64>) {
         let tv = self.tg.mul_t_with(l, &self.vg).scale_with(l, s_g);
-        let vv = self.va.mul_t_symmetric_with(l, &self.va).mul_add(
-            l,
-            s_a,
-            &self.vg.mul_t_symmetric_with(l, &self.vg).scale_with(l, s_g),
-        );
+        let vg_vg = self.vg.mul_t_symmetric_with(l, &self.vg).scale_with(l, s_g);
+        let vv = match va_gram {
+            Some(c) => vg_vg.plus_identity(c * s_a),
+            None => self.va.mul_t_symmetric_with(l, &self.va).mul_add(l, s_a, &vg_vg),
+        };
         let c = self.half_h;
         cov[0] = self.tg.mul_t_symmetric_with(l, &self.tg).mul_add(l, s_g, &cov[0]);
         cov[1] = cov[1].add_with(l, &tv);
@@ -193,7 +150,7 @@ impl Input {
 
     /// `cov += Y Gᵀ + G Yᵀ` for a 9×6 `Y` (a transported cross covariance).
     #[inline(always)]
-    pub fn add_cross<L: Lanes>(&self, l: L, cov: &mut Padded, y: &PaddedCross) {
+    pub fn add_cross<L: Lanes>(&self, l: L, cov: &mut CovarianceBlocks, y: &Cross) {
         let c = self.half_h;
         let (vg, va) = (&self.vg, &self.va);
         // u_i = (Y Gᵀ) in block column v; block column p is c u_i, block column θ is y_i0 tgᵀ.
@@ -214,7 +171,7 @@ impl Input {
 
 /// Block-wise `a + b` for cross covariances.
 #[inline(always)]
-pub(super) fn add(a: &PaddedCross, b: &PaddedCross) -> PaddedCross {
+pub(super) fn add(a: &Cross, b: &Cross) -> Cross {
     let row = |i: usize| [a[i][0] + b[i][0], a[i][1] + b[i][1]];
     [row(0), row(1), row(2)]
 }
@@ -224,7 +181,8 @@ pub(super) fn assemble(blocks: &CovarianceBlocks) -> SMatrix<f64, 9, 9> {
     let mut out = SMatrix::<f64, 9, 9>::zeros();
     let places = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
     for ((i, j), b) in places.into_iter().zip(blocks) {
-        out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(b);
+        let b = b.matrix();
+        out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&b);
         out.fixed_view_mut::<3, 3>(3 * j, 3 * i).copy_from(&b.transpose());
     }
     out
@@ -232,7 +190,7 @@ pub(super) fn assemble(blocks: &CovarianceBlocks) -> SMatrix<f64, 9, 9> {
 
 /// The unique blocks of a symmetric 9×9 matrix.
 pub(super) fn blocks_of(m: &SMatrix<f64, 9, 9>) -> CovarianceBlocks {
-    let b = |i: usize, j: usize| m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned();
+    let b = |i: usize, j: usize| M3::of(&m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned());
     [b(0, 0), b(0, 1), b(0, 2), b(1, 1), b(1, 2), b(2, 2)]
 }
 
@@ -241,7 +199,7 @@ pub(super) fn cross_matrix(x: &Cross) -> SMatrix<f64, 9, 6> {
     let mut out = SMatrix::<f64, 9, 6>::zeros();
     for (i, row) in x.iter().enumerate() {
         for (j, b) in row.iter().enumerate() {
-            out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(b);
+            out.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&b.matrix());
         }
     }
     out
@@ -249,7 +207,7 @@ pub(super) fn cross_matrix(x: &Cross) -> SMatrix<f64, 9, 6> {
 
 /// The blocks of a dense 9×6 matrix.
 pub(super) fn cross_of(m: &SMatrix<f64, 9, 6>) -> Cross {
-    std::array::from_fn(|i| std::array::from_fn(|j| m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned()))
+    std::array::from_fn(|i| std::array::from_fn(|j| M3::of(&m.fixed_view::<3, 3>(3 * i, 3 * j).into_owned())))
 }
 
 #[cfg(test)]

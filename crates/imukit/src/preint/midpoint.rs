@@ -84,7 +84,6 @@ struct Step {
     a1: Vector3<f64>,
     r0: Matrix3<f64>,
     r1: Matrix3<f64>,
-    step: Matrix3<f64>,
     phi: Matrix3<f64>,
     jr: Matrix3<f64>,
     m: Matrix3<f64>,
@@ -111,7 +110,6 @@ impl Preintegrator {
             a1,
             r0,
             r1,
-            step,
             phi,
             jr,
         }
@@ -144,7 +142,7 @@ impl Preintegrator {
         let q1 = [q[0] * scale[0], q[1] * scale[1]];
         let q0 = prev.var.unwrap_or([q[0] * prev.scale[0], q[1] * prev.scale[1]]);
         let half_h = 0.5 * h;
-        // In padded blocks (`mat3::M3`) from here to the stored blocks.
+        // In padded blocks (`mat3::M3`), the form the blocks are stored in.
         let (phi, m, jr, k, r0, r1) = (
             M3::of(&s.phi),
             M3::of(&s.m),
@@ -168,35 +166,31 @@ impl Preintegrator {
         };
 
         // Covariance, with the shared sample's correlation (module docs).
-        let y_end = blocks::transition(l, &blocks::padded_cross(&self.ends.end_cross), &phi, &m, h);
-        let mut cov = blocks::propagate(l, &blocks::padded(&self.covariance), &phi, &m, &jr, h, 0.0, 0.0);
+        let y_end = blocks::transition(l, &self.ends.end_cross, &phi, &m, h);
+        let mut cov = blocks::propagate(l, &self.covariance, &phi, &m, h, 0.0, None);
         // B_0 q_0 B_0ᵀ + B_1 q_1 B_1ᵀ in one: the gyro columns are equal, and each accelerometer
-        // block (−½h R_s) has the Gram matrix ¼h² I, as −½h I does.
-        let pair = Input {
-            va: M3::ZERO.plus_identity(half_h),
-            ..b0
-        };
-        pair.add_quadratic(l, &mut cov, q0[0] + q1[0], q0[1] + q1[1]);
+        // block (−½h R_s) has the Gram matrix ¼h² I.
+        b0.add_quadratic(l, &mut cov, q0[0] + q1[0], q0[1] + q1[1], Some(half_h * half_h));
         b0.add_cross(l, &mut cov, &y_end);
         blocks::symmetric_diagonal(&mut cov);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step(l, &mut cov, &phi, &m, &g_b, &self.noise);
+            walk.step(l, &mut cov, &phi, &m, &g_b, None, &self.noise);
         }
-        self.covariance = blocks::unpadded(&cov);
-        let moved_start = blocks::transition(l, &blocks::padded_cross(&self.ends.start_cross), &phi, &m, h);
-        self.ends.start_cross = blocks::unpadded_cross(&match prev.var {
+        self.covariance = cov;
+        let moved_start = blocks::transition(l, &self.ends.start_cross, &phi, &m, h);
+        self.ends.start_cross = match prev.var {
             None => blocks::add(&moved_start, &b0.scaled(q0[0], q0[1])),
             Some(_) => moved_start,
-        });
-        self.ends.end_cross = blocks::unpadded_cross(&b1.scaled(q1[0], q1[1]));
-        let jac = blocks::transition(l, &blocks::padded_cross(&self.jac), &phi, &m, h);
-        self.jac = blocks::unpadded_cross(&blocks::add(&jac, &g_b.scaled(1.0, 1.0)));
+        };
+        self.ends.end_cross = b1.scaled(q1[0], q1[1]);
+        let jac = blocks::transition(l, &self.jac, &phi, &m, h);
+        self.jac = blocks::add(&jac, &g_b.scaled(1.0, 1.0));
 
         // Deltas.
         let acc = (s.r0 * s.a0 + s.r1 * s.a1) * 0.5;
         self.delta_position += self.delta_velocity * h + acc * (half_h * h);
         self.delta_velocity += acc * h;
-        self.delta_rotation = mul(&s.r0, &s.step);
+        self.delta_rotation = s.r1;
         self.delta_t += h;
         self.count_interval();
         if prev.var.is_none() {

@@ -48,7 +48,7 @@ use crate::imu::Noise;
 use crate::mat3::{mul, Lanes, M3};
 use crate::so3;
 pub use batch::CHUNK;
-use blocks::{CovarianceBlocks, Cross, Input, Padded, ZERO_CROSS};
+use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
 pub use continuity::{End, Ends};
 pub use lever::LeverNoise;
 pub use midpoint::MidpointStepMatrices;
@@ -168,17 +168,27 @@ impl BiasWalk {
     /// Adds the bias terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
     /// and propagates the cross and bias blocks, with `F = [[A, G_b], [0, I]]` and `G_b` the step's
     /// response to a bias change (Forster 2017, the combined form); the bias is held over each
-    /// interval and steps at its end.
+    /// interval and steps at its end. `va_gram` as in [`Input::add_quadratic`].
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    fn step<L: Lanes>(&mut self, l: L, cov: &mut Padded, phi: &M3, m: &M3, g_b: &Input, noise: &Noise) {
+    #[allow(clippy::too_many_arguments)]
+    fn step<L: Lanes>(
+        &mut self,
+        l: L,
+        cov: &mut CovarianceBlocks,
+        phi: &M3,
+        m: &M3,
+        g_b: &Input,
+        va_gram: Option<f64>,
+        noise: &Noise,
+    ) {
         let h = 2.0 * g_b.half_h;
-        let y = blocks::transition(l, &blocks::padded_cross(&self.cross), phi, m, h);
+        let y = blocks::transition(l, &self.cross, phi, m, h);
         g_b.add_cross(l, cov, &y);
-        g_b.add_quadratic(l, cov, self.var_gyro, self.var_accel);
+        g_b.add_quadratic(l, cov, self.var_gyro, self.var_accel, va_gram);
         blocks::symmetric_diagonal(cov);
-        self.cross = blocks::unpadded_cross(&blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel)));
+        self.cross = blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
         self.var_accel += noise.accel_random_walk * noise.accel_random_walk * h;
     }
@@ -253,7 +263,7 @@ impl Preintegrator {
             delta_velocity: Vector3::zeros(),
             delta_position: Vector3::zeros(),
             delta_t: 0.0,
-            covariance: [Matrix3::zeros(); 6],
+            covariance: [M3::ZERO; 6],
             jac: ZERO_CROSS,
             bias_walk: None,
             ends: midpoint::Ends::default(),
@@ -420,10 +430,10 @@ impl Preintegrator {
         // Covariance first: A, B, C use the state before the update.
         let var_a = self.noise.accel_density * self.noise.accel_density / h * scale[1];
         let var_g = self.noise.gyro_density * self.noise.gyro_density / h * scale[0];
-        // In padded blocks (`mat3::M3`) from here to the stored blocks.
+        // In padded blocks (`mat3::M3`), the form the blocks are stored in.
         let (rp, jr_p, phi) = (M3::of(&r), M3::of(&jr), M3::of(&step_t));
         let m = -M3::of(&r_a_cross);
-        let mut cov = blocks::propagate(l, &blocks::padded(&self.covariance), &phi, &m, &jr_p, h, var_a, var_g);
+        let mut cov = blocks::propagate(l, &self.covariance, &phi, &m, h, var_a, Some((&jr_p, var_g)));
         if let Some(walk) = self.bias_walk.as_mut() {
             let g_b = Input {
                 tg: -jr_p * h,
@@ -431,23 +441,24 @@ impl Preintegrator {
                 va: -rp * h,
                 half_h: 0.5 * h,
             };
-            walk.step(l, &mut cov, &phi, &m, &g_b, &self.noise);
+            // `va vaᵀ = h² ΔR ΔRᵀ = h² I`.
+            walk.step(l, &mut cov, &phi, &m, &g_b, Some(h * h), &self.noise);
         }
-        self.covariance = blocks::unpadded(&cov);
+        self.covariance = cov;
 
         // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = blocks::padded_cross(&self.jac);
+        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac;
         let jr_h = jr_p * h;
         // `x + y h − z s` runs as `(x + y h) − z s` (the unfused order).
         let ra_drot = M3::of(&r_a_cross).mul_with(l, &jtg);
-        self.jac = blocks::unpadded_cross(&[
+        self.jac = [
             [phi.mul_with(l, &jtg) - jr_h, M3::ZERO],
             [ra_drot.mul_add(l, -h, &jvg), rp.mul_add(l, -h, &jva)],
             [
                 ra_drot.mul_add(l, -half_h2, &jvg.mul_add(l, h, &jpg)),
                 rp.mul_add(l, -half_h2, &jva.mul_add(l, h, &jpa)),
             ],
-        ]);
+        ];
 
         // Deltas.
         let ra = r * a;
@@ -462,7 +473,8 @@ impl Preintegrator {
     /// still overflow them (a noise density of 1e200 squares to inf).
     pub(super) fn is_finite(&self) -> bool {
         let finite = |m: &Matrix3<f64>| m.iter().all(|v| v.is_finite());
-        let cross_finite = |c: &Cross| c.iter().flatten().all(finite);
+        let block_finite = |b: &M3| finite(&b.matrix());
+        let cross_finite = |c: &Cross| c.iter().flatten().all(block_finite);
         let walk_finite = self
             .bias_walk
             .as_ref()
@@ -474,7 +486,7 @@ impl Preintegrator {
                 .chain(self.delta_position.iter())
                 .all(|v| v.is_finite())
             && self.delta_t.is_finite()
-            && self.covariance.iter().all(finite)
+            && self.covariance.iter().all(block_finite)
             && cross_finite(&self.jac)
             && cross_finite(&self.ends.start_cross)
             && cross_finite(&self.ends.end_cross)

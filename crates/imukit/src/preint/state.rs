@@ -17,6 +17,7 @@ use super::midpoint::Sample;
 use super::{BiasWalk, End, Ends, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::imu::Noise;
+use crate::mat3::M3;
 
 /// Appends numbers to the flat state.
 struct Writer(Vec<f64>);
@@ -27,7 +28,7 @@ impl Writer {
     }
     fn cross(&mut self, c: &Cross) {
         for m in c.iter().flatten() {
-            self.all(m.as_slice());
+            self.all(m.matrix().as_slice());
         }
     }
     fn flag(&mut self, b: bool) {
@@ -78,7 +79,7 @@ impl Reader<'_> {
     fn cross(&mut self) -> Result<Cross> {
         let mut c = ZERO_CROSS;
         for m in c.iter_mut().flatten() {
-            *m = self.matrix()?;
+            *m = M3::of(&self.matrix()?);
         }
         Ok(c)
     }
@@ -112,7 +113,7 @@ impl Preintegrator {
         w.all(self.delta_position.as_slice());
         w.all(&[self.delta_t]);
         for m in &self.covariance {
-            w.all(m.as_slice());
+            w.all(m.matrix().as_slice());
         }
         w.cross(&self.jac);
         w.flag(self.bias_walk.is_some());
@@ -163,7 +164,7 @@ impl Preintegrator {
         (p.delta_velocity, p.delta_position) = (r.vector()?, r.vector()?);
         p.delta_t = r.one()?;
         for m in p.covariance.iter_mut() {
-            *m = r.matrix()?;
+            *m = M3::of(&r.matrix()?);
         }
         p.jac = r.cross()?;
         let walk = r.flag()?;
