@@ -27,7 +27,6 @@ use nalgebra::{Matrix3, Vector3};
 use super::so3::{exp_and_jacobian_pullback, vee2};
 use super::step::{Mat9, State};
 use super::{read, write, Outputs, Windows};
-use crate::error::{Error, Result};
 use crate::so3::{exp, hat, right_jacobian};
 
 /// A symmetric 9×9 `[θ, v, p]` by its upper 3×3 blocks.
@@ -174,15 +173,8 @@ fn run(x: &Windows<'_>, q: &[f64], mut tape: Option<&mut Vec<f64>>) -> (Matrix3<
 /// Numbers per interval of the tape.
 const TAPE: usize = 57;
 
-fn finite(x: &[f64], b: usize) -> Result<()> {
-    match x.iter().all(|v| v.is_finite()) {
-        true => Ok(()),
-        false => Err(Error::Overflow { index: b }),
-    }
-}
-
 /// One window's record (`mod.rs`'s layout, covariance, no Jacobian).
-pub(super) fn forward(x: &Windows<'_>, q: &[f64], outputs: &Outputs, o: &mut [f64], b: usize) -> Result<()> {
+pub(super) fn forward(x: &Windows<'_>, q: &[f64], outputs: &Outputs, o: &mut [f64]) {
     let (r, v, p, cov) = run(x, q, None);
     let s = State {
         r,
@@ -192,19 +184,11 @@ pub(super) fn forward(x: &Windows<'_>, q: &[f64], outputs: &Outputs, o: &mut [f6
         ..State::zero()
     };
     write(&s, outputs, o);
-    finite(o, b)
 }
 
 /// One window's input cotangents (`mod.rs`'s rows `[h̄, w̄, ā, σ̄_g², σ̄_a²]`) given its record's
 /// cotangent `bar`.
-pub(super) fn backward(
-    x: &Windows<'_>,
-    q: &[f64],
-    outputs: &Outputs,
-    bar: &[f64],
-    g: &mut [f64],
-    b: usize,
-) -> Result<()> {
+pub(super) fn backward(x: &Windows<'_>, q: &[f64], outputs: &Outputs, bar: &[f64], g: &mut [f64]) {
     let gw = x.grad_width();
     let mut tape = Vec::with_capacity(x.n * TAPE);
     let (r_end, _, _, cov_end) = run(x, q, Some(&mut tape));
@@ -286,5 +270,4 @@ pub(super) fn backward(
         row[4..7].copy_from_slice(r.tr_mul(&f_bar).as_slice());
         v_bar += p_bar * h;
     }
-    finite(g, b)
 }

@@ -364,7 +364,8 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
     out.par_chunks_mut(chunk).enumerate().try_for_each(|(b, o)| {
         let x = window(x, b);
         if let Some(q) = x.euler_densities(outputs) {
-            return euler::forward(&x, q, outputs, o, b);
+            euler::forward(&x, q, outputs, o);
+            return finite(o, b);
         }
         let mut s = State::start();
         for k in 0..x.n {
@@ -376,10 +377,7 @@ pub fn forward(x: &Windows<'_>, outputs: &Outputs, out: &mut [f64]) -> Result<()
         if !outputs.per_step {
             write(&s, outputs, o);
         }
-        match o.iter().all(|v| v.is_finite()) {
-            true => Ok(()),
-            false => Err(Error::Overflow { index: b }),
-        }
+        finite(o, b)
     })
 }
 
@@ -399,7 +397,8 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
         let x = window(x, b);
         let bar = &bar[b * records * width..(b + 1) * records * width];
         if let Some(q) = x.euler_densities(outputs) {
-            return euler::backward(&x, q, outputs, bar, g, b);
+            euler::backward(&x, q, outputs, bar, g);
+            return finite(g, b);
         }
         let mut tape = Tape::new(linear, x.a_end.is_some(), x.n);
         let mut s = State::start();
@@ -441,9 +440,14 @@ pub fn backward(x: &Windows<'_>, outputs: &Outputs, bar: &[f64], grad: &mut [f64
                 false => prev,
             };
         }
-        match g.iter().all(|v| v.is_finite()) {
-            true => Ok(()),
-            false => Err(Error::Overflow { index: b }),
-        }
+        finite(g, b)
     })
+}
+
+/// Window `b`'s output is finite: finite input so large that it overflowed is an error.
+fn finite(x: &[f64], b: usize) -> Result<()> {
+    match x.iter().all(|v| v.is_finite()) {
+        true => Ok(()),
+        false => Err(Error::Overflow { index: b }),
+    }
 }
