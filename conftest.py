@@ -1,0 +1,13 @@
+"""Collection rules above both test roots (the doctests of python/imukit and tests/)."""
+
+import importlib.util
+
+# imukit.torch's modules import torch at the top. Without imukit[torch] (the Makefile leaves it out
+# where the disk cannot hold the CUDA libraries) their doctests are not collected, and the header says so;
+# the tests under tests/ skip with their own reason.
+HAVE_TORCH = importlib.util.find_spec("torch") is not None
+collect_ignore = [] if HAVE_TORCH else ["python/imukit/torch"]
+
+
+def pytest_report_header() -> str | None:
+    return None if HAVE_TORCH else "torch not installed: imukit.torch's doctests are not collected"
