@@ -124,6 +124,21 @@ def test_errors_name_the_argument() -> None:
     assert "4100" in str(e.value)
 
 
+def test_a_field_whose_norm_overflows_is_refused_at_its_row() -> None:
+    """Components from 1.4e154 on overflow the squared norm (the reference the filter keeps); the
+    check's fast bound (±1e153) must not let them through, nor refuse what merely exceeds it."""
+    imu, mag, _ = _imu(1.0)
+    for row, big in ((7, [2e154, 0.0, 0.0]), (60, [-2e154, 3.0, 1.0])):
+        bad = mag.copy()
+        bad[row] = big
+        with pytest.raises(ik.NonFiniteError, match=f"sample {row} is too large"):
+            ik.filters.Robust().run(imu, mag=bad)
+    # Beyond the bound, norm finite (3·(5e153)² = 7.5e307): no error from the check.
+    fine = mag.copy()
+    fine[7] = [5e153, -5e153, 5e153]
+    ik.filters.Robust().run(imu, mag=fine)
+
+
 # Accuracy regression: one trial per group, at defaults, online and offline; bounds are the
 # measured values of docs/filters_robust.md + 15% (a 20% regression fails).
 REGRESSION = {

@@ -164,9 +164,19 @@ def _run_mag(imu: ImuData, mag: ArrayLike | bool | None) -> FloatArray | None:
     return mags
 
 
+# Largest component magnitude whose rows' norms cannot overflow (see _check_mag_norms).
+_NORM_SAFE = 1e153
+
+
 def _check_mag_norms(mags: FloatArray) -> FloatArray:
     """``mags`` (N, 3), refusing finite samples whose norm overflows: the filter keeps the first
     norm as its reference, which must stay finite."""
+    # Row norms along an axis of 3 cost a quarter of a whole 9D run (62 ns/sample at 10^6
+    # samples, docs/filters_robust.md); two contiguous reductions (1.8 ns) clear the common case:
+    # components within ±1e153 have a finite norm (3·1e306 < 1.8e308), and NaN or inf fails the
+    # test and takes the full check.
+    if mags.size == 0 or (mags.min() >= -_NORM_SAFE and mags.max() <= _NORM_SAFE):
+        return mags
     with np.errstate(over="ignore", invalid="ignore"):
         norms = np.linalg.norm(mags, axis=1)
     # NaN and inf themselves are the core's to report (naming the sample); here finite overflow.

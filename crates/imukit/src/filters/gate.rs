@@ -187,9 +187,22 @@ pub(crate) fn dip(m: &Vector3<f64>, m_norm: f64, up_b: &Vector3<f64>) -> (f64, f
     dip_scaled(m, 1.0 / m_norm, up_b)
 }
 
+/// [`dip`] for a field already in a frame whose up is z: the dot with up is `m.z` (the same
+/// value; the two products by 0 were a quarter of the dip's instructions in the robust 9D step).
+#[inline(always)]
+pub(crate) fn dip_z_up(m: &Vector3<f64>, m_norm: f64) -> (f64, f64) {
+    dip_of(m.z, 1.0 / m_norm)
+}
+
 /// [`dip`] given `1/‖m‖` (the gate divides once for the dip and the direction).
 #[inline(always)]
 fn dip_scaled(m: &Vector3<f64>, inv_norm: f64, up_b: &Vector3<f64>) -> (f64, f64) {
-    let s = (-(m.dot(up_b)) * inv_norm).clamp(-1.0, 1.0);
+    dip_of(m.dot(up_b), inv_norm)
+}
+
+/// `(sin δ, cos δ)` from the field's component along up and `1/‖m‖`.
+#[inline(always)]
+fn dip_of(m_up: f64, inv_norm: f64) -> (f64, f64) {
+    let s = (-m_up * inv_norm).clamp(-1.0, 1.0);
     (s, (1.0 - s * s).sqrt())
 }

@@ -136,15 +136,6 @@ impl Track {
             mag_disturbed: &mut self.mag_disturbed,
         }
     }
-
-    /// The rows in reverse order.
-    fn reverse(&mut self) {
-        self.q.reverse();
-        self.bias.reverse();
-        self.bias_sigma.reverse();
-        self.rest.reverse();
-        self.mag_disturbed.reverse();
-    }
 }
 
 /// A configured robust filter (no state: every call takes a [`RobustState`]).

@@ -7,10 +7,10 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
 
 use super::params::RobustParams;
 use super::state::RobustState;
-use crate::filters::gate::dip;
-use crate::filters::{initial_attitude, World};
-use crate::lie::series::{atan2, half_angle};
-use crate::quat::{exp, multiply};
+use crate::filters::gate::dip_z_up;
+use crate::filters::{exp_step, initial_attitude, World};
+use crate::lie::series::{atan2, half_angle_small};
+use crate::quat::multiply;
 
 /// The coefficients that depend on the step `dt` only, recomputed when it changes by more than
 /// the rounding of timestamps: they are computed from `dt` with its 20 lowest mantissa bits
@@ -142,12 +142,14 @@ fn heading_of(psi: f64) -> Vector2<f64> {
 }
 
 /// The heading pair `h` turned by `angle` [rad] about the vertical, `Rz(angle) ⊗ h`: the half-angle
-/// rotation by `series::half_angle` (its series below 0.5 rad, exact to rounding and no libm call;
-/// the heading loop's `k e` is ~1e-3 rad), renormalised by one Newton step and with `w ≥ 0`, i.e.
-/// `ψ ∈ [−π, π]` (the angle's wrap).
+/// rotation by `series::half_angle_small` (exact to rounding, no libm call below 0.5 rad), whose
+/// short series holds below 0.01 rad: the heading loop's `k e` is there whenever the field's gain
+/// `k = 1 − exp(−dt/τ_mag)` is below 0.01/π (|e| ≤ π; dt/τ_mag < 0.0032, every rate above 16 Hz
+/// at the default τ_mag = 20 s), and a larger angle takes the longer series. Renormalised by one
+/// Newton step and with `w ≥ 0`, i.e. `ψ ∈ [−π, π]` (the angle's wrap).
 #[inline(always)]
 pub(super) fn turn(h: &Vector2<f64>, angle: f64) -> Vector2<f64> {
-    let (k, c) = half_angle(angle * angle);
+    let (k, c) = half_angle_small(angle * angle);
     let s = angle * k;
     let p = Vector2::new(h.x * c - h.y * s, h.y * c + h.x * s);
     let p = p * (0.5 * (3.0 - p.norm_squared()));
@@ -217,7 +219,7 @@ pub(super) fn step<const LEARN: bool>(
         if LEARN {
             rest_detection(p, c, s, gyro, accel);
         }
-        s.q_gyro = compose(&s.q_gyro, &exp(&((gyro - s.bias) * dt)));
+        s.q_gyro = compose(&s.q_gyro, &exp_step(&((gyro - s.bias) * dt)));
     }
     let a_i = s.q_gyro * accel;
     if !s.lp_ready {
@@ -342,7 +344,7 @@ fn magnetometer(
     // Dip δ below the horizontal (E' vertical being z) as (sin δ, cos δ): with δ, δ₀ ∈ [−π/2, π/2],
     // |δ − δ₀| ≤ θ exactly when cos(δ − δ₀) = cos δ cos δ₀ + sin δ sin δ₀ ≥ cos θ (cos decreases
     // on [0, π]), which needs no asin.
-    let (dip_sin, dip_cos) = dip(m_e, norm, &Vector3::z());
+    let (dip_sin, dip_cos) = dip_z_up(m_e, norm);
     let dip = Vector2::new(dip_sin, dip_cos);
     let near = |n0: f64, d0: &Vector2<f64>| (norm - n0).abs() <= p.mag_norm_fraction * n0 && dip.dot(d0) >= c.cos_dip;
     if !s.mag_ready {
