@@ -7,6 +7,7 @@ Usage::
     python bench/robust_tune.py --set tau_acc_s=2.5   # the same with parameters changed
     python bench/robust_tune.py --cv                  # grid search: all-trials and leave-one-group-out scores
     python bench/robust_tune.py --cv --grid field     # the same over the magnetic thresholds
+    python bench/robust_tune.py --cv --grid filter --grid bias_motion  # two grids' product
     python bench/robust_tune.py --speed               # 10^6 samples: Robust vs vqf.VQF.updateBatch / offlineVQF
     python bench/robust_tune.py --field               # the field seen through the true attitude, per trial
 
@@ -51,6 +52,10 @@ GRIDS: dict[str, dict[str, tuple[float, ...]]] = {
         "rest_noise_tau_s": (0.02, 0.05, 0.1),
         "rest_gyro_rad_s": tuple(float(x) for x in np.radians([1.0, 2.0, 3.0])),
         "rest_accel": (0.25, 0.5),
+    },
+    # Bias updates in motion (issue 15: offline 9D); 100 °/s switches them off in effect.
+    "bias_motion": {
+        "bias_sigma_motion_rad_s": tuple(float(x) for x in np.radians([0.2, 0.5, 2.0, 100.0])),
     },
     "dip": {
         "tau_mag_s": (14.0, 20.0),
@@ -268,7 +273,9 @@ def main() -> None:
     parser.add_argument("--no-vqf", action="store_true", help="leave vqf out of the table")
     parser.add_argument("--cv", action="store_true", help="grid search with leave-one-group-out scores")
     parser.add_argument("--offline", action="store_true", help="with --cv: tune the smoother")
-    parser.add_argument("--grid", choices=sorted(GRIDS), default="filter", help="with --cv: which grid")
+    parser.add_argument(
+        "--grid", choices=sorted(GRIDS), action="append", help="with --cv: which grid (repeat: their product)"
+    )
     parser.add_argument("--speed", action="store_true", help="timing, 10^6 samples")
     parser.add_argument("--field", action="store_true", help="the field through the true attitude, per trial")
     args = parser.parse_args()
@@ -280,7 +287,7 @@ def main() -> None:
     if args.field:
         field_report(trs)
     elif args.cv:
-        cross_validate(trs, args.offline, GRIDS[args.grid])
+        cross_validate(trs, args.offline, {k: v for g in args.grid or ["filter"] for k, v in GRIDS[g].items()})
     else:
         report(trs, params, not args.no_vqf)
 
