@@ -1,4 +1,4 @@
-"""Instructions per sample of the preintegration and propagate kernels, counted with valgrind's
+"""Instructions per sample of the preintegration, propagate and filter kernels, counted with valgrind's
 callgrind (exact, independent of the machine's load; this host has no hardware counters for
 ``perf stat``), per dispatch path (``IMUKIT_SIMD``; valgrind cannot run AVX-512).
 
@@ -6,10 +6,10 @@ Each kernel runs once on ``--n`` samples (the inputs of ``bench/_timing.syntheti
 under ``valgrind --tool=callgrind --toggle-collect=<entry>``, so only the entry's call tree is
 counted, inclusive of its callees (preintegration: ``Preintegrator::integrate_samples_cancellable``,
 i.e. the validation, the dispatched loop and the finiteness check; propagate: the whole Rust call
-under the glue's interruptible runner);
+under the glue's interruptible runner; the filters (Mahony, Madgwick, 6D and 9D): the same);
 the count is divided by the number of samples.
 
-Usage: ``python bench/instructions.py [--n 50000] [--paths baseline avx2]``.
+Usage: ``python bench/instructions.py [--n 50000] [--paths baseline avx2] [--kernels "Mahony 9D" ...]``.
 """
 
 from __future__ import annotations
@@ -22,14 +22,26 @@ import sys
 import tempfile
 from pathlib import Path
 
-# The kernel's call and the function (callgrind pattern) whose call tree is counted.
+# The kernel's call (a statement on the CHILD's inputs) and the function (callgrind pattern)
+# whose call tree is counted.
+PREINT = "ik.preintegrate(imu, noise=noise, threads=1, {})"
 KERNELS = {
-    "preintegrate euler": ("dict(scheme='lie_euler')", "*integrate_samples_cancellable*"),
-    "preintegrate midpoint": ("dict(scheme='midpoint')", "*integrate_samples_cancellable*"),
-    "preintegrate combined": ("dict(scheme='lie_euler', combined=True)", "*integrate_samples_cancellable*"),
+    "preintegrate euler": (PREINT.format("scheme='lie_euler'"), "*integrate_samples_cancellable*"),
+    "preintegrate midpoint": (PREINT.format("scheme='midpoint'"), "*integrate_samples_cancellable*"),
+    "preintegrate combined": (PREINT.format("scheme='lie_euler', combined=True"), "*integrate_samples_cancellable*"),
     # The whole Rust call: a pattern on propagate_model would also match its closures, and
     # callgrind toggles collection off again on entering them.
-    "propagate": (None, "*_core::threads::interruptible*"),
+    "propagate": (
+        "ik.propagate(imu, initial=ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity()),"
+        " covariance=np.eye(15) * 1e-4, noise=noise, covariance_every=1000)",
+        "*_core::threads::interruptible*",
+    ),
+    # The filters' batch loop (issue 20), as bench/bench_filters.py runs it (9D from imu.mag).
+    **{
+        f"{law} {dim}": (f"ik.filters.{law}().run(imu_mag, mag={use})", "*_core::threads::interruptible*")
+        for law in ("Mahony", "Madgwick")
+        for dim, use in (("6D", "False"), ("9D", "None"))
+    },
 }
 
 CHILD = """
@@ -41,20 +53,17 @@ sys.path.insert(0, {bench!r})
 from _timing import synthetic_imu
 t, gyro, accel = synthetic_imu({n})
 imu = ik.ImuData(t, gyro, accel)
+mag = np.stack([20.0 * np.cos(0.2 * t), 20.0 * np.sin(0.2 * t), np.full_like(t, -40.0)], axis=-1)
+imu_mag = ik.ImuData(t, gyro, accel, mag=mag)
 noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
-kwargs = {kwargs}
-if kwargs is None:
-    initial = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
-    ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise, covariance_every=1000)
-else:
-    ik.preintegrate(imu, noise=noise, threads=1, **kwargs)
+{call}
 """
 
 
 def count(kernel: str, path: str, n: int) -> float:
     """Instructions per sample of one kernel on one path."""
-    kwargs, entry = KERNELS[kernel]
-    code = CHILD.format(bench=str(Path(__file__).parent), n=n, kwargs=kwargs)
+    call, entry = KERNELS[kernel]
+    code = CHILD.format(bench=str(Path(__file__).parent), n=n, call=call)
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "callgrind.out"
         command = [
@@ -80,11 +89,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=50_000)
     parser.add_argument("--paths", nargs="+", default=["baseline", "avx2"])
+    parser.add_argument("--kernels", nargs="+", default=list(KERNELS), choices=list(KERNELS))
     args = parser.parse_args()
     print(f"instructions per sample (callgrind, n = {args.n:,}, one thread)")
     print("| kernel | " + " | ".join(args.paths) + " |")
     print("|---|" + "---|" * len(args.paths))
-    for kernel in KERNELS:
+    for kernel in args.kernels:
         cells = [f"{count(kernel, p, args.n):,.0f}" for p in args.paths]
         print(f"| {kernel} | " + " | ".join(cells) + " |")
 
