@@ -62,8 +62,9 @@ lint: build
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 	$(VPY) -m ruff check python tests bench
 	$(VPY) -m ruff format --check python tests bench
-	if $(HAVE_TORCH); then $(VPY) -m mypy; else \
+	@if $(HAVE_TORCH); then echo "$(VPY) -m mypy"; $(VPY) -m mypy; else \
 		echo "WARNING: torch not installed: mypy leaves python/imukit/torch out"; \
+		echo "$(VPY) -m mypy --exclude 'python/imukit/torch/'"; \
 		$(VPY) -m mypy --exclude 'python/imukit/torch/'; fi
 	$(VPY) -m mypy.stubtest imukit._core
 
