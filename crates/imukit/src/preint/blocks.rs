@@ -118,15 +118,18 @@ pub(super) struct Input {
 }
 
 impl Input {
+    /// `G` as a cross covariance.
+    #[inline(always)]
+    pub fn cross(&self) -> Cross {
+        let (vg, va) = (self.vg, self.va);
+        [[self.tg, M3::ZERO], [vg, va], [vg * self.half_h, va * self.half_h]]
+    }
+
     /// `G diag(s_g I, s_a I)` as a cross covariance.
     #[inline(always)]
     pub fn scaled(&self, s_g: f64, s_a: f64) -> Cross {
-        let (vg, va) = (self.vg * s_g, self.va * s_a);
-        [
-            [self.tg * s_g, M3::ZERO],
-            [vg, va],
-            [vg * self.half_h, va * self.half_h],
-        ]
+        let (tg, vg, va) = (self.tg * s_g, self.vg * s_g, self.va * s_a);
+        Input { tg, vg, va, ..*self }.cross()
     }
 
     /// `cov += G diag(s_g I, s_a I) Gᵀ` (`va` enters only through `va vaᵀ`). `va_gram` is `Some(c)`

@@ -184,7 +184,7 @@ impl Preintegrator {
         };
         self.ends.end_cross = b1.scaled(q1[0], q1[1]);
         let jac = blocks::transition(l, &self.jac, &phi, &m, h);
-        self.jac = blocks::add(&jac, &g_b.scaled(1.0, 1.0));
+        self.jac = blocks::add(&jac, &g_b.cross());
 
         // Deltas.
         let acc = (s.r0 * s.a0 + s.r1 * s.a1) * 0.5;
