@@ -35,7 +35,7 @@
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{compose, from_world, to_up, to_world, turn, yawed, Coefs};
-use super::{Outputs, Robust, RobustState, Track};
+use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{exp_step, initial_attitude, row, Inputs, World};
 use crate::lie::series::atan2;
 use crate::Result;
@@ -119,33 +119,20 @@ impl Robust {
 
         // The backward track is in reversed time: sample k is its row n − 1 − k (indexed so, not
         // reversed in place: two passes over the tracks' 150 MB at 10^6 samples in 9D).
-        let mut weights = vec![0.5; n];
-        for (k, weight) in weights.iter_mut().enumerate() {
-            let j = n - 1 - k;
-            let (sf, sb) = (fwd.bias_sigma[k], bwd.bias_sigma[j]);
-            let (vf, vb) = (norm2(&sf), norm2(&sb));
-            if vf + vb > 0.0 {
-                *weight = vf / (vf + vb);
-            }
-            for i in 0..3 {
-                let (bf, bb) = (fwd.bias[k][i], -bwd.bias[j][i]);
-                let (pf, pb) = (sf[i] * sf[i], sb[i] * sb[i]);
-                let (fused, var) = if pf + pb > 0.0 {
-                    ((bf * pb + bb * pf) / (pf + pb), pf * pb / (pf + pb))
-                } else {
-                    (0.5 * (bf + bb), 0.0)
-                };
-                out.bias[k][i] = fused;
-                out.bias_sigma[k][i] = var.sqrt();
-            }
-            out.rest[k] = fwd.rest[k] || bwd.rest[j];
-            out.mag_disturbed[k] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
-        }
+        let nine = inputs.mag.is_some();
+        let mut weights = if nine { vec![0.5; n] } else { Vec::new() };
+        fuse_bias(&fwd, &bwd, out, &mut weights);
 
         // Second stage: the zero-phase inclination from the fused bias; in 9D the heading of
         // both passes run again with the fused bias (on two threads), fused by the weights.
-        self.zero_phase(&start, inputs, out.bias, out.q);
-        if inputs.mag.is_some() {
+        let q0 = if start.initialized {
+            from_world(self.world, &start.q)
+        } else {
+            initial_attitude(World::Enu, &row(&inputs.accel[0]), None)
+        };
+        // 6D: the zero-phase attitude is the estimate, turned into the world as it is written.
+        zero_phase(&self.params, q0, inputs, out.bias, out.q, (!nine).then_some(self.world));
+        if nine {
             let bias_rev: Vec<[f64; 3]> = out.bias.iter().rev().map(|b| [-b[0], -b[1], -b[2]]).collect();
             let mut s = start;
             let fused_bias: &[[f64; 3]] = out.bias;
@@ -158,29 +145,66 @@ impl Robust {
             );
             forward?;
             backward?;
-            self.fuse_headings(&fwd.q, &bwd.q, &weights, out.q);
-        }
-        for o in out.q.iter_mut() {
-            *o = to_world(self.world, &quat(o)).coords.into();
+            fuse_headings(self.world, &fwd.q, &bwd.q, &weights, out.q);
         }
         Ok(())
     }
 }
 
-impl Robust {
-    /// The 6D attitude of [`Robust::smooth`] into `out` (`q_wb`, internal ENU): strapdown with the
-    /// fused `bias` into the almost-inertial frame `I`, the specific force there filtered by the
-    /// Butterworth forward and then backward (zero phase, `|H|²`), the inclination the smallest
-    /// rotation taking it to up. The heading is the strapdown's (its start's).
-    fn zero_phase(&self, start: &RobustState, inputs: &Inputs<'_>, bias: &[[f64; 3]], out: &mut [[f64; 4]]) {
-        let p = &self.params;
+crate::simd_dispatch! {
+    /// Stage 1's fusion of the passes `fwd`, `bwd` (`bwd` in reversed time) into `out`'s bias, its
+    /// σ and the flags, and in 9D (`weights` not empty) each sample's heading weight `v_f/(v_f + v_b)`
+    /// of the backward pass. Per axis `b = b_f w_f + b_b w_b`, `w_f = σ_b²/(σ_f² + σ_b²)`: one
+    /// division for both weights and the variance `σ_f² σ_b²/(σ_f² + σ_b²)`, the three axes side by
+    /// side (no branch: an axis with both σ zero takes the mean and σ = 0).
+    fn fuse_bias<'a>(fwd: &Track, bwd: &Track, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
+        let n = fwd.bias.len();
+        for k in 0..n {
+            let j = n - 1 - k;
+            let (sf, sb) = (fwd.bias_sigma[k], bwd.bias_sigma[j]);
+            let (pf, pb) = (sf.map(|s| s * s), sb.map(|s| s * s));
+            if let Some(weight) = weights.get_mut(k) {
+                let (vf, vb) = (pf[0] + pf[1] + pf[2], pb[0] + pb[1] + pb[2]);
+                if vf + vb > 0.0 {
+                    *weight = vf / (vf + vb);
+                }
+            }
+            let (bf, bb) = (fwd.bias[k], bwd.bias[j]);
+            let (mut fused, mut sigma) = ([0.0; 3], [0.0; 3]);
+            for i in 0..3 {
+                let sum = pf[i] + pb[i];
+                let live = sum > 0.0;
+                let r = 1.0 / if live { sum } else { 1.0 };
+                let (wf, wb) = if live { (pb[i] * r, pf[i] * r) } else { (0.5, 0.5) };
+                // The backward pass runs on −ω: its bias is −b.
+                fused[i] = bf[i] * wf - bb[i] * wb;
+                sigma[i] = (pf[i] * pb[i] * r).sqrt();
+            }
+            out.bias[k] = fused;
+            out.bias_sigma[k] = sigma;
+            out.rest[k] = fwd.rest[k] || bwd.rest[j];
+            out.mag_disturbed[k] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
+        }
+    }
+}
+
+crate::simd_dispatch! {
+    /// The 6D attitude of [`Robust::smooth`] into `out` (`q_wb`, internal ENU, or `world`'s when
+    /// given): strapdown from `q0` with the fused `bias` into the almost-inertial frame `I`, the
+    /// specific force there filtered by the Butterworth forward and then backward (zero phase,
+    /// `|H|²`), the inclination the smallest rotation taking it to up, applied as the backward
+    /// pass reaches each sample. The heading is the strapdown's (its start's).
+    fn zero_phase<'a>(
+        p: &RobustParams,
+        q0: UnitQuaternion<f64>,
+        inputs: &Inputs<'a>,
+        bias: &[[f64; 3]],
+        out: &mut [[f64; 4]],
+        world: Option<World>,
+    ) -> () {
         let n = inputs.t.len();
         let dt = |k: usize| if k == 0 { 0.0 } else { inputs.t[k] - inputs.t[k - 1] };
-        let mut q = if start.initialized {
-            from_world(self.world, &start.q)
-        } else {
-            initial_attitude(World::Enu, &row(&inputs.accel[0]), None)
-        };
+        let mut q = q0;
         // Strapdown as the online step (sample k integrates (t_k−1, t_k] with bias k), and the
         // specific force in I filtered forward.
         let mut a_i = Vec::with_capacity(n);
@@ -200,23 +224,26 @@ impl Robust {
             if k + 1 < n {
                 coefs = coefs.for_dt(p, dt(k + 1));
             }
-            a_i[k] = coefs.butter(a_i[k], &mut s1, &mut s2);
-        }
-        for (o, a) in out.iter_mut().zip(&a_i) {
-            if let Some(tilt) = to_up(a) {
-                *o = (tilt * quat(o)).coords.into();
+            let a = coefs.butter(a_i[k], &mut s1, &mut s2);
+            let mut q = quat(&out[k]);
+            if let Some(tilt) = to_up(&a) {
+                q = tilt * q;
             }
+            out[k] = world.map_or(q, |w| to_world(w, &q)).coords.into();
         }
     }
+}
 
-    /// 9D: the heading of `out` (internal ENU) replaced by that of the passes `fwd`, `bwd` (in the
-    /// world; `bwd` in reversed time, sample k its row n − 1 − k), `h = h_f + w_k wrap(h_b − h_f)`,
-    /// each `h` the angle about the vertical from `out`'s (the twist of `pass ⊗ out⁻¹` about z). Kept as half-angle pairs (as the step's heading):
+crate::simd_dispatch! {
+    /// 9D: the heading of `out` (internal ENU; written in `world`) replaced by that of the passes
+    /// `fwd`, `bwd` (in the world; `bwd` in reversed time, sample k its row n − 1 − k),
+    /// `h = h_f + w_k wrap(h_b − h_f)`, each `h` the angle about the vertical from `out`'s (the
+    /// twist of `pass ⊗ out⁻¹` about z). Kept as half-angle pairs (as the step's heading):
     /// `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)` with `Δ/2` the angle of the pair `Rz(h_b) ⊗ Rz(h_f)⁻¹` taken
     /// with `w ≥ 0` (which is the wrap), one `atan2` per sample.
-    fn fuse_headings(&self, fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], out: &mut [[f64; 4]]) {
+    fn fuse_headings(world: World, fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], out: &mut [[f64; 4]]) -> () {
         let twist = |pass: &[f64; 4], q: &UnitQuaternion<f64>| {
-            let d = from_world(self.world, &quat(pass)) * q.inverse();
+            let d = from_world(world, &quat(pass)) * q.inverse();
             let n2 = d.w * d.w + d.k * d.k;
             if n2 > 0.0 {
                 Vector2::new(d.w, d.k) / n2.sqrt()
@@ -230,12 +257,7 @@ impl Robust {
             let rel = Vector2::new(tb.x * tf.x + tb.y * tf.y, tb.y * tf.x - tb.x * tf.y);
             let half = if rel.x < 0.0 { -rel } else { rel };
             let delta = 2.0 * atan2(half.y, half.x);
-            *o = yawed(&turn(&tf, weights[k] * delta), &q).coords.into();
+            *o = to_world(world, &yawed(&turn(&tf, weights[k] * delta), &q)).coords.into();
         }
     }
-}
-
-/// `‖σ‖²` of a row.
-fn norm2(x: &[f64; 3]) -> f64 {
-    x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
 }
