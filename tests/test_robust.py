@@ -143,11 +143,12 @@ def test_a_field_whose_norm_overflows_is_refused_at_its_row() -> None:
 # measured values of docs/filters_robust.md + 15% (a 20% regression fails).
 REGRESSION = {
     # trial: (6D inclination, 9D total) online, then offline [°], measured by bench/robust_tune.py
-    # (2026-12-01, with the rest test under vibration: docs/filters_robust.md "Issue 15")
-    "01_undisturbed_slow_rotation_A": ((0.55, 1.61), (0.37, 3.22)),
+    # (2026-12-01, with the rest test under vibration: docs/filters_robust.md "Issue 15"; offline
+    # 9D 2026-12-02, the heading passes on the zero-phase attitude)
+    "01_undisturbed_slow_rotation_A": ((0.55, 1.61), (0.37, 3.11)),
     "10_undisturbed_slow_translation_A": ((0.33, 2.03), (0.25, 1.81)),
-    "24_disturbed_tapping_A": ((0.61, 1.30), (0.51, 0.87)),
-    "28_disturbed_stationary_magnet_A": ((1.16, 2.16), (0.81, 1.81)),
+    "24_disturbed_tapping_A": ((0.61, 1.30), (0.51, 0.94)),
+    "28_disturbed_stationary_magnet_A": ((1.16, 2.16), (0.81, 1.67)),
 }
 
 

@@ -205,7 +205,7 @@ impl Robust {
         } else {
             0.0
         };
-        step::step::<true>(
+        step::step(
             &self.params,
             self.world,
             &Coefs::new(&self.params, dt),
@@ -229,7 +229,7 @@ impl Robust {
         continued: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
-        self.run_with((state, inputs), (0, continued), out, None)
+        self.run_part(state, inputs, 0, continued, out)
     }
 
     /// [`Robust::run`] on a part of a longer record whose first row is row `first` of the whole
@@ -242,19 +242,6 @@ impl Robust {
         first: usize,
         continued: bool,
         out: &mut Outputs<'_>,
-    ) -> Result<()> {
-        self.run_with((state, inputs), (first, continued), out, None)
-    }
-
-    /// [`Robust::run_part`] with `start = (first, continued)`, the bias of every step taken from
-    /// `bias` (one row per sample) instead of the estimate when given (the smoother's second
-    /// passes).
-    fn run_with(
-        &self,
-        (state, inputs): (&mut RobustState, &Inputs<'_>),
-        (first, continued): (usize, bool),
-        out: &mut Outputs<'_>,
-        bias: Option<&[[f64; 3]]>,
     ) -> Result<()> {
         let n = inputs.t.len();
         check_lengths(inputs)?;
@@ -271,20 +258,19 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        run_any(self, state, inputs, (first, continued), out, bias)
+        run_any(self, state, inputs, (first, continued), out)
     }
 
-    /// The loop of [`Robust::run_with`]: `NINE` with the field `mags`; `LEARN` estimating the bias,
-    /// else taking it from `bias` (one row per sample); `start` is `(first, continued)`.
+    /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`; `start` is
+    /// `(first, continued)`.
     #[inline(always)]
-    fn run_loop<const NINE: bool, const LEARN: bool>(
+    fn run_loop<const NINE: bool>(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         mags: &[[f64; 3]],
         (first, continued): (usize, bool),
         out: &mut Outputs<'_>,
-        bias: &[[f64; 3]],
     ) -> Result<()> {
         let p = &self.params;
         let mut coefs = Coefs::new(p, 0.0);
@@ -310,10 +296,7 @@ impl Robust {
             };
             if dt > 0.0 || !state.initialized {
                 coefs = coefs.for_dt(p, dt);
-                if !LEARN {
-                    state.bias = row(&bias[k]);
-                }
-                step::step::<LEARN>(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
+                step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
                 check_overflow(state, first + k)?;
             }
             state.time = t;
@@ -325,21 +308,18 @@ impl Robust {
 }
 
 crate::simd_dispatch! {
-    /// [`Robust::run_with`] on checked inputs: the loop of its sensor set and bias source, per
-    /// instruction-set path.
+    /// [`Robust::run_part`] on checked inputs: the loop of its sensor set, per instruction-set
+    /// path.
     fn run_any(
         f: &Robust,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         start: (usize, bool),
         out: &mut Outputs<'_>,
-        bias: Option<&[[f64; 3]]>,
     ) -> Result<()> {
-        match (inputs.mag, bias) {
-            (Some(m), None) => f.run_loop::<true, true>(state, inputs, m, start, out, &[]),
-            (None, None) => f.run_loop::<false, true>(state, inputs, &[], start, out, &[]),
-            (Some(m), Some(b)) => f.run_loop::<true, false>(state, inputs, m, start, out, b),
-            (None, Some(b)) => f.run_loop::<false, false>(state, inputs, &[], start, out, b),
+        match inputs.mag {
+            Some(m) => f.run_loop::<true>(state, inputs, m, start, out),
+            None => f.run_loop::<false>(state, inputs, &[], start, out),
         }
     }
 }

@@ -19,22 +19,26 @@
 //! before and after it. (BROAD 6D offline 0.530° → 0.487°; the mean of the two passes' tilts,
 //! the first version, is what this replaces.)
 //!
-//! Stage 2, the heading (9D): both passes run again with the fused bias in every step; the heading
-//! of each relative to the zero-phase attitude (its angle about the vertical) is fused with
-//! `w = v_f/(v_f + v_b)` on the backward one, each pass's variance `v` taken as `‖σ_b‖²` (a bias
-//! error ε leaves the heading `ε τ_mag` behind; a pass that has just started has the prior σ and
-//! so little weight): the two headings differ in quality, as each pass rejects the field at other
-//! times (`½` instead: 9D 2.16° → 2.38°). A two-sided kernel `exp(−|Δt|/τ_mag)` on the field in
-//! `E'`, weighted 0 where either pass rejected it, was tried instead: 9D 2.14° → 2.43° (trials 32,
-//! 34, attached magnets: the passes' own reference learning does better), not taken. In 6D the
-//! heading is the zero-phase attitude's (the strapdown's, from its start).
+//! Stage 2, the heading (9D): the online step's heading loop alone (the field's gate, reference
+//! learning and heading filter) runs forward and backward on the zero-phase attitudes, i.e. with
+//! the fused bias and the zero-phase inclination in place of each pass's own; the two headings
+//! are fused with `w = v_f/(v_f + v_b)` on the backward one, each pass's variance `v` taken as
+//! `‖σ_b‖²` of stage 1 (a bias error ε leaves the heading `ε τ_mag` behind; a pass that has just
+//! started has the prior σ and so little weight): the two headings differ in quality, as each
+//! pass rejects the field at other times (`½` instead: 9D 2.16° → 2.38°). Before, both full passes
+//! ran again with the fused bias, each with its own causal inclination: BROAD 9D offline 2.100° →
+//! 2.059° with the zero-phase one (the field's horizontal part is taken about a better vertical),
+//! and a heading pass costs a fifth of a full one. A two-sided kernel `exp(−|Δt|/τ_mag)` on the
+//! field in `E'`, weighted 0 where either pass rejected it, was tried instead: 9D 2.14° → 2.43°
+//! (trials 32, 34, attached magnets: the passes' own reference learning does better), not taken.
+//! In 6D the heading is the zero-phase attitude's (the strapdown's, from its start).
 //!
 //! Flags: rest where either pass detects it (detection needs `rest_duration_s` of history, which
 //! each pass has on its own side); disturbed where both passes reject the field.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
-use super::step::{compose, from_world, to_up, to_world, turn, yawed, Coefs};
+use super::step::{compose, from_world, magnetometer, start_heading, to_up, to_world, turn, yawed, Coefs};
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{exp_step, initial_attitude, row, Inputs, World};
 use crate::lie::series::atan2;
@@ -87,8 +91,8 @@ impl Robust {
     /// pass's final state. Deterministic; errors as [`Robust::run`].
     ///
     /// Two stages: forward and backward passes estimate the bias, fused; then the inclination of
-    /// the zero-phase filtered specific force with that bias, and in 9D the heading of both passes
-    /// run again with it, fused.
+    /// the zero-phase filtered specific force with that bias, and in 9D the heading loop run
+    /// forward and backward on that attitude, fused.
     pub fn smooth(&self, state: &mut RobustState, inputs: &Inputs<'_>, out: &mut Outputs<'_>) -> Result<()> {
         let n = inputs.t.len();
         if !out.len_ok(n) {
@@ -102,7 +106,7 @@ impl Robust {
         if n == 0 {
             return self.run(state, inputs, false, &mut fwd.outputs());
         }
-        // The two passes of each stage are independent: one thread each (every pass is the same
+        // The two passes are independent: one thread each (every pass is the same
         // sequential loop, so the result does not depend on the threads; errors are the forward
         // pass's first, as in sequence).
         let (forward, backward) = rayon::join(
@@ -111,11 +115,11 @@ impl Robust {
                 let rev = Reversed::new(inputs);
                 let mut bwd = Track::new(n);
                 let done = self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs());
-                done.map(|()| (rev, bwd))
+                done.map(|()| bwd)
             },
         );
         forward?;
-        let (rev, mut bwd) = backward?;
+        let bwd = backward?;
 
         // The backward track is in reversed time: sample k is its row n − 1 − k (indexed so, not
         // reversed in place: two passes over the tracks' 150 MB at 10^6 samples in 9D).
@@ -123,8 +127,8 @@ impl Robust {
         let mut weights = if nine { vec![0.5; n] } else { Vec::new() };
         fuse_bias(&fwd, &bwd, out, &mut weights);
 
-        // Second stage: the zero-phase inclination from the fused bias; in 9D the heading of
-        // both passes run again with the fused bias (on two threads), fused by the weights.
+        // Second stage: the zero-phase inclination from the fused bias; in 9D the heading loop
+        // forward and backward on it (on two threads), fused by the weights.
         let q0 = if start.initialized {
             from_world(self.world, &start.q)
         } else {
@@ -132,20 +136,24 @@ impl Robust {
         };
         // 6D: the zero-phase attitude is the estimate, turned into the world as it is written.
         zero_phase(&self.params, q0, inputs, out.bias, out.q, (!nine).then_some(self.world));
-        if nine {
-            let bias_rev: Vec<[f64; 3]> = out.bias.iter().rev().map(|b| [-b[0], -b[1], -b[2]]).collect();
-            let mut s = start;
-            let fused_bias: &[[f64; 3]] = out.bias;
-            let (forward, backward) = rayon::join(
-                || self.run_with((&mut s, inputs), (0, false), &mut fwd.outputs(), Some(fused_bias)),
+        if let Some(mags) = inputs.mag {
+            let base: &[[f64; 4]] = out.q;
+            let (mut fwd_h, mut bwd_h) = (vec![Vector2::zeros(); n], vec![Vector2::zeros(); n]);
+            rayon::join(
+                || heading_pass(&self.params, &start, inputs, mags, base, false, &mut fwd_h),
                 || {
-                    let back = (&mut RobustState::default(), &rev.inputs());
-                    self.run_with(back, (0, false), &mut bwd.outputs(), Some(&bias_rev))
+                    heading_pass(
+                        &self.params,
+                        &RobustState::default(),
+                        inputs,
+                        mags,
+                        base,
+                        true,
+                        &mut bwd_h,
+                    )
                 },
             );
-            forward?;
-            backward?;
-            fuse_headings(self.world, &fwd.q, &bwd.q, &weights, out.q);
+            fuse_headings(self.world, &fwd_h, &bwd_h, &weights, out.q);
         }
         Ok(())
     }
@@ -235,29 +243,61 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
-    /// 9D: the heading of `out` (internal ENU; written in `world`) replaced by that of the passes
-    /// `fwd`, `bwd` (in the world; `bwd` in reversed time, sample k its row n − 1 − k),
-    /// `h = h_f + w_k wrap(h_b − h_f)`, each `h` the angle about the vertical from `out`'s (the
-    /// twist of `pass ⊗ out⁻¹` about z). Kept as half-angle pairs (as the step's heading):
-    /// `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)` with `Δ/2` the angle of the pair `Rz(h_b) ⊗ Rz(h_f)⁻¹` taken
-    /// with `w ≥ 0` (which is the wrap), one `atan2` per sample.
-    fn fuse_headings(world: World, fwd: &[[f64; 4]], bwd: &[[f64; 4]], weights: &[f64], out: &mut [[f64; 4]]) -> () {
-        let twist = |pass: &[f64; 4], q: &UnitQuaternion<f64>| {
-            let d = from_world(world, &quat(pass)) * q.inverse();
-            let n2 = d.w * d.w + d.k * d.k;
-            if n2 > 0.0 {
-                Vector2::new(d.w, d.k) / n2.sqrt()
+    /// 9D, stage 2: the heading loop of the online step alone (the field's gate, its reference
+    /// learning and the heading filter, [`magnetometer`]) on the zero-phase attitudes `base`
+    /// (internal ENU) in place of each pass's own inclination: forward from `start`, or
+    /// (`backward`) from the last sample on an uninitialised state, each interval with the gyro
+    /// sample the online pass would integrate it with. The heading pair after each sample into
+    /// `out`, in forward order.
+    fn heading_pass<'a>(
+        p: &RobustParams,
+        start: &RobustState,
+        inputs: &Inputs<'a>,
+        mags: &[[f64; 3]],
+        base: &[[f64; 4]],
+        backward: bool,
+        out: &mut [Vector2<f64>],
+    ) -> () {
+        let n = base.len();
+        let mut s = *start;
+        let mut coefs = Coefs::new(p, 0.0);
+        for i in 0..n {
+            // The interval reached: (t_k−1, t_k] forward, (t_k, t_k+1] backward, both with the
+            // later gyro sample (as `Reversed`).
+            let (k, other) = if backward {
+                (n - 1 - i, (n - i).min(n - 1))
             } else {
-                Vector2::new(1.0, 0.0)
+                (i, i.saturating_sub(1))
+            };
+            let gyro = row(&inputs.gyro[k.max(other)]);
+            let m_e = quat(&base[k]) * row(&mags[k]);
+            if !s.initialized {
+                s.heading = Vector2::new(1.0, 0.0);
+                start_heading(&mut s, &m_e);
+                s.initialized = true;
             }
-        };
+            coefs = coefs.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
+            if let Some((gain, err)) = magnetometer(p, &coefs, &mut s, &m_e, &gyro) {
+                s.heading = turn(&s.heading, gain * err);
+            }
+            out[k] = s.heading;
+        }
+    }
+}
+
+crate::simd_dispatch! {
+    /// 9D: the heading `h = h_f + w_k wrap(h_b − h_f)` of the two heading passes (`fwd`, `bwd`,
+    /// about the vertical of `out`'s zero-phase attitudes, internal ENU) put on `out` and written
+    /// in `world`. Kept as half-angle pairs (as the step's heading): `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)`
+    /// with `Δ/2` the angle of the pair `Rz(h_b) ⊗ Rz(h_f)⁻¹` taken with `w ≥ 0` (which is the
+    /// wrap), one `atan2` per sample.
+    fn fuse_headings(world: World, fwd: &[Vector2<f64>], bwd: &[Vector2<f64>], weights: &[f64], out: &mut [[f64; 4]]) -> () {
         for (k, o) in out.iter_mut().enumerate() {
-            let q = quat(o);
-            let (tf, tb) = (twist(&fwd[k], &q), twist(&bwd[bwd.len() - 1 - k], &q));
+            let (tf, tb) = (fwd[k], bwd[k]);
             let rel = Vector2::new(tb.x * tf.x + tb.y * tf.y, tb.y * tf.x - tb.x * tf.y);
             let half = if rel.x < 0.0 { -rel } else { rel };
             let delta = 2.0 * atan2(half.y, half.x);
-            *o = to_world(world, &yawed(&turn(&tf, weights[k] * delta), &q)).coords.into();
+            *o = to_world(world, &yawed(&turn(&tf, weights[k] * delta), &quat(o))).coords.into();
         }
     }
 }

@@ -141,6 +141,14 @@ fn heading_of(psi: f64) -> Vector2<f64> {
     Vector2::new(c, s)
 }
 
+/// The first sample's heading: the one that turns the field `m_e` (frame `E'`) to north, when it
+/// has a horizontal part.
+pub(super) fn start_heading(s: &mut RobustState, m_e: &Vector3<f64>) {
+    if m_e.x != 0.0 || m_e.y != 0.0 {
+        s.heading = heading_of(m_e.x.atan2(m_e.y));
+    }
+}
+
 /// The heading pair `h` turned by `angle` [rad] about the vertical, `Rz(angle) ⊗ h`: the half-angle
 /// rotation by `series::half_angle_small` (exact to rounding, no libm call below 0.5 rad), whose
 /// short series holds below 0.01 rad: the heading loop's `k e` is there whenever the field's gain
@@ -192,11 +200,8 @@ pub(super) fn initialise(
 
 /// One sample on validated input with coefficients `c` for its step `c.dt` (0 on the first
 /// sample of an uninitialised state, which only initialises). Updates `s.q` (in `world`).
-/// `LEARN` false: the bias is given (the smoother's second stage), so rest detection and the bias
-/// windows, which only feed the bias estimate and the rest flag, are skipped; the attitude is the
-/// same as with them.
 #[inline(always)]
-pub(super) fn step<const LEARN: bool>(
+pub(super) fn step(
     p: &RobustParams,
     world: World,
     c: &Coefs,
@@ -209,16 +214,11 @@ pub(super) fn step<const LEARN: bool>(
     if !s.initialized {
         initialise(p, s, None, gyro, accel);
         if let Some(m) = mag {
-            let m_e = s.q_gyro * m;
-            if m_e.x != 0.0 || m_e.y != 0.0 {
-                s.heading = heading_of(m_e.x.atan2(m_e.y));
-            }
+            start_heading(s, &(s.q_gyro * m));
         }
     }
     if dt > 0.0 {
-        if LEARN {
-            rest_detection(p, c, s, gyro, accel);
-        }
+        rest_detection(p, c, s, gyro, accel);
         s.q_gyro = compose(&s.q_gyro, &exp_step(&((gyro - s.bias) * dt)));
     }
     let a_i = s.q_gyro * accel;
@@ -240,7 +240,7 @@ pub(super) fn step<const LEARN: bool>(
             heading_gain = Some(gain);
         }
     }
-    if LEARN && dt > 0.0 {
+    if dt > 0.0 {
         bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
     }
     let q = if mag.is_some() { yawed(&s.heading, &q6) } else { q6 };
@@ -330,7 +330,7 @@ fn rest_detection(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vecto
 /// when the field is used. The reference (norm, dip) is learned from the first sample; a field
 /// that stays homogeneous while the sensor turns for `mag_new_field_s` becomes the reference.
 #[inline(always)]
-fn magnetometer(
+pub(super) fn magnetometer(
     p: &RobustParams,
     c: &Coefs,
     s: &mut RobustState,
