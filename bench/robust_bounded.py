@@ -20,15 +20,18 @@ if an oracle removed every slow error: the best such a constraint could do.
 from __future__ import annotations
 
 import argparse
+import itertools
 from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.io import loadmat
 from scipy.signal import butter, sosfiltfilt
 from scipy.spatial.transform import Rotation
 
 import imukit as ik
-from broad_accuracy import GROUPS, Trial
-from robust_tune import Runner, robust_runner, trials, vqf_runner
+from broad_accuracy import DATA, GROUPS, Trial, euroc_trial
+from robust_tune import Runner, robust_runner, score, table, trials, vqf_runner
 
 
 def tilt_vector(q_est: np.ndarray, tr: Trial) -> tuple[np.ndarray, np.ndarray]:
@@ -101,6 +104,320 @@ def diagnose(trs: Sequence[Trial], period_s: float) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |")
 
 
+G = 9.80665  # m/s²: the nominal gravity; the filter estimates the offset
+UP = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class Bounded:
+    """The bounded-motion filter's parameters (SI, angles in rad). A bias state with zero prior
+    and zero random walk stays zero: ``sigma_bias0=0, q_bias=0`` switches it off."""
+
+    rate_hz: float = 25.0  # the filter's rate (inputs integrated over ``round(rate / rate_hz)`` samples)
+    sigma_p: float = 1.0  # m: spread of each position axis about its mean (the room)
+    tau_p: float = 10.0  # s: its correlation time
+    sigma_v: float = 1.0  # m/s
+    tau_v: float = 1.0  # s
+    q_theta: float = float(np.radians(0.03) ** 2)  # rad²/s: random walk of the tilt error
+    q_acc: float = 0.01  # m²/s³: white world-acceleration error (noise and Robust's fast tilt error)
+    q_bias: float = 1e-6  # (m/s²)²/s: random walk of the accelerometer bias and the gravity offset
+    sigma_zupt: float = 0.01  # m/s: velocity at Robust's rest
+    sigma_theta0: float = float(np.radians(1.0))
+    sigma_bias0: float = 0.1  # m/s²: accelerometer bias and gravity offset, prior
+    sigma_v0: float = 0.05  # m/s
+    sigma_p0: float = 0.05  # m
+
+
+@dataclass(frozen=True)
+class Steps:
+    """Robust's attitude and the accelerometer reduced to the filter's intervals
+    ``start[k]:end[k]``: the kinematic sums of ``v_{k+1} = v_k + sv + jv c``,
+    ``p_{k+1} = p_k + T v_k + sp + jp c`` (``c = [δθ_x, δθ_y, b_a, δg]``) and whether Robust
+    flagged every sample of the interval rest."""
+
+    start: np.ndarray
+    end: np.ndarray
+    dt: np.ndarray  # (K,) s
+    sv: np.ndarray  # (K, 3)
+    sp: np.ndarray  # (K, 3)
+    jv: np.ndarray  # (K, 3, 6)
+    jp: np.ndarray  # (K, 3, 6)
+    rest: np.ndarray  # (K,) bool
+    rot_end: np.ndarray  # (K, 3, 3): R̂ at each interval's last sample
+
+
+def reduce(rot: Rotation, acc: np.ndarray, rest: np.ndarray, rate: float, out_rate: float) -> Steps:
+    """With the true attitude ``R = Exp(δθ) R̂``, ``δθ = (δθ_x, δθ_y, 0)`` in the world frame, and
+    ``f = f_m − b_a``, the world acceleration to first order is
+    ``ẍ = R̂ f_m − (g + δg) e_z + δθ × (R̂ f_m) − R̂ b_a`` (Groves 2013, §14.2's attitude-error
+    coupling ``−[R̂ f]× δθ``). Integrated sample by sample (``v_j = v_{j−1} + ẍ_j dt``,
+    ``p_j = p_{j−1} + v_j dt``) over an interval of ``M`` samples with ``c`` constant, sample
+    ``i`` enters ``v`` with weight ``dt`` and ``p`` with ``(end − i) dt²``."""
+    n = len(acc)
+    m = max(1, round(rate / out_rate))
+    dt = 1.0 / rate
+    start = np.arange(0, n, m)
+    end = np.minimum(start + m, n)
+    a = rot.apply(acc)
+    b = np.zeros((n, 3, 6))
+    b[:, 0, 1], b[:, 1, 0] = a[:, 2], -a[:, 2]  # −[a]× e_x, −[a]× e_y: the first two columns
+    b[:, 2, 0], b[:, 2, 1] = a[:, 1], -a[:, 0]
+    b[:, :, 2:5] = -rot.as_matrix()
+    b[:, 2, 5] = -1.0
+    u = np.concatenate([a - G * UP, b.reshape(n, 18)], axis=1)
+    w = (np.repeat(end, end - start) - np.arange(n)) * dt**2
+    sv = np.add.reduceat(u * dt, start, axis=0)
+    sp = np.add.reduceat(u * w[:, None], start, axis=0)
+    return Steps(
+        start,
+        end,
+        (end - start) * dt,
+        sv[:, :3],
+        sp[:, :3],
+        sv[:, 3:].reshape(-1, 3, 6),
+        sp[:, 3:].reshape(-1, 3, 6),
+        np.logical_and.reduceat(rest, start),
+        rot[end - 1].as_matrix(),
+    )
+
+
+def kalman(st: Steps, par: Bounded, smooth: bool, oracle: np.ndarray | None = None) -> np.ndarray:
+    """The tilt error ``(K, 2)`` at each interval's end: the forward filter's, or RTS-smoothed
+    (Rauch, Tung & Striebel, AIAA J. 3 (1965)). States ``[c (6), v (3), p (3), r (3)]``; ``c``
+    random walks, ``v, p`` driven by a white acceleration error. The bounded motion enters as
+    pseudo-measurements ``0 = v + n_v``, ``0 = p + n_p`` at every step: an Ornstein–Uhlenbeck
+    process of variance σ² and time constant τ has the low-frequency power density ``2σ²τ``, so
+    it is taken as white noise of that density (variance ``2σ²τ/T`` per step of ``T`` s): a
+    repeated pseudo-measurement then weighs as much per second at any filter rate, and only
+    ``σ²τ`` matters. At Robust's rest ``v = 0`` with ``σ_zupt`` (a ZUPT, Foxlin 2005).
+
+    ``oracle`` (``(K, 3)``, NaN where missing): the motion capture's positions at the interval
+    ends replace the bounds, ``z = p − R̂ r`` with 1 cm noise and ``r`` the lever arm from the IMU
+    to the markers' origin (body frame, constant, estimated): what the best position aid reaches.
+    """
+    n_k = len(st.dt)
+    eye = np.eye(15)
+    x = np.zeros(15)
+    lever0 = 0.0 if oracle is None else 0.1
+    p = np.diag(
+        np.array(
+            [par.sigma_theta0] * 2 + [par.sigma_bias0] * 4 + [par.sigma_v0] * 3 + [par.sigma_p0] * 3 + [lever0] * 3
+        )
+        ** 2
+    )
+    if oracle is not None:
+        x[9:12] = oracle[0]
+    q_c = np.diag([par.q_theta] * 2 + [par.q_bias] * 4)
+    xs_f, ps_f, xs_p, ps_p, fs = (np.zeros((n_k, 15)), np.zeros((n_k, 15, 15)), [], [], [])
+    for k in range(n_k):
+        t = st.dt[k]
+        f = eye.copy()
+        f[6:9, :6] = st.jv[k]
+        f[9:12, :6] = st.jp[k]
+        f[9:12, 6:9] = t * np.eye(3)
+        q = np.zeros((15, 15))
+        q[:6, :6] = q_c * t
+        q[6:9, 6:9] = par.q_acc * t * np.eye(3)
+        q[6:9, 9:12] = q[9:12, 6:9] = par.q_acc * t**2 / 2 * np.eye(3)
+        q[9:12, 9:12] = par.q_acc * t**3 / 3 * np.eye(3)
+        x = f @ x
+        x[6:9] += st.sv[k]
+        x[9:12] += st.sp[k]
+        p = f @ p @ f.T + q
+        if smooth:
+            xs_p.append(x.copy())
+            ps_p.append(p.copy())
+            fs.append(f)
+        h, z, r = measurement(st, par, k, oracle)
+        if len(z):
+            s = h @ p @ h.T + np.diag(r)
+            gain = np.linalg.solve(s, h @ p).T
+            x = x + gain @ (z - h @ x)
+            p = p - gain @ s @ gain.T
+            p = (p + p.T) / 2
+        xs_f[k], ps_f[k] = x, p
+    if not smooth:
+        return xs_f[:, :2]
+    xs = xs_f.copy()
+    for k in range(n_k - 2, -1, -1):
+        # pinv: a state switched off (zero prior, zero noise) makes P⁻ singular
+        c = ps_f[k] @ fs[k + 1].T @ np.linalg.pinv(ps_p[k + 1], hermitian=True)
+        xs[k] = xs_f[k] + c @ (xs[k + 1] - xs_p[k + 1])
+    return xs[:, :2]
+
+
+def measurement(
+    st: Steps, par: Bounded, k: int, oracle: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step ``k``'s ``H``, ``z`` and noise variances (see :func:`kalman`)."""
+    rows, z, r = [], [], []
+    v_var = par.sigma_zupt**2 if st.rest[k] else 2 * par.sigma_v**2 * par.tau_v / st.dt[k]
+    if oracle is None or st.rest[k]:
+        rows.append(np.eye(3, 15, 6))
+        z.append(np.zeros(3))
+        r += [v_var] * 3
+    if oracle is None:
+        rows.append(np.eye(3, 15, 9))
+        z.append(np.zeros(3))
+        r += [2 * par.sigma_p**2 * par.tau_p / st.dt[k]] * 3
+    elif np.isfinite(oracle[k]).all():
+        h = np.eye(3, 15, 9)
+        h[:, 12:] = -st.rot_end[k]
+        rows.append(h)
+        z.append(oracle[k])
+        r += [1e-4] * 3
+    if not rows:
+        return np.zeros((0, 15)), np.zeros(0), np.zeros(0)
+    return np.vstack(rows), np.concatenate(z), np.array(r)
+
+
+def correct(rot: Rotation, st: Steps, dtheta: np.ndarray, causal: bool) -> Rotation:
+    """``Exp(δθ) R̂`` at full rate: causal, each interval uses the estimate after the one before
+    (zero in the first); otherwise ``δθ`` interpolated linearly between the interval ends."""
+    n = len(rot)
+    if causal:
+        held = np.vstack([np.zeros((1, 2)), dtheta[:-1]])
+        d = np.repeat(held, st.end - st.start, axis=0)
+    else:
+        d = np.stack([np.interp(np.arange(n), st.end - 1, dtheta[:, i]) for i in range(2)], axis=1)
+    return Rotation.from_rotvec(np.column_stack([d, np.zeros(n)])) * rot
+
+
+_BASE: dict[tuple[str, bool], tuple[Rotation, np.ndarray]] = {}
+
+
+def robust_base(tr: Trial, offline: bool) -> tuple[Rotation, np.ndarray]:
+    """Robust's 6D attitude and rest flags (cached: the bounded filter's grid reruns only itself)."""
+    key = (tr.name, offline)
+    if key not in _BASE:
+        imu = ik.ImuData(np.arange(len(tr.gyr)) / tr.rate, tr.gyr, tr.acc)
+        res = ik.filters.Robust().run(imu, offline=offline)
+        _BASE[key] = (res.rotation, np.asarray(res.rest, bool))
+    return _BASE[key]
+
+
+def bounded_runner(offline: bool, par: Bounded, oracle: bool = False) -> Runner:
+    """Robust (online: forward filter on the online attitude; offline: forward filter and RTS on
+    the smoothed attitude), corrected by the bounded-motion filter; ``oracle``: by the motion
+    capture's positions instead of the bounds."""
+
+    def run(tr: Trial, nine: bool) -> np.ndarray:
+        if nine:
+            raise ValueError("the bounded-motion prototype is 6D only")
+        rot, rest = robust_base(tr, offline)
+        st = reduce(rot, tr.acc, rest, tr.rate, par.rate_hz)
+        pos = mocap_positions(tr, rot)[st.end - 1] if oracle else None
+        out = correct(rot, st, kalman(st, par, smooth=offline, oracle=pos), causal=not offline)
+        return np.asarray(out.as_quat(scalar_first=True))
+
+    return run
+
+
+def mocap_positions(tr: Trial, rot: Rotation) -> np.ndarray:
+    """BROAD's ``opt_pos`` [m] turned into the estimate's world (its heading offset ``δ`` from
+    the motion capture's, ``R_truth ≈ Rz(δ) R̂``, removed), NaN where the mocap dropped out."""
+    pos = np.asarray(loadmat(DATA / f"{tr.name}.mat")["opt_pos"], float)
+    offset = ik.eval.attitude_error(
+        rot.as_quat(scalar_first=True), tr.truth, scalar_first=True, align_heading=True, mask=tr.movement
+    ).heading_offset
+    return np.asarray(Rotation.from_euler("z", -offset).apply(np.nan_to_num(pos))) + np.where(
+        np.isfinite(pos), 0.0, np.nan
+    )
+
+
+# --cv's grid; 1e3 stands for "off" (a bound of 1 km, a ZUPT of 1 km/s).
+GRID: dict[str, tuple[float, ...]] = {
+    "sigma_p": (0.3, 1.0, 1e3),
+    "sigma_v": (1.0, 1e3),
+    "q_acc": (0.01, 0.03, 0.1),
+    "sigma_zupt": (0.01, 1e3),
+}
+
+
+def parse_set(items: Sequence[str]) -> Bounded:
+    """``--set name=value`` (``q_theta`` in (°)²/s, the rest in SI)."""
+    kw = {k: float(v) for k, v in (item.split("=", 1) for item in items)}
+    if "q_theta" in kw:
+        kw["q_theta"] = float(np.radians(1.0) ** 2 * kw["q_theta"])
+    return replace(Bounded(), **kw)
+
+
+def report(trs: Sequence[Trial], par: Bounded, with_oracle: bool) -> None:
+    """Per trial, per group and mean: Robust, Robust + bounds (and the mocap-position oracle), VQF."""
+    rows = {}
+    for offline in (False, True):
+        mode = "offline" if offline else "online"
+        rows[f"Robust {mode}"] = score(robust_runner(offline), trs, False)
+        rows[f"+ bounds {mode}"] = score(bounded_runner(offline, par), trs, False)
+        if with_oracle:
+            rows[f"+ mocap position {mode}"] = score(bounded_runner(offline, par, oracle=True), trs, False)
+        rows["offlineVQF" if offline else "VQF"] = score(vqf_runner(offline), trs, False)
+    print(f"\n### 6D inclination RMSE [°], {par}\n")
+    table(rows, trs)
+
+
+def cross_validate(trs: Sequence[Trial], offline: bool) -> None:
+    """``GRID`` on all trials and leave one group out (tuned on three groups, scored on the fourth)."""
+    keys = list(GRID)
+    results = []
+    for values in itertools.product(*(GRID[k] for k in keys)):
+        kw = dict(zip(keys, values, strict=True))
+        results.append((kw, score(bounded_runner(offline, replace(Bounded(), **kw)), trs, False)))
+        print(f"  {kw}: {np.mean(list(results[-1][1].values())):.4f}", flush=True)
+
+    def best(names: set[str]) -> tuple[dict[str, float], dict[str, float]]:
+        return min(results, key=lambda r: float(np.mean([r[1][n] for n in names])))
+
+    base = score(robust_runner(offline), trs, False)
+    mode = "offline" if offline else "online"
+    kw_all, s_all = best({tr.name for tr in trs})
+    m_all, m_base = np.mean(list(s_all.values())), np.mean(list(base.values()))
+    print(f"\n### {mode}: chosen on all 12: {kw_all}: {m_all:.4f}° (Robust {m_base:.4f}°)\n")
+    print(
+        "| held-out group | chosen on the other three | held out | all-trials choice | Robust |\n|---|---|---|---|---|"
+    )
+    held_scores: dict[str, float] = {}
+    for g, names in GROUPS.items():
+        kw, s = best({tr.name for tr in trs} - set(names))
+        held_scores.update({n: s[n] for n in names})
+        short = ", ".join(f"{k}={v:g}" for k, v in kw.items())
+        cells = " | ".join(f"{np.mean([d[n] for n in names]):.3f}" for d in (s, s_all, base))
+        print(f"| {g} | {short} | {cells} |")
+    print(f"| **mean** | | {np.mean(list(held_scores.values())):.3f} | {m_all:.3f} | {m_base:.3f} |")
+
+
+def euroc(par: Bounded) -> None:
+    """The EuRoC excerpt (a drone flying meters; every sample scored)."""
+    tr = euroc_trial()
+    if tr is None:
+        print("EuRoC excerpt not found")
+        return
+    print("\n### EuRoC V1_02_medium, 6D inclination RMSE [°]\n\n| | online | offline |\n|---|---|---|")
+    for name, make in (
+        ("Robust", lambda off: robust_runner(off)),
+        ("+ bounds", lambda off: bounded_runner(off, par)),
+        ("VQF / offlineVQF", vqf_runner),
+    ):
+        cells = [f"{score(make(off), [tr], False)[tr.name]:.3f}" for off in (False, True)]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+
+
+def motion(trs: Sequence[Trial]) -> None:
+    """What the bounds assume, measured: the motion capture's position spread and velocity."""
+    print("| trial | p std x/y/z [m] | max ‖p − mean‖ [m] | v RMS x/y/z [m/s] | max ‖v‖ [m/s] |\n|---|---|---|---|---|")
+    for tr in trs:
+        pos = np.asarray(loadmat(DATA / f"{tr.name}.mat")["opt_pos"], float)
+        ok = np.isfinite(pos).all(1)
+        idx = np.arange(len(pos))
+        pos = np.stack([np.interp(idx, idx[ok], pos[ok, i]) for i in range(3)], 1)
+        v = np.gradient(sosfiltfilt(butter(2, 5.0, fs=tr.rate, output="sos"), pos, axis=0), 1 / tr.rate, axis=0)
+        dev = pos[ok] - pos[ok].mean(0)
+        p_std = " / ".join(f"{x:.2f}" for x in dev.std(0))
+        v_rms = " / ".join(f"{x:.2f}" for x in np.sqrt(np.mean(v[ok] ** 2, 0)))
+        p_max, v_max = np.linalg.norm(dev, axis=1).max(), np.linalg.norm(v[ok], axis=1).max()
+        print(f"| {tr.name[:2]} | {p_std} | {p_max:.2f} | {v_rms} | {v_max:.2f} |")
+
+
 def group_of(name: str) -> str:
     return next(g for g, names in GROUPS.items() if name in names)
 
@@ -109,10 +426,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--diagnose", action="store_true", help="slow / fast split of the tilt error")
     parser.add_argument("--split-s", type=float, default=5.0, help="period splitting slow from fast [s]")
+    parser.add_argument("--set", action="append", default=[], help="Bounded parameter=value (repeatable)")
+    parser.add_argument("--oracle", action="store_true", help="also the motion capture's positions as the aid")
+    parser.add_argument("--cv", action="store_true", help="GRID: all trials and leave one group out")
+    parser.add_argument("--offline", action="store_true", help="with --cv: the smoother")
+    parser.add_argument("--euroc", action="store_true", help="the EuRoC excerpt")
+    parser.add_argument("--motion", action="store_true", help="the motion capture's position and velocity spread")
     args = parser.parse_args()
+    par = parse_set(args.set)
+    if args.euroc:
+        euroc(par)
+        return
     trs = trials()
     if args.diagnose:
         diagnose(trs, args.split_s)
+    elif args.motion:
+        motion(trs)
+    elif args.cv:
+        cross_validate(trs, args.offline)
+    else:
+        report(trs, par, args.oracle)
 
 
 if __name__ == "__main__":
