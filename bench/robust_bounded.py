@@ -21,11 +21,13 @@ from __future__ import annotations
 
 import argparse
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 from scipy.io import loadmat
+from scipy.optimize import OptimizeResult, minimize
 from scipy.signal import butter, sosfiltfilt
 from scipy.spatial.transform import Rotation
 
@@ -106,6 +108,10 @@ def diagnose(trs: Sequence[Trial], period_s: float) -> None:
 
 G = 9.80665  # m/s²: the nominal gravity; the filter estimates the offset
 UP = np.array([0.0, 0.0, 1.0])
+# The state: c = [δθ_x, δθ_y, b_a (3), δg, s_a (3)] (constants, NC of them), v, p, lever arm.
+NC = 9
+NX = NC + 9
+C, V, P, L = slice(0, NC), slice(NC, NC + 3), slice(NC + 3, NC + 6), slice(NC + 6, NX)
 
 
 @dataclass(frozen=True)
@@ -124,6 +130,7 @@ class Bounded:
     sigma_zupt: float = 0.01  # m/s: velocity at Robust's rest
     sigma_theta0: float = float(np.radians(1.0))
     sigma_bias0: float = 0.1  # m/s²: accelerometer bias and gravity offset, prior
+    sigma_scale0: float = 0.0  # accelerometer scale factors (constant), prior; 0: off
     sigma_v0: float = 0.05  # m/s
     sigma_p0: float = 0.05  # m
 
@@ -132,7 +139,7 @@ class Bounded:
 class Steps:
     """Robust's attitude and the accelerometer reduced to the filter's intervals
     ``start[k]:end[k]``: the kinematic sums of ``v_{k+1} = v_k + sv + jv c``,
-    ``p_{k+1} = p_k + T v_k + sp + jp c`` (``c = [δθ_x, δθ_y, b_a, δg]``) and whether Robust
+    ``p_{k+1} = p_k + T v_k + sp + jp c`` (``c`` as in ``NC``) and whether Robust
     flagged every sample of the interval rest."""
 
     start: np.ndarray
@@ -140,16 +147,16 @@ class Steps:
     dt: np.ndarray  # (K,) s
     sv: np.ndarray  # (K, 3)
     sp: np.ndarray  # (K, 3)
-    jv: np.ndarray  # (K, 3, 6)
-    jp: np.ndarray  # (K, 3, 6)
+    jv: np.ndarray  # (K, 3, NC)
+    jp: np.ndarray  # (K, 3, NC)
     rest: np.ndarray  # (K,) bool
     rot_end: np.ndarray  # (K, 3, 3): R̂ at each interval's last sample
 
 
 def reduce(rot: Rotation, acc: np.ndarray, rest: np.ndarray, rate: float, out_rate: float) -> Steps:
     """With the true attitude ``R = Exp(δθ) R̂``, ``δθ = (δθ_x, δθ_y, 0)`` in the world frame, and
-    ``f = f_m − b_a``, the world acceleration to first order is
-    ``ẍ = R̂ f_m − (g + δg) e_z + δθ × (R̂ f_m) − R̂ b_a`` (Groves 2013, §14.2's attitude-error
+    ``f = f_m − b_a − diag(f_m) s_a``, the world acceleration to first order is
+    ``ẍ = R̂ f_m − (g + δg) e_z + δθ × (R̂ f_m) − R̂ b_a − R̂ diag(f_m) s_a`` (Groves 2013, §14.2's attitude-error
     coupling ``−[R̂ f]× δθ``). Integrated sample by sample (``v_j = v_{j−1} + ẍ_j dt``,
     ``p_j = p_{j−1} + v_j dt``) over an interval of ``M`` samples with ``c`` constant, sample
     ``i`` enters ``v`` with weight ``dt`` and ``p`` with ``(end − i) dt²``."""
@@ -159,12 +166,13 @@ def reduce(rot: Rotation, acc: np.ndarray, rest: np.ndarray, rate: float, out_ra
     start = np.arange(0, n, m)
     end = np.minimum(start + m, n)
     a = rot.apply(acc)
-    b = np.zeros((n, 3, 6))
-    b[:, 0, 1], b[:, 1, 0] = a[:, 2], -a[:, 2]  # −[a]× e_x, −[a]× e_y: the first two columns
+    b = np.zeros((n, 3, NC))
+    b[:, 0, 1], b[:, 1, 0] = (a[:, 2], -a[:, 2])  # −[a]× e_x, −[a]× e_y: the first two columns
     b[:, 2, 0], b[:, 2, 1] = a[:, 1], -a[:, 0]
     b[:, :, 2:5] = -rot.as_matrix()
     b[:, 2, 5] = -1.0
-    u = np.concatenate([a - G * UP, b.reshape(n, 18)], axis=1)
+    b[:, :, 6:9] = -rot.as_matrix() * acc[:, None, :]  # −R̂ diag(f_m)
+    u = np.concatenate([a - G * UP, b.reshape(n, 3 * NC)], axis=1)
     w = (np.repeat(end, end - start) - np.arange(n)) * dt**2
     sv = np.add.reduceat(u * dt, start, axis=0)
     sp = np.add.reduceat(u * w[:, None], start, axis=0)
@@ -174,8 +182,8 @@ def reduce(rot: Rotation, acc: np.ndarray, rest: np.ndarray, rate: float, out_ra
         (end - start) * dt,
         sv[:, :3],
         sp[:, :3],
-        sv[:, 3:].reshape(-1, 3, 6),
-        sp[:, 3:].reshape(-1, 3, 6),
+        sv[:, 3:].reshape(-1, 3, NC),
+        sp[:, 3:].reshape(-1, 3, NC),
         np.logical_and.reduceat(rest, start),
         rot[end - 1].as_matrix(),
     )
@@ -183,7 +191,7 @@ def reduce(rot: Rotation, acc: np.ndarray, rest: np.ndarray, rate: float, out_ra
 
 def kalman(st: Steps, par: Bounded, smooth: bool, oracle: np.ndarray | None = None) -> np.ndarray:
     """The tilt error ``(K, 2)`` at each interval's end: the forward filter's, or RTS-smoothed
-    (Rauch, Tung & Striebel, AIAA J. 3 (1965)). States ``[c (6), v (3), p (3), r (3)]``; ``c``
+    (Rauch, Tung & Striebel, AIAA J. 3 (1965)). States ``[c (NC), v (3), p (3), r (3)]``; ``c``
     random walks, ``v, p`` driven by a white acceleration error. The bounded motion enters as
     pseudo-measurements ``0 = v + n_v``, ``0 = p + n_p`` at every step: an Ornstein–Uhlenbeck
     process of variance σ² and time constant τ has the low-frequency power density ``2σ²τ``, so
@@ -196,33 +204,38 @@ def kalman(st: Steps, par: Bounded, smooth: bool, oracle: np.ndarray | None = No
     to the markers' origin (body frame, constant, estimated): what the best position aid reaches.
     """
     n_k = len(st.dt)
-    eye = np.eye(15)
-    x = np.zeros(15)
+    eye = np.eye(NX)
+    x = np.zeros(NX)
     lever0 = 0.0 if oracle is None else 0.1
     p = np.diag(
         np.array(
-            [par.sigma_theta0] * 2 + [par.sigma_bias0] * 4 + [par.sigma_v0] * 3 + [par.sigma_p0] * 3 + [lever0] * 3
+            [par.sigma_theta0] * 2
+            + [par.sigma_bias0] * 4
+            + [par.sigma_scale0] * 3
+            + [par.sigma_v0] * 3
+            + [par.sigma_p0] * 3
+            + [lever0] * 3
         )
         ** 2
     )
     if oracle is not None:
-        x[9:12] = oracle[0]
-    q_c = np.diag([par.q_theta] * 2 + [par.q_bias] * 4)
-    xs_f, ps_f, xs_p, ps_p, fs = (np.zeros((n_k, 15)), np.zeros((n_k, 15, 15)), [], [], [])
+        x[P] = oracle[0]
+    q_c = np.diag([par.q_theta] * 2 + [par.q_bias] * 4 + [0.0] * 3)
+    xs_f, ps_f, xs_p, ps_p, fs = (np.zeros((n_k, NX)), np.zeros((n_k, NX, NX)), [], [], [])
     for k in range(n_k):
         t = st.dt[k]
         f = eye.copy()
-        f[6:9, :6] = st.jv[k]
-        f[9:12, :6] = st.jp[k]
-        f[9:12, 6:9] = t * np.eye(3)
-        q = np.zeros((15, 15))
-        q[:6, :6] = q_c * t
-        q[6:9, 6:9] = par.q_acc * t * np.eye(3)
-        q[6:9, 9:12] = q[9:12, 6:9] = par.q_acc * t**2 / 2 * np.eye(3)
-        q[9:12, 9:12] = par.q_acc * t**3 / 3 * np.eye(3)
+        f[V, C] = st.jv[k]
+        f[P, C] = st.jp[k]
+        f[P, V] = t * np.eye(3)
+        q = np.zeros((NX, NX))
+        q[C, C] = q_c * t
+        q[V, V] = par.q_acc * t * np.eye(3)
+        q[V, P] = q[P, V] = par.q_acc * t**2 / 2 * np.eye(3)
+        q[P, P] = par.q_acc * t**3 / 3 * np.eye(3)
         x = f @ x
-        x[6:9] += st.sv[k]
-        x[9:12] += st.sp[k]
+        x[V] += st.sv[k]
+        x[P] += st.sp[k]
         p = f @ p @ f.T + q
         if smooth:
             xs_p.append(x.copy())
@@ -253,21 +266,21 @@ def measurement(
     rows, z, r = [], [], []
     v_var = par.sigma_zupt**2 if st.rest[k] else 2 * par.sigma_v**2 * par.tau_v / st.dt[k]
     if oracle is None or st.rest[k]:
-        rows.append(np.eye(3, 15, 6))
+        rows.append(np.eye(3, NX, V.start))
         z.append(np.zeros(3))
         r += [v_var] * 3
     if oracle is None:
-        rows.append(np.eye(3, 15, 9))
+        rows.append(np.eye(3, NX, P.start))
         z.append(np.zeros(3))
         r += [2 * par.sigma_p**2 * par.tau_p / st.dt[k]] * 3
     elif np.isfinite(oracle[k]).all():
-        h = np.eye(3, 15, 9)
-        h[:, 12:] = -st.rot_end[k]
+        h = np.eye(3, NX, P.start)
+        h[:, L] = -st.rot_end[k]
         rows.append(h)
         z.append(oracle[k])
         r += [1e-4] * 3
     if not rows:
-        return np.zeros((0, 15)), np.zeros(0), np.zeros(0)
+        return np.zeros((0, NX)), np.zeros(0), np.zeros(0)
     return np.vstack(rows), np.concatenate(z), np.array(r)
 
 
@@ -414,12 +427,57 @@ def motion(trs: Sequence[Trial]) -> None:
         dev = pos[ok] - pos[ok].mean(0)
         p_std = " / ".join(f"{x:.2f}" for x in dev.std(0))
         v_rms = " / ".join(f"{x:.2f}" for x in np.sqrt(np.mean(v[ok] ** 2, 0)))
-        p_max, v_max = np.linalg.norm(dev, axis=1).max(), np.linalg.norm(v[ok], axis=1).max()
+        p_max, v_max = (np.linalg.norm(dev, axis=1).max(), np.linalg.norm(v[ok], axis=1).max())
         print(f"| {tr.name[:2]} | {p_std} | {p_max:.2f} | {v_rms} | {v_max:.2f} |")
 
 
 def group_of(name: str) -> str:
     return next(g for g, names in GROUPS.items() if name in names)
+
+
+def inclination(rot: Rotation, tr: Trial) -> float:
+    err = ik.eval.attitude_error(
+        rot.as_quat(scalar_first=True), tr.truth, scalar_first=True, align_heading=True, mask=tr.movement
+    )
+    return err.rmse(degrees=True).inclination
+
+
+def in_body(rot: Rotation, m: np.ndarray) -> Rotation:
+    return rot * Rotation.from_rotvec(m)
+
+
+def in_world(rot: Rotation, w: np.ndarray) -> Rotation:
+    return Rotation.from_rotvec([w[0], w[1], 0.0]) * rot
+
+
+def fit(tr: Trial, turn: Callable[[np.ndarray], Rotation], n: int) -> OptimizeResult:
+    """The ``n`` parameters of ``turn`` that minimise the inclination RMSE (Powell: no gradient)."""
+    return minimize(lambda x: inclination(turn(x), tr), np.zeros(n), method="Powell")
+
+
+def misalignment(trs: Sequence[Trial]) -> None:
+    """How much of the error a constant rotation explains, fitted per trial (an oracle with the
+    truth): in the body frame, ``R̂ Exp(m)`` (the IMU-to-markers misalignment, which no filter can
+    see: it is a tilt against the reference, not against gravity), or in the world frame,
+    ``Exp(w) R̂`` with ``w`` horizontal (a constant tilt, the slowest error the bounds can see)."""
+    print("| filter | trial | incl. RMSE | body fit: RMSE, ‖m‖ | world fit: RMSE, ‖w‖ |\n|---|---|---|---|---|")
+    means = []
+    for offline in (False, True):
+        for tr in trs:
+            rot, _ = robust_base(tr, offline)
+
+            body = fit(tr, partial(in_body, rot), 3)
+            world = fit(tr, partial(in_world, rot), 2)
+            means.append((inclination(rot, tr), body.fun, world.fun))
+            print(
+                f"| Robust {'offline' if offline else 'online'} | {tr.name[:2]} | {means[-1][0]:.3f} "
+                f"| {body.fun:.3f}, {np.degrees(np.linalg.norm(body.x)):.2f}° "
+                f"| {world.fun:.3f}, {np.degrees(np.linalg.norm(world.x)):.2f}° |",
+                flush=True,
+            )
+    for offline, block in ((False, means[: len(trs)]), (True, means[len(trs) :])):
+        m = np.mean(block, axis=0)
+        print(f"| Robust {'offline' if offline else 'online'} | **mean** | {m[0]:.3f} | {m[1]:.3f} | {m[2]:.3f} |")
 
 
 def main() -> None:
@@ -432,6 +490,7 @@ def main() -> None:
     parser.add_argument("--offline", action="store_true", help="with --cv: the smoother")
     parser.add_argument("--euroc", action="store_true", help="the EuRoC excerpt")
     parser.add_argument("--motion", action="store_true", help="the motion capture's position and velocity spread")
+    parser.add_argument("--misalign", action="store_true", help="a constant rotation fitted per trial (oracle)")
     args = parser.parse_args()
     par = parse_set(args.set)
     if args.euroc:
@@ -442,6 +501,8 @@ def main() -> None:
         diagnose(trs, args.split_s)
     elif args.motion:
         motion(trs)
+    elif args.misalign:
+        misalignment(trs)
     elif args.cv:
         cross_validate(trs, args.offline)
     else:
