@@ -1,9 +1,19 @@
 """Issue 15: does a bounded-motion constraint (position and velocity stay small) beat the
 velocity-over-τ assumption of ``imukit.filters.Robust`` (and VQF) on BROAD's inclination?
 
-Usage::
+Usage (answer and numbers: docs/filters_robust.md, "a bounded-motion constraint")::
 
     python bench/robust_bounded.py --diagnose      # Robust's (and VQF's) tilt error: slow / fast split
+    python bench/robust_bounded.py                 # per trial: Robust, + bounds, VQF (online, offline)
+    python bench/robust_bounded.py --oracle        # the same plus the mocap positions in place of the bounds
+    python bench/robust_bounded.py --set sigma_p=1 --set q_theta=0.01   # parameters (q_theta in (°)²/s)
+    python bench/robust_bounded.py --cv [--offline]  # GRID: all trials and leave one group out
+    python bench/robust_bounded.py --euroc         # the EuRoC excerpt
+    python bench/robust_bounded.py --motion        # the mocap's position and velocity spread
+    python bench/robust_bounded.py --misalign      # a constant rotation fitted per trial (oracle)
+
+The prototype (:func:`reduce`, :func:`kalman`, :func:`correct`) is an error-state Kalman filter
+with an RTS smoother on Robust's attitude, 6D only, NumPy, at 25 Hz.
 
 The diagnosis answers whether the idea *can* reach issue 15's targets before anything is built: a
 constraint on position observes a tilt error δθ only through ½ g δθ t², so only the part of the
