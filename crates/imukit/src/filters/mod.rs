@@ -276,11 +276,13 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
-        self.step(state, gyro, accel, mag, dt);
+        self.step(state, gyro, accel, mag, dt, self.options.world);
         check_overflow(&state.common, 0)
     }
 
     /// The update proper, on validated input: initialise, or gate, correct and integrate.
+    /// `world` is the options' (the batch loop passes it as a constant of its copy: read from
+    /// the options, both frames' predictions were computed and one selected every sample).
     #[inline(always)]
     fn step(
         &self,
@@ -289,17 +291,18 @@ impl<L: Law> Filter<L> {
         accel: &Vector3<f64>,
         mag: Option<&Vector3<f64>>,
         dt: f64,
+        world: World,
     ) {
         let o = &self.options;
         let s = &mut state.common;
         if !s.initialized {
-            s.q = initial_attitude(o.world, accel, mag);
+            s.q = initial_attitude(world, accel, mag);
             s.initialized = true;
             (s.acc_lp1, s.acc_lp2, s.gyro_lp, s.rest_accel_lp) = (*accel, *accel, *gyro, *accel);
             if let Some(m) = mag {
                 let norm = m.norm();
                 if norm > 0.0 {
-                    let (sin, cos) = gate::dip(m, norm, &o.world.predicted(&s.q).1);
+                    let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).1);
                     gate::learn(s, norm, sin, cos);
                 }
             }
@@ -308,7 +311,7 @@ impl<L: Law> Filter<L> {
         let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
-        let (north_pred, up_pred) = o.world.predicted(&s.q);
+        let (north_pred, up_pred) = world.predicted(&s.q);
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
@@ -445,7 +448,7 @@ impl<L: Law> Filter<L> {
 
     /// The batch loop for one sensor set (checked inputs), compiled per law.
     #[inline(always)]
-    fn run_loop<const NINE: bool>(
+    fn run_loop<const NINE: bool, const ENU: bool>(
         &self,
         state: &mut State<L>,
         inputs: &Inputs<'_>,
@@ -454,6 +457,7 @@ impl<L: Law> Filter<L> {
         (out_q, out_bias): (&mut [[f64; 4]], &mut [[f64; 3]]),
         cancel: &Cancel,
     ) -> Result<()> {
+        let world = if ENU { World::Enu } else { World::Ned };
         let mut previous = state.common.time;
         for (k, (&t, (q_out, b_out))) in inputs
             .t
@@ -465,10 +469,12 @@ impl<L: Law> Filter<L> {
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
             let mag = if NINE { Some(row(&mags[k])) } else { None };
-            // One test on the sum (NaN and ±inf propagate); only when it fails, find the culprit
-            // (a finite sum overflowing to inf is no error, but a field whose squared norm
+            // One test on a sum of everything (NaN and ±inf propagate through any order of the
+            // additions; this one pairs the rows lane by lane); only when it fails, find the
+            // culprit (a finite sum overflowing to inf is no error, but a field whose squared norm
             // overflows is: the gate keeps its first norm as the reference).
-            let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.norm_squared());
+            let lanes = gyro + accel;
+            let sum = (lanes.x + lanes.y) + (lanes.z + (t + mag.map_or(0.0, |m| m.norm_squared())));
             if !sum.is_finite() {
                 if !t.is_finite() {
                     return Err(Error::NonFinite { index: k }.in_argument("t"));
@@ -491,14 +497,14 @@ impl<L: Law> Filter<L> {
             }
             if k == 0 && !continued {
                 if !state.common.initialized {
-                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0);
+                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, world);
                 }
             } else {
                 let dt = t - previous;
                 if dt.is_nan() || dt <= 0.0 {
                     return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
                 }
-                self.step(state, &gyro, &accel, mag.as_ref(), dt);
+                self.step(state, &gyro, &accel, mag.as_ref(), dt, world);
                 check_overflow(&state.common, k)?;
             }
             // Keep the stamp itself (summing the steps would drift from it by rounding).
@@ -522,9 +528,12 @@ crate::simd_dispatch! {
         out: (&mut [[f64; 4]], &mut [[f64; 3]]),
         cancel: &Cancel,
     ) -> Result<()> {
-        match inputs.mag {
-            Some(mag) => filter.run_loop::<true>(state, inputs, mag, continued, out, cancel),
-            None => filter.run_loop::<false>(state, inputs, &[], continued, out, cancel),
+        let mag = inputs.mag.unwrap_or(&[]);
+        match (inputs.mag.is_some(), filter.options.world) {
+            (true, World::Enu) => filter.run_loop::<true, true>(state, inputs, mag, continued, out, cancel),
+            (true, World::Ned) => filter.run_loop::<true, false>(state, inputs, mag, continued, out, cancel),
+            (false, World::Enu) => filter.run_loop::<false, true>(state, inputs, mag, continued, out, cancel),
+            (false, World::Ned) => filter.run_loop::<false, false>(state, inputs, mag, continued, out, cancel),
         }
     }
 }
