@@ -276,7 +276,12 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
+        // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
+        let stepping = state.common.initialized;
         self.step(state, gyro, accel, mag, dt, self.options.world);
+        if stepping {
+            state.common.time += dt;
+        }
         check_overflow(&state.common, 0)
     }
 
@@ -333,8 +338,12 @@ impl<L: Law> Filter<L> {
             // The means lag the start of a motion by about tau_s: one sample beyond 4× the rms
             // deviation seen so far (floored at a tenth of the threshold) ends the rest at once,
             // before the bias learns the motion.
-            let still =
-                gyro_dev < 16.0 * s.rest_gyro_ms.max(g2 / 100.0) && accel_dev < 16.0 * s.rest_accel_ms.max(a2 / 100.0);
+            // `f64::max` by a compare, without the NaN blend `max` compiles to: the same value for
+            // a threshold that is a number (validated), a NaN `ms` included; zeros' signs do not
+            // matter to the `<` below.
+            let floor = |ms: f64, threshold: f64| if ms > threshold { ms } else { threshold };
+            let still = gyro_dev < 16.0 * floor(s.rest_gyro_ms, g2 / 100.0)
+                && accel_dev < 16.0 * floor(s.rest_accel_ms, a2 / 100.0);
             s.rest_gyro_ms += (gyro_dev - s.rest_gyro_ms) * alpha;
             s.rest_accel_ms += (accel_dev - s.rest_accel_ms) * alpha;
             let steady = s.rest_gyro_ms < g2 && s.rest_accel_ms < a2;
@@ -381,7 +390,6 @@ impl<L: Law> Filter<L> {
                 *f = w + correction_dt.cross(&w);
             }
         }
-        s.time += dt;
         if ramping {
             s.ramp_elapsed += dt;
         }
