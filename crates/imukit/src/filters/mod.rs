@@ -178,11 +178,12 @@ fn check_overflow(s: &CommonState, index: usize) -> Result<()> {
 }
 
 /// The factors of one step that depend only on `dt` and the options: the low pass's and rest
-/// detection's `dt / (τ + dt)` and the bias follower's `min(dt / τ, 1)`, divided every sample as
-/// one 4-lane division. A cache keyed on `dt` (divide only when it changes) missed its branch on
-/// 43 % of samples where the stamps' differences jitter by rounding (`k · 0.005`; BROAD's stamps
-/// jitter more), and each miss cost more than the division; the lanes divide independently, so
-/// each factor is the same number either way.
+/// detection's `dt / (τ + dt)` and the bias follower's `min(dt / τ, 1)`, divided every sample
+/// (off the step's dependency chain: `dt` comes from the stamps). A cache keyed on `dt` (divide
+/// only when it changes) missed its branch on 43 % of the bench's samples (callgrind's branch
+/// simulation): stamps `k · 0.005` differ by rounding from one step to the next on 48 % of
+/// samples, BROAD's `k / 285.714` on 14 %; each miss cost more than the divisions. Each factor is
+/// the same number either way.
 #[derive(Debug, Clone, Copy)]
 struct Rates {
     low_pass: f64,
@@ -195,12 +196,10 @@ impl Rates {
     /// option that is off, whose factor is then unused).
     #[inline(always)]
     fn at(taus: [f64; 2], dt: f64) -> Self {
-        let den = [taus[0] + dt, taus[1] + dt, taus[1], 1.0];
-        let q: [f64; 4] = std::array::from_fn(|i| dt / den[i]);
         Self {
-            low_pass: q[0],
-            rest: q[1],
-            follow: q[2].min(1.0),
+            low_pass: dt / (taus[0] + dt),
+            rest: dt / (taus[1] + dt),
+            follow: (dt / taus[1]).min(1.0),
         }
     }
 }
