@@ -128,6 +128,8 @@ pub struct Filter<L: Law> {
     law: L,
     options: Options,
     gates: Gates,
+    /// `τ` of the low pass and of rest detection, 1 for one that is off ([`Rates::at`]).
+    taus: [f64; 2],
 }
 
 /// Samples of a batch run, one row per sample.
@@ -175,31 +177,30 @@ fn check_overflow(s: &CommonState, index: usize) -> Result<()> {
     }
 }
 
-/// The factors of one step that depend only on `dt` and the options (the low pass's and rest
-/// detection's `dt / (τ + dt)`, the bias follower's `min(dt / τ, 1)`), divided out only when `dt`
-/// changes: a batch at a fixed rate divides once, not three times a sample.
-#[derive(Debug, Clone, Copy, Default)]
+/// The factors of one step that depend only on `dt` and the options: the low pass's and rest
+/// detection's `dt / (τ + dt)` and the bias follower's `min(dt / τ, 1)`, divided every sample
+/// (off the step's dependency chain: `dt` comes from the stamps). A cache keyed on `dt` (divide
+/// only when it changes) missed its branch on 43 % of the bench's samples (callgrind's branch
+/// simulation): stamps `k · 0.005` differ by rounding from one step to the next on 48 % of
+/// samples, BROAD's `k / 285.714` on 14 %; each miss cost more than the divisions. Each factor is
+/// the same number either way.
+#[derive(Debug, Clone, Copy)]
 struct Rates {
-    dt: f64,
     low_pass: f64,
     rest: f64,
     follow: f64,
 }
 
 impl Rates {
-    /// The factors for `dt` (> 0), from the cache when `dt` is the last one's.
+    /// The factors for `dt` (> 0); `taus` are the low pass's and rest detection's `τ` (1 for an
+    /// option that is off, whose factor is then unused).
     #[inline(always)]
-    fn at(&mut self, o: &Options, dt: f64) -> Self {
-        if dt != self.dt {
-            let alpha = |tau_s: f64| dt / (tau_s + dt);
-            *self = Self {
-                dt,
-                low_pass: o.acc_lowpass.map_or(0.0, |lp| alpha(lp.tau_s)),
-                rest: o.rest_detection.map_or(0.0, |r| alpha(r.tau_s)),
-                follow: o.rest_detection.map_or(0.0, |r| (dt / r.tau_s).min(1.0)),
-            };
+    fn at(taus: [f64; 2], dt: f64) -> Self {
+        Self {
+            low_pass: dt / (taus[0] + dt),
+            rest: dt / (taus[1] + dt),
+            follow: (dt / taus[1]).min(1.0),
         }
-        *self
     }
 }
 
@@ -226,6 +227,10 @@ impl<L: Law> Filter<L> {
             law,
             options,
             gates: Gates::new(options.acc_rejection, options.mag_rejection, options.gravity),
+            taus: [
+                options.acc_lowpass.map_or(1.0, |lp| lp.tau_s),
+                options.rest_detection.map_or(1.0, |r| r.tau_s),
+            ],
         })
     }
 
@@ -270,11 +275,18 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
-        self.step(state, gyro, accel, mag, dt, &mut Rates::default());
+        // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
+        let stepping = state.common.initialized;
+        self.step(state, gyro, accel, mag, dt, self.options.world);
+        if stepping {
+            state.common.time += dt;
+        }
         check_overflow(&state.common, 0)
     }
 
     /// The update proper, on validated input: initialise, or gate, correct and integrate.
+    /// `world` is the options' (the batch loop passes it as a constant of its copy: read from
+    /// the options, both frames' predictions were computed and one selected every sample).
     #[inline(always)]
     fn step(
         &self,
@@ -283,27 +295,27 @@ impl<L: Law> Filter<L> {
         accel: &Vector3<f64>,
         mag: Option<&Vector3<f64>>,
         dt: f64,
-        rates: &mut Rates,
+        world: World,
     ) {
         let o = &self.options;
         let s = &mut state.common;
         if !s.initialized {
-            s.q = initial_attitude(o.world, accel, mag);
+            s.q = initial_attitude(world, accel, mag);
             s.initialized = true;
             (s.acc_lp1, s.acc_lp2, s.gyro_lp, s.rest_accel_lp) = (*accel, *accel, *gyro, *accel);
             if let Some(m) = mag {
                 let norm = m.norm();
                 if norm > 0.0 {
-                    let (sin, cos) = gate::dip(m, norm, &o.world.predicted(&s.q).1);
+                    let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).1);
                     gate::learn(s, norm, sin, cos);
                 }
             }
             return;
         }
-        let rates = rates.at(o, dt);
+        let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
-        let (north_pred, up_pred) = o.world.predicted(&s.q);
+        let (north_pred, up_pred) = world.predicted(&s.q);
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
@@ -325,8 +337,12 @@ impl<L: Law> Filter<L> {
             // The means lag the start of a motion by about tau_s: one sample beyond 4× the rms
             // deviation seen so far (floored at a tenth of the threshold) ends the rest at once,
             // before the bias learns the motion.
-            let still =
-                gyro_dev < 16.0 * s.rest_gyro_ms.max(g2 / 100.0) && accel_dev < 16.0 * s.rest_accel_ms.max(a2 / 100.0);
+            // `f64::max` by a compare, without the NaN blend `max` compiles to: the same value for
+            // a threshold that is a number (validated), a NaN `ms` included; zeros' signs do not
+            // matter to the `<` below.
+            let floor = |ms: f64, threshold: f64| if ms > threshold { ms } else { threshold };
+            let still = gyro_dev < 16.0 * floor(s.rest_gyro_ms, g2 / 100.0)
+                && accel_dev < 16.0 * floor(s.rest_accel_ms, a2 / 100.0);
             s.rest_gyro_ms += (gyro_dev - s.rest_gyro_ms) * alpha;
             s.rest_accel_ms += (accel_dev - s.rest_accel_ms) * alpha;
             let steady = s.rest_gyro_ms < g2 && s.rest_accel_ms < a2;
@@ -373,7 +389,6 @@ impl<L: Law> Filter<L> {
                 *f = w + correction_dt.cross(&w);
             }
         }
-        s.time += dt;
         if ramping {
             s.ramp_elapsed += dt;
         }
@@ -440,7 +455,7 @@ impl<L: Law> Filter<L> {
 
     /// The batch loop for one sensor set (checked inputs), compiled per law.
     #[inline(always)]
-    fn run_loop<const NINE: bool>(
+    fn run_loop<const NINE: bool, const ENU: bool>(
         &self,
         state: &mut State<L>,
         inputs: &Inputs<'_>,
@@ -449,8 +464,8 @@ impl<L: Law> Filter<L> {
         (out_q, out_bias): (&mut [[f64; 4]], &mut [[f64; 3]]),
         cancel: &Cancel,
     ) -> Result<()> {
+        let world = if ENU { World::Enu } else { World::Ned };
         let mut previous = state.common.time;
-        let mut rates = Rates::default();
         for (k, (&t, (q_out, b_out))) in inputs
             .t
             .iter()
@@ -461,10 +476,12 @@ impl<L: Law> Filter<L> {
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
             let mag = if NINE { Some(row(&mags[k])) } else { None };
-            // One test on the sum (NaN and ±inf propagate); only when it fails, find the culprit
-            // (a finite sum overflowing to inf is no error, but a field whose squared norm
+            // One test on a sum of everything (NaN and ±inf propagate through any order of the
+            // additions; this one pairs the rows lane by lane); only when it fails, find the
+            // culprit (a finite sum overflowing to inf is no error, but a field whose squared norm
             // overflows is: the gate keeps its first norm as the reference).
-            let sum = t + gyro.sum() + accel.sum() + mag.map_or(0.0, |m| m.norm_squared());
+            let lanes = gyro + accel;
+            let sum = (lanes.x + lanes.y) + (lanes.z + (t + mag.map_or(0.0, |m| m.norm_squared())));
             if !sum.is_finite() {
                 if !t.is_finite() {
                     return Err(Error::NonFinite { index: k }.in_argument("t"));
@@ -487,14 +504,14 @@ impl<L: Law> Filter<L> {
             }
             if k == 0 && !continued {
                 if !state.common.initialized {
-                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, &mut rates);
+                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, world);
                 }
             } else {
                 let dt = t - previous;
                 if dt.is_nan() || dt <= 0.0 {
                     return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
                 }
-                self.step(state, &gyro, &accel, mag.as_ref(), dt, &mut rates);
+                self.step(state, &gyro, &accel, mag.as_ref(), dt, world);
                 check_overflow(&state.common, k)?;
             }
             // Keep the stamp itself (summing the steps would drift from it by rounding).
@@ -518,9 +535,12 @@ crate::simd_dispatch! {
         out: (&mut [[f64; 4]], &mut [[f64; 3]]),
         cancel: &Cancel,
     ) -> Result<()> {
-        match inputs.mag {
-            Some(mag) => filter.run_loop::<true>(state, inputs, mag, continued, out, cancel),
-            None => filter.run_loop::<false>(state, inputs, &[], continued, out, cancel),
+        let mag = inputs.mag.unwrap_or(&[]);
+        match (inputs.mag.is_some(), filter.options.world) {
+            (true, World::Enu) => filter.run_loop::<true, true>(state, inputs, mag, continued, out, cancel),
+            (true, World::Ned) => filter.run_loop::<true, false>(state, inputs, mag, continued, out, cancel),
+            (false, World::Enu) => filter.run_loop::<false, true>(state, inputs, mag, continued, out, cancel),
+            (false, World::Ned) => filter.run_loop::<false, false>(state, inputs, mag, continued, out, cancel),
         }
     }
 }
