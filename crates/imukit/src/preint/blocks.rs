@@ -95,30 +95,43 @@ pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
 /// `A Σ Aᵀ` for the transition of the midpoint scheme's frame-i blocks (`midpoint.rs`), where
 /// `Φ = I` and `M = W`: with `Σ_θθ` symmetric, `Σ_θθ Wᵀ = (W Σ_θθ)ᵀ` and `Σ_vθ Wᵀ = (W Σ_θv)ᵀ`, so
 /// four 3×3 products (`W Σ_θθ`, `W Σ_θv`, `W Σ_θp`, `(W Σ_θθ) Wᵀ`) where `propagate` takes ten.
+/// The diagonal blocks are sums of symmetric terms (`X + Xᵀ` formed first), so they come out
+/// exactly symmetric with no `(b + bᵀ)/2`:
+///
+/// ```text
+/// vv' = vv + h (W Σ_θv + ·ᵀ) + h² W Σ_θθ Wᵀ
+/// vp' = vp + h W Σ_θp + h vv + h² W Σ_θv + ½h² (W Σ_θv)ᵀ + ½h³ W Σ_θθ Wᵀ
+/// pp' = pp + h (vp + ·ᵀ) + h² vv + ½h² (W Σ_θp + ·ᵀ) + ½h³ (W Σ_θv + ·ᵀ) + ¼h⁴ W Σ_θθ Wᵀ
+/// ```
 #[inline(always)]
 pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, h: f64) -> CovarianceBlocks {
     let [tt, tv, tp, vv, vp, pp] = *cov;
-    let half_h2 = 0.5 * h * h;
+    let (h2, half_h2) = (h * h, 0.5 * h * h);
     let (w_tt, w_tv, w_tp) = (w.mul_with(l, &tt), w.mul_with(l, &tv), w.mul_with(l, &tp));
-    let w_tt_t = w_tt.transpose();
-    // Rows v and p of A Σ in the blocks v and p, and of (A Σ) in block θ times Wᵀ.
-    let a_vv = w_tv.mul_add(l, h, &vv);
-    let a_vp = w_tp.mul_add(l, h, &vp);
-    let a_pv = w_tv.mul_add(l, half_h2, &vv.mul_add(l, h, &vp.transpose()));
-    let a_pp = w_tp.mul_add(l, half_h2, &vp.mul_add(l, h, &pp));
+    let (w_tt_t, w_tv_t) = (w_tt.transpose(), w_tv.transpose());
     let w_tt_wt = w_tt.mul_t_symmetric_with(l, w);
-    let a_vt_wt = w_tt_wt.mul_add(l, h, &w_tv.transpose());
-    let a_pt_wt = w_tt_wt.mul_add(l, half_h2, &w_tv.transpose().mul_add(l, h, &w_tp.transpose()));
-    let new_vv = a_vt_wt.mul_add(l, h, &a_vv);
-    let new_vp = a_vt_wt.mul_add(l, half_h2, &a_vv.mul_add(l, h, &a_vp));
-    let new_pp = a_pt_wt.mul_add(l, half_h2, &a_pv.mul_add(l, h, &a_pp));
+    let sym_v = w_tv.add_with(l, &w_tv_t);
+    let sym_p = w_tp.add_with(l, &w_tp.transpose());
+    let sym_vp = vp.add_with(l, &vp.transpose());
+    let new_vv = w_tt_wt.mul_add(l, h, &sym_v).mul_add(l, h, &vv);
+    let new_vp = w_tt_wt.mul_add(l, h, &w_tv_t).mul_add(
+        l,
+        half_h2,
+        &w_tv.mul_add(l, h2, &vv.mul_add(l, h, &w_tp.mul_add(l, h, &vp))),
+    );
+    // ¼h⁴ X + ½h³ S_v + ½h² S_p = ½h² (½h² X + h S_v + S_p).
+    let new_pp = w_tt_wt.mul_add(l, half_h2, &sym_v.mul_add(l, h, &sym_p)).mul_add(
+        l,
+        half_h2,
+        &vv.mul_add(l, h2, &sym_vp.mul_add(l, h, &pp)),
+    );
     [
         tt,
         w_tt_t.mul_add(l, h, &tv),
         w_tt_t.mul_add(l, half_h2, &tv.mul_add(l, h, &tp)),
-        new_vv.symmetric(),
+        new_vv,
         new_vp,
-        new_pp.symmetric(),
+        new_pp,
     ]
 }
 
@@ -184,6 +197,34 @@ impl Input {
         }
     }
 
+    /// The gyro column `[θ, v, p]` of `D = A P + B` (`P` this input, `A` the frame-i transition of
+    /// `W`, `h`; `midpoint.rs`); its accelerometer blocks are multiples of a rotation, known apart.
+    #[inline(always)]
+    pub fn through<L: Lanes>(&self, l: L, w: &M3, h: f64, b: &Input) -> [M3; 3] {
+        let w_tg = w.mul_with(l, &self.tg);
+        // p row: ½h² W P_θ + (h + h'/2) P_v + (h/2) B_v, P's p row being h'/2 times its v row.
+        let p_v = self.vg.scale_with(l, h + self.half_h);
+        [
+            self.tg.add_with(l, &b.tg),
+            w_tg.mul_add(l, h, &self.vg).add_with(l, &b.vg),
+            w_tg.mul_add(l, 0.5 * h * h, &p_v)
+                .add_with(l, &b.vg.scale_with(l, b.half_h)),
+        ]
+    }
+
+    /// `x + G` for a 9×6 `x`, in `l`'s lanes.
+    #[inline(always)]
+    pub fn added_to<L: Lanes>(&self, l: L, x: &Cross) -> Cross {
+        [
+            [x[0][0].add_with(l, &self.tg), x[0][1]],
+            [x[1][0].add_with(l, &self.vg), x[1][1].add_with(l, &self.va)],
+            [
+                self.vg.mul_add(l, self.half_h, &x[2][0]),
+                self.va.mul_add(l, self.half_h, &x[2][1]),
+            ],
+        ]
+    }
+
     /// `G` as a cross covariance.
     #[inline(always)]
     pub fn cross(&self) -> Cross {
@@ -238,19 +279,18 @@ impl Input {
     }
 }
 
-/// `cov += D diag(q_g I, q_a I) Dᵀ` for a 9×6 `D` whose accelerometer blocks are `c_v R` (v row)
-/// and `c_p R` (p row) for a rotation `R`: those enter as multiples of I, with no product; the
-/// gyro column takes six.
+/// `cov += D diag(q_g I, q_a I) Dᵀ` for a 9×6 `D` with gyro column `[dt, dv, dp]` and accelerometer
+/// blocks `0`, `c_v R`, `c_p R` for a rotation `R`: those enter as multiples of I, with no product;
+/// the gyro column takes six.
 #[inline(always)]
 pub(super) fn add_noise<L: Lanes>(
     l: L,
     cov: &mut CovarianceBlocks,
-    d: &Cross,
+    [dt, dv, dp]: &[M3; 3],
     q_g: f64,
     q_a: f64,
     [c_v, c_p]: [f64; 2],
 ) {
-    let [[dt, _], [dv, _], [dp, _]] = *d;
     let (st, sv, sp) = (dt.scale_with(l, q_g), dv.scale_with(l, q_g), dp.scale_with(l, q_g));
     cov[0] = cov[0].add_with(l, &st.mul_t_symmetric_with(l, &dt));
     cov[1] = cov[1].add_with(l, &st.mul_t_with(l, &dv));

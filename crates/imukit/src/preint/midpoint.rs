@@ -153,28 +153,28 @@ impl Preintegrator {
 
         // Frame i (module docs): W = −[ā]×, G = R_1 J_r, each B_s's v row h K = ¼h² [R_1 â_1]× G.
         let (r0, r1) = (M3::of(&s.r0), M3::of(&s.r1));
-        let w = -M3::of(&so3::hat(&acc));
+        let w = M3::of(&so3::hat(&-acc));
         let g = r1.mul_with(l, &M3::of(&s.jr));
         let vg = M3::of(&so3::hat(&(u1 * (0.25 * h * h)))).mul_with(l, &g);
-        let tg = g * -half_h;
+        let tg = g.scale_with(l, -half_h);
+        let (va0, va1) = (r0.scale_with(l, -half_h), r1.scale_with(l, -half_h));
         let b0 = Input {
             tg,
             vg,
-            va: r0 * -half_h,
+            va: va0,
             half_h,
         };
-        let b1 = Input { va: r1 * -half_h, ..b0 };
         let g_b = Input {
-            tg: g * -h,
-            vg: vg * 2.0,
-            va: (r0 + r1) * -half_h,
+            tg: tg.add_with(l, &tg),
+            vg: vg.add_with(l, &vg),
+            va: va0.add_with(l, &va1),
             half_h,
         };
 
         // Covariance: the last sample's noise enters now through D = A P + B_0 (module docs), whose
         // accelerometer blocks are −½(h' + h) R_0 and −¼(h' + h)² R_0.
         let pending = self.ends.pending;
-        let d = blocks::add(&blocks::transition(l, &pending.cross(), None, &w, h), &b0.cross());
+        let d = pending.through(l, &w, h, &b0);
         let mut cov = blocks::propagate_frame_i(l, &self.covariance, &w, h);
         let c_v = -(pending.half_h + half_h);
         blocks::add_noise(l, &mut cov, &d, q0[0], q0[1], [c_v, -c_v * c_v]);
@@ -182,14 +182,13 @@ impl Preintegrator {
             walk.step(l, &mut cov, None, &w, &g_b, None, &self.noise);
         }
         self.covariance = cov;
-        self.ends.pending = b1;
+        self.ends.pending = Input { va: va1, ..b0 };
         self.ends.start_cross = match prev.var {
             // The window's first interval: its first sample's noise enters through B_0 alone.
             None => b0.scaled(q0[0], q0[1]),
             Some(_) => blocks::transition(l, &self.ends.start_cross, None, &w, h),
         };
-        let jac = blocks::transition(l, &self.jac, None, &w, h);
-        self.jac = blocks::add(&jac, &g_b.cross());
+        self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, None, &w, h));
 
         // Deltas.
         self.delta_position += self.delta_velocity * h + acc * (half_h * h);
