@@ -292,17 +292,15 @@ pub(super) fn add_noise<L: Lanes>(
     [c_v, c_p]: [f64; 2],
 ) {
     let (st, sv, sp) = (dt.scale_with(l, q_g), dv.scale_with(l, q_g), dp.scale_with(l, q_g));
-    cov[0] = cov[0].add_with(l, &st.mul_t_symmetric_with(l, &dt));
-    cov[1] = cov[1].add_with(l, &st.mul_t_with(l, &dv));
-    cov[2] = cov[2].add_with(l, &st.mul_t_with(l, &dp));
+    cov[0] = cov[0].add_with(l, &st.mul_t_symmetric_with(l, dt));
+    cov[1] = cov[1].add_with(l, &st.mul_t_with(l, dv));
+    cov[2] = cov[2].add_with(l, &st.mul_t_with(l, dp));
     cov[3] = cov[3]
-        .add_with(l, &sv.mul_t_symmetric_with(l, &dv))
+        .add_with(l, &sv.mul_t_symmetric_with(l, dv))
         .plus_identity(q_a * c_v * c_v);
-    cov[4] = cov[4]
-        .add_with(l, &sv.mul_t_with(l, &dp))
-        .plus_identity(q_a * c_v * c_p);
+    cov[4] = cov[4].add_with(l, &sv.mul_t_with(l, dp)).plus_identity(q_a * c_v * c_p);
     cov[5] = cov[5]
-        .add_with(l, &sp.mul_t_symmetric_with(l, &dp))
+        .add_with(l, &sp.mul_t_symmetric_with(l, dp))
         .plus_identity(q_a * c_p * c_p);
 }
 

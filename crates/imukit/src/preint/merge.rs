@@ -161,6 +161,6 @@ impl Preintegrator {
             boundary: self.boundary.then(&next.boundary),
             since_projection: 0,
         }
-        .from_body_frame())
+        .in_own_frame())
     }
 }

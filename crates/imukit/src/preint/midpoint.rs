@@ -244,7 +244,7 @@ impl Preintegrator {
 
     /// This preintegration with its covariance, bias Jacobian and start cross covariance given in
     /// the body frame at j (as a merge composes them) taken to the scheme's own frame.
-    pub(super) fn from_body_frame(mut self) -> Self {
+    pub(super) fn in_own_frame(mut self) -> Self {
         if self.scheme == Scheme::Midpoint {
             let r = M3::of(&self.delta_rotation);
             self.covariance = blocks::rotate_covariance(&self.covariance, &r);
