@@ -1,5 +1,5 @@
 """Preintegration from Python, 10^6 samples at 200 Hz, euler scheme, 9×9 covariance and bias
-Jacobians: ``imukit.preintegrate`` (one call, GIL released; on one core as a single window with
+Jacobians (``lie_euler``): ``imukit.preintegrate`` (one call, GIL released; on one core as a single window with
 ``threads=1``, and on all cores as parallel chunks), the 15×15 and midpoint variants,
 ``preintegrate_windows`` over 10^4 windows on 1 and 2 threads, against the streaming
 ``PreintegratedImu.integrate_measurement`` loop over a subset, and against GTSAM's
@@ -49,43 +49,44 @@ def main() -> None:
     t, gyro, accel = synthetic_imu(args.n)
     imu = ik.ImuData(t, gyro, accel)
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+    euler = ik.PreintParams(noise, scheme="lie_euler")
     if args.record_vs_list:
         record_vs_list(imu, noise, imu.t[:: max(1, args.n // args.windows)], args.repeats)
         return
 
     def stream(m: int) -> ik.PreintegratedImu:
-        pim = ik.PreintegratedImu(noise=noise, scheme="euler")
+        pim = ik.PreintegratedImu(noise=noise, scheme="lie_euler")
         for k in range(m - 1):
             pim.integrate_measurement(accel[k], gyro[k], 0.005)
         return pim
 
     m = args.loop_n
-    gap = np.abs(stream(m).delta_position - ik.preintegrate(imu[:m], noise=noise, scheme="euler").delta_position).max()
+    gap = np.abs(stream(m).delta_position - ik.preintegrate(imu[:m], euler).delta_position).max()
     whole = [imu.t[0], imu.t[-1]]  # one window: the sequential batch on one core
     rows = [
         (
             "preintegrate, 1 core",
-            median_s(lambda: ik.preintegrate_windows(imu, whole, noise=noise, scheme="euler", threads=1), args.repeats)
-            / args.n,
+            median_s(lambda: ik.preintegrate_windows(imu, whole, euler, threads=1), args.repeats) / args.n,
         ),
         (
             "preintegrate (all cores)",
-            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler"), args.repeats) / args.n,
+            median_s(lambda: ik.preintegrate(imu, euler), args.repeats) / args.n,
         ),
         (
             "preintegrate combined=True",
-            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="euler", combined=True), 3) / args.n,
+            median_s(lambda: ik.preintegrate(imu, ik.PreintParams(noise, scheme="lie_euler", combined=True)), 3)
+            / args.n,
         ),
         (
             "preintegrate midpoint",
-            median_s(lambda: ik.preintegrate(imu, noise=noise, scheme="midpoint"), 3) / args.n,
+            median_s(lambda: ik.preintegrate(imu, ik.PreintParams(noise, scheme="midpoint")), 3) / args.n,
         ),
         ("integrate_measurement loop", median_s(lambda: stream(m), 1) / m),
     ]
     bounds = imu.t[:: max(1, args.n // args.windows)]
     for threads in (1, 2):
         seconds = median_s(
-            lambda: ik.preintegrate_windows(imu, bounds, noise=noise, scheme="euler", threads=threads),  # noqa: B023
+            lambda: ik.preintegrate_windows(imu, bounds, euler, threads=threads),  # noqa: B023
             args.repeats,
         )
         rows.append((f"{len(bounds) - 1:,} windows, {threads} thread(s)", seconds / args.n))
@@ -106,7 +107,7 @@ def main() -> None:
             return pim
 
         manifold = gtsam_loop(gtsam.PreintegratedImuMeasurementsManifold)
-        ours = ik.preintegrate(imu[:g], noise=noise, scheme="euler")
+        ours = ik.preintegrate(imu[:g], euler)
         gtsam_gap = np.abs(manifold.deltaPij() - ours.delta_position).max() / np.abs(ours.delta_position).max()
         print(f"imukit batch vs GTSAM manifold over {g:,} samples: max |Δp| gap = {gtsam_gap:.1e} relative")
         rows += [

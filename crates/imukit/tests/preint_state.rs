@@ -41,3 +41,20 @@ fn the_state_round_trips_and_continues_bit_for_bit() {
         }
     }
 }
+
+/// A midpoint state of the earlier layout (scheme word 1: body-frame blocks, no pending input) is
+/// refused, not misread; so is an unknown scheme word.
+#[test]
+fn states_of_the_earlier_midpoint_layout_are_refused() {
+    let mut p = Preintegrator::new(Vector3::zeros(), Vector3::zeros(), NOISE).with_scheme(Scheme::Midpoint);
+    for (k, (a, w)) in samples().iter().take(5).enumerate() {
+        p.integrate_measurement(a, w, if k == 0 { 0.0 } else { H });
+    }
+    let mut words = p.state_words();
+    assert_eq!(words[0], 2.0);
+    for scheme in [1.0, 3.0] {
+        words[0] = scheme;
+        let message = Preintegrator::from_state_words(&words).unwrap_err().to_string();
+        assert!(message.contains("scheme word"), "{message}");
+    }
+}

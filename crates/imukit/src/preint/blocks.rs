@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::mat3::{Lanes, M3};
+use crate::mat3::{Lanes, Unfused, M3};
 
 /// The unique blocks `[θθ, θv, θp, vv, vp, pp]` of the 9×9 covariance, held in padded form
 /// (`mat3::M3`) between steps: the per-sample kernels read and write them with no conversion
@@ -92,14 +92,64 @@ pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
     }
 }
 
-/// `A X` for a 9×6 cross covariance `X`.
+/// `A Σ Aᵀ` for the transition of the midpoint scheme's frame-i blocks (`midpoint.rs`), where
+/// `Φ = I` and `M = W`: with `Σ_θθ` symmetric, `Σ_θθ Wᵀ = (W Σ_θθ)ᵀ` and `Σ_vθ Wᵀ = (W Σ_θv)ᵀ`, so
+/// four 3×3 products (`W Σ_θθ`, `W Σ_θv`, `W Σ_θp`, `(W Σ_θθ) Wᵀ`) where `propagate` takes ten.
+/// The diagonal blocks are sums of symmetric terms (`X + Xᵀ` formed first), so they come out
+/// exactly symmetric with no `(b + bᵀ)/2`:
+///
+/// ```text
+/// vv' = vv + h (W Σ_θv + ·ᵀ) + h² W Σ_θθ Wᵀ
+/// vp' = vp + h W Σ_θp + h vv + h² W Σ_θv + ½h² (W Σ_θv)ᵀ + ½h³ W Σ_θθ Wᵀ
+/// pp' = pp + h (vp + ·ᵀ) + h² vv + ½h² (W Σ_θp + ·ᵀ) + ½h³ (W Σ_θv + ·ᵀ) + ¼h⁴ W Σ_θθ Wᵀ
+/// ```
 #[inline(always)]
-pub(super) fn transition<L: Lanes>(l: L, x: &Cross, phi: &M3, m: &M3, h: f64) -> Cross {
+pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, h: f64) -> CovarianceBlocks {
+    let [tt, tv, tp, vv, vp, pp] = *cov;
+    let (h2, half_h2) = (h * h, 0.5 * h * h);
+    let (w_tt, w_tv, w_tp) = (w.mul_with(l, &tt), w.mul_with(l, &tv), w.mul_with(l, &tp));
+    let (w_tt_t, w_tv_t) = (w_tt.transpose(), w_tv.transpose());
+    let w_tt_wt = w_tt.mul_t_symmetric_with(l, w);
+    let sym_v = w_tv.add_with(l, &w_tv_t);
+    let sym_p = w_tp.add_with(l, &w_tp.transpose());
+    let sym_vp = vp.add_with(l, &vp.transpose());
+    let new_vv = w_tt_wt.mul_add(l, h, &sym_v).mul_add(l, h, &vv);
+    let new_vp = w_tt_wt.mul_add(l, h, &w_tv_t).mul_add(
+        l,
+        half_h2,
+        &w_tv.mul_add(l, h2, &vv.mul_add(l, h, &w_tp.mul_add(l, h, &vp))),
+    );
+    // ¼h⁴ X + ½h³ S_v + ½h² S_p = ½h² (½h² X + h S_v + S_p).
+    let new_pp = w_tt_wt.mul_add(l, half_h2, &sym_v.mul_add(l, h, &sym_p)).mul_add(
+        l,
+        half_h2,
+        &vv.mul_add(l, h2, &sym_vp.mul_add(l, h, &pp)),
+    );
+    [
+        tt,
+        w_tt_t.mul_add(l, h, &tv),
+        w_tt_t.mul_add(l, half_h2, &tv.mul_add(l, h, &tp)),
+        new_vv,
+        new_vp,
+        new_pp,
+    ]
+}
+
+/// `A X` for a 9×6 cross covariance `X`; `phi` `None` for `Φ = I` (the midpoint scheme's frame-i
+/// blocks: no product in the θ row).
+#[inline(always)]
+pub(super) fn transition<L: Lanes>(l: L, x: &Cross, phi: Option<&M3>, m: &M3, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
     let m_tg = m.mul_with(l, &xtg);
     [
-        [phi.mul_with(l, &xtg), M3::ZERO],
+        [
+            match phi {
+                Some(phi) => phi.mul_with(l, &xtg),
+                None => xtg,
+            },
+            M3::ZERO,
+        ],
         [m_tg.mul_add(l, h, &xvg), xva],
         [
             xvg.mul_add(l, h, &m_tg.scale_with(l, half_h2)).add_with(l, &xpg),
@@ -109,7 +159,7 @@ pub(super) fn transition<L: Lanes>(l: L, x: &Cross, phi: &M3, m: &M3, h: f64) ->
 }
 
 /// A step's 9×6 input matrix `G = [[tg, 0], [vg, va], [h/2 vg, h/2 va]]` (columns `[gyro, accel]`).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Input {
     pub tg: M3,
     pub vg: M3,
@@ -118,6 +168,63 @@ pub(super) struct Input {
 }
 
 impl Input {
+    /// The zero input.
+    pub const ZERO: Input = Input {
+        tg: M3::ZERO,
+        vg: M3::ZERO,
+        va: M3::ZERO,
+        half_h: 0.0,
+    };
+
+    /// The input whose cross covariance form ([`Input::cross`]) is `x`, an input's: its p rows are
+    /// `half_h` times its v rows.
+    pub fn of_cross(x: &Cross, half_h: f64) -> Input {
+        Input {
+            tg: x[0][0],
+            vg: x[1][0],
+            va: x[1][1],
+            half_h,
+        }
+    }
+
+    /// Each block premultiplied by `r`.
+    pub fn rotated(&self, r: &M3) -> Input {
+        Input {
+            tg: r.mul(&self.tg),
+            vg: r.mul(&self.vg),
+            va: r.mul(&self.va),
+            half_h: self.half_h,
+        }
+    }
+
+    /// The gyro column `[θ, v, p]` of `D = A P + B` (`P` this input, `A` the frame-i transition of
+    /// `W`, `h`; `midpoint.rs`); its accelerometer blocks are multiples of a rotation, known apart.
+    #[inline(always)]
+    pub fn through<L: Lanes>(&self, l: L, w: &M3, h: f64, b: &Input) -> [M3; 3] {
+        let w_tg = w.mul_with(l, &self.tg);
+        // p row: ½h² W P_θ + (h + h'/2) P_v + (h/2) B_v, P's p row being h'/2 times its v row.
+        let p_v = self.vg.scale_with(l, h + self.half_h);
+        [
+            self.tg.add_with(l, &b.tg),
+            w_tg.mul_add(l, h, &self.vg).add_with(l, &b.vg),
+            w_tg.mul_add(l, 0.5 * h * h, &p_v)
+                .add_with(l, &b.vg.scale_with(l, b.half_h)),
+        ]
+    }
+
+    /// `x + G` for a 9×6 `x`, in `l`'s lanes.
+    #[inline(always)]
+    pub fn added_to<L: Lanes>(&self, l: L, x: &Cross) -> Cross {
+        [
+            [x[0][0].add_with(l, &self.tg), x[0][1]],
+            [x[1][0].add_with(l, &self.vg), x[1][1].add_with(l, &self.va)],
+            [
+                self.vg.mul_add(l, self.half_h, &x[2][0]),
+                self.va.mul_add(l, self.half_h, &x[2][1]),
+            ],
+        ]
+    }
+
     /// `G` as a cross covariance.
     #[inline(always)]
     pub fn cross(&self) -> Cross {
@@ -170,6 +277,52 @@ impl Input {
         cov[4] = cov[4].add_with(l, &u[1].mul_add(l, c, &u[2].transpose()));
         cov[5] += (u[2] + u[2].transpose()) * c;
     }
+}
+
+/// `cov += D diag(q_g I, q_a I) Dᵀ` for a 9×6 `D` with gyro column `[dt, dv, dp]` and accelerometer
+/// blocks `0`, `c_v R`, `c_p R` for a rotation `R`: those enter as multiples of I, with no product;
+/// the gyro column takes six.
+#[inline(always)]
+pub(super) fn add_noise<L: Lanes>(
+    l: L,
+    cov: &mut CovarianceBlocks,
+    [dt, dv, dp]: &[M3; 3],
+    q_g: f64,
+    q_a: f64,
+    [c_v, c_p]: [f64; 2],
+) {
+    let (st, sv, sp) = (dt.scale_with(l, q_g), dv.scale_with(l, q_g), dp.scale_with(l, q_g));
+    cov[0] = cov[0].add_with(l, &st.mul_t_symmetric_with(l, dt));
+    cov[1] = cov[1].add_with(l, &st.mul_t_with(l, dv));
+    cov[2] = cov[2].add_with(l, &st.mul_t_with(l, dp));
+    cov[3] = cov[3]
+        .add_with(l, &sv.mul_t_symmetric_with(l, dv))
+        .plus_identity(q_a * c_v * c_v);
+    cov[4] = cov[4].add_with(l, &sv.mul_t_with(l, dp)).plus_identity(q_a * c_v * c_p);
+    cov[5] = cov[5]
+        .add_with(l, &sp.mul_t_symmetric_with(l, dp))
+        .plus_identity(q_a * c_p * c_p);
+}
+
+/// `x` with its θ row premultiplied by `r` (its θ-row accelerometer block is zero).
+pub(super) fn rotate_rows(x: &Cross, r: &M3) -> Cross {
+    let mut out = *x;
+    out[0][0] = r.mul(&x[0][0]);
+    out
+}
+
+/// `T Σ Tᵀ` for `T = diag(r, I, I)`.
+pub(super) fn rotate_covariance(cov: &CovarianceBlocks, r: &M3) -> CovarianceBlocks {
+    let [tt, tv, tp, vv, vp, pp] = *cov;
+    let r_tt = r.mul(&tt);
+    [
+        r_tt.mul_t_symmetric_with(Unfused, r),
+        r.mul(&tv),
+        r.mul(&tp),
+        vv,
+        vp,
+        pp,
+    ]
 }
 
 /// Block-wise `a + b` for cross covariances.

@@ -13,6 +13,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use super::blocks::{self, Cross};
 use super::{Covariance9, Preintegrator, Scheme};
 use crate::error::{Error, Result};
+use crate::mat3::M3;
 use crate::so3;
 
 fn mismatch(expected: &'static str, got: String) -> Error {
@@ -100,6 +101,13 @@ impl Preintegrator {
                 }
                 _ => {}
             }
+            if next.ends.last.is_some_and(|s| s.var.is_none()) {
+                // `next` holds only its first sample, this one's last: nothing to compose.
+                return Ok(Preintegrator {
+                    bias_walk: None,
+                    ..self.clone()
+                });
+            }
         }
         let r = self.delta_rotation;
         let dt_jk = next.delta_t;
@@ -108,14 +116,16 @@ impl Preintegrator {
             (&next.delta_rotation, &next.delta_velocity, &next.delta_position, dt_jk),
         );
         // Dense 9×9 products: merging is rare.
-        let mut cov = j1 * self.covariance() * j1.transpose() + j2 * next.covariance() * j2.transpose();
+        // `next`'s covariance without its last sample's noise: the merged window holds that apart too.
+        let cov_jk = blocks::assemble(&next.covariance_blocks(false));
+        let mut cov = j1 * self.covariance() * j1.transpose() + j2 * cov_jk * j2.transpose();
         let transport = |m: &Covariance9, x: &Cross| blocks::cross_of(&(m * blocks::cross_matrix(x)));
         let mut ends = next.ends.clone();
         if let (Scheme::Midpoint, Some(first)) = (self.scheme, &next.ends.first) {
             // Cov(δx_jk, n_j) Cov(n_j)⁻¹ is n_j's sensitivity D; Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Dᵀ.
             let [q_g, q_a] = first.var.unwrap_or([0.0; 2]);
             let inv = |q: f64| if q > 0.0 { 1.0 / q } else { 0.0 };
-            let d = blocks::cross_matrix(&next.ends.start_cross)
+            let d = blocks::cross_matrix(&next.body_rows(&next.ends.start_cross))
                 * SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
                     inv(q_g),
                     inv(q_g),
@@ -124,13 +134,15 @@ impl Preintegrator {
                     inv(q_a),
                     inv(q_a),
                 ));
-            let between = j1 * blocks::cross_matrix(&self.ends.end_cross) * d.transpose() * j2.transpose();
+            let between = j1 * blocks::cross_matrix(&self.end_cross()) * d.transpose() * j2.transpose();
             cov += between + between.transpose();
             ends.first = self.ends.first;
-            ends.start_cross = transport(&j1, &self.ends.start_cross);
-            ends.end_cross = transport(&j2, &next.ends.end_cross);
+            ends.start_cross = transport(&j1, &self.body_rows(&self.ends.start_cross));
+            // In frame i: J_2 = diag(I, ΔR_ij, ΔR_ij) between body frames, ΔR_ij on every row.
+            ends.pending = next.ends.pending.rotated(&M3::of(&r));
         }
-        let jac = j1 * blocks::cross_matrix(&self.jac) + j2 * blocks::cross_matrix(&next.jac);
+        let body_jac = |p: &Preintegrator| blocks::cross_matrix(&p.body_rows(&p.jac));
+        let jac = j1 * body_jac(self) + j2 * body_jac(next);
         Ok(Preintegrator {
             scheme: self.scheme,
             bias_gyro: self.bias_gyro,
@@ -148,6 +160,7 @@ impl Preintegrator {
             ends,
             boundary: self.boundary.then(&next.boundary),
             since_projection: 0,
-        })
+        }
+        .in_own_frame())
     }
 }

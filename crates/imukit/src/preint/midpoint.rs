@@ -19,17 +19,31 @@
 //! `B_s = [[−½hJ, 0], [hK, −½hR_s], [½h²K, −¼h²R_s]]` (columns `[gyro, accel]`) and a bias
 //! change through `G_b = B_0 + B_1`, which is also the bias Jacobian's step: `J_b ← A J_b + G_b`.
 //!
-//! Consecutive intervals share a sample, so its white noise enters two steps. The covariance
-//! carries `C = Cov(δx, n_last)` and adds `A C B_0ᵀ + B_0 Cᵀ Aᵀ`, an exact account of that
-//! correlation (tested against a dense augmented-state propagation and a Monte Carlo). VINS-Mono
-//! treats `n_0` and `n_1` of every interval as fresh noise, which halves the white-noise part:
-//! `Δv ≈ h Σ ½(n_k + n_k+1)` has variance `≈ N h² σ²`, its model `½ N h² σ²`.
+//! Consecutive intervals share a sample, so its white noise enters two steps. VINS-Mono treats
+//! `n_0` and `n_1` of every interval as fresh noise, which halves the white-noise part:
+//! `Δv ≈ h Σ ½(n_k + n_k+1)` has variance `≈ N h² σ²`, its model `½ N h² σ²`. Here the error
+//! splits as `δx = δx̃ + P n_last`, `δx̃` independent of `n_last` (`P` the last interval's `B_1`);
+//! an interval then gives `δx̃_1 = A δx̃_0 + D n_0` with `D = A P + B_0`, and `P ← B_1`, so the
+//! stored covariance `Cov(δx̃)` takes `A Σ̃ Aᵀ + D q_0 Dᵀ` and the covariance is `Σ̃ + P q Pᵀ`, an
+//! exact account of that correlation (tested against a dense augmented-state propagation and a
+//! Monte Carlo) with no cross term to carry through `A`.
+//!
+//! **Frame i.** The per-sample blocks hold the rotation error as `δφ = ΔR δθ` (a left
+//! perturbation, in the frame of keyframe i), i.e. the state error `T δx` with `T = diag(ΔR, I, I)`.
+//! Since `R_1 Φᵀ R_0ᵀ = I` and `M R_0ᵀ = −½[R_0 â_0 + R_1 â_1]× = −[ā]×` (`R[a]×Rᵀ = [Ra]×`), the
+//! transition becomes `A' = [[I, 0, 0], [W h, I, 0], [½ W h², h I, I]]` with `W = −[ā]×`, and the
+//! inputs `B'_s` have θ rows `−½h G`, `G = R_1 J`, and v rows `h K = ¼h² [R_1 â_1]× G`: no `Φ`
+//! product anywhere, four 3×3 products for `A' Σ A'ᵀ` instead of ten (the rotation part of the
+//! invariant EKF's error, Barrau & Bonnabel, "The Invariant Extended Kalman Filter as a Stable
+//! Observer", IEEE TAC 2017). The body
+//! frame's blocks, which every reader gets, are `T⁻¹ (·) T⁻ᵀ` at the current `ΔR`; a projection of
+//! `ΔR` (`mod.rs`) moves that frame by rounding only.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use super::blocks::{self, Cross, Input, ZERO_CROSS};
-use super::{Covariance9, Preintegrator};
-use crate::mat3::{mul, Lanes, M3};
+use super::blocks::{self, CovarianceBlocks, Cross, Input, ZERO_CROSS};
+use super::{Covariance9, Preintegrator, Scheme};
+use crate::mat3::{mul, Lanes, Unfused, M3};
 use crate::so3;
 
 /// One sample as the midpoint scheme remembers it.
@@ -44,15 +58,17 @@ pub(super) struct Sample {
     pub scale: [f64; 2],
 }
 
-/// The samples at the window's ends and the covariances of the state error with their noise.
+/// The samples at the window's ends and how their noise enters the state error (frame i, module
+/// docs).
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Ends {
     pub first: Option<Sample>,
     pub last: Option<Sample>,
     /// `Cov(δx, n_first)`, for merging this window after another.
     pub start_cross: Cross,
-    /// `Cov(δx, n_last)`.
-    pub end_cross: Cross,
+    /// `P`, the response of `δx` to the last sample's noise, whose share `P q Pᵀ` the stored
+    /// covariance leaves out (zero before the first interval).
+    pub pending: Input,
 }
 
 impl Default for Ends {
@@ -61,7 +77,7 @@ impl Default for Ends {
             first: None,
             last: None,
             start_cross: ZERO_CROSS,
-            end_cross: ZERO_CROSS,
+            pending: Input::ZERO,
         }
     }
 }
@@ -84,33 +100,23 @@ struct Step {
     a1: Vector3<f64>,
     r0: Matrix3<f64>,
     r1: Matrix3<f64>,
-    phi: Matrix3<f64>,
+    /// `Exp(ω̂h)`.
+    exp: Matrix3<f64>,
     jr: Matrix3<f64>,
-    m: Matrix3<f64>,
-    k: Matrix3<f64>,
 }
 
 impl Preintegrator {
     #[inline(always)]
     fn midpoint_step(&self, prev: &Sample, accel: &Vector3<f64>, gyro: &Vector3<f64>, h: f64) -> Step {
-        let a0 = prev.accel - self.bias_accel;
-        let a1 = accel - self.bias_accel;
         let w = (prev.gyro + gyro) * 0.5 - self.bias_gyro;
         let r0 = self.delta_rotation;
-        let (step, jr) = so3::exp_and_right_jacobian(&(w * h));
-        let phi = step.transpose();
-        let r1 = mul(&r0, &step);
-        let r1a = blocks::times_hat(&r1, &a1);
+        let (exp, jr) = so3::exp_and_right_jacobian(&(w * h));
         Step {
-            // R_1[â_1]× Φᵀ = R_0 Exp(ω̂h) [â_1]× Exp(ω̂h)ᵀ = R_0 [Exp(ω̂h) â_1]× (the adjoint), so
-            // M = −½ R_0 [â_0 + Exp(ω̂h) â_1]×: one product instead of three.
-            m: -blocks::times_hat(&r0, &(a0 + step * a1)) * 0.5,
-            k: mul(&r1a, &jr) * (0.25 * h),
-            a0,
-            a1,
+            a0: prev.accel - self.bias_accel,
+            a1: accel - self.bias_accel,
             r0,
-            r1,
-            phi,
+            r1: mul(&r0, &exp),
+            exp,
             jr,
         }
     }
@@ -142,52 +148,49 @@ impl Preintegrator {
         let q1 = [q[0] * scale[0], q[1] * scale[1]];
         let q0 = prev.var.unwrap_or([q[0] * prev.scale[0], q[1] * prev.scale[1]]);
         let half_h = 0.5 * h;
-        // In padded blocks (`mat3::M3`), the form the blocks are stored in.
-        let (phi, m, jr, k, r0, r1) = (
-            M3::of(&s.phi),
-            M3::of(&s.m),
-            M3::of(&s.jr),
-            M3::of(&s.k),
-            M3::of(&s.r0),
-            M3::of(&s.r1),
-        );
-        let input = |r_s: &M3| Input {
-            tg: -jr * half_h,
-            vg: k * h,
-            va: -*r_s * half_h,
+        let (u0, u1) = (s.r0 * s.a0, s.r1 * s.a1);
+        let acc = (u0 + u1) * 0.5;
+
+        // Frame i (module docs): W = −[ā]×, G = R_1 J_r, each B_s's v row h K = ¼h² [R_1 â_1]× G.
+        let (r0, r1) = (M3::of(&s.r0), M3::of(&s.r1));
+        let w = M3::of(&so3::hat(&-acc));
+        let g = r1.mul_with(l, &M3::of(&s.jr));
+        let vg = M3::of(&so3::hat(&(u1 * (0.25 * h * h)))).mul_with(l, &g);
+        let tg = g.scale_with(l, -half_h);
+        let (va0, va1) = (r0.scale_with(l, -half_h), r1.scale_with(l, -half_h));
+        let b0 = Input {
+            tg,
+            vg,
+            va: va0,
             half_h,
         };
-        let (b0, b1) = (input(&r0), input(&r1));
         let g_b = Input {
-            tg: -jr * h,
-            vg: k * (2.0 * h),
-            va: -(r0 + r1) * half_h,
+            tg: tg.add_with(l, &tg),
+            vg: vg.add_with(l, &vg),
+            va: va0.add_with(l, &va1),
             half_h,
         };
 
-        // Covariance, with the shared sample's correlation (module docs).
-        let y_end = blocks::transition(l, &self.ends.end_cross, &phi, &m, h);
-        let mut cov = blocks::propagate(l, &self.covariance, &phi, &m, h, 0.0, None);
-        // B_0 q_0 B_0ᵀ + B_1 q_1 B_1ᵀ in one: the gyro columns are equal, and each accelerometer
-        // block (−½h R_s) has the Gram matrix ¼h² I.
-        b0.add_quadratic(l, &mut cov, q0[0] + q1[0], q0[1] + q1[1], Some(half_h * half_h));
-        b0.add_cross(l, &mut cov, &y_end);
-        blocks::symmetric_diagonal(&mut cov);
+        // Covariance: the last sample's noise enters now through D = A P + B_0 (module docs), whose
+        // accelerometer blocks are −½(h' + h) R_0 and −¼(h' + h)² R_0.
+        let pending = self.ends.pending;
+        let d = pending.through(l, &w, h, &b0);
+        let mut cov = blocks::propagate_frame_i(l, &self.covariance, &w, h);
+        let c_v = -(pending.half_h + half_h);
+        blocks::add_noise(l, &mut cov, &d, q0[0], q0[1], [c_v, -c_v * c_v]);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step(l, &mut cov, &phi, &m, &g_b, None, &self.noise);
+            walk.step(l, &mut cov, None, &w, &g_b, None, &self.noise);
         }
         self.covariance = cov;
-        let moved_start = blocks::transition(l, &self.ends.start_cross, &phi, &m, h);
+        self.ends.pending = Input { va: va1, ..b0 };
         self.ends.start_cross = match prev.var {
-            None => blocks::add(&moved_start, &b0.scaled(q0[0], q0[1])),
-            Some(_) => moved_start,
+            // The window's first interval: its first sample's noise enters through B_0 alone.
+            None => b0.scaled(q0[0], q0[1]),
+            Some(_) => blocks::transition(l, &self.ends.start_cross, None, &w, h),
         };
-        self.ends.end_cross = b1.scaled(q1[0], q1[1]);
-        let jac = blocks::transition(l, &self.jac, &phi, &m, h);
-        self.jac = blocks::add(&jac, &g_b.cross());
+        self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, None, &w, h));
 
         // Deltas.
-        let acc = (s.r0 * s.a0 + s.r1 * s.a1) * 0.5;
         self.delta_position += self.delta_velocity * h + acc * (half_h * h);
         self.delta_velocity += acc * h;
         self.delta_rotation = s.r1;
@@ -202,6 +205,53 @@ impl Preintegrator {
             var: Some(q1),
             scale,
         });
+    }
+
+    /// `ΔRᵀ` as a block: from frame i to the body frame at j.
+    fn to_body(&self) -> M3 {
+        M3::of(&self.delta_rotation.transpose())
+    }
+
+    /// `x` with its θ row in the body frame at j (the right perturbation of `mod.rs`), where the
+    /// midpoint scheme keeps it in frame i.
+    pub(super) fn body_rows(&self, x: &Cross) -> Cross {
+        match self.scheme {
+            Scheme::Euler => *x,
+            Scheme::Midpoint => blocks::rotate_rows(x, &self.to_body()),
+        }
+    }
+
+    /// The covariance blocks in the body frame at j: with the last sample's noise (the
+    /// covariance), or without it (`pending = false`: the part a merge composes on its own).
+    pub(super) fn covariance_blocks(&self, pending: bool) -> CovarianceBlocks {
+        if self.scheme == Scheme::Euler {
+            return self.covariance;
+        }
+        let mut cov = self.covariance;
+        if let (true, Some([q_g, q_a])) = (pending, self.ends.last.and_then(|s| s.var)) {
+            let p = &self.ends.pending;
+            // `va` is −½h R_1: `va vaᵀ = (h/2)² I`.
+            p.add_quadratic(Unfused, &mut cov, q_g, q_a, Some(p.half_h * p.half_h));
+        }
+        blocks::rotate_covariance(&cov, &self.to_body())
+    }
+
+    /// `Cov(δx, n_last)` in the body frame at j (zero before the first interval).
+    pub(super) fn end_cross(&self) -> Cross {
+        let [q_g, q_a] = self.ends.last.and_then(|s| s.var).unwrap_or([0.0; 2]);
+        self.body_rows(&self.ends.pending.scaled(q_g, q_a))
+    }
+
+    /// This preintegration with its covariance, bias Jacobian and start cross covariance given in
+    /// the body frame at j (as a merge composes them) taken to the scheme's own frame.
+    pub(super) fn in_own_frame(mut self) -> Self {
+        if self.scheme == Scheme::Midpoint {
+            let r = M3::of(&self.delta_rotation);
+            self.covariance = blocks::rotate_covariance(&self.covariance, &r);
+            self.jac = blocks::rotate_rows(&self.jac, &r);
+            self.ends.start_cross = blocks::rotate_rows(&self.ends.start_cross, &r);
+        }
+        self
     }
 
     /// The midpoint window's last sample `(accel, gyro)`, which the next interval starts from;
@@ -219,16 +269,19 @@ impl Preintegrator {
         h: f64,
     ) -> Option<MidpointStepMatrices> {
         let s = self.midpoint_step(self.ends.last.as_ref()?, accel, gyro, h);
+        let phi = s.exp.transpose();
+        let m = -blocks::times_hat(&s.r0, &(s.a0 + s.exp * s.a1)) * 0.5;
+        let k = mul(&blocks::times_hat(&s.r1, &s.a1), &s.jr) * (0.25 * h);
         let mut a = Covariance9::identity();
-        a.fixed_view_mut::<3, 3>(0, 0).copy_from(&s.phi);
-        a.fixed_view_mut::<3, 3>(3, 0).copy_from(&(s.m * h));
-        a.fixed_view_mut::<3, 3>(6, 0).copy_from(&(s.m * (0.5 * h * h)));
+        a.fixed_view_mut::<3, 3>(0, 0).copy_from(&phi);
+        a.fixed_view_mut::<3, 3>(3, 0).copy_from(&(m * h));
+        a.fixed_view_mut::<3, 3>(6, 0).copy_from(&(m * (0.5 * h * h)));
         a.fixed_view_mut::<3, 3>(6, 3).copy_from(&(Matrix3::identity() * h));
         let input = |r_s: &Matrix3<f64>| {
             let mut b = SMatrix::<f64, 9, 6>::zeros();
             b.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-s.jr * (0.5 * h)));
-            b.fixed_view_mut::<3, 3>(3, 0).copy_from(&(s.k * h));
-            b.fixed_view_mut::<3, 3>(6, 0).copy_from(&(s.k * (0.5 * h * h)));
+            b.fixed_view_mut::<3, 3>(3, 0).copy_from(&(k * h));
+            b.fixed_view_mut::<3, 3>(6, 0).copy_from(&(k * (0.5 * h * h)));
             b.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-r_s * (0.5 * h)));
             b.fixed_view_mut::<3, 3>(6, 3).copy_from(&(-r_s * (0.25 * h * h)));
             b

@@ -177,7 +177,7 @@ impl BiasWalk {
         &mut self,
         l: L,
         cov: &mut CovarianceBlocks,
-        phi: &M3,
+        phi: Option<&M3>,
         m: &M3,
         g_b: &Input,
         va_gram: Option<f64>,
@@ -442,7 +442,7 @@ impl Preintegrator {
                 half_h: 0.5 * h,
             };
             // `va vaᵀ = h² ΔR ΔRᵀ = h² I`.
-            walk.step(l, &mut cov, &phi, &m, &g_b, Some(h * h), &self.noise);
+            walk.step(l, &mut cov, Some(&phi), &m, &g_b, Some(h * h), &self.noise);
         }
         self.covariance = cov;
 
@@ -489,7 +489,7 @@ impl Preintegrator {
             && self.covariance.iter().all(block_finite)
             && cross_finite(&self.jac)
             && cross_finite(&self.ends.start_cross)
-            && cross_finite(&self.ends.end_cross)
+            && cross_finite(&self.ends.pending.cross())
             && walk_finite
     }
 
@@ -532,7 +532,7 @@ impl Preintegrator {
         let walk = self.bias_walk.as_ref()?;
         let mut out = Covariance15::zeros();
         out.fixed_view_mut::<9, 9>(0, 0).copy_from(&self.covariance());
-        let cross = blocks::cross_matrix(&walk.cross);
+        let cross = blocks::cross_matrix(&self.body_rows(&walk.cross));
         out.fixed_view_mut::<9, 6>(0, 9).copy_from(&cross);
         out.fixed_view_mut::<6, 9>(9, 0).copy_from(&cross.transpose());
         out.fixed_view_mut::<3, 3>(9, 9)
@@ -544,11 +544,11 @@ impl Preintegrator {
 
     /// Covariance of `[δθ, δv, δp]` (9×9).
     pub fn covariance(&self) -> Covariance9 {
-        blocks::assemble(&self.covariance)
+        blocks::assemble(&self.covariance_blocks(true))
     }
 
     /// The bias Jacobian `∂(θ, v, p)/∂(b_g, b_a)`.
     pub fn bias_jacobian(&self) -> BiasJacobian {
-        blocks::cross_matrix(&self.jac)
+        blocks::cross_matrix(&self.body_rows(&self.jac))
     }
 }

@@ -3,21 +3,30 @@
 //! including the parts that are not public (covariance blocks, Jacobian, bias walk, the midpoint
 //! scheme's end samples and their noise correlations, the projection counter).
 //!
-//! Layout (all f64; matrices column-major): scheme (0 lie_euler, 1 midpoint), b_g (3), b_a (3),
+//! Layout (all f64; matrices column-major): scheme (0 lie_euler, 2 midpoint), b_g (3), b_a (3),
 //! noise (4: densities, random walks), saturation factor, ΔR (9), Δv (3), Δp (3), Δt, covariance
 //! blocks (6 × 9), Jacobian (54), bias walk (flag, cross 54, var_g, var_a), first and last
-//! midpoint samples (each: flag, accel 3, gyro 3, var flag, var 2, scale 2), start and end cross
-//! covariances (54 each), intervals since the last projection, then the continuity ends (first
-//! and last, each: flag, time flag, t, accel 3, gyro 3; absent in states written before them: unknown).
+//! midpoint samples (each: flag, accel 3, gyro 3, var flag, var 2, scale 2), start cross
+//! covariance (54), the last sample's pending input (54, then in midpoint states its `h/2`),
+//! intervals since the last projection, then the continuity ends (first and last, each: flag,
+//! time flag, t, accel 3, gyro 3; absent in states written before them: unknown).
+//!
+//! Midpoint states hold their blocks as the scheme does (frame i, covariance without the last
+//! sample's noise; `midpoint.rs`). Those of earlier versions (scheme 1) held them in the body frame
+//! with that noise included, and are refused: the pending input cannot be recovered from them.
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::blocks::{Cross, ZERO_CROSS};
+use super::blocks::{Cross, Input, ZERO_CROSS};
 use super::midpoint::Sample;
 use super::{BiasWalk, End, Ends, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::imu::Noise;
 use crate::mat3::M3;
+
+/// The scheme words: midpoint's is 2 since its blocks moved to frame i (module docs).
+const EULER: f64 = 0.0;
+const MIDPOINT: f64 = 2.0;
 
 /// Appends numbers to the flat state.
 struct Writer(Vec<f64>);
@@ -102,7 +111,10 @@ impl Preintegrator {
     /// it back into an equal preintegrator.
     pub fn state_words(&self) -> Vec<f64> {
         let mut w = Writer(Vec::with_capacity(512));
-        w.flag(self.scheme == Scheme::Midpoint);
+        w.all(&[match self.scheme {
+            Scheme::Euler => EULER,
+            Scheme::Midpoint => MIDPOINT,
+        }]);
         w.all(self.bias_gyro.as_slice());
         w.all(self.bias_accel.as_slice());
         let n = &self.noise;
@@ -127,7 +139,10 @@ impl Preintegrator {
         w.sample(&self.ends.first);
         w.sample(&self.ends.last);
         w.cross(&self.ends.start_cross);
-        w.cross(&self.ends.end_cross);
+        w.cross(&self.ends.pending.cross());
+        if self.scheme == Scheme::Midpoint {
+            w.all(&[self.ends.pending.half_h]);
+        }
         w.all(&[f64::from(self.since_projection)]);
         for end in [self.boundary.first, self.boundary.last] {
             w.flag(end.is_some());
@@ -149,7 +164,22 @@ impl Preintegrator {
     /// `state_words`).
     pub fn from_state_words(words: &[f64]) -> Result<Self> {
         let mut r = Reader(words);
-        let scheme = if r.flag()? { Scheme::Midpoint } else { Scheme::Euler };
+        let scheme = match r.one()? {
+            EULER => Scheme::Euler,
+            MIDPOINT => Scheme::Midpoint,
+            other => {
+                return Err(Error::Parameter {
+                    name: "words",
+                    expected: "a state of this version (scheme word 0: lie_euler, 2: midpoint)",
+                    got: if other == 1.0 {
+                        "a midpoint state of an earlier version (scheme word 1), whose blocks cannot be converted"
+                            .into()
+                    } else {
+                        format!("scheme word {other}")
+                    },
+                })
+            }
+        };
         let (bias_gyro, bias_accel) = (r.vector()?, r.vector()?);
         let [gyro_density, accel_density, gyro_random_walk, accel_random_walk] = r.take::<4>()?;
         let noise = Noise {
@@ -176,7 +206,10 @@ impl Preintegrator {
             var_accel,
         });
         (p.ends.first, p.ends.last) = (r.sample()?, r.sample()?);
-        (p.ends.start_cross, p.ends.end_cross) = (r.cross()?, r.cross()?);
+        p.ends.start_cross = r.cross()?;
+        let pending = r.cross()?;
+        let half_h = if scheme == Scheme::Midpoint { r.one()? } else { 0.0 };
+        p.ends.pending = Input::of_cross(&pending, half_h);
         // A count below PROJECT_EVERY (16): exact in f64, and saturating on anything else.
         p.since_projection = r.one()? as u32;
         if !r.0.is_empty() {
