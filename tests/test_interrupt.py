@@ -19,7 +19,7 @@ import pytest
 
 CHILD = textwrap.dedent(
     """
-    import json, sys, time
+    import json, signal, sys, time
     import numpy as np
     from scipy.spatial.transform import Rotation
     import imukit as ik
@@ -43,6 +43,9 @@ CHILD = textwrap.dedent(
             "mahony": lambda: ik.filters.Mahony().run(imu),
             "simulate": lambda: ik.sim.simulate(ik.sim.FigureEight(), rate=1000.0, duration=n / 1000.0,
                                                 noise=noise)}[sys.argv[1]]
+    # A shell's background job inherits SIGINT ignored, and Python then installs no handler: the
+    # test is of imukit's handling, not of the parent's disposition.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     print("start", flush=True)
     start = time.perf_counter()
     try:
