@@ -134,23 +134,23 @@ impl Gates {
         }
     }
 
-    /// The unit field direction if the sample is used (`field`: what `mag` gives alone). The
-    /// reference (norm, dip) is learned from the first usable sample and re-learned on a recovery.
+    /// The unit field direction if the sample is used. The reference (norm, dip) is learned from
+    /// the first usable sample and re-learned on a recovery.
     #[inline(always)]
     pub(crate) fn magnetometer(
         &self,
         s: &mut CommonState,
         mag: &Vector3<f64>,
-        field: &Field,
         up_pred: &Vector3<f64>,
         ramping: bool,
         dt: f64,
     ) -> Option<Vector3<f64>> {
-        let Field { norm, inv, dir } = *field;
+        let norm = mag.norm();
         let usable = norm > 0.0;
         if !usable {
             return None;
         }
+        let inv = 1.0 / norm;
         let (dip_sin, dip_cos) = dip_scaled(mag, inv, up_pred);
         if s.mag_norm <= 0.0 {
             learn(s, norm, dip_sin, dip_cos);
@@ -163,37 +163,12 @@ impl Gates {
             })
         });
         match verdict {
-            Verdict::Accept => Some(dir),
+            Verdict::Accept => Some(mag * inv),
             Verdict::Reject => None,
             Verdict::Recover => {
                 learn(s, norm, dip_sin, dip_cos);
-                Some(dir)
+                Some(mag * inv)
             }
-        }
-    }
-}
-
-/// What the magnetometer gate needs of a field sample that depends on the sample alone: its norm,
-/// `1/‖m‖` (one division for the dip and the direction) and the unit direction `m/‖m‖`. The batch
-/// loop computes it for a block of rows ahead of the steps (`super::Block`).
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Field {
-    pub(crate) norm: f64,
-    pub(crate) inv: f64,
-    pub(crate) dir: Vector3<f64>,
-}
-
-impl Field {
-    /// The field sample `mag`'s values (a zero sample's `inv` and `dir` are infinite or NaN, and
-    /// the gate does not read them).
-    #[inline(always)]
-    pub(crate) fn of(mag: &Vector3<f64>) -> Self {
-        let norm = mag.norm();
-        let inv = 1.0 / norm;
-        Self {
-            norm,
-            inv,
-            dir: mag * inv,
         }
     }
 }

@@ -75,7 +75,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use crate::lie::series;
 use crate::quat::multiply;
 use crate::{Cancel, Error, Result};
-use gate::{Field, Gates};
+use gate::Gates;
 
 /// A correction law: its gains (a `Copy` value) and how one gated sample corrects the estimate.
 pub trait Law: Copy + std::fmt::Debug + PartialEq + Send + Sync {
@@ -217,268 +217,6 @@ fn low_pass(s: &mut CommonState, accel: &Vector3<f64>, alpha: f64) -> Vector3<f6
     s.acc_lp2
 }
 
-/// What rest detection ([`RestDetection`]) tracks: the means and mean squares of its tests and
-/// the time they have held (the fields `gyro_lp`, `rest_gyro_ms`, `rest_accel_lp`,
-/// `rest_accel_ms`, `rest` of [`CommonState`]). They follow the samples alone, never the
-/// estimate, so the batch loop runs them for a block of rows ahead of the steps ([`Block`]).
-#[derive(Debug, Clone, Copy)]
-struct Rest {
-    gyro_lp: Vector3<f64>,
-    gyro_ms: f64,
-    accel_lp: Vector3<f64>,
-    accel_ms: f64,
-    held: f64,
-}
-
-impl Rest {
-    #[inline(always)]
-    fn of(s: &CommonState) -> Self {
-        Self {
-            gyro_lp: s.gyro_lp,
-            gyro_ms: s.rest_gyro_ms,
-            accel_lp: s.rest_accel_lp,
-            accel_ms: s.rest_accel_ms,
-            held: s.rest,
-        }
-    }
-
-    #[inline(always)]
-    fn store(&self, s: &mut CommonState) {
-        (s.gyro_lp, s.rest_gyro_ms, s.rest_accel_lp, s.rest_accel_ms, s.rest) =
-            (self.gyro_lp, self.gyro_ms, self.accel_lp, self.accel_ms, self.held);
-    }
-
-    /// One sample over `dt` (`alpha = dt / (τ + dt)`); whether the sensor is at rest after it
-    /// (the bias then follows the gyro).
-    #[inline(always)]
-    fn update(&mut self, r: &RestDetection, gyro: &Vector3<f64>, accel: &Vector3<f64>, alpha: f64, dt: f64) -> bool {
-        self.gyro_lp += (gyro - self.gyro_lp) * alpha;
-        self.accel_lp += (accel - self.accel_lp) * alpha;
-        // Capped: a finite 1e300 m/s² sample must not make the state infinite.
-        let gyro_dev = (gyro - self.gyro_lp).norm_squared().min(f64::MAX);
-        let accel_dev = (accel - self.accel_lp).norm_squared().min(f64::MAX);
-        let (g2, a2) = (r.gyro * r.gyro, r.accel * r.accel);
-        // The means lag the start of a motion by about tau_s: one sample beyond 4× the rms
-        // deviation seen so far (floored at a tenth of the threshold) ends the rest at once,
-        // before the bias learns the motion.
-        // `f64::max` by a compare, without the NaN blend `max` compiles to: the same value for
-        // a threshold that is a number (validated), a NaN `ms` included; zeros' signs do not
-        // matter to the `<` below.
-        let floor = |ms: f64, threshold: f64| if ms > threshold { ms } else { threshold };
-        let still =
-            gyro_dev < 16.0 * floor(self.gyro_ms, g2 / 100.0) && accel_dev < 16.0 * floor(self.accel_ms, a2 / 100.0);
-        self.gyro_ms += (gyro_dev - self.gyro_ms) * alpha;
-        self.accel_ms += (accel_dev - self.accel_ms) * alpha;
-        let steady = self.gyro_ms < g2 && self.accel_ms < a2;
-        if still && steady && self.gyro_lp.norm_squared() < r.max_bias * r.max_bias {
-            self.held += dt;
-        } else {
-            self.held = 0.0;
-        }
-        self.held >= r.duration_s
-    }
-}
-
-/// One step's values that depend on its samples alone, not on the estimate: the step, the low
-/// pass's and the bias follower's factors ([`Rates`]), the accelerometer's squared norm (its raw
-/// norm test) and rest detection's verdict ([`Rest`]). [`Filter::update`] computes them inline,
-/// the batch loop for a block of rows ahead of the steps ([`Block`]).
-#[derive(Debug, Clone, Copy)]
-struct Given {
-    dt: f64,
-    low_pass: f64,
-    follow: f64,
-    accel_sq: f64,
-    at_rest: bool,
-}
-
-/// Rows per block of the batch loop ([`Block`]): a power of two dividing [`Cancel::EVERY`], so
-/// that the blocks start at its polling points.
-const BLOCK: usize = 256;
-const _: () = assert!(Cancel::EVERY.is_multiple_of(BLOCK));
-
-/// A block of rows' [`Given`] and [`Field`] values as a structure of arrays, on the stack. The
-/// batch loop's first pass fills them ([`Block::fill`]): everything but rest detection is
-/// independent from row to row, so it vectorises across rows (the divisions of [`Rates`] and of
-/// `1/‖m‖`, the square root of `‖m‖`, the finiteness and time tests); the second pass runs the
-/// steps, which then hold only the estimate's chain and its gates.
-struct Block {
-    dt: [f64; BLOCK],
-    low_pass: [f64; BLOCK],
-    rest: [f64; BLOCK],
-    follow: [f64; BLOCK],
-    accel_sq: [f64; BLOCK],
-    at_rest: [bool; BLOCK],
-    mag_norm: [f64; BLOCK],
-    mag_inv: [f64; BLOCK],
-    mag_dir: [Vector3<f64>; BLOCK],
-}
-
-/// Zero when every value of `x` is finite, NaN otherwise (`v · 0` is NaN exactly for ±inf and
-/// NaN), summed in four lanes so that it vectorises.
-#[inline(always)]
-fn poison(x: &[f64]) -> f64 {
-    let mut lanes = [0.0; 4];
-    let (chunks, tail) = x.as_chunks::<4>();
-    for c in chunks {
-        for (lane, v) in lanes.iter_mut().zip(c) {
-            *lane += v * 0.0;
-        }
-    }
-    for v in tail {
-        lanes[0] += v * 0.0;
-    }
-    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
-}
-
-/// The input checks of one sample's rows: [`Error::NonFinite`] naming the first non-finite one,
-/// or [`Error::Overflow`] for a field whose squared norm overflows (the gate keeps its first norm
-/// as the reference).
-fn check_rows(gyro: &Vector3<f64>, accel: &Vector3<f64>, mag: Option<&Vector3<f64>>, index: usize) -> Result<()> {
-    if !finite(gyro) {
-        return Err(Error::NonFinite { index }.in_argument("gyro"));
-    }
-    if !finite(accel) {
-        return Err(Error::NonFinite { index }.in_argument("accel"));
-    }
-    if let Some(m) = mag {
-        if !finite(m) {
-            return Err(Error::NonFinite { index }.in_argument("mag"));
-        }
-        if !m.norm_squared().is_finite() {
-            return Err(Error::Overflow { index }.in_argument("mag"));
-        }
-    }
-    Ok(())
-}
-
-/// The rows of one block of a batch run: stamps, gyro, accelerometer, magnetometer (empty in 6D).
-#[derive(Clone, Copy)]
-struct Rows<'a> {
-    t: &'a [f64],
-    gyro: &'a [[f64; 3]],
-    accel: &'a [[f64; 3]],
-    mag: &'a [[f64; 3]],
-}
-
-impl Rows<'_> {
-    /// The first row that fails the input checks (non-finite, or a step `dt` that is not
-    /// positive), with its error; `k0` is the block's first index. Only called after a block's
-    /// vectorised tests failed.
-    #[cold]
-    #[inline(never)]
-    fn first_bad(&self, dt: &[f64], k0: usize) -> Option<(usize, Error)> {
-        (0..self.t.len()).find_map(|i| {
-            let index = k0 + i;
-            let mag = self.mag.get(i).map(row);
-            let checked = if self.t[i].is_finite() {
-                check_rows(&row(&self.gyro[i]), &row(&self.accel[i]), mag.as_ref(), index)
-            } else {
-                Err(Error::NonFinite { index }.in_argument("t"))
-            };
-            let checked = checked.and_then(|()| match dt[i] {
-                dt if dt.is_nan() || dt <= 0.0 => Err(Error::NonIncreasingTime { index, dt }.in_argument("t")),
-                _ => Ok(()),
-            });
-            checked.err().map(|e| (i, e))
-        })
-    }
-}
-
-impl Block {
-    fn new() -> Self {
-        Self {
-            dt: [0.0; BLOCK],
-            low_pass: [0.0; BLOCK],
-            rest: [0.0; BLOCK],
-            follow: [0.0; BLOCK],
-            accel_sq: [0.0; BLOCK],
-            at_rest: [false; BLOCK],
-            mag_norm: [0.0; BLOCK],
-            mag_inv: [0.0; BLOCK],
-            mag_dir: [Vector3::zeros(); BLOCK],
-        }
-    }
-
-    /// The first pass over `rows` (at most [`BLOCK`], the first at index `k0`, after the stamp
-    /// `previous`): every row's values, then rest detection from `rest` on. Returns how many
-    /// rows passed the input checks, and the error of the first that did not.
-    #[inline(always)]
-    fn fill<const NINE: bool>(
-        &mut self,
-        taus: [f64; 2],
-        rest_detection: Option<&RestDetection>,
-        rest: &mut Rest,
-        rows: &Rows<'_>,
-        previous: f64,
-        k0: usize,
-    ) -> (usize, Option<Error>) {
-        let n = rows.t.len();
-        let dt = &mut self.dt[..n];
-        dt[0] = rows.t[0] - previous;
-        for (d, (t, before)) in dt[1..].iter_mut().zip(rows.t[1..].iter().zip(rows.t)) {
-            *d = t - before;
-        }
-        let increasing = dt.iter().fold(true, |ok, &d| ok & (d > 0.0));
-        for (i, &dt) in dt.iter().enumerate() {
-            let r = Rates::at(taus, dt);
-            (self.low_pass[i], self.rest[i], self.follow[i]) = (r.low_pass, r.rest, r.follow);
-        }
-        for (sq, a) in self.accel_sq[..n].iter_mut().zip(rows.accel) {
-            *sq = row(a).norm_squared();
-        }
-        let mut sum = (poison(rows.t) + poison(rows.gyro.as_flattened())) + poison(rows.accel.as_flattened());
-        if NINE {
-            for (i, m) in rows.mag.iter().enumerate() {
-                let f = Field::of(&row(m));
-                (self.mag_norm[i], self.mag_inv[i], self.mag_dir[i]) = (f.norm, f.inv, f.dir);
-            }
-            // The norm is finite exactly when the field is and its squared norm did not overflow.
-            sum += poison(&self.mag_norm[..n]);
-        }
-        let (valid, error) = if sum == 0.0 && increasing {
-            (n, None)
-        } else {
-            rows.first_bad(&self.dt[..n], k0)
-                .map_or((n, None), |(i, e)| (i, Some(e)))
-        };
-        if let Some(r) = rest_detection {
-            self.rest_pass(r, rest, rows, valid);
-        }
-        (valid, error)
-    }
-
-    /// Rest detection over the first `n` rows, from `rest` on.
-    #[inline(always)]
-    fn rest_pass(&mut self, r: &RestDetection, rest: &mut Rest, rows: &Rows<'_>, n: usize) {
-        for i in 0..n {
-            self.at_rest[i] = rest.update(r, &row(&rows.gyro[i]), &row(&rows.accel[i]), self.rest[i], self.dt[i]);
-        }
-    }
-
-    /// Row `i`'s values.
-    #[inline(always)]
-    fn given(&self, i: usize) -> Given {
-        Given {
-            dt: self.dt[i],
-            low_pass: self.low_pass[i],
-            follow: self.follow[i],
-            accel_sq: self.accel_sq[i],
-            at_rest: self.at_rest[i],
-        }
-    }
-
-    /// Row `i`'s field values.
-    #[inline(always)]
-    fn field(&self, i: usize) -> Field {
-        Field {
-            norm: self.mag_norm[i],
-            inv: self.mag_inv[i],
-            dir: self.mag_dir[i],
-        }
-    }
-}
-
 impl<L: Law> Filter<L> {
     /// A filter with `law`'s gains and the shared `options`; errors on a gain or an option
     /// outside its domain.
@@ -516,66 +254,37 @@ impl<L: Law> Filter<L> {
         mag: Option<&Vector3<f64>>,
         dt: f64,
     ) -> Result<()> {
-        check_rows(gyro, accel, mag, 0)?;
-        let world = self.options.world;
-        if !state.common.initialized {
-            self.initialise(&mut state.common, gyro, accel, mag, world);
-            return check_overflow(&state.common, 0);
+        if !finite(gyro) {
+            return Err(Error::NonFinite { index: 0 }.in_argument("gyro"));
         }
-        if !(dt > 0.0 && dt.is_finite()) {
+        if !finite(accel) {
+            return Err(Error::NonFinite { index: 0 }.in_argument("accel"));
+        }
+        if let Some(m) = mag {
+            if !finite(m) {
+                return Err(Error::NonFinite { index: 0 }.in_argument("mag"));
+            }
+            if !m.norm_squared().is_finite() {
+                return Err(Error::Overflow { index: 0 }.in_argument("mag"));
+            }
+        }
+        if state.common.initialized && !(dt > 0.0 && dt.is_finite()) {
             return Err(Error::Parameter {
                 name: "dt",
                 expected: "a positive finite step [s]",
                 got: format!("{dt}"),
             });
         }
-        let s = &mut state.common;
-        let rates = Rates::at(self.taus, dt);
-        let at_rest = self.options.rest_detection.is_some_and(|r| {
-            let mut rest = Rest::of(s);
-            let at_rest = rest.update(&r, gyro, accel, rates.rest, dt);
-            rest.store(s);
-            at_rest
-        });
-        let given = Given {
-            dt,
-            low_pass: rates.low_pass,
-            follow: rates.follow,
-            accel_sq: accel.norm_squared(),
-            at_rest,
-        };
-        let field = mag.map(Field::of);
-        self.step(state, gyro, accel, mag.zip(field.as_ref()), &given, world);
         // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
-        state.common.time += dt;
+        let stepping = state.common.initialized;
+        self.step(state, gyro, accel, mag, dt, self.options.world);
+        if stepping {
+            state.common.time += dt;
+        }
         check_overflow(&state.common, 0)
     }
 
-    /// The first sample of an uninitialised state: the attitude from `accel` (and `mag`), every
-    /// low pass started at this sample, the field's reference learned from it.
-    fn initialise(
-        &self,
-        s: &mut CommonState,
-        gyro: &Vector3<f64>,
-        accel: &Vector3<f64>,
-        mag: Option<&Vector3<f64>>,
-        world: World,
-    ) {
-        s.q = initial_attitude(world, accel, mag);
-        s.initialized = true;
-        (s.acc_lp1, s.acc_lp2, s.gyro_lp, s.rest_accel_lp) = (*accel, *accel, *gyro, *accel);
-        if let Some(m) = mag {
-            let norm = m.norm();
-            if norm > 0.0 {
-                let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).1);
-                gate::learn(s, norm, sin, cos);
-            }
-        }
-    }
-
-    /// The step proper of an initialised state, on validated input: gate, correct and
-    /// integrate. `mag` is the field sample with its [`Field`] values, `given` the sample's
-    /// values that do not depend on the estimate (rest detection's state already advanced);
+    /// The update proper, on validated input: initialise, or gate, correct and integrate.
     /// `world` is the options' (the batch loop passes it as a constant of its copy: read from
     /// the options, both frames' predictions were computed and one selected every sample).
     #[inline(always)]
@@ -584,27 +293,67 @@ impl<L: Law> Filter<L> {
         state: &mut State<L>,
         gyro: &Vector3<f64>,
         accel: &Vector3<f64>,
-        mag: Option<(&Vector3<f64>, &Field)>,
-        given: &Given,
+        mag: Option<&Vector3<f64>>,
+        dt: f64,
         world: World,
     ) {
         let o = &self.options;
         let s = &mut state.common;
-        let dt = given.dt;
+        if !s.initialized {
+            s.q = initial_attitude(world, accel, mag);
+            s.initialized = true;
+            (s.acc_lp1, s.acc_lp2, s.gyro_lp, s.rest_accel_lp) = (*accel, *accel, *gyro, *accel);
+            if let Some(m) = mag {
+                let norm = m.norm();
+                if norm > 0.0 {
+                    let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).1);
+                    gate::learn(s, norm, sin, cos);
+                }
+            }
+            return;
+        }
+        let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
         let (north_pred, up_pred) = world.predicted(&s.q);
-        let raw_sq = given.accel_sq;
+        let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
-            let f = low_pass(s, accel, given.low_pass);
+            let f = low_pass(s, accel, rates.low_pass);
             self.gates.accelerometer(s, &f, f.norm(), raw_sq, &up_pred, ramping, dt)
         } else {
             self.gates
                 .accelerometer(s, accel, raw_sq.sqrt(), raw_sq, &up_pred, ramping, dt)
         };
-        let mag_dir = mag.and_then(|(m, field)| self.gates.magnetometer(s, m, field, &up_pred, ramping, dt));
-        if given.at_rest {
-            s.bias += (gyro - s.bias) * given.follow;
+        let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
+
+        if let Some(r) = o.rest_detection {
+            let alpha = rates.rest;
+            s.gyro_lp += (gyro - s.gyro_lp) * alpha;
+            s.rest_accel_lp += (accel - s.rest_accel_lp) * alpha;
+            // Capped: a finite 1e300 m/s² sample must not make the state infinite.
+            let gyro_dev = (gyro - s.gyro_lp).norm_squared().min(f64::MAX);
+            let accel_dev = (accel - s.rest_accel_lp).norm_squared().min(f64::MAX);
+            let (g2, a2) = (r.gyro * r.gyro, r.accel * r.accel);
+            // The means lag the start of a motion by about tau_s: one sample beyond 4× the rms
+            // deviation seen so far (floored at a tenth of the threshold) ends the rest at once,
+            // before the bias learns the motion.
+            // `f64::max` by a compare, without the NaN blend `max` compiles to: the same value for
+            // a threshold that is a number (validated), a NaN `ms` included; zeros' signs do not
+            // matter to the `<` below.
+            let floor = |ms: f64, threshold: f64| if ms > threshold { ms } else { threshold };
+            let still = gyro_dev < 16.0 * floor(s.rest_gyro_ms, g2 / 100.0)
+                && accel_dev < 16.0 * floor(s.rest_accel_ms, a2 / 100.0);
+            s.rest_gyro_ms += (gyro_dev - s.rest_gyro_ms) * alpha;
+            s.rest_accel_ms += (accel_dev - s.rest_accel_ms) * alpha;
+            let steady = s.rest_gyro_ms < g2 && s.rest_accel_ms < a2;
+            if still && steady && s.gyro_lp.norm_squared() < r.max_bias * r.max_bias {
+                s.rest += dt;
+            } else {
+                s.rest = 0.0;
+            }
+            if s.rest >= r.duration_s {
+                s.bias += (gyro - s.bias) * rates.follow;
+            }
         }
 
         let step = Step {
@@ -613,7 +362,7 @@ impl<L: Law> Filter<L> {
             up_pred,
             gyro,
             accel,
-            mag: mag.map(|(m, _)| m),
+            mag,
             accel_dir,
             mag_dir,
             ramping,
@@ -704,9 +453,7 @@ impl<L: Law> Filter<L> {
         run_batch(self, state, inputs, continued, (out_q, out_bias), cancel)
     }
 
-    /// The batch loop for one sensor set (checked inputs), compiled per law: the first row
-    /// (initialisation) on its own, then blocks of [`BLOCK`] rows, each filled by its first pass
-    /// ([`Block::fill`]) and then stepped.
+    /// The batch loop for one sensor set (checked inputs), compiled per law.
     #[inline(always)]
     fn run_loop<const NINE: bool, const ENU: bool>(
         &self,
@@ -718,75 +465,60 @@ impl<L: Law> Filter<L> {
         cancel: &Cancel,
     ) -> Result<()> {
         let world = if ENU { World::Enu } else { World::Ned };
-        let n = inputs.t.len();
-        let mut k0 = 0;
-        if !continued && n > 0 {
-            cancel.check(0)?;
-            let (gyro, accel) = (row(&inputs.gyro[0]), row(&inputs.accel[0]));
-            let mag = NINE.then(|| row(&mags[0]));
-            if !inputs.t[0].is_finite() {
-                return Err(Error::NonFinite { index: 0 }.in_argument("t"));
-            }
-            check_rows(&gyro, &accel, mag.as_ref(), 0)?;
-            if !state.common.initialized {
-                self.initialise(&mut state.common, &gyro, &accel, mag.as_ref(), world);
-            }
-            state.common.time = inputs.t[0];
-            out_q[0] = state.common.q.coords.into();
-            out_bias[0] = state.common.bias.into();
-            k0 = 1;
-        }
-        let mut block = Block::new();
-        let rest_detection = self.options.rest_detection.as_ref();
-        while k0 < n {
-            cancel.check(k0)?;
-            let end = ((k0 / BLOCK + 1) * BLOCK).min(n);
-            let rows = Rows {
-                t: &inputs.t[k0..end],
-                gyro: &inputs.gyro[k0..end],
-                accel: &inputs.accel[k0..end],
-                mag: if NINE { &mags[k0..end] } else { &[] },
-            };
-            // Rest detection's state at the block's start stays in `state` until the block is
-            // stepped: an overflow part-way re-runs it to the failing row from there.
-            let mut rest = Rest::of(&state.common);
-            let (valid, error) = block.fill::<NINE>(self.taus, rest_detection, &mut rest, &rows, state.common.time, k0);
-            let outputs = out_q[k0..k0 + valid].iter_mut().zip(&mut out_bias[k0..k0 + valid]);
-            for (i, (q_out, b_out)) in outputs.enumerate() {
-                let gyro = row(&rows.gyro[i]);
-                let accel = row(&rows.accel[i]);
-                let mag = NINE.then(|| (row(&rows.mag[i]), block.field(i)));
-                self.step(
-                    state,
-                    &gyro,
-                    &accel,
-                    mag.as_ref().map(|(m, f)| (m, f)),
-                    &block.given(i),
-                    world,
-                );
-                if let Err(e) = check_overflow(&state.common, k0 + i) {
-                    if let Some(r) = rest_detection {
-                        let mut rest = Rest::of(&state.common);
-                        block.rest_pass(r, &mut rest, &rows, i + 1);
-                        rest.store(&mut state.common);
-                    }
-                    if i > 0 {
-                        state.common.time = rows.t[i - 1];
-                    }
-                    return Err(e);
+        let mut previous = state.common.time;
+        for (k, (&t, (q_out, b_out))) in inputs
+            .t
+            .iter()
+            .zip(out_q.iter_mut().zip(out_bias.iter_mut()))
+            .enumerate()
+        {
+            cancel.check(k)?;
+            let gyro = row(&inputs.gyro[k]);
+            let accel = row(&inputs.accel[k]);
+            let mag = if NINE { Some(row(&mags[k])) } else { None };
+            // One test on a sum of everything (NaN and ±inf propagate through any order of the
+            // additions; this one pairs the rows lane by lane); only when it fails, find the
+            // culprit (a finite sum overflowing to inf is no error, but a field whose squared norm
+            // overflows is: the gate keeps its first norm as the reference).
+            let lanes = gyro + accel;
+            let sum = (lanes.x + lanes.y) + (lanes.z + (t + mag.map_or(0.0, |m| m.norm_squared())));
+            if !sum.is_finite() {
+                if !t.is_finite() {
+                    return Err(Error::NonFinite { index: k }.in_argument("t"));
                 }
-                *q_out = state.common.q.coords.into();
-                *b_out = state.common.bias.into();
+                if !finite(&gyro) {
+                    return Err(Error::NonFinite { index: k }.in_argument("gyro"));
+                }
+                if !finite(&accel) {
+                    return Err(Error::NonFinite { index: k }.in_argument("accel"));
+                }
+                if let Some(m) = mag.filter(|m| !finite(m) || !m.norm_squared().is_finite()) {
+                    let index = k;
+                    return Err(if finite(&m) {
+                        Error::Overflow { index }
+                    } else {
+                        Error::NonFinite { index }
+                    }
+                    .in_argument("mag"));
+                }
             }
-            rest.store(&mut state.common);
-            if valid > 0 {
-                // The stamp itself (summing the steps would drift from it by rounding).
-                state.common.time = rows.t[valid - 1];
+            if k == 0 && !continued {
+                if !state.common.initialized {
+                    self.step(state, &gyro, &accel, mag.as_ref(), 0.0, world);
+                }
+            } else {
+                let dt = t - previous;
+                if dt.is_nan() || dt <= 0.0 {
+                    return Err(Error::NonIncreasingTime { index: k, dt }.in_argument("t"));
+                }
+                self.step(state, &gyro, &accel, mag.as_ref(), dt, world);
+                check_overflow(&state.common, k)?;
             }
-            if let Some(e) = error {
-                return Err(e);
-            }
-            k0 = end;
+            // Keep the stamp itself (summing the steps would drift from it by rounding).
+            state.common.time = t;
+            previous = t;
+            *q_out = state.common.q.coords.into();
+            *b_out = state.common.bias.into();
         }
         Ok(())
     }
