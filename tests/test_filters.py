@@ -315,10 +315,12 @@ def rest_then_disturbed(n: int) -> tuple[ik.ImuData, np.ndarray]:
 @pytest.mark.parametrize("nine", [False, True])
 @pytest.mark.parametrize("cls", FILTERS)
 def test_batch_equals_streaming_across_blocks(cls: type[Mahony], nine: bool) -> None:
-    """The batch loop computes what depends only on the samples for blocks of rows ahead of the
-    steps: over 1,000 rows (not a multiple of a block) with rest, both gates rejecting and
-    jittered steps, its outputs and final state are streaming's bit for bit, and a run split at
-    row 613 and continued is the whole run (errors part-way: `crates/imukit/tests/filters.rs`)."""
+    """Over 1,000 rows with rest, both gates rejecting and jittered steps, the batch outputs and
+    final state are streaming's bit for bit, and a run split at row 613 and continued is the whole
+    run: what a batch loop that computes the input-only values for blocks of rows ahead of the
+    steps (tried, docs/performance.md "Filters, 2026-12-02 (filtpre)") must keep across its block
+    boundaries (1,000 is a multiple of no block of 16 rows or more, 613 is odd). Errors part-way:
+    `crates/imukit/tests/filters.rs`."""
     imu, mag = rest_then_disturbed(1000)
     m = mag if nine else None
     make = lambda: cls(gain_ramp=ik.filters.GainRamp(0.5, 10.0))  # noqa: E731 - rejection from 0.5 s

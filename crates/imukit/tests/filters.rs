@@ -286,9 +286,10 @@ fn extreme_finite_input_does_not_panic() {
     for_each_filter!(World::Enu, |f| { extreme_finite_input(&f) });
 }
 
-/// An error part-way through a batch run (row 700, then 900, in blocks of rows computed ahead of
-/// the steps) is the row's, and leaves the state of the last good row: streaming's over the rows
-/// before it, bit for bit (rest detection's means included), with the clock at its stamp.
+/// An error part-way through a batch run (row 700, then 900: inside a block of a loop that
+/// computes its input-only values ahead, `docs/performance.md`) is the row's, and leaves the state
+/// of the last good row: streaming's over the rows before it, bit for bit (rest detection's means
+/// included), with the clock at its stamp.
 fn error_part_way<L: Law>(f: &Filter<L>) {
     let n = 1000;
     let (t, gyro, accel, mag) = moving(n);
