@@ -293,6 +293,66 @@ def test_streaming_equals_batch_on_irregular_stamps(
     assert f.get_state().time == float(np.cumsum(steps[1:])[-1])
 
 
+def rest_then_disturbed(n: int) -> tuple[ik.ImuData, np.ndarray]:
+    """``n`` samples at 3–7 ms steps, each jittered: 2 s at rest with a gyro offset (rest detection
+    holds and the bias follows), then a turn about the vertical with an acceleration disturbance
+    and then a magnetic one (both gates reject)."""
+    rng = np.random.default_rng(11)
+    dts = rng.choice([0.003, 0.005, 0.007], n) * (1.0 + 1e-3 * rng.standard_normal(n))
+    t = np.concatenate([[0.0], np.cumsum(dts[1:])])
+    moving = t > 2.0
+    rate = np.where(moving, 0.4, 0.0)
+    yaw = np.concatenate([[0.0], np.cumsum(rate[1:] * dts[1:])])
+    r_wb = Rotation.from_euler("z", yaw[:, None])
+    gyro = np.stack([np.zeros(n), np.zeros(n), rate], axis=-1) + 0.02 + 1e-3 * rng.standard_normal((n, 3))
+    accel = r_wb.inv().apply(UP_READING["ENU"]) + 1e-2 * rng.standard_normal((n, 3))
+    mag = r_wb.inv().apply(FIELD["ENU"])
+    accel[(t > 2.6) & (t < 3.1), 2] += 3.0  # beyond the raw norm gate (2 m/s²)
+    mag[(t > 3.4) & (t < 3.9)] *= 1.5  # beyond the field-norm gate (10 %)
+    return ik.ImuData(t, gyro, accel), mag
+
+
+@pytest.mark.parametrize("nine", [False, True])
+@pytest.mark.parametrize("cls", FILTERS)
+def test_batch_equals_streaming_across_blocks(cls: type[Mahony], nine: bool) -> None:
+    """Over 1,000 rows with rest, both gates rejecting and jittered steps, the batch outputs and
+    final state are streaming's bit for bit, and a run split at row 613 and continued is the whole
+    run: what a batch loop that computes the input-only values for blocks of rows ahead of the
+    steps (tried, docs/performance.md "Filters, 2026-12-02 (filtpre)") must keep across its block
+    boundaries (1,000 is a multiple of no block of 16 rows or more, 613 is odd). Errors part-way:
+    `crates/imukit/tests/filters.rs`."""
+    imu, mag = rest_then_disturbed(1000)
+    m = mag if nine else None
+    make = lambda: cls(gain_ramp=ik.filters.GainRamp(0.5, 10.0))  # noqa: E731 - rejection from 0.5 s
+    batch = make().run(imu, mag=m)
+    f = make()
+    steps = np.diff(imu.seconds, prepend=0.0)
+    quats, bias, rest, accel_rejected, mag_rejected = [], [], [], [], []
+    for k in range(len(steps)):
+        f.update(imu.gyro[k], imu.accel[k], steps[k], mag=None if m is None else m[k])
+        s = f.get_state()
+        quats.append(s.quaternion)
+        bias.append(s.gyro_bias)
+        rest.append(s.rest)
+        accel_rejected.append(s.accel_rejected)
+        mag_rejected.append(s.mag_rejected)
+    # The scenario does what it is for: rest holds past its 1 s, both gates reject for a while.
+    assert max(rest) > 1.0 and max(accel_rejected) > 0.1
+    assert max(mag_rejected) > 0.1 if nine else max(mag_rejected) == 0.0
+    assert np.array_equal(np.array(quats), batch.rotation.as_quat())
+    assert np.array_equal(np.array(bias), batch.gyro_bias)
+    end, streamed = batch.state, f.get_state()
+    for name in ("acc_lp1", "acc_lp2", "gyro_lp", "rest_accel_lp", "quaternion", "gyro_bias"):
+        assert np.array_equal(getattr(end, name), getattr(streamed, name)), name
+    for name in ("rest", "rest_gyro_ms", "rest_accel_ms", "accel_rejected", "accel_calm", "mag_rejected", "mag_norm"):
+        assert getattr(end, name) == getattr(streamed, name), name
+    cut = 613
+    first = make().run(imu[:cut], mag=None if m is None else m[:cut])
+    second = make().run(imu[cut:], mag=None if m is None else m[cut:], initial=first.state)
+    q = np.concatenate([first.rotation.as_quat(), second.rotation.as_quat()])
+    assert np.array_equal(q, batch.rotation.as_quat())
+
+
 @pytest.mark.parametrize("nine", [False, True])
 @pytest.mark.parametrize("cls", FILTERS)
 def test_split_save_restore(cls: type[Mahony], nine: bool, moving: tuple[ik.ImuData, np.ndarray]) -> None:

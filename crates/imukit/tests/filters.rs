@@ -285,3 +285,59 @@ fn extreme_finite_input<L: Law>(filter: &Filter<L>) {
 fn extreme_finite_input_does_not_panic() {
     for_each_filter!(World::Enu, |f| { extreme_finite_input(&f) });
 }
+
+/// An error part-way through a batch run (row 700, then 900: inside a block of a loop that
+/// computes its input-only values ahead, `docs/performance.md`) is the row's, and leaves the state
+/// of the last good row: streaming's over the rows before it, bit for bit (rest detection's means
+/// included), with the clock at its stamp.
+fn error_part_way<L: Law>(f: &Filter<L>) {
+    let n = 1000;
+    let (t, gyro, accel, mag) = moving(n);
+    let v = |x: &Rows, k: usize| Vector3::from(x[k]);
+    let streamed = |rows: usize| {
+        let mut s = State::default();
+        for k in 0..rows {
+            let dt = if k == 0 { 0.0 } else { t[k] - t[k - 1] };
+            f.update(&mut s, &v(&gyro, k), &v(&accel, k), Some(&v(&mag, k)), dt)
+                .unwrap();
+        }
+        s.common.time = t[rows - 1];
+        s
+    };
+    let mut bad_accel = accel.clone();
+    bad_accel[700][1] = f64::INFINITY;
+    let mut bad_t = t.clone();
+    bad_t[900] = bad_t[899];
+    let cases = [
+        (
+            &t,
+            &bad_accel,
+            Error::NonFinite { index: 700 }.in_argument("accel"),
+            700,
+        ),
+        (
+            &bad_t,
+            &accel,
+            Error::NonIncreasingTime { index: 900, dt: 0.0 }.in_argument("t"),
+            900,
+        ),
+    ];
+    for (t, accel, expected, good) in cases {
+        let inputs = Inputs {
+            t,
+            gyro: &gyro,
+            accel,
+            mag: Some(&mag),
+        };
+        let (mut q, mut b) = (vec![[0.0; 4]; n], vec![[0.0; 3]; n]);
+        let mut s = State::default();
+        let e = f.run(&mut s, &inputs, false, &mut q, &mut b).unwrap_err();
+        assert_eq!(e, expected);
+        assert_eq!(s, streamed(good));
+    }
+}
+
+#[test]
+fn an_error_part_way_leaves_the_last_good_rows_state() {
+    for_each_filter!(World::Enu, |f| { error_part_way(&f) });
+}
