@@ -32,14 +32,6 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[c1 * a.z - c2 * a.y, c2 * a.x - c0 * a.z, c0 * a.y - c1 * a.x])
 }
 
-/// The diagonal blocks `θθ`, `vv`, `pp` made exactly symmetric against rounding (`(b + bᵀ)/2`).
-#[inline(always)]
-pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
-    for d in [0, 3, 5] {
-        cov[d] = cov[d].symmetric();
-    }
-}
-
 /// `A Σ Aᵀ` for the frame-i transition (module docs): with `Σ_θθ` symmetric, `Σ_θθ Wᵀ = (W Σ_θθ)ᵀ` and `Σ_vθ Wᵀ = (W Σ_θv)ᵀ`, so
 /// four 3×3 products (`W Σ_θθ`, `W Σ_θv`, `W Σ_θp`, `(W Σ_θθ) Wᵀ`) where the body frame's
 /// transition, with `Exp(ω̂h)ᵀ` in its θθ block, takes ten.

@@ -179,7 +179,8 @@ impl Preintegrator {
         let c_v = -(pending.half_h + half_h);
         blocks::add_noise(l, &mut cov, &d, q0[0], q0[1], [c_v, -c_v * c_v]);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step(l, &mut cov, &w, &g_b, None, &self.noise);
+            g_b.add_quadratic(l, &mut cov, walk.var_gyro, walk.var_accel, None);
+            walk.step(l, &mut cov, &w, &g_b, &self.noise);
         }
         self.covariance = cov;
         self.ends.pending = Input { va: va1, ..b0 };

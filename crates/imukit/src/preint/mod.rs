@@ -188,28 +188,20 @@ struct BiasWalk {
 }
 
 impl BiasWalk {
-    /// Adds the bias terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
+    /// Adds the cross terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
     /// and propagates the cross and bias blocks, with `F = [[A, G_b], [0, I]]` and `G_b` the step's
     /// response to a bias change (Forster 2017, the combined form); the bias is held over each
-    /// interval and steps at its end; `w`, `h` the frame-i transition (`blocks.rs`). `va_gram` as in
-    /// [`Input::add_quadratic`].
+    /// interval and steps at its end; `w`, `h` the frame-i transition (`blocks.rs`). The caller
+    /// adds `G_b Σ_b G_bᵀ` (`Σ_b` the bias variances before this step): the euler scheme's folds
+    /// into its white noise's. Every term added to a diagonal block is exactly symmetric (`X + Xᵀ`),
+    /// so no `(b + bᵀ)/2`.
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    fn step<L: Lanes>(
-        &mut self,
-        l: L,
-        cov: &mut CovarianceBlocks,
-        w: &M3,
-        g_b: &Input,
-        va_gram: Option<f64>,
-        noise: &Noise,
-    ) {
+    fn step<L: Lanes>(&mut self, l: L, cov: &mut CovarianceBlocks, w: &M3, g_b: &Input, noise: &Noise) {
         let h = 2.0 * g_b.half_h;
         let y = blocks::transition(l, &self.cross, w, h);
         g_b.add_cross(l, cov, &y);
-        g_b.add_quadratic(l, cov, self.var_gyro, self.var_accel, va_gram);
-        blocks::symmetric_diagonal(cov);
         self.cross = blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
         self.var_accel += noise.accel_random_walk * noise.accel_random_walk * h;
@@ -461,10 +453,12 @@ impl Preintegrator {
             half_h: 0.5 * h,
         };
         let mut cov = blocks::propagate_frame_i(l, &self.covariance, &w_m, h);
-        blocks::add_held_noise(l, &mut cov, &g, var_g, var_a, h);
+        // The bias step enters through `G_b = −[C, B]`, the white noise's own inputs: one quadratic
+        // for both (`x + 0.0` is `x`: no walk, the same bits).
+        let [walk_g, walk_a] = self.bias_walk.as_ref().map_or([0.0; 2], |b| [b.var_gyro, b.var_accel]);
+        blocks::add_held_noise(l, &mut cov, &g, var_g + walk_g, var_a + walk_a, h);
         if let Some(walk) = self.bias_walk.as_mut() {
-            // `va vaᵀ = h² ΔR ΔRᵀ = h² I`.
-            walk.step(l, &mut cov, &w_m, &g_b, Some(h * h), &self.noise);
+            walk.step(l, &mut cov, &w_m, &g_b, &self.noise);
         }
         self.covariance = cov;
         self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, &w_m, h));
