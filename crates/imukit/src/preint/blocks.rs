@@ -47,7 +47,11 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
 pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, h: f64) -> CovarianceBlocks {
     let [tt, tv, tp, vv, vp, pp] = *cov;
     let (h2, half_h2) = (h * h, 0.5 * h * h);
-    let (w_tt, w_tv, w_tp) = (w.mul_with(l, &tt), w.mul_with(l, &tv), w.mul_with(l, &tp));
+    let (w_tt, w_tv, w_tp) = (
+        w.zero_diagonal_mul_with(l, &tt),
+        w.zero_diagonal_mul_with(l, &tv),
+        w.zero_diagonal_mul_with(l, &tp),
+    );
     let (w_tt_t, w_tv_t) = (w_tt.transpose(), w_tv.transpose());
     let w_tt_wt = w_tt.mul_t_symmetric_with(l, w);
     let sym_v = w_tv.add_with(l, &w_tv_t);
@@ -81,7 +85,7 @@ pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, 
 pub(super) fn transition<L: Lanes>(l: L, x: &Cross, w: &M3, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
-    let w_tg = w.mul_with(l, &xtg);
+    let w_tg = w.zero_diagonal_mul_with(l, &xtg);
     [
         [xtg, M3::ZERO],
         [w_tg.mul_add(l, h, &xvg), xva],
@@ -147,7 +151,7 @@ impl Input {
     /// `W`, `h`; `midpoint.rs`); its accelerometer blocks are multiples of a rotation, known apart.
     #[inline(always)]
     pub fn through<L: Lanes>(&self, l: L, w: &M3, h: f64, b: &Input) -> [M3; 3] {
-        let w_tg = w.mul_with(l, &self.tg);
+        let w_tg = w.zero_diagonal_mul_with(l, &self.tg);
         // p row: ½h² W P_θ + (h + h'/2) P_v + (h/2) B_v, P's p row being h'/2 times its v row.
         let p_v = self.vg.scale_with(l, h + self.half_h);
         [
