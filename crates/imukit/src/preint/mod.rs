@@ -49,7 +49,7 @@
 //! product) and its v and p rows take `W ∂φ/∂b_g`, one product: `J ← A' J + G_b` with
 //! `G_b = −[[G, 0], [0, R_0 h], [0, ½ R_0 h²]]`, which is also the bias walk's input. Every reader
 //! (`covariance`, `bias_jacobian`, `covariance_combined`, windows, merge) gets the body frame's
-//! blocks, `T⁻¹ (·) T⁻ᵀ` at the current `ΔR`; a projection of `ΔR` ([`PROJECT_EVERY`]) moves that
+//! blocks, `T⁻¹ (·) T⁻ᵀ` at the current `ΔR`; a projection of `ΔR` (`PROJECT_EVERY`) moves that
 //! frame by rounding only.
 //!
 //! The midpoint step, its linearisation and its noise model: `preint/midpoint.rs`; merging two
