@@ -62,6 +62,12 @@ pub(crate) trait Lanes: Copy {
     fn scale_add(self, a: Col, s: f64, acc: Col) -> Col;
     /// `a + b`.
     fn add(self, a: Col, b: Col) -> Col;
+    /// `a b` for an `a` with a zero diagonal (a skew matrix): the dense product unless the lanes
+    /// can leave its zero terms out.
+    #[inline(always)]
+    fn zero_diagonal_mul(self, a: &M3, b: &M3) -> M3 {
+        a.mul_with(self, b)
+    }
 }
 
 /// Plain arrays, each product and each sum rounded: the baseline path (the `Matrix3` forms' bits).
@@ -82,6 +88,22 @@ impl Lanes for Unfused {
     #[inline(always)]
     fn add(self, a: Col, b: Col) -> Col {
         a + b
+    }
+
+    /// Lane by lane, the dense product's two nonzero terms in its order (the same bits: the
+    /// dropped term is `0·x`, which adds an exact zero): 6 products and 3 sums a column for 9 and 6.
+    #[inline(always)]
+    fn zero_diagonal_mul(self, a: &M3, b: &M3) -> M3 {
+        let [a0, a1, a2] = [a.0[0].0, a.0[1].0, a.0[2].0];
+        M3(std::array::from_fn(|c| {
+            let s = b.0[c].0;
+            Col([
+                a1[0] * s[1] + a2[0] * s[2],
+                a0[1] * s[0] + a2[1] * s[2],
+                a0[2] * s[0] + a1[2] * s[1],
+                0.0,
+            ])
+        }))
     }
 }
 
@@ -217,6 +239,13 @@ impl M3 {
             Col::combine(l, &self.0, c1),
             Col::combine(l, &self.0, c2),
         ])
+    }
+
+    /// `self b` for a `self` with a zero diagonal (a skew matrix), in `l`'s lanes
+    /// ([`Lanes::zero_diagonal_mul`]).
+    #[inline(always)]
+    pub fn zero_diagonal_mul_with<L: Lanes>(&self, l: L, b: &M3) -> M3 {
+        l.zero_diagonal_mul(self, b)
     }
 
     /// `self bᵀ`.
@@ -380,6 +409,11 @@ mod tests {
         assert_eq!(
             pa.mul_t_symmetric_with(super::Unfused, &pa).matrix(),
             mul_t_symmetric(&a, &a)
+        );
+        let w = crate::so3::hat(&nalgebra::Vector3::new(0.8, -9.7, 0.35));
+        assert_eq!(
+            M3::of(&w).zero_diagonal_mul_with(super::Unfused, &pb).matrix(),
+            super::mul(&w, &b)
         );
         assert_eq!(pa.transpose().matrix(), a.transpose());
         assert_eq!(pa.symmetric().matrix(), (a + a.transpose()) * 0.5);

@@ -52,7 +52,7 @@ fn states_of_the_earlier_midpoint_layout_are_refused() {
     }
     let mut words = p.state_words();
     assert_eq!(words[0], 2.0);
-    for scheme in [1.0, 3.0] {
+    for scheme in [1.0, 4.0] {
         words[0] = scheme;
         let message = Preintegrator::from_state_words(&words).unwrap_err().to_string();
         assert!(message.contains("scheme word"), "{message}");

@@ -1,12 +1,12 @@
-//! Block algebra of the preintegration covariance: the 9×9 `[δθ, δv, δp]` covariance kept as its
+//! Block algebra of the preintegration covariance: the 9×9 `[δφ, δv, δp]` covariance kept as its
 //! six unique 3×3 blocks, 9×6 cross covariances as 3×2 blocks, and the step's inputs.
 //!
-//! Every step of both schemes has the transition
-//! `A = [[Φ, 0, 0], [M h, I, 0], [½ M h², h I, I]]` (`Φ = Exp(ω̂h)ᵀ`; `M` is the scheme's
-//! `∂(specific force in frame i)/∂δθ`), and every input (white noise of a sample, a bias change, a
-//! bias step) enters through a 9×6 matrix `G` (columns `[gyro, accel]`) with no accelerometer
-//! term in θ and p rows equal to `h/2` times the v rows. The products below use only that
-//! structure: about a dozen 3×3 products per term instead of dense 9×9 ones.
+//! Both schemes keep the rotation error in frame i (`δφ = ΔR δθ`; `mod.rs`, `midpoint.rs`), where
+//! every step has the transition `A = [[I, 0, 0], [W h, I, 0], [½ W h², h I, I]]` (`W` the
+//! scheme's `∂(specific force in frame i)/∂δφ`, a skew matrix), and every input (white noise of a
+//! sample, a bias change, a bias step) enters through a 9×6 matrix `G` (columns `[gyro, accel]`)
+//! with no accelerometer term in θ and p rows equal to `h/2` times the v rows. The products below
+//! use only that structure: a few 3×3 products per term instead of dense 9×9 ones.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -24,58 +24,6 @@ pub(super) type Cross = [[M3; 2]; 3];
 
 pub(super) const ZERO_CROSS: Cross = [[M3::ZERO; 2]; 3];
 
-/// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ` for the euler scheme's own white noise
-/// (`B = [0; ΔR h; ½ ΔR h²]`, `C = [J_r h; 0; 0]`, `Σ_a = var_a I`, `Σ_g = var_g I`): `B Σ_a Bᵀ`
-/// reduces to multiples of I because ΔR is orthonormal. `gyro` is `(J_r, var_g)`; with `None` and
-/// `var_a = 0`, `A Σ Aᵀ` alone (the midpoint scheme adds its noise itself), without the `J_r J_rᵀ`
-/// product.
-#[inline(always)]
-pub(super) fn propagate<L: Lanes>(
-    l: L,
-    cov: &CovarianceBlocks,
-    phi: &M3,
-    m: &M3,
-    h: f64,
-    var_a: f64,
-    gyro: Option<(&M3, f64)>,
-) -> CovarianceBlocks {
-    let [tt, tv, tp, vv, vp, pp] = *cov;
-    let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
-    let half_h2 = 0.5 * h * h;
-    // `x s + y t + z` as `(x s + y t) + z`: the sums' order of the unfused form, so that the
-    // baseline path keeps its bits. A nested fn, not a closure: a closure is compiled without the
-    // dispatched copy's target features.
-    #[inline(always)]
-    fn axpy2<L: Lanes>(l: L, x: &M3, s: f64, y: &M3, t: f64, z: &M3) -> M3 {
-        y.mul_add(l, t, &x.scale_with(l, s)).add_with(l, z)
-    }
-    // Rows of A Σ.
-    let phi_tt = phi.mul_with(l, &tt);
-    let m_tt = m.mul_with(l, &tt);
-    let (m_tv, m_tp) = (m.mul_with(l, &tv), m.mul_with(l, &tp));
-    let a_vt = m_tt.mul_add(l, h, &vt);
-    let a_vv = m_tv.mul_add(l, h, &vv);
-    let a_vp = m_tp.mul_add(l, h, &vp);
-    let a_pt = axpy2(l, &m_tt, half_h2, &vt, h, &pt);
-    let a_pv = axpy2(l, &m_tv, half_h2, &vv, h, &pv);
-    let a_pp = axpy2(l, &m_tp, half_h2, &vp, h, &pp);
-    // (A Σ) Aᵀ, upper blocks.
-    let phi_tt_mt = phi_tt.mul_t_with(l, m);
-    let phi_tt_phit = phi_tt.mul_t_symmetric_with(l, phi);
-    let new_tt = match gyro {
-        Some((jr, var_g)) => jr.mul_t_symmetric_with(l, jr).mul_add(l, var_g * h * h, &phi_tt_phit),
-        None => phi_tt_phit,
-    };
-    let phi_tv = phi.mul_with(l, &tv);
-    let new_tv = phi_tt_mt.mul_add(l, h, &phi_tv);
-    let new_tp = axpy2(l, &phi_tt_mt, half_h2, &phi_tv, h, &phi.mul_with(l, &tp));
-    let a_vt_mt = a_vt.mul_t_with(l, m);
-    let new_vv = a_vt_mt.mul_add(l, h, &a_vv).plus_identity(var_a * h * h);
-    let new_vp = axpy2(l, &a_vt_mt, half_h2, &a_vv, h, &a_vp).plus_identity(var_a * h * half_h2);
-    let new_pp = axpy2(l, &a_pt.mul_t_with(l, m), half_h2, &a_pv, h, &a_pp).plus_identity(var_a * half_h2 * half_h2);
-    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()]
-}
-
 /// `R [a]×` by columns: column j is `R (a × e_j)`, a difference of two columns of R (27 flops
 /// where the dense product with `[a]×` costs 45, its zeros included).
 #[inline(always)]
@@ -84,17 +32,9 @@ pub(super) fn times_hat(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[c1 * a.z - c2 * a.y, c2 * a.x - c0 * a.z, c0 * a.y - c1 * a.x])
 }
 
-/// The diagonal blocks `θθ`, `vv`, `pp` made exactly symmetric against rounding (`(b + bᵀ)/2`).
-#[inline(always)]
-pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
-    for d in [0, 3, 5] {
-        cov[d] = cov[d].symmetric();
-    }
-}
-
-/// `A Σ Aᵀ` for the transition of the midpoint scheme's frame-i blocks (`midpoint.rs`), where
-/// `Φ = I` and `M = W`: with `Σ_θθ` symmetric, `Σ_θθ Wᵀ = (W Σ_θθ)ᵀ` and `Σ_vθ Wᵀ = (W Σ_θv)ᵀ`, so
-/// four 3×3 products (`W Σ_θθ`, `W Σ_θv`, `W Σ_θp`, `(W Σ_θθ) Wᵀ`) where `propagate` takes ten.
+/// `A Σ Aᵀ` for the frame-i transition (module docs): with `Σ_θθ` symmetric, `Σ_θθ Wᵀ = (W Σ_θθ)ᵀ` and `Σ_vθ Wᵀ = (W Σ_θv)ᵀ`, so
+/// four 3×3 products (`W Σ_θθ`, `W Σ_θv`, `W Σ_θp`, `(W Σ_θθ) Wᵀ`) where the body frame's
+/// transition, with `Exp(ω̂h)ᵀ` in its θθ block, takes ten.
 /// The diagonal blocks are sums of symmetric terms (`X + Xᵀ` formed first), so they come out
 /// exactly symmetric with no `(b + bᵀ)/2`:
 ///
@@ -107,7 +47,11 @@ pub(super) fn symmetric_diagonal(cov: &mut CovarianceBlocks) {
 pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, h: f64) -> CovarianceBlocks {
     let [tt, tv, tp, vv, vp, pp] = *cov;
     let (h2, half_h2) = (h * h, 0.5 * h * h);
-    let (w_tt, w_tv, w_tp) = (w.mul_with(l, &tt), w.mul_with(l, &tv), w.mul_with(l, &tp));
+    let (w_tt, w_tv, w_tp) = (
+        w.zero_diagonal_mul_with(l, &tt),
+        w.zero_diagonal_mul_with(l, &tv),
+        w.zero_diagonal_mul_with(l, &tp),
+    );
     let (w_tt_t, w_tv_t) = (w_tt.transpose(), w_tv.transpose());
     let w_tt_wt = w_tt.mul_t_symmetric_with(l, w);
     let sym_v = w_tv.add_with(l, &w_tv_t);
@@ -135,27 +79,33 @@ pub(super) fn propagate_frame_i<L: Lanes>(l: L, cov: &CovarianceBlocks, w: &M3, 
     ]
 }
 
-/// `A X` for a 9×6 cross covariance `X`; `phi` `None` for `Φ = I` (the midpoint scheme's frame-i
-/// blocks: no product in the θ row).
+/// `A X` for a 9×6 cross covariance `X` (the frame-i transition of `w`, `h`: no product in the θ
+/// row).
 #[inline(always)]
-pub(super) fn transition<L: Lanes>(l: L, x: &Cross, phi: Option<&M3>, m: &M3, h: f64) -> Cross {
+pub(super) fn transition<L: Lanes>(l: L, x: &Cross, w: &M3, h: f64) -> Cross {
     let half_h2 = 0.5 * h * h;
     let [[xtg, _], [xvg, xva], [xpg, xpa]] = *x;
-    let m_tg = m.mul_with(l, &xtg);
+    let w_tg = w.zero_diagonal_mul_with(l, &xtg);
     [
+        [xtg, M3::ZERO],
+        [w_tg.mul_add(l, h, &xvg), xva],
         [
-            match phi {
-                Some(phi) => phi.mul_with(l, &xtg),
-                None => xtg,
-            },
-            M3::ZERO,
-        ],
-        [m_tg.mul_add(l, h, &xvg), xva],
-        [
-            xvg.mul_add(l, h, &m_tg.scale_with(l, half_h2)).add_with(l, &xpg),
+            xvg.mul_add(l, h, &w_tg.scale_with(l, half_h2)).add_with(l, &xpg),
             xva.mul_add(l, h, &xpa),
         ],
     ]
+}
+
+/// `cov += C q_g Cᵀ + B q_a Bᵀ` for one euler interval's white noise in frame i (`mod.rs`):
+/// `C = [g; 0; 0]`, `B = [0; R h; ½ R h²]` for a rotation `R`, whose terms are multiples of I
+/// (`R Rᵀ = I`): one product, for `g gᵀ`.
+#[inline(always)]
+pub(super) fn add_held_noise<L: Lanes>(l: L, cov: &mut CovarianceBlocks, g: &M3, q_g: f64, q_a: f64, h: f64) {
+    let half_h2 = 0.5 * h * h;
+    cov[0] = g.mul_t_symmetric_with(l, g).mul_add(l, q_g, &cov[0]);
+    cov[3] = cov[3].plus_identity(q_a * h * h);
+    cov[4] = cov[4].plus_identity(q_a * h * half_h2);
+    cov[5] = cov[5].plus_identity(q_a * half_h2 * half_h2);
 }
 
 /// A step's 9×6 input matrix `G = [[tg, 0], [vg, va], [h/2 vg, h/2 va]]` (columns `[gyro, accel]`).
@@ -201,7 +151,7 @@ impl Input {
     /// `W`, `h`; `midpoint.rs`); its accelerometer blocks are multiples of a rotation, known apart.
     #[inline(always)]
     pub fn through<L: Lanes>(&self, l: L, w: &M3, h: f64, b: &Input) -> [M3; 3] {
-        let w_tg = w.mul_with(l, &self.tg);
+        let w_tg = w.zero_diagonal_mul_with(l, &self.tg);
         // p row: ½h² W P_θ + (h + h'/2) P_v + (h/2) B_v, P's p row being h'/2 times its v row.
         let p_v = self.vg.scale_with(l, h + self.half_h);
         [

@@ -41,9 +41,9 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use super::blocks::{self, CovarianceBlocks, Cross, Input, ZERO_CROSS};
-use super::{Covariance9, Preintegrator, Scheme};
-use crate::mat3::{mul, Lanes, Unfused, M3};
+use super::blocks::{self, Cross, Input, ZERO_CROSS};
+use super::{Covariance9, Preintegrator};
+use crate::mat3::{mul, Lanes, M3};
 use crate::so3;
 
 /// One sample as the midpoint scheme remembers it.
@@ -179,16 +179,17 @@ impl Preintegrator {
         let c_v = -(pending.half_h + half_h);
         blocks::add_noise(l, &mut cov, &d, q0[0], q0[1], [c_v, -c_v * c_v]);
         if let Some(walk) = self.bias_walk.as_mut() {
-            walk.step(l, &mut cov, None, &w, &g_b, None, &self.noise);
+            g_b.add_quadratic(l, &mut cov, walk.var_gyro, walk.var_accel, None);
+            walk.step(l, &mut cov, &w, &g_b, &self.noise);
         }
         self.covariance = cov;
         self.ends.pending = Input { va: va1, ..b0 };
         self.ends.start_cross = match prev.var {
             // The window's first interval: its first sample's noise enters through B_0 alone.
             None => b0.scaled(q0[0], q0[1]),
-            Some(_) => blocks::transition(l, &self.ends.start_cross, None, &w, h),
+            Some(_) => blocks::transition(l, &self.ends.start_cross, &w, h),
         };
-        self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, None, &w, h));
+        self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, &w, h));
 
         // Deltas.
         self.delta_position += self.delta_velocity * h + acc * (half_h * h);
@@ -205,53 +206,6 @@ impl Preintegrator {
             var: Some(q1),
             scale,
         });
-    }
-
-    /// `ΔRᵀ` as a block: from frame i to the body frame at j.
-    fn to_body(&self) -> M3 {
-        M3::of(&self.delta_rotation.transpose())
-    }
-
-    /// `x` with its θ row in the body frame at j (the right perturbation of `mod.rs`), where the
-    /// midpoint scheme keeps it in frame i.
-    pub(super) fn body_rows(&self, x: &Cross) -> Cross {
-        match self.scheme {
-            Scheme::Euler => *x,
-            Scheme::Midpoint => blocks::rotate_rows(x, &self.to_body()),
-        }
-    }
-
-    /// The covariance blocks in the body frame at j: with the last sample's noise (the
-    /// covariance), or without it (`pending = false`: the part a merge composes on its own).
-    pub(super) fn covariance_blocks(&self, pending: bool) -> CovarianceBlocks {
-        if self.scheme == Scheme::Euler {
-            return self.covariance;
-        }
-        let mut cov = self.covariance;
-        if let (true, Some([q_g, q_a])) = (pending, self.ends.last.and_then(|s| s.var)) {
-            let p = &self.ends.pending;
-            // `va` is −½h R_1: `va vaᵀ = (h/2)² I`.
-            p.add_quadratic(Unfused, &mut cov, q_g, q_a, Some(p.half_h * p.half_h));
-        }
-        blocks::rotate_covariance(&cov, &self.to_body())
-    }
-
-    /// `Cov(δx, n_last)` in the body frame at j (zero before the first interval).
-    pub(super) fn end_cross(&self) -> Cross {
-        let [q_g, q_a] = self.ends.last.and_then(|s| s.var).unwrap_or([0.0; 2]);
-        self.body_rows(&self.ends.pending.scaled(q_g, q_a))
-    }
-
-    /// This preintegration with its covariance, bias Jacobian and start cross covariance given in
-    /// the body frame at j (as a merge composes them) taken to the scheme's own frame.
-    pub(super) fn in_own_frame(mut self) -> Self {
-        if self.scheme == Scheme::Midpoint {
-            let r = M3::of(&self.delta_rotation);
-            self.covariance = blocks::rotate_covariance(&self.covariance, &r);
-            self.jac = blocks::rotate_rows(&self.jac, &r);
-            self.ends.start_cross = blocks::rotate_rows(&self.ends.start_cross, &r);
-        }
-        self
     }
 
     /// The midpoint window's last sample `(accel, gyro)`, which the next interval starts from;

@@ -9,7 +9,7 @@
 //! |---|---|
 //! | deltas | `ΔR_ij`, `Δv_ij`, `Δp_ij` in the body frame at i, gravity-free; `Δt_ij` |
 //! | bias | `b̄ = (b_g, b_a)` fixed during integration; `ω̂ = ω_m − b_g`, `â = a_m − b_a` |
-//! | covariance (9) | `[δθ, δv, δp]` with `ΔR = ΔR̂ Exp(δθ)` (right), `Δv = Δv̂ + δv`, `Δp = Δp̂ + δp` |
+//! | covariance (9) | `[δθ, δv, δp]` with `ΔR = ΔR̂ Exp(δθ)` (right), `Δv = Δv̂ + δv`, `Δp = Δp̂ + δp` (as read; held in frame i, below) |
 //! | combined (15) | `[δθ, δv, δp, δb_g, δb_a]` ([`Preintegrator::with_bias_walk`]) |
 //! | bias Jacobian (9×6) | rows `[θ, v, p]`, columns `[b_g, b_a]` |
 //! | noise | continuous densities σ_g, σ_a; each sample's white noise has variance `σ²/h I` (h: its interval) |
@@ -29,6 +29,29 @@
 //! B = [0; ΔR h; ½ ΔR h²],  C = [J_r(ω̂h) h; 0; 0]      (Forster eqs. 62–63, 69)
 //! ```
 //!
+//! **Frame i.** Both schemes keep their blocks (covariance, bias Jacobian, bias-walk cross
+//! covariance) with the rotation error as `δφ = ΔR δθ`, a left perturbation in the frame of
+//! keyframe i: the state error `T δx` with `T = diag(ΔR, I, I)` (the rotation part of the
+//! invariant EKF's error, Barrau & Bonnabel, "The Invariant Extended Kalman Filter as a Stable
+//! Observer", IEEE TAC 2017). With `R_0 = ΔR` and `R_1 = ΔR Exp(ω̂h)` before and after the
+//! interval, `R_1 Exp(ω̂h)ᵀ R_0ᵀ = I` and `R_0 [â]× R_0ᵀ = [R_0 â]×`, so Forster's step becomes
+//!
+//! ```text
+//! δφ ← δφ + G n_g                            G = R_1 J_r(ω̂h) h
+//! δv ← δv + W h δφ + R_0 h n_a               W = −[R_0 â]×
+//! δp ← δp + h δv + ½ W h² δφ + ½ R_0 h² n_a
+//! A' = T_1 A T_0⁻¹ = [[I, 0, 0], [W h, I, 0], [½ W h², h I, I]],  C' = [G; 0; 0],  B' = B
+//! ```
+//!
+//! `A' Σ A'ᵀ` takes four 3×3 products (`blocks::propagate_frame_i`) where `A Σ Aᵀ` takes ten;
+//! `B Σ_a Bᵀ` is a multiple of I in each block (`R_0 R_0ᵀ = I`), `C' Σ_g C'ᵀ` one product
+//! (`G Gᵀ`), and `G` itself one. The bias Jacobian's θ row becomes `∂φ/∂b_g ← ∂φ/∂b_g − G` (no
+//! product) and its v and p rows take `W ∂φ/∂b_g`, one product: `J ← A' J + G_b` with
+//! `G_b = −[[G, 0], [0, R_0 h], [0, ½ R_0 h²]]`, which is also the bias walk's input. Every reader
+//! (`covariance`, `bias_jacobian`, `covariance_combined`, windows, merge) gets the body frame's
+//! blocks, `T⁻¹ (·) T⁻ᵀ` at the current `ΔR`; a projection of `ΔR` (`PROJECT_EVERY`) moves that
+//! frame by rounding only.
+//!
 //! The midpoint step, its linearisation and its noise model: `preint/midpoint.rs`; merging two
 //! windows: `preint/merge.rs`.
 
@@ -45,7 +68,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::error::{Error, Result};
 use crate::imu::Noise;
-use crate::mat3::{mul, Lanes, M3};
+use crate::mat3::{mul, Lanes, Unfused, M3};
 use crate::so3;
 pub use batch::CHUNK;
 use blocks::{CovarianceBlocks, Cross, Input, ZERO_CROSS};
@@ -165,29 +188,20 @@ struct BiasWalk {
 }
 
 impl BiasWalk {
-    /// Adds the bias terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
+    /// Adds the cross terms of `F Σ₁₅ Fᵀ + G Q Gᵀ` to the 9×9 blocks `cov` (already `A Σ Aᵀ + …`)
     /// and propagates the cross and bias blocks, with `F = [[A, G_b], [0, I]]` and `G_b` the step's
     /// response to a bias change (Forster 2017, the combined form); the bias is held over each
-    /// interval and steps at its end. `va_gram` as in [`Input::add_quadratic`].
+    /// interval and steps at its end; `w`, `h` the frame-i transition (`blocks.rs`). The caller
+    /// adds `G_b Σ_b G_bᵀ` (`Σ_b` the bias variances before this step): the euler scheme's folds
+    /// into its white noise's. Every term added to a diagonal block is exactly symmetric (`X + Xᵀ`),
+    /// so no `(b + bᵀ)/2`.
     // Per sample: inlined across the crate's 4 codegen units (a new module moved the split and
     // the bias-walk loop ran 1.7× slower).
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn step<L: Lanes>(
-        &mut self,
-        l: L,
-        cov: &mut CovarianceBlocks,
-        phi: Option<&M3>,
-        m: &M3,
-        g_b: &Input,
-        va_gram: Option<f64>,
-        noise: &Noise,
-    ) {
+    fn step<L: Lanes>(&mut self, l: L, cov: &mut CovarianceBlocks, w: &M3, g_b: &Input, noise: &Noise) {
         let h = 2.0 * g_b.half_h;
-        let y = blocks::transition(l, &self.cross, phi, m, h);
+        let y = blocks::transition(l, &self.cross, w, h);
         g_b.add_cross(l, cov, &y);
-        g_b.add_quadratic(l, cov, self.var_gyro, self.var_accel, va_gram);
-        blocks::symmetric_diagonal(cov);
         self.cross = blocks::add(&y, &g_b.scaled(self.var_gyro, self.var_accel));
         self.var_gyro += noise.gyro_random_walk * noise.gyro_random_walk * h;
         self.var_accel += noise.accel_random_walk * noise.accel_random_walk * h;
@@ -422,49 +436,37 @@ impl Preintegrator {
         let a = accel - self.bias_accel;
         let w = gyro - self.bias_gyro;
         let r = self.delta_rotation;
-        let r_a_cross = blocks::times_hat(&r, &a);
         let (step, jr) = so3::exp_and_right_jacobian(&(w * h));
-        let step_t = step.transpose();
-        let half_h2 = 0.5 * h * h;
+        let r1 = mul(&r, &step);
+        let ra = r * a;
 
-        // Covariance first: A, B, C use the state before the update.
+        // Frame i (module docs): W = −[ΔR â]×, G = ΔR_k+1 J_r h; A, B, G use the state before the
+        // update.
         let var_a = self.noise.accel_density * self.noise.accel_density / h * scale[1];
         let var_g = self.noise.gyro_density * self.noise.gyro_density / h * scale[0];
-        // In padded blocks (`mat3::M3`), the form the blocks are stored in.
-        let (rp, jr_p, phi) = (M3::of(&r), M3::of(&jr), M3::of(&step_t));
-        let m = -M3::of(&r_a_cross);
-        let mut cov = blocks::propagate(l, &self.covariance, &phi, &m, h, var_a, Some((&jr_p, var_g)));
+        let w_m = M3::of(&so3::hat(&-ra));
+        let g = M3::of(&r1).mul_with(l, &M3::of(&(jr * h)));
+        let g_b = Input {
+            tg: -g,
+            vg: M3::ZERO,
+            va: M3::of(&r).scale_with(l, -h),
+            half_h: 0.5 * h,
+        };
+        let mut cov = blocks::propagate_frame_i(l, &self.covariance, &w_m, h);
+        // The bias step enters through `G_b = −[C, B]`, the white noise's own inputs: one quadratic
+        // for both (`x + 0.0` is `x`: no walk, the same bits).
+        let [walk_g, walk_a] = self.bias_walk.as_ref().map_or([0.0; 2], |b| [b.var_gyro, b.var_accel]);
+        blocks::add_held_noise(l, &mut cov, &g, var_g + walk_g, var_a + walk_a, h);
         if let Some(walk) = self.bias_walk.as_mut() {
-            let g_b = Input {
-                tg: -jr_p * h,
-                vg: M3::ZERO,
-                va: -rp * h,
-                half_h: 0.5 * h,
-            };
-            // `va vaᵀ = h² ΔR ΔRᵀ = h² I`.
-            walk.step(l, &mut cov, Some(&phi), &m, &g_b, Some(h * h), &self.noise);
+            walk.step(l, &mut cov, &w_m, &g_b, &self.noise);
         }
         self.covariance = cov;
-
-        // Bias Jacobians `J ← A J + G_b`, written out: the θ row has no accelerometer column.
-        let [[jtg, _], [jvg, jva], [jpg, jpa]] = self.jac;
-        let jr_h = jr_p * h;
-        // `x + y h − z s` runs as `(x + y h) − z s` (the unfused order).
-        let ra_drot = M3::of(&r_a_cross).mul_with(l, &jtg);
-        self.jac = [
-            [phi.mul_with(l, &jtg) - jr_h, M3::ZERO],
-            [ra_drot.mul_add(l, -h, &jvg), rp.mul_add(l, -h, &jva)],
-            [
-                ra_drot.mul_add(l, -half_h2, &jvg.mul_add(l, h, &jpg)),
-                rp.mul_add(l, -half_h2, &jva.mul_add(l, h, &jpa)),
-            ],
-        ];
+        self.jac = g_b.added_to(l, &blocks::transition(l, &self.jac, &w_m, h));
 
         // Deltas.
-        let ra = r * a;
-        self.delta_position += self.delta_velocity * h + ra * half_h2;
+        self.delta_position += self.delta_velocity * h + ra * (0.5 * h * h);
         self.delta_velocity += ra * h;
-        self.delta_rotation = mul(&r, &step);
+        self.delta_rotation = r1;
         self.delta_t += h;
         self.count_interval();
     }
@@ -550,5 +552,50 @@ impl Preintegrator {
     /// The bias Jacobian `∂(θ, v, p)/∂(b_g, b_a)`.
     pub fn bias_jacobian(&self) -> BiasJacobian {
         blocks::cross_matrix(&self.body_rows(&self.jac))
+    }
+
+    /// `ΔRᵀ` as a block: from frame i to the body frame at j.
+    fn to_body(&self) -> M3 {
+        M3::of(&self.delta_rotation.transpose())
+    }
+
+    /// `x` with its θ row in the body frame at j (the right perturbation of the readers), where
+    /// both schemes keep it in frame i (module docs).
+    pub(super) fn body_rows(&self, x: &Cross) -> Cross {
+        blocks::rotate_rows(x, &self.to_body())
+    }
+
+    /// The covariance blocks in the body frame at j: with the midpoint scheme's last sample's
+    /// noise (the covariance), or without it (`pending = false`: the part a merge composes on its
+    /// own); the euler scheme has none pending.
+    pub(super) fn covariance_blocks(&self, pending: bool) -> CovarianceBlocks {
+        let mut cov = self.covariance;
+        if let (true, Some([q_g, q_a])) = (pending, self.ends.last.and_then(|s| s.var)) {
+            let p = &self.ends.pending;
+            // `va` is −½h R_1: `va vaᵀ = (h/2)² I`.
+            p.add_quadratic(Unfused, &mut cov, q_g, q_a, Some(p.half_h * p.half_h));
+        }
+        blocks::rotate_covariance(&cov, &self.to_body())
+    }
+
+    /// `Cov(δx, n_last)` in the body frame at j (zero before the first interval and in the euler
+    /// scheme).
+    pub(super) fn end_cross(&self) -> Cross {
+        let [q_g, q_a] = self.ends.last.and_then(|s| s.var).unwrap_or([0.0; 2]);
+        self.body_rows(&self.ends.pending.scaled(q_g, q_a))
+    }
+
+    /// This preintegration with its blocks (covariance, bias Jacobian, start cross covariance, bias
+    /// walk cross) given in the body frame at j, as a merge composes them and earlier euler states
+    /// hold them (`state.rs`), taken to frame i.
+    pub(super) fn in_own_frame(mut self) -> Self {
+        let r = M3::of(&self.delta_rotation);
+        self.covariance = blocks::rotate_covariance(&self.covariance, &r);
+        self.jac = blocks::rotate_rows(&self.jac, &r);
+        self.ends.start_cross = blocks::rotate_rows(&self.ends.start_cross, &r);
+        if let Some(walk) = self.bias_walk.as_mut() {
+            walk.cross = blocks::rotate_rows(&walk.cross, &r);
+        }
+        self
     }
 }

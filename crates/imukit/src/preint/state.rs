@@ -3,7 +3,7 @@
 //! including the parts that are not public (covariance blocks, Jacobian, bias walk, the midpoint
 //! scheme's end samples and their noise correlations, the projection counter).
 //!
-//! Layout (all f64; matrices column-major): scheme (0 lie_euler, 2 midpoint), b_g (3), b_a (3),
+//! Layout (all f64; matrices column-major): scheme (3 lie_euler, 2 midpoint), b_g (3), b_a (3),
 //! noise (4: densities, random walks), saturation factor, ΔR (9), Δv (3), Δp (3), Δt, covariance
 //! blocks (6 × 9), Jacobian (54), bias walk (flag, cross 54, var_g, var_a), first and last
 //! midpoint samples (each: flag, accel 3, gyro 3, var flag, var 2, scale 2), start cross
@@ -11,9 +11,13 @@
 //! intervals since the last projection, then the continuity ends (first and last, each: flag,
 //! time flag, t, accel 3, gyro 3; absent in states written before them: unknown).
 //!
-//! Midpoint states hold their blocks as the scheme does (frame i, covariance without the last
-//! sample's noise; `midpoint.rs`). Those of earlier versions (scheme 1) held them in the body frame
-//! with that noise included, and are refused: the pending input cannot be recovered from them.
+//! States hold their blocks as the schemes do: in frame i (`δφ = ΔR δθ`; `mod.rs`), the midpoint
+//! covariance without the last sample's noise (`midpoint.rs`). Euler states of earlier versions
+//! (scheme 0) held the blocks in the body frame at j; they load, converted to frame i at their
+//! stored `ΔR` (the θ rows and columns premultiplied by it), and continue as an uninterrupted run
+//! does up to rounding. Midpoint states of earlier versions (scheme 1) held their blocks in the
+//! body frame with the last sample's noise included, and are refused: the pending input cannot be
+//! recovered from them.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -24,8 +28,10 @@ use crate::error::{Error, Result};
 use crate::imu::Noise;
 use crate::mat3::M3;
 
-/// The scheme words: midpoint's is 2 since its blocks moved to frame i (module docs).
-const EULER: f64 = 0.0;
+/// The scheme words: midpoint's is 2 and euler's 3 since their blocks moved to frame i; euler's
+/// was 0 before (module docs).
+const EULER: f64 = 3.0;
+const EULER_BODY_FRAME: f64 = 0.0;
 const MIDPOINT: f64 = 2.0;
 
 /// Appends numbers to the flat state.
@@ -164,13 +170,14 @@ impl Preintegrator {
     /// `state_words`).
     pub fn from_state_words(words: &[f64]) -> Result<Self> {
         let mut r = Reader(words);
-        let scheme = match r.one()? {
-            EULER => Scheme::Euler,
+        let word = r.one()?;
+        let scheme = match word {
+            EULER | EULER_BODY_FRAME => Scheme::Euler,
             MIDPOINT => Scheme::Midpoint,
             other => {
                 return Err(Error::Parameter {
                     name: "words",
-                    expected: "a state of this version (scheme word 0: lie_euler, 2: midpoint)",
+                    expected: "a state of this version (scheme word 3 or, earlier, 0: lie_euler; 2: midpoint)",
                     got: if other == 1.0 {
                         "a midpoint state of an earlier version (scheme word 1), whose blocks cannot be converted"
                             .into()
@@ -230,6 +237,6 @@ impl Preintegrator {
                 output: words.len(),
             });
         }
-        Ok(p)
+        Ok(if word == EULER_BODY_FRAME { p.in_own_frame() } else { p })
     }
 }
