@@ -566,3 +566,40 @@ fn errors_name_the_input() {
         .unwrap_err();
     assert_eq!((e.argument(), e.index()), (Some("t"), Some(105)));
 }
+
+/// A stamp refused at row 700 (inside the third block of a loop that would prepare blocks of 256
+/// rows ahead of the step, docs/filters_robust.md "Speed, seventh round") ends the run there,
+/// naming it, after the rows before it were filtered as in a run that stops before it.
+#[test]
+fn a_refused_row_inside_a_block_ends_the_run_after_the_rows_before() {
+    let f = filter();
+    let r = turning_record(10.0, Vector3::new(0.004, -0.002, 0.003), 21);
+    let bad = 700;
+    let mut t = r.t.clone();
+    t[bad] = t[bad - 1];
+    let mut out = RobustTrack::new(t.len());
+    let e = f
+        .run(
+            &mut RobustState::default(),
+            &Inputs {
+                t: &t,
+                ..r.inputs(true)
+            },
+            false,
+            &mut out.outputs(),
+        )
+        .unwrap_err();
+    assert_eq!((e.argument(), e.index()), (Some("t"), Some(bad)));
+    let before = Inputs {
+        t: &r.t[..bad],
+        gyro: &r.gyro[..bad],
+        accel: &r.accel[..bad],
+        mag: Some(&r.mag[..bad]),
+    };
+    let mut prefix = RobustTrack::new(bad);
+    f.run(&mut RobustState::default(), &before, false, &mut prefix.outputs())
+        .unwrap();
+    assert_eq!(&out.q[..bad], &prefix.q[..]);
+    assert_eq!(&out.bias[..bad], &prefix.bias[..]);
+    assert!(out.q[bad..].iter().all(|q| *q == [0.0; 4]));
+}
