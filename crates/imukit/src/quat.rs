@@ -146,6 +146,15 @@ pub fn exp(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::from_parts(w, phi * k))
 }
 
+/// [`exp`] of one integration step: below θ = 0.01 rad the shorter series of
+/// [`series::half_angle_small`] (the same rotation to the last bit or so; a step is a chain of
+/// dependent operations, and this takes three multiply-adds off it).
+#[inline(always)]
+pub fn exp_step(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
+    let (k, w) = series::half_angle_small(phi.norm_squared());
+    UnitQuaternion::new_unchecked(Quaternion::from_parts(w, phi * k))
+}
+
 /// `Log(q)`: the rotation vector with angle in `[0, π]` of the rotation `q` (either sign of `q`).
 ///
 /// Uses `θ = 2 atan2(|v|, |w|)`, accurate at 0 and at π, unlike `acos(w)`. Not nalgebra's

@@ -297,7 +297,7 @@ impl<'a> Stepper<'a> {
 /// `q ⊗ Exp(θ)`, not renormalised: [`Stepper::run`] does that every [`RENORMALIZE_EVERY`] steps.
 #[inline]
 fn compose(q: &UnitQuaternion<f64>, theta: &Vector3<f64>) -> UnitQuaternion<f64> {
-    UnitQuaternion::new_unchecked(quat::multiply(q.quaternion(), quat::exp(theta).quaternion()))
+    UnitQuaternion::new_unchecked(quat::multiply(q.quaternion(), quat::exp_step(theta).quaternion()))
 }
 
 /// A product of unit quaternions drifts from unit norm by rounding only (≈ 1e-16 per step);

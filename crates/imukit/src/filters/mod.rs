@@ -70,10 +70,9 @@ pub use robust::{Outputs as RobustOutputs, Robust, RobustParams, RobustState, Tr
 pub use state::{CommonState, Fields, State};
 pub use world::{initial_attitude, World};
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::lie::series;
-use crate::quat::multiply;
+use crate::quat::{exp_step, multiply};
 use crate::{Cancel, Error, Result};
 use gate::Gates;
 
@@ -143,15 +142,6 @@ pub struct Inputs<'a> {
     pub accel: &'a [[f64; 3]],
     /// Magnetometer (9D), or None (6D).
     pub mag: Option<&'a [[f64; 3]]>,
-}
-
-/// `Exp(φ)` of one filter step: [`crate::quat::exp`] with the shorter series of
-/// [`series::half_angle_small`] below θ = 0.01 rad (the same rotation to the last bit or so;
-/// the step is a chain of dependent operations, and this shortens it by three multiply-adds).
-#[inline(always)]
-fn exp_step(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
-    let (k, w) = series::half_angle_small(phi.norm_squared());
-    UnitQuaternion::new_unchecked(Quaternion::from_parts(w, phi * k))
 }
 
 /// One sample's row as a vector, element by element: copying the array whole went through the

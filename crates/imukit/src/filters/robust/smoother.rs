@@ -40,8 +40,9 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{compose, from_world, magnetometer, start_heading, to_up, to_world, turn, yawed, Coefs};
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
-use crate::filters::{exp_step, initial_attitude, row, Inputs, World};
+use crate::filters::{initial_attitude, row, Inputs, World};
 use crate::lie::series::atan2;
+use crate::quat::exp_step;
 use crate::Result;
 
 fn quat(x: &[f64; 4]) -> UnitQuaternion<f64> {

@@ -8,8 +8,9 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
 use super::params::RobustParams;
 use super::state::RobustState;
 use crate::filters::gate::dip_z_up;
-use crate::filters::{exp_step, initial_attitude, World};
+use crate::filters::{initial_attitude, World};
 use crate::lie::series::{atan2, half_angle_small};
+use crate::quat::exp_step;
 use crate::quat::multiply;
 
 /// The coefficients that depend on the step `dt` only, recomputed when it changes by more than
