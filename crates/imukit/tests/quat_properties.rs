@@ -338,6 +338,29 @@ fn exp_matches_so3_exp() {
     });
 }
 
+/// The step exponential's shorter series (θ < 0.01 rad) against `sin`, `cos` of the half angle on
+/// both sides of the switch: within a last bit of each component; above it, `quat::exp` itself.
+#[test]
+fn exp_step_is_exp_to_the_last_bit() {
+    check(
+        "θ in [1e-9, 0.02]",
+        CASES,
+        (unit_vector(), -9.0..-1.7_f64),
+        |(u, log_t)| {
+            let t = 10f64.powf(log_t);
+            let q = quat::exp_step(&(u * t));
+            let (s, c) = (0.5 * t).sin_cos();
+            let expected = Vector4::new(u.x * s, u.y * s, u.z * s, c);
+            let err = (q.coords - expected).amax();
+            prop_assert!(err <= 2.0 * f64::EPSILON * expected.amax(), "θ = {t:e}: {err:e}");
+            if t >= 0.01 {
+                prop_assert_eq!(q, quat::exp(&(u * t)));
+            }
+            Ok(())
+        },
+    );
+}
+
 #[test]
 fn log_inverts_exp() {
     check_rotation_vectors(CASES, |phi| {

@@ -10,8 +10,7 @@ use super::state::RobustState;
 use crate::filters::gate::dip_z_up;
 use crate::filters::{initial_attitude, World};
 use crate::lie::series::{atan2, half_angle_small};
-use crate::quat::exp_step;
-use crate::quat::multiply;
+use crate::quat::{exp_step, multiply};
 
 /// The coefficients that depend on the step `dt` only, recomputed when it changes by more than
 /// the rounding of timestamps: they are computed from `dt` with its 20 lowest mantissa bits
