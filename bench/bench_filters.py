@@ -1,7 +1,7 @@
 """Attitude filters, batch ``run`` on 10^6 samples: imukit's Mahony and Madgwick, 6D and 9D, against
 ``vqf.VQF.updateBatch`` and ``imufusion.Ahrs`` (per-sample loop, its only API), in one run.
 
-Usage: ``python bench/bench_filters.py [--n 1000000] [--repeats 5] [--loop-n 50000] [--no-robust]
+Usage: ``python bench/bench_filters.py [--n 1000000] [--repeats 5] [--loop-n 50000] [--no-robust | --only-robust]
 [--cpu] [--imu-mag]``; to compare with another build, alternate runs with ``PYTHONPATH`` set to a
 copy of its ``python/`` folder (``imukit`` with its ``_core``).
 Prints the median time per sample (including the glue and building the returned ``Rotation``) and
@@ -33,7 +33,9 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=1_000_000)
     parser.add_argument("--loop-n", type=int, default=50_000)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--no-robust", action="store_true", help="skip Robust against vqf")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--no-robust", action="store_true", help="skip Robust against vqf")
+    which.add_argument("--only-robust", action="store_true", help="only Robust against vqf (issue 15's rows)")
     parser.add_argument("--cpu", action="store_true", help="CPU time (process_time) instead of wall time")
     parser.add_argument("--imu-mag", action="store_true", help="9D from imu.mag (read in place) instead of mag=")
     args = parser.parse_args()
@@ -43,6 +45,9 @@ def main() -> None:
     mag = np.stack([20.0 * np.cos(0.2 * t), 20.0 * np.sin(0.2 * t), np.full_like(t, -40.0)], axis=-1)
     imu = ik.ImuData(t, gyro, accel, mag=mag if args.imu_mag else None)
     dt = float(t[1] - t[0])
+    if args.only_robust:
+        robust_vs_vqf(imu, mag, args.repeats, clock)
+        return
 
     ours: dict[str, float] = {}
     print(f"{'filter':<18} {'ns/sample':>10} {'target':>8}")
