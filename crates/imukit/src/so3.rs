@@ -80,12 +80,12 @@ pub fn right_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
 
 /// `(Exp(φ), J_r(φ))` at once, the pair every preintegration step needs: with `K = [φ]×`,
 /// `Exp = I + a K + b K²` and `J_r = I − b K + c K²` share θ, `b = (1 − cos θ)/θ²` and
-/// `K² = φ φᵀ − θ² I` (one norm and one set of coefficients for the two).
+/// `K² = φ φᵀ − θ² I` (one norm and one set of coefficients for the two). The coefficients come
+/// from θ² ([`series::exp_jacobian_small`]): most steps have θ < 0.01, where no square root sits on
+/// the step's chain.
 #[inline(always)]
 pub fn exp_and_right_jacobian(phi: &Vector3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
-    let theta = phi.norm();
-    let (a, b) = series::rodrigues(theta);
-    let c = theta_minus_sin_over_cube(theta);
+    let (a, b, c) = series::exp_jacobian_small(phi.norm_squared());
     let (x, y, z) = (phi.x, phi.y, phi.z);
     let (xy, xz, yz) = (x * y, x * z, y * z);
     let (d0, d1, d2) = (y * y + z * z, x * x + z * z, x * x + y * y);

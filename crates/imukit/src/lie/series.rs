@@ -6,6 +6,7 @@
 //! | [`rodrigues`] | `(sin θ/θ, (1 − cos θ)/θ²)` | 0.5 | `so3::exp` |
 //! | [`half_angle`] | `(sin(θ/2)/θ, cos(θ/2))` from θ² | 0.5 (x = θ/2 < 0.25) | `quat::exp` |
 //! | [`half_angle_small`] | the same, shorter series below θ² = 1e-4 | 1e-4, then 0.5 | the attitude filters' step |
+//! | [`exp_jacobian_small`] | `(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)` from θ², short series below θ² = 1e-4 | 1e-4, then as [`rodrigues`] and [`theta_minus_sin_over_cube`] | `Exp` with `J_r` (preintegration, propagate) |
 //! | [`one_minus_cos_over_sq`] | `(1 − cos θ)/θ² = ½ (sin(θ/2)/(θ/2))²` | via `sinc` | Jacobians |
 //! | [`theta_minus_sin_over_cube`] | `(θ − sin θ)/θ³` | 0.2 | Jacobians, `Γ₂` |
 //! | [`cos_remainder`] | `(θ²/2 + cos θ − 1)/θ⁴` | 0.2 | `Γ₂` |
@@ -49,6 +50,15 @@ const COS: [f64; 7] = [
     1.0 / 40_320.0,
     -1.0 / 3_628_800.0,
     1.0 / 479_001_600.0,
+];
+
+/// `(θ − sin θ)/θ³ = Σ (−1)ᵏ θ²ᵏ/(2k+3)!` in θ², through θ⁸.
+const THETA_MINUS_SIN: [f64; 5] = [
+    1.0 / 6.0,
+    -1.0 / 120.0,
+    1.0 / 5_040.0,
+    -1.0 / 362_880.0,
+    1.0 / 39_916_800.0,
 ];
 
 /// `atan t = t + t³ P(t²)/Q(t²)` on `|t| ≤ 0.66`: Cephes' rational approximation (S. L. Moshier,
@@ -152,6 +162,28 @@ pub fn half_angle_small(theta_sq: f64) -> (f64, f64) {
     }
 }
 
+/// `(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)` from `θ²`, the coefficients `Exp` and `J_r` share
+/// (`so3::exp_and_right_jacobian`). Below θ² = 1e-4 (θ < 0.01 rad, a preintegration step at
+/// 200 Hz up to 2 rad/s) short series in θ², through θ⁶, θ⁴ and θ⁴: the first omitted terms,
+/// θ⁸/9!, θ⁶/8! and θ⁶/9!, are below 3e-22, 3e-17 and 3e-18, a quarter of the last bit of each
+/// coefficient at most. No square root is taken there (the closed forms need θ itself), and each
+/// chain is three multiply-adds at most where [`rodrigues`] and [`theta_minus_sin_over_cube`] take
+/// a square root and six. Above, those two.
+#[inline(always)]
+pub fn exp_jacobian_small(theta_sq: f64) -> (f64, f64, f64) {
+    if theta_sq < 1e-4 {
+        (
+            horner_head::<4, 7>(theta_sq, &SINC),
+            horner_head::<3, 7>(theta_sq, &ONE_MINUS_COS),
+            horner_head::<3, 5>(theta_sq, &THETA_MINUS_SIN),
+        )
+    } else {
+        let theta = theta_sq.sqrt();
+        let (a, b) = rodrigues(theta);
+        (a, b, theta_minus_sin_over_cube(theta))
+    }
+}
+
 /// `(1 − cos θ)/θ² = ½ (sin(θ/2)/(θ/2))²`, written with the half angle to avoid cancellation.
 #[inline]
 pub fn one_minus_cos_over_sq(theta: f64) -> f64 {
@@ -162,14 +194,9 @@ pub fn one_minus_cos_over_sq(theta: f64) -> f64 {
 /// `(θ − sin θ)/θ³ = Σ (−1)ᵏ θ²ᵏ/(2k+3)!`.
 #[inline]
 pub fn theta_minus_sin_over_cube(theta: f64) -> f64 {
-    const C: [f64; 5] = [
-        1.0 / 6.0,
-        -1.0 / 120.0,
-        1.0 / 5_040.0,
-        -1.0 / 362_880.0,
-        1.0 / 39_916_800.0,
-    ];
-    taylor_below(theta, 0.2, &C, || (theta - theta.sin()) / (theta * theta * theta))
+    taylor_below(theta, 0.2, &THETA_MINUS_SIN, || {
+        (theta - theta.sin()) / (theta * theta * theta)
+    })
 }
 
 /// `(θ²/2 + cos θ − 1)/θ⁴ = (½ − (1 − cos θ)/θ²)/θ² = Σ (−1)ᵏ θ²ᵏ/(2k+4)!`.
@@ -352,6 +379,85 @@ mod tests {
                 assert!((k_ours - k).abs() < 2e-16, "sin(θ/2)/θ at {theta}: {k_ours} vs {k}");
                 assert!((w_ours - w).abs() < 2e-16, "cos(θ/2) at {theta}: {w_ours} vs {w}");
             }
+        }
+    }
+
+    /// `exp_jacobian_small` on both sides of its switch (θ = 0.01) and of the closed forms' own
+    /// (θ = 0.2 and 0.5), against 50-digit values (mpmath): within the last bit of the values.
+    #[test]
+    #[allow(clippy::excessive_precision)] // the references are quoted as computed
+    fn exp_jacobian_small_matches_high_precision_values() {
+        // (θ, sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)
+        let cases = [
+            (
+                1e-8,
+                0.9999999999999999833333,
+                0.4999999999999999958333,
+                0.1666666666666666658333,
+            ),
+            (
+                0.003,
+                0.9999985000006749998554,
+                0.4999996250001124999819,
+                0.1666665916666827380932,
+            ),
+            (
+                0.0099999,
+                0.9999833337499948016495,
+                0.4999958334305545585416,
+                0.1666658333519839615313,
+            ),
+            (
+                0.0100001,
+                0.9999833330833348016257,
+                0.4999958332638890029831,
+                0.1666658333186507869278,
+            ),
+            (
+                0.1,
+                0.9983341664682815230681,
+                0.4995834721974233904438,
+                0.1665833531718476931858,
+            ),
+            (
+                0.199_999,
+                0.993346720375522076189,
+                0.498335570591187701,
+                0.1663336539443291972,
+            ),
+            (
+                0.200_001,
+                0.9933465875747607355578,
+                0.4983355373466480749,
+                0.1663336472903503664,
+            ),
+            (
+                0.4999,
+                0.9588673293679386592089,
+                0.4896738497279754956206,
+                0.1645965145502048631016,
+            ),
+            (
+                0.5001,
+                0.9588348219618437967631,
+                0.4896656543569134832207,
+                0.164594867621781395518,
+            ),
+            (
+                3.0,
+                0.04704000268662240736691,
+                0.2211102774000494952524,
+                0.1058844441459308436259,
+            ),
+        ];
+        for (theta, a, b, c) in cases {
+            let (a_ours, b_ours, c_ours) = exp_jacobian_small(theta * theta);
+            assert!((a_ours - a).abs() < 2.3e-16, "sin θ/θ at {theta}: {a_ours} vs {a}");
+            assert!(
+                (b_ours - b).abs() < 1.2e-16,
+                "(1 − cos θ)/θ² at {theta}: {b_ours} vs {b}"
+            );
+            assert!((c_ours - c).abs() < 3e-15, "(θ − sin θ)/θ³ at {theta}: {c_ours} vs {c}");
         }
     }
 
