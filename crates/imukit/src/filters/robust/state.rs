@@ -4,6 +4,8 @@
 
 use nalgebra::{Matrix2x3, Matrix3, Quaternion, SMatrix, UnitQuaternion, Vector2, Vector3};
 
+use std::f64::consts::{PI, TAU};
+
 use crate::filters::Fields;
 
 /// A value that flattens to numbers: how the state macro stores each field.
@@ -221,8 +223,8 @@ impl Default for RobustState {
 
 impl RobustState {
     /// A state from stored values ([`Fields::values`] order): every number finite and each
-    /// quaternion and the heading pair unit within 1e-9, the heading angle in [−π, π] (then kept
-    /// bit for bit). Errors name the argument `state`.
+    /// quaternion and the heading pair unit within 1e-9, the heading angle in [−π, π] and within
+    /// 1e-6 rad of the pair's (then kept bit for bit). Errors name the argument `state`.
     pub fn restored(values: &[f64]) -> crate::Result<Self> {
         let bad = |expected: &'static str| crate::Error::Parameter {
             name: "state",
@@ -235,15 +237,21 @@ impl RobustState {
         let s = Self::from_values(values).ok_or_else(|| bad("the fields of a RobustState"))?;
         let unit = |q: &UnitQuaternion<f64>| (q.norm_squared() - 1.0).abs() < 1e-9;
         let unit_heading = (s.heading.norm_squared() - 1.0).abs() < 1e-9;
+        // The output turns by the pair and the heading error is taken from the angle: a state
+        // edited in one and not the other would hold two headings, the gap never closing.
+        let gap = (s.heading_angle - 2.0 * s.heading.y.atan2(s.heading.x) + PI).rem_euclid(TAU) - PI;
         if unit(&s.q)
             && unit(&s.q_gyro)
             && unit(&s.q_incl)
             && unit_heading
-            && s.heading_angle.abs() <= std::f64::consts::PI
+            && s.heading_angle.abs() <= PI
+            && gap.abs() < 1e-6
         {
             Ok(s)
         } else {
-            Err(bad("unit quaternions and heading pair, a heading angle in [−π, π]"))
+            Err(bad(
+                "unit quaternions and heading pair, a heading angle in [−π, π] equal to the pair's within 1e-6 rad",
+            ))
         }
     }
 }
