@@ -479,6 +479,42 @@ fn streaming_equals_batch_and_resume_equals_uninterrupted() {
     }
 }
 
+/// The heading is kept twice (`step::turn_heading`): as the pair `(cos ψ/2, sin ψ/2)` the output
+/// uses and as the angle ψ the heading error is taken from. After a 9D run of 60 s (6,000 turns
+/// of both by the field's correction) the two agree to rounding; a state whose angle is outside
+/// [−π, π], or away from the pair's, is refused on restore.
+#[test]
+fn heading_angle_and_pair_agree_and_the_angle_is_checked_on_restore() {
+    let r = turning_record(60.0, Vector3::zeros(), 7);
+    let mut s = RobustState::default();
+    let mut track = RobustTrack::new(r.t.len());
+    filter()
+        .run(&mut s, &r.inputs(true), false, &mut track.outputs())
+        .unwrap();
+    let from_pair = 2.0 * s.heading.y.atan2(s.heading.x);
+    let diff = wrap_pi(s.heading_angle - from_pair);
+    assert!(diff.abs() < 1e-12, "angle {} vs pair {from_pair}", s.heading_angle);
+    assert!(s.heading_angle.abs() <= std::f64::consts::PI);
+    let mut values = imukit::filters::Fields::values(&s);
+    assert!(RobustState::restored(&values).is_ok());
+    let at = <RobustState as imukit::filters::Fields>::NAMES
+        .iter()
+        .position(|&n| n == "heading_angle")
+        .unwrap();
+    values[at] = 4.0;
+    assert!(RobustState::restored(&values).is_err());
+    // In range but not the pair's heading: two headings in one state.
+    values[at] = wrap_pi(from_pair + 1e-3);
+    assert!(RobustState::restored(&values).is_err());
+    // A difference at rounding is the same heading.
+    values[at] = wrap_pi(from_pair + 1e-9);
+    assert!(RobustState::restored(&values).is_ok());
+}
+
+fn wrap_pi(x: f64) -> f64 {
+    (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+}
+
 #[test]
 fn ned_is_enu_turned() {
     let r = turning_record(20.0, Vector3::zeros(), 6);

@@ -38,10 +38,12 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
-use super::step::{compose, from_world, magnetometer, start_heading, to_up, to_world, turn, yawed, Coefs};
+use super::step::{
+    compose, from_world, magnetometer, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap, yawed,
+    Coefs,
+};
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
-use crate::lie::series::atan2;
 use crate::quat::exp_step;
 use crate::Result;
 
@@ -139,7 +141,7 @@ impl Robust {
         zero_phase(&self.params, q0, inputs, out.bias, out.q, (!nine).then_some(self.world));
         if let Some(mags) = inputs.mag {
             let base: &[[f64; 4]] = out.q;
-            let (mut fwd_h, mut bwd_h) = (vec![Vector2::zeros(); n], vec![Vector2::zeros(); n]);
+            let (mut fwd_h, mut bwd_h) = (vec![(Vector2::zeros(), 0.0); n], vec![(Vector2::zeros(), 0.0); n]);
             rayon::join(
                 || heading_pass(&self.params, &start, inputs, mags, base, false, &mut fwd_h),
                 || {
@@ -248,8 +250,8 @@ crate::simd_dispatch! {
     /// learning and the heading filter, [`magnetometer`]) on the zero-phase attitudes `base`
     /// (internal ENU) in place of each pass's own inclination: forward from `start`, or
     /// (`backward`) from the last sample on an uninitialised state, each interval with the gyro
-    /// sample the online pass would integrate it with. The heading pair after each sample into
-    /// `out`, in forward order.
+    /// sample the online pass would integrate it with. The heading after each sample into `out`
+    /// (its pair and its angle), in forward order.
     fn heading_pass<'a>(
         p: &RobustParams,
         start: &RobustState,
@@ -257,7 +259,7 @@ crate::simd_dispatch! {
         mags: &[[f64; 3]],
         base: &[[f64; 4]],
         backward: bool,
-        out: &mut [Vector2<f64>],
+        out: &mut [(Vector2<f64>, f64)],
     ) -> () {
         let n = base.len();
         let mut s = *start;
@@ -273,15 +275,15 @@ crate::simd_dispatch! {
             let gyro = row(&inputs.gyro[k.max(other)]);
             let m_e = quat(&base[k]) * row(&mags[k]);
             if !s.initialized {
-                s.heading = Vector2::new(1.0, 0.0);
+                set_heading(&mut s, 0.0);
                 start_heading(&mut s, &m_e);
                 s.initialized = true;
             }
             coefs = coefs.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
             if let Some((gain, err)) = magnetometer(p, &coefs, &mut s, &m_e, &gyro) {
-                s.heading = turn(&s.heading, gain * err);
+                turn_heading(&mut s, gain * err);
             }
-            out[k] = s.heading;
+            out[k] = (s.heading, s.heading_angle);
         }
     }
 }
@@ -289,16 +291,20 @@ crate::simd_dispatch! {
 crate::simd_dispatch! {
     /// 9D: the heading `h = h_f + w_k wrap(h_b − h_f)` of the two heading passes (`fwd`, `bwd`,
     /// about the vertical of `out`'s zero-phase attitudes, internal ENU) put on `out` and written
-    /// in `world`. Kept as half-angle pairs (as the step's heading): `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)`
-    /// with `Δ/2` the angle of the pair `Rz(h_b) ⊗ Rz(h_f)⁻¹` taken with `w ≥ 0` (which is the
-    /// wrap), one `atan2` per sample.
-    fn fuse_headings(world: World, fwd: &[Vector2<f64>], bwd: &[Vector2<f64>], weights: &[f64], out: &mut [[f64; 4]]) -> () {
+    /// in `world`: `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)` on the forward pass's half-angle pair, `Δ` the
+    /// difference of the passes' angles, wrapped (no `atan2`: it was that of the pair
+    /// `Rz(h_b) ⊗ Rz(h_f)⁻¹`, the same to rounding).
+    fn fuse_headings(
+        world: World,
+        fwd: &[(Vector2<f64>, f64)],
+        bwd: &[(Vector2<f64>, f64)],
+        weights: &[f64],
+        out: &mut [[f64; 4]],
+    ) -> () {
         for (k, o) in out.iter_mut().enumerate() {
-            let (tf, tb) = (fwd[k], bwd[k]);
-            let rel = Vector2::new(tb.x * tf.x + tb.y * tf.y, tb.y * tf.x - tb.x * tf.y);
-            let half = if rel.x < 0.0 { -rel } else { rel };
-            let delta = 2.0 * atan2(half.y, half.x);
-            *o = to_world(world, &yawed(&turn(&tf, weights[k] * delta), &quat(o))).coords.into();
+            let ((pair, angle_f), (_, angle_b)) = (fwd[k], bwd[k]);
+            let delta = wrap(angle_b - angle_f);
+            *o = to_world(world, &yawed(&turn(&pair, weights[k] * delta), &quat(o))).coords.into();
         }
     }
 }

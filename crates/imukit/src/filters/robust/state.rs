@@ -4,6 +4,8 @@
 
 use nalgebra::{Matrix2x3, Matrix3, Quaternion, SMatrix, UnitQuaternion, Vector2, Vector3};
 
+use std::f64::consts::{PI, TAU};
+
 use crate::filters::Fields;
 
 /// A value that flattens to numbers: how the state macro stores each field.
@@ -95,6 +97,10 @@ state!(
     /// (the w, z of its quaternion; w ≥ 0, i.e. ψ ∈ [−π, π]): turned by a small rotation each
     /// sample, without trigonometry.
     heading: Vector2<f64> = ["heading_w", "heading_z"],
+    /// The same heading ψ [rad] as an angle in [−π, π] (equal to `heading`'s to rounding): the
+    /// heading error is the field's own angle less ψ, so the loop-carried chain of the heading
+    /// filter is a subtraction, a wrap and a multiply-add, with no `atan2` on it.
+    heading_angle: f64 = ["heading_angle"],
     /// False until the specific-force low pass has been set to its first input.
     lp_ready: bool = ["lp_ready"],
     /// First delay element of the Butterworth low pass (per axis, frame `I`).
@@ -176,6 +182,7 @@ impl Default for RobustState {
             q_gyro: q,
             q_incl: q,
             heading: Vector2::new(1.0, 0.0),
+            heading_angle: 0.0,
             lp_ready: false,
             lp_s1: Vector3::zeros(),
             lp_s2: Vector3::zeros(),
@@ -216,8 +223,8 @@ impl Default for RobustState {
 
 impl RobustState {
     /// A state from stored values ([`Fields::values`] order): every number finite and each
-    /// quaternion and the heading pair unit within 1e-9 (then kept bit for bit). Errors name the
-    /// argument `state`.
+    /// quaternion and the heading pair unit within 1e-9, the heading angle in [−π, π] and within
+    /// 1e-6 rad of the pair's (then kept bit for bit). Errors name the argument `state`.
     pub fn restored(values: &[f64]) -> crate::Result<Self> {
         let bad = |expected: &'static str| crate::Error::Parameter {
             name: "state",
@@ -229,10 +236,22 @@ impl RobustState {
         }
         let s = Self::from_values(values).ok_or_else(|| bad("the fields of a RobustState"))?;
         let unit = |q: &UnitQuaternion<f64>| (q.norm_squared() - 1.0).abs() < 1e-9;
-        if unit(&s.q) && unit(&s.q_gyro) && unit(&s.q_incl) && (s.heading.norm_squared() - 1.0).abs() < 1e-9 {
+        let unit_heading = (s.heading.norm_squared() - 1.0).abs() < 1e-9;
+        // The output turns by the pair and the heading error is taken from the angle: a state
+        // edited in one and not the other would hold two headings, the gap never closing.
+        let gap = (s.heading_angle - 2.0 * s.heading.y.atan2(s.heading.x) + PI).rem_euclid(TAU) - PI;
+        if unit(&s.q)
+            && unit(&s.q_gyro)
+            && unit(&s.q_incl)
+            && unit_heading
+            && s.heading_angle.abs() <= PI
+            && gap.abs() < 1e-6
+        {
             Ok(s)
         } else {
-            Err(bad("unit quaternions and heading pair"))
+            Err(bad(
+                "unit quaternions and heading pair, a heading angle in [−π, π] equal to the pair's within 1e-6 rad",
+            ))
         }
     }
 }
