@@ -346,6 +346,11 @@ impl<L: Law> Filter<L> {
             }
         }
 
+        // The low pass's turn into the new body axes, by the gyro alone with the bias before the
+        // law's update (what [`AccelLowPass`] specifies): it depends on the inputs and the last
+        // step's bias only, so the low pass's loop-carried chain is its two stages and this turn,
+        // without the norm, the division and the correction of the attitude's chain.
+        let gyro_turn = o.acc_lowpass.is_some().then(|| exp_step(&((gyro - s.bias) * dt)));
         let step = Step {
             q: &s.q,
             north_pred,
@@ -371,12 +376,9 @@ impl<L: Law> Filter<L> {
         let turn = exp_step(&((gyro - s.bias) * dt + correction_dt));
         let q = multiply(s.q.quaternion(), turn.quaternion());
         s.q = UnitQuaternion::new_unchecked(q * renorm);
-        if o.acc_lowpass.is_some() {
-            // Into the new body axes by the gyro turn alone: `Exp(θ)ᵀ = Exp(c) Exp(θ + c)ᵀ` to
-            // first order in the small correction `c`, i.e. one cross product after the full turn.
+        if let Some(gyro_turn) = gyro_turn {
             for f in [&mut s.acc_lp1, &mut s.acc_lp2] {
-                let w = turn.inverse_transform_vector(f);
-                *f = w + correction_dt.cross(&w);
+                *f = gyro_turn.inverse_transform_vector(f);
             }
         }
         if ramping {
