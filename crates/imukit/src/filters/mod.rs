@@ -72,7 +72,7 @@ pub use world::{initial_attitude, World};
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::quat::{exp_step, multiply};
+use crate::quat::{exp_step, multiply_exp_step};
 use crate::{Cancel, Error, Result};
 use gate::Gates;
 
@@ -192,6 +192,15 @@ impl Rates {
             follow: (dt / taus[1]).min(1.0),
         }
     }
+}
+
+/// `v / √n2` (`n2 > 0`, a squared norm) as `(v / n2) √n2`: the division and the square root
+/// both start from `n2` and run side by side, where `v / √n2` waits for the root before dividing
+/// (20 + 13 cycles on this host's Zen 5, docs/performance.md); one rounding more. The laws
+/// normalise on the attitude's dependency chain (Madgwick's direction, Mahony's heading error).
+#[inline(always)]
+fn over_norm(v: &Vector3<f64>, n2: f64) -> Vector3<f64> {
+    v * (1.0 / n2) * n2.sqrt()
 }
 
 /// Both stages of the accelerometer low pass ([`AccelLowPass`]) one step towards `accel`
@@ -373,9 +382,8 @@ impl<L: Law> Filter<L> {
         // |q_k| for a unit E), so it stays off the dependency chain: the exact exponential keeps
         // the norm to rounding, this only stops the rounding from accumulating.
         let renorm = 0.5 * (3.0 - s.q.norm_squared());
-        let turn = exp_step(&((gyro - s.bias) * dt + correction_dt));
-        let q = multiply(s.q.quaternion(), turn.quaternion());
-        s.q = UnitQuaternion::new_unchecked(q * renorm);
+        let q = multiply_exp_step(&(s.q.quaternion() * renorm), &((gyro - s.bias) * dt + correction_dt));
+        s.q = UnitQuaternion::new_unchecked(q);
         if let Some(gyro_turn) = gyro_turn {
             for f in [&mut s.acc_lp1, &mut s.acc_lp2] {
                 *f = gyro_turn.inverse_transform_vector(f);
