@@ -197,7 +197,8 @@ impl Rates {
 /// `v / √n2` (`n2 > 0`, a squared norm) as `(v / n2) √n2`: the division and the square root
 /// both start from `n2` and run side by side, where `v / √n2` waits for the root before dividing
 /// (20 + 13 cycles on this host's Zen 5, docs/performance.md); one rounding more. The laws
-/// normalise on the attitude's dependency chain (Madgwick's direction, Mahony's heading error).
+/// normalise on the attitude's dependency chain (Madgwick's direction, Mahony's heading error), and
+/// the accelerometer gate on Mahony's bias (the low pass → direction → bias → gyro turn cycle).
 #[inline(always)]
 fn over_norm(v: &Vector3<f64>, n2: f64) -> Vector3<f64> {
     v * (1.0 / n2) * n2.sqrt()
@@ -318,10 +319,11 @@ impl<L: Law> Filter<L> {
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
-            self.gates.accelerometer(s, &f, f.norm(), raw_sq, &up_pred, ramping, dt)
+            self.gates
+                .accelerometer(s, &f, f.norm_squared(), raw_sq, &up_pred, ramping, dt)
         } else {
             self.gates
-                .accelerometer(s, accel, raw_sq.sqrt(), raw_sq, &up_pred, ramping, dt)
+                .accelerometer(s, accel, raw_sq, raw_sq, &up_pred, ramping, dt)
         };
         let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
 
