@@ -1,8 +1,14 @@
 """Mahony and Madgwick outputs pinned to main's build before issue 20's speed work: a fixed 45 s
 input through every branch of the shared step (rest, bursts, sustained acceleration and the drift
 rule, a magnetic disturbance and its recovery; ``tests/fixtures/make_filters_pinned.py``), three
-option sets, 6D and 9D. The expected values were computed once, on main at 3f23077, and saved in
-``tests/fixtures/filters_pinned.npz``: a faster step must give the same outputs within 1e-12."""
+option sets, 6D and 9D. The expected values were computed on main at 3f23077 and saved in
+``tests/fixtures/filters_pinned.npz``: a faster step must give the same outputs within 1e-12.
+Re-pinned once, 2026-12-02 (branch ``filtchain``, issue 20), by the project owner's decision to let
+the step's chain change results beyond rounding within the BROAD rule of docs/performance.md
+("Filters, 2026-12-02 (filtchain): the chain"): the low pass turned by the gyro turn alone moved the
+defaults / NED outputs by up to 6.0e-4 (Mahony) and 4.5e-3 (Madgwick) in q, Mahony's bias by
+2.2e-5 rad/s; ``bare`` (no low pass) moved by rounding only (≤ 3.0e-15 in q, the reordered
+exponential and normalisations)."""
 
 from __future__ import annotations
 

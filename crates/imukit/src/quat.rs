@@ -155,6 +155,18 @@ pub fn exp_step(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::from_parts(w, phi * k))
 }
 
+/// `q ⊗ Exp(φ)` of one integration step, as `w q + k (q ⊗ [φ, 0])` with `(k, w)` of
+/// [`exp_step`] (`Exp(φ) = [k φ, w]`, and the product is linear in its right factor): the pure
+/// product runs beside the series instead of after it, which takes the scaling `k φ` and one
+/// product level off a filter step's dependency chain. The same rotation to rounding.
+#[inline(always)]
+pub fn multiply_exp_step(q: &Quaternion<f64>, phi: &Vector3<f64>) -> Quaternion<f64> {
+    let (k, w) = series::half_angle_small(phi.norm_squared());
+    let (v, s) = (q.imag(), q.w);
+    let pure = Quaternion::from_parts(-v.dot(phi), phi * s + v.cross(phi));
+    q * w + pure * k
+}
+
 /// `Log(q)`: the rotation vector with angle in `[0, π]` of the rotation `q` (either sign of `q`).
 ///
 /// Uses `θ = 2 atan2(|v|, |w|)`, accurate at 0 and at π, unlike `acos(w)`. Not nalgebra's

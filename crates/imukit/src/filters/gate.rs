@@ -80,8 +80,8 @@ impl Gates {
         }
     }
 
-    /// The unit direction of `accel` (the vector the law uses, `accel_norm` its norm; a zero one
-    /// is never used) if the sample is used. With a low pass, `raw_sq` is the unfiltered
+    /// The unit direction of `accel` (the vector the law uses, `norm_sq` its squared norm; a zero
+    /// one is never used) if the sample is used. With a low pass, `raw_sq` is the unfiltered
     /// sample's squared norm and the norm test is on it: a sustained acceleration changes the raw norm at
     /// once, while the filtered vector turns slowly and a law whose correction rate does not
     /// shrink with the error (Madgwick's) would follow it below any angle threshold; the angle
@@ -93,18 +93,25 @@ impl Gates {
         &self,
         s: &mut CommonState,
         accel: &Vector3<f64>,
-        accel_norm: f64,
+        norm_sq: f64,
         raw_sq: f64,
         up_pred: &Vector3<f64>,
         ramping: bool,
         dt: f64,
     ) -> Option<Vector3<f64>> {
+        let accel_norm = norm_sq.sqrt();
         // Written as `>` so that a NaN norm, like a zero one, is never used.
         let usable = accel_norm > 1e-9;
         if !usable {
             return None;
         }
-        let dir = accel * (1.0 / accel_norm);
+        // A finite sample whose squared norm overflows (1e300 m/s²) keeps `a / ‖a‖ = 0` (unused
+        // by the law), where `(a / ‖a‖²) ‖a‖` would be `0 · ∞`.
+        let dir = if norm_sq.is_finite() {
+            super::over_norm(accel, norm_sq)
+        } else {
+            accel * (1.0 / accel_norm)
+        };
         let verdict = decide(
             &mut s.accel_rejected,
             self.accel.map(|r| r.recovery_s),

@@ -11,7 +11,7 @@
 
 use nalgebra::Vector3;
 
-use super::{check, Law, Step};
+use super::{check, over_norm, Law, Step};
 use crate::Result;
 
 /// Gain of the Madgwick filter.
@@ -70,11 +70,13 @@ fn direction(
     if let Some(m) = mag_dir {
         let vertical = m.dot(up_pred);
         let horizontal = (1.0 - vertical * vertical).max(0.0).sqrt();
-        d += m.cross(&(north_pred * horizontal + up_pred * vertical));
+        // `m × v̂_m` as `‖h_h‖ (m × n_pred) + h_up (m × u_pred)`: both products run beside the
+        // square root instead of after it (the step's dependency chain; the same to rounding).
+        d += m.cross(north_pred) * horizontal + m.cross(up_pred) * vertical;
     }
     let n2 = d.norm_squared();
     if n2 > 1e-24 {
-        d * (1.0 / n2.sqrt())
+        over_norm(&d, n2)
     } else {
         Vector3::zeros()
     }

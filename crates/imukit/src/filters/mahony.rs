@@ -11,7 +11,7 @@
 
 use nalgebra::Vector3;
 
-use super::{check, Law, Step};
+use super::{check, over_norm, Law, Step};
 use crate::Result;
 
 /// Gains of the Mahony filter.
@@ -95,7 +95,7 @@ fn errors(
         let h_east = m.dot(&north_pred.cross(up_pred));
         let r2 = h_north * h_north + h_east * h_east;
         if r2 > 1e-18 {
-            e_mag = up_pred * (h_east / r2.sqrt());
+            e_mag = over_norm(&(up_pred * h_east), r2);
         }
     }
     (e_acc, e_mag)

@@ -72,7 +72,7 @@ pub use world::{initial_attitude, World};
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::quat::{exp_step, multiply};
+use crate::quat::{exp_step, multiply_exp_step};
 use crate::{Cancel, Error, Result};
 use gate::Gates;
 
@@ -194,6 +194,16 @@ impl Rates {
     }
 }
 
+/// `v / √n2` (`n2 > 0`, a squared norm) as `(v / n2) √n2`: the division and the square root
+/// both start from `n2` and run side by side, where `v / √n2` waits for the root before dividing
+/// (20 + 13 cycles on this host's Zen 5, docs/performance.md); one rounding more. The laws
+/// normalise on the attitude's dependency chain (Madgwick's direction, Mahony's heading error), and
+/// the accelerometer gate on Mahony's bias (the low pass → direction → bias → gyro turn cycle).
+#[inline(always)]
+fn over_norm(v: &Vector3<f64>, n2: f64) -> Vector3<f64> {
+    v * (1.0 / n2) * n2.sqrt()
+}
+
 /// Both stages of the accelerometer low pass ([`AccelLowPass`]) one step towards `accel`
 /// (`alpha = dt / (τ + dt)`); the filtered vector. A state without one (zero: an `initial`
 /// attitude, a restored older state) starts it at this sample.
@@ -309,10 +319,11 @@ impl<L: Law> Filter<L> {
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
-            self.gates.accelerometer(s, &f, f.norm(), raw_sq, &up_pred, ramping, dt)
+            self.gates
+                .accelerometer(s, &f, f.norm_squared(), raw_sq, &up_pred, ramping, dt)
         } else {
             self.gates
-                .accelerometer(s, accel, raw_sq.sqrt(), raw_sq, &up_pred, ramping, dt)
+                .accelerometer(s, accel, raw_sq, raw_sq, &up_pred, ramping, dt)
         };
         let mag_dir = mag.and_then(|m| self.gates.magnetometer(s, m, &up_pred, ramping, dt));
 
@@ -346,6 +357,11 @@ impl<L: Law> Filter<L> {
             }
         }
 
+        // The low pass's turn into the new body axes, by the gyro alone with the bias before the
+        // law's update (what [`AccelLowPass`] specifies): it depends on the inputs and the last
+        // step's bias only, so the low pass's loop-carried chain is its two stages and this turn,
+        // without the norm, the division and the correction of the attitude's chain.
+        let gyro_turn = o.acc_lowpass.is_some().then(|| exp_step(&((gyro - s.bias) * dt)));
         let step = Step {
             q: &s.q,
             north_pred,
@@ -368,15 +384,11 @@ impl<L: Law> Filter<L> {
         // |q_k| for a unit E), so it stays off the dependency chain: the exact exponential keeps
         // the norm to rounding, this only stops the rounding from accumulating.
         let renorm = 0.5 * (3.0 - s.q.norm_squared());
-        let turn = exp_step(&((gyro - s.bias) * dt + correction_dt));
-        let q = multiply(s.q.quaternion(), turn.quaternion());
-        s.q = UnitQuaternion::new_unchecked(q * renorm);
-        if o.acc_lowpass.is_some() {
-            // Into the new body axes by the gyro turn alone: `Exp(θ)ᵀ = Exp(c) Exp(θ + c)ᵀ` to
-            // first order in the small correction `c`, i.e. one cross product after the full turn.
+        let q = multiply_exp_step(&(s.q.quaternion() * renorm), &((gyro - s.bias) * dt + correction_dt));
+        s.q = UnitQuaternion::new_unchecked(q);
+        if let Some(gyro_turn) = gyro_turn {
             for f in [&mut s.acc_lp1, &mut s.acc_lp2] {
-                let w = turn.inverse_transform_vector(f);
-                *f = w + correction_dt.cross(&w);
+                *f = gyro_turn.inverse_transform_vector(f);
             }
         }
         if ramping {
