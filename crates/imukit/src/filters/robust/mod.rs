@@ -55,21 +55,50 @@ pub struct Outputs<'a> {
 }
 
 impl Outputs<'_> {
-    fn len_ok(&self, n: usize) -> bool {
-        [
-            self.q.len(),
-            self.bias.len(),
-            self.bias_sigma.len(),
-            self.rest.len(),
-            self.mag_disturbed.len(),
-        ]
-        .iter()
-        .all(|&l| l == n)
+    /// Every row count `n`, the attitude's `0` where the run writes none (`attitude` false).
+    fn len_ok(&self, n: usize, attitude: bool) -> bool {
+        self.q.len() == if attitude { n } else { 0 }
+            && [
+                self.bias.len(),
+                self.bias_sigma.len(),
+                self.rest.len(),
+                self.mag_disturbed.len(),
+            ]
+            .iter()
+            .all(|&l| l == n)
+    }
+
+    /// The rows before `m` and those from `m` (the smoother's fusions run the halves of the
+    /// record on two threads).
+    fn split_at(&mut self, m: usize) -> (Outputs<'_>, Outputs<'_>) {
+        let (q, q_) = self.q.split_at_mut(m);
+        let (bias, bias_) = self.bias.split_at_mut(m);
+        let (bias_sigma, bias_sigma_) = self.bias_sigma.split_at_mut(m);
+        let (rest, rest_) = self.rest.split_at_mut(m);
+        let (mag_disturbed, mag_disturbed_) = self.mag_disturbed.split_at_mut(m);
+        (
+            Outputs {
+                q,
+                bias,
+                bias_sigma,
+                rest,
+                mag_disturbed,
+            },
+            Outputs {
+                q: q_,
+                bias: bias_,
+                bias_sigma: bias_sigma_,
+                rest: rest_,
+                mag_disturbed: mag_disturbed_,
+            },
+        )
     }
 
     #[inline(always)]
-    fn write(&mut self, k: usize, s: &RobustState, sigma: &mut Sigma) {
-        self.q[k] = s.q.coords.into();
+    fn write<const ATTITUDE: bool>(&mut self, k: usize, s: &RobustState, sigma: &mut Sigma) {
+        if ATTITUDE {
+            self.q[k] = s.q.coords.into();
+        }
         self.bias[k] = s.bias.into();
         self.bias_sigma[k] = sigma.of(&s.bias_cov);
         self.rest[k] = s.rest;
@@ -243,9 +272,23 @@ impl Robust {
         continued: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
+        self.run_checked(state, inputs, (first, continued), true, out)
+    }
+
+    /// [`Robust::run_part`] with `start = (first, continued)`, writing the attitude only where
+    /// `attitude` (`out.q` empty otherwise): the smoother's first stage reads none, and its two
+    /// passes' attitude tracks were 32 B per sample of fresh pages each.
+    fn run_checked(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        (first, continued): (usize, bool),
+        attitude: bool,
+        out: &mut Outputs<'_>,
+    ) -> Result<()> {
         let n = inputs.t.len();
         check_lengths(inputs)?;
-        if !out.len_ok(n) {
+        if !out.len_ok(n, attitude) {
             return Err(Error::RowCount {
                 input: n,
                 output: out.q.len(),
@@ -258,13 +301,13 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        run_any(self, state, inputs, (first, continued), out)
+        run_any(self, state, inputs, (first, continued), attitude, out)
     }
 
-    /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`; `start` is
-    /// `(first, continued)`.
+    /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`, the attitude written
+    /// where `ATTITUDE`; `start` is `(first, continued)`.
     #[inline(always)]
-    fn run_loop<const NINE: bool>(
+    fn run_loop<const NINE: bool, const ATTITUDE: bool>(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
@@ -301,7 +344,7 @@ impl Robust {
             }
             state.time = t;
             previous = t;
-            out.write(k, state, &mut sigma);
+            out.write::<ATTITUDE>(k, state, &mut sigma);
         }
         Ok(())
     }
@@ -315,11 +358,14 @@ crate::simd_dispatch! {
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         start: (usize, bool),
+        attitude: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
-        match inputs.mag {
-            Some(m) => f.run_loop::<true>(state, inputs, m, start, out),
-            None => f.run_loop::<false>(state, inputs, &[], start, out),
+        match (inputs.mag, attitude) {
+            (Some(m), true) => f.run_loop::<true, true>(state, inputs, m, start, out),
+            (Some(m), false) => f.run_loop::<true, false>(state, inputs, m, start, out),
+            (None, true) => f.run_loop::<false, true>(state, inputs, &[], start, out),
+            (None, false) => f.run_loop::<false, false>(state, inputs, &[], start, out),
         }
     }
 }

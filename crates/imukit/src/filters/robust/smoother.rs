@@ -98,37 +98,56 @@ impl Robust {
     /// forward and backward on that attitude, fused.
     pub fn smooth(&self, state: &mut RobustState, inputs: &Inputs<'_>, out: &mut Outputs<'_>) -> Result<()> {
         let n = inputs.t.len();
-        if !out.len_ok(n) {
+        if !out.len_ok(n, true) {
             return Err(crate::Error::RowCount {
                 input: n,
                 output: out.q.len(),
             });
         }
         let start = *state;
-        let mut fwd = Track::new(n);
         if n == 0 {
-            return self.run(state, inputs, false, &mut fwd.outputs());
+            return self.run(state, inputs, false, &mut Track::new(0).outputs());
         }
         // The two passes are independent: one thread each (every pass is the same
         // sequential loop, so the result does not depend on the threads; errors are the forward
-        // pass's first, as in sequence).
+        // pass's first, as in sequence). Neither writes its attitude: nothing reads it.
         let (forward, backward) = rayon::join(
-            || self.run(state, inputs, false, &mut fwd.outputs()),
+            || {
+                let mut fwd = unposed(n);
+                let done = self.run_checked(state, inputs, (0, false), false, &mut fwd.outputs());
+                done.map(|()| fwd)
+            },
             || {
                 let rev = Reversed::new(inputs);
-                let mut bwd = Track::new(n);
-                let done = self.run(&mut RobustState::default(), &rev.inputs(), false, &mut bwd.outputs());
+                let mut bwd = unposed(n);
+                let done = self.run_checked(
+                    &mut RobustState::default(),
+                    &rev.inputs(),
+                    (0, false),
+                    false,
+                    &mut bwd.outputs(),
+                );
                 done.map(|()| bwd)
             },
         );
-        forward?;
+        let fwd = forward?;
         let bwd = backward?;
 
         // The backward track is in reversed time: sample k is its row n − 1 − k (indexed so, not
-        // reversed in place: two passes over the tracks' 150 MB at 10^6 samples in 9D).
+        // reversed in place: two passes over the tracks' 150 MB at 10^6 samples in 9D). The
+        // fusions are per sample: the record's halves on two threads, bit for bit.
         let nine = inputs.mag.is_some();
-        let mut weights = if nine { vec![0.5; n] } else { Vec::new() };
-        fuse_bias(&fwd, &bwd, out, &mut weights);
+        let half = n / 2;
+        let mut weights = if nine { vec![0.0; n] } else { Vec::new() };
+        {
+            let (mut early, mut late) = out.split_at(half);
+            let split = half.min(weights.len()); // 6D: no weights
+            let (w_early, w_late) = weights.split_at_mut(split);
+            rayon::join(
+                || fuse_bias(&fwd, &bwd, 0, &mut early, w_early),
+                || fuse_bias(&fwd, &bwd, half, &mut late, w_late),
+            );
+        }
 
         // Second stage: the zero-phase inclination from the fused bias; in 9D the heading loop
         // forward and backward on it (on two threads), fused by the weights.
@@ -141,44 +160,50 @@ impl Robust {
         zero_phase(&self.params, q0, inputs, out.bias, out.q, (!nine).then_some(self.world));
         if let Some(mags) = inputs.mag {
             let base: &[[f64; 4]] = out.q;
-            let (mut fwd_h, mut bwd_h) = (vec![(Vector2::zeros(), 0.0); n], vec![(Vector2::zeros(), 0.0); n]);
+            let pass = |from: &RobustState, backward: bool| {
+                let mut headings = vec![(Vector2::zeros(), 0.0); n];
+                heading_pass(&self.params, from, inputs, mags, base, backward, &mut headings);
+                headings
+            };
+            let (fwd_h, bwd_h) = rayon::join(|| pass(&start, false), || pass(&RobustState::default(), true));
+            let (early, late) = out.q.split_at_mut(half);
+            let (f, b, w) = (fwd_h.split_at(half), bwd_h.split_at(half), weights.split_at(half));
             rayon::join(
-                || heading_pass(&self.params, &start, inputs, mags, base, false, &mut fwd_h),
-                || {
-                    heading_pass(
-                        &self.params,
-                        &RobustState::default(),
-                        inputs,
-                        mags,
-                        base,
-                        true,
-                        &mut bwd_h,
-                    )
-                },
+                || fuse_headings(self.world, f.0, b.0, w.0, early),
+                || fuse_headings(self.world, f.1, b.1, w.1, late),
             );
-            fuse_headings(self.world, &fwd_h, &bwd_h, &weights, out.q);
         }
         Ok(())
+    }
+}
+
+/// A first-stage track: `n` rows of zeros but no attitude.
+fn unposed(n: usize) -> Track {
+    Track {
+        q: Vec::new(),
+        bias: vec![[0.0; 3]; n],
+        bias_sigma: vec![[0.0; 3]; n],
+        rest: vec![false; n],
+        mag_disturbed: vec![false; n],
     }
 }
 
 crate::simd_dispatch! {
     /// Stage 1's fusion of the passes `fwd`, `bwd` (`bwd` in reversed time) into `out`'s bias, its
     /// σ and the flags, and in 9D (`weights` not empty) each sample's heading weight `v_f/(v_f + v_b)`
-    /// of the backward pass. Per axis `b = b_f w_f + b_b w_b`, `w_f = σ_b²/(σ_f² + σ_b²)`: one
+    /// of the backward pass (½ where both are 0); `out`'s and `weights`' rows are the record's from
+    /// row `first`. Per axis `b = b_f w_f + b_b w_b`, `w_f = σ_b²/(σ_f² + σ_b²)`: one
     /// division for both weights and the variance `σ_f² σ_b²/(σ_f² + σ_b²)`, the three axes side by
     /// side (no branch: an axis with both σ zero takes the mean and σ = 0).
-    fn fuse_bias<'a>(fwd: &Track, bwd: &Track, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
+    fn fuse_bias<'a>(fwd: &Track, bwd: &Track, first: usize, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
         let n = fwd.bias.len();
-        for k in 0..n {
-            let j = n - 1 - k;
+        for i in 0..out.bias.len() {
+            let (k, j) = (first + i, n - 1 - first - i);
             let (sf, sb) = (fwd.bias_sigma[k], bwd.bias_sigma[j]);
             let (pf, pb) = (sf.map(|s| s * s), sb.map(|s| s * s));
-            if let Some(weight) = weights.get_mut(k) {
+            if let Some(weight) = weights.get_mut(i) {
                 let (vf, vb) = (pf[0] + pf[1] + pf[2], pb[0] + pb[1] + pb[2]);
-                if vf + vb > 0.0 {
-                    *weight = vf / (vf + vb);
-                }
+                *weight = if vf + vb > 0.0 { vf / (vf + vb) } else { 0.5 };
             }
             let (bf, bb) = (fwd.bias[k], bwd.bias[j]);
             let (mut fused, mut sigma) = ([0.0; 3], [0.0; 3]);
@@ -191,10 +216,10 @@ crate::simd_dispatch! {
                 fused[i] = bf[i] * wf - bb[i] * wb;
                 sigma[i] = (pf[i] * pb[i] * r).sqrt();
             }
-            out.bias[k] = fused;
-            out.bias_sigma[k] = sigma;
-            out.rest[k] = fwd.rest[k] || bwd.rest[j];
-            out.mag_disturbed[k] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
+            out.bias[i] = fused;
+            out.bias_sigma[i] = sigma;
+            out.rest[i] = fwd.rest[k] || bwd.rest[j];
+            out.mag_disturbed[i] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
         }
     }
 }
