@@ -188,6 +188,15 @@ def test_trajectory_outputs_are_guarded() -> None:
         assert not arr.flags.writeable
         with pytest.raises(ValueError, match="read-only"):
             arr[0] = 1.0
+    # a stride that lands on the last sample keeps it once, and each covariance is its sample's
+    noise = ik.ImuNoise(1e-3, 1e-2, 1e-5, 1e-4)
+    full = ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=noise, covariance_every=1)
+    assert full.covariance is not None and full.covariance_t is not None
+    assert np.array_equal(full.covariance_t, t)
+    on = ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=noise, covariance_every=5)
+    assert on.covariance is not None and on.covariance_t is not None
+    assert np.array_equal(on.covariance_t, t[[0, 5, 10]])
+    assert np.array_equal(on.covariance, full.covariance[[0, 5, 10]])
     # a stride past the end keeps the first and the last sample
     long = ik.propagate(imu, initial=x0, covariance=np.eye(15), noise=ik.ImuNoise(0, 0, 0, 0), covariance_every=10**30)
     assert np.array_equal(long.covariance_t, t[[0, 10]])

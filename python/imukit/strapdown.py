@@ -195,6 +195,10 @@ def propagate(
     pv, quaternions, covs = _core.strapdown_propagate(
         imu.seconds, gyro, accel, initial, p0, b, noise, g, scheme, every, rate, arm, transport
     )
-    kept = np.unique(np.append(np.arange(0, n, every), n - 1))
+    # Sorted and distinct by construction: numpy's `unique` (a hash table since 2.3) cost
+    # ~1.7 µs a sample at `covariance_every=1`, more than the propagation itself.
+    kept = np.arange(0, n, every)
+    if kept[-1] != n - 1:
+        kept = np.append(kept, n - 1)
     covs.setflags(write=False)
     return _trajectory(imu, pv, quaternions, covs.reshape(-1, 15, 15), readonly_copy(imu.t[kept]))
