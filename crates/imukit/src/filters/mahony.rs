@@ -51,6 +51,7 @@ impl Law for Mahony {
     fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
         let (e_acc, e_mag) = errors(
             &step.north_pred,
+            &step.east_pred,
             &step.up_pred,
             step.accel_dir.as_ref(),
             step.mag_dir.as_ref(),
@@ -77,13 +78,14 @@ impl Law for Mahony {
 }
 
 /// `v × v̂` of the accepted accelerometer and magnetometer samples (body frame), zero for one not
-/// accepted. `north_pred`, `up_pred` are the world north and up in body axes (`R̂ᵀ n_w`, `R̂ᵀ u_w`).
+/// accepted. `north_pred`, `east_pred`, `up_pred` are the world north, east and up in body axes
+/// (`R̂ᵀ n_w`, `R̂ᵀ e_w`, `R̂ᵀ u_w`).
 ///
-/// Magnetometer: with `h = R̂ m̂`, its east and north parts are `m̂·ê_pred`, `m̂·n_pred`
-/// (`ê = n × u`), and `ĥ_horizontal × n_w = u_w h_e / √(h_e² + h_n²)`; in body axes `u_pred h_e/…`.
+/// Magnetometer: with `h = R̂ m̂`, its east and north parts are `m̂·e_pred`, `m̂·n_pred`, and `ĥ_horizontal × n_w = u_w h_e / √(h_e² + h_n²)`; in body axes `u_pred h_e/…`.
 #[inline(always)]
 fn errors(
     north_pred: &Vector3<f64>,
+    east_pred: &Vector3<f64>,
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,
     mag_dir: Option<&Vector3<f64>>,
@@ -92,7 +94,7 @@ fn errors(
     let mut e_mag = Vector3::zeros();
     if let Some(m) = mag_dir {
         let h_north = m.dot(north_pred);
-        let h_east = m.dot(&north_pred.cross(up_pred));
+        let h_east = m.dot(east_pred);
         let r2 = h_north * h_north + h_east * h_east;
         if r2 > 1e-18 {
             e_mag = over_norm(&(up_pred * h_east), r2);

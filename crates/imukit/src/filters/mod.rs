@@ -96,6 +96,8 @@ pub struct Step<'a> {
     pub q: &'a UnitQuaternion<f64>,
     /// World north in body axes, `R̂ᵀ n_w`.
     pub north_pred: Vector3<f64>,
+    /// World east in body axes, `R̂ᵀ e_w` (`north_pred × up_pred`).
+    pub east_pred: Vector3<f64>,
     /// World up in body axes, `R̂ᵀ u_w`.
     pub up_pred: Vector3<f64>,
     /// The raw gyro sample [rad/s].
@@ -306,7 +308,7 @@ impl<L: Law> Filter<L> {
             if let Some(m) = mag {
                 let norm = m.norm();
                 if norm > 0.0 {
-                    let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).1);
+                    let (sin, cos) = gate::dip(m, norm, &world.predicted(&s.q).2);
                     gate::learn(s, norm, sin, cos);
                 }
             }
@@ -315,7 +317,7 @@ impl<L: Law> Filter<L> {
         let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
-        let (north_pred, up_pred) = world.predicted(&s.q);
+        let (north_pred, east_pred, up_pred) = world.predicted(&s.q);
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
@@ -365,6 +367,7 @@ impl<L: Law> Filter<L> {
         let step = Step {
             q: &s.q,
             north_pred,
+            east_pred,
             up_pred,
             gyro,
             accel,

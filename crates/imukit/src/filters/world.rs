@@ -32,9 +32,11 @@ impl World {
         }
     }
 
-    /// World north and up in body axes, `(R_wbᵀ n_w, R_wbᵀ u_w)`: rows of `R(q)`.
+    /// World north, east and up in body axes, `(R_wbᵀ n_w, R_wbᵀ e_w, R_wbᵀ u_w)`: rows of `R(q)`.
+    /// East (`n × u`) is a row too, read instead of crossed (Mahony's heading error needs it on
+    /// the step's chain; the same to rounding for a unit `q`).
     #[inline(always)]
-    pub(crate) fn predicted(self, q: &UnitQuaternion<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    pub(crate) fn predicted(self, q: &UnitQuaternion<f64>) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let (x, y, z, w) = (q.i, q.j, q.k, q.w);
         let row0 = Vector3::new(
             1.0 - 2.0 * (y * y + z * z),
@@ -52,8 +54,8 @@ impl World {
             1.0 - 2.0 * (x * x + y * y),
         );
         match self {
-            World::Enu => (row1, row2),
-            World::Ned => (row0, -row2),
+            World::Enu => (row1, row0, row2),
+            World::Ned => (row0, row1, -row2),
         }
     }
 
