@@ -197,11 +197,11 @@ crate::simd_dispatch! {
     /// side (no branch: an axis with both σ zero takes the mean and σ = 0).
     fn fuse_bias<'a>(fwd: &Track, bwd: &Track, first: usize, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
         let n = fwd.bias.len();
-        for i in 0..out.bias.len() {
-            let (k, j) = (first + i, n - 1 - first - i);
+        for row in 0..out.bias.len() {
+            let (k, j) = (first + row, n - 1 - first - row);
             let (sf, sb) = (fwd.bias_sigma[k], bwd.bias_sigma[j]);
             let (pf, pb) = (sf.map(|s| s * s), sb.map(|s| s * s));
-            if let Some(weight) = weights.get_mut(i) {
+            if let Some(weight) = weights.get_mut(row) {
                 let (vf, vb) = (pf[0] + pf[1] + pf[2], pb[0] + pb[1] + pb[2]);
                 *weight = if vf + vb > 0.0 { vf / (vf + vb) } else { 0.5 };
             }
@@ -216,10 +216,10 @@ crate::simd_dispatch! {
                 fused[i] = bf[i] * wf - bb[i] * wb;
                 sigma[i] = (pf[i] * pb[i] * r).sqrt();
             }
-            out.bias[i] = fused;
-            out.bias_sigma[i] = sigma;
-            out.rest[i] = fwd.rest[k] || bwd.rest[j];
-            out.mag_disturbed[i] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
+            out.bias[row] = fused;
+            out.bias_sigma[row] = sigma;
+            out.rest[row] = fwd.rest[k] || bwd.rest[j];
+            out.mag_disturbed[row] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
         }
     }
 }
