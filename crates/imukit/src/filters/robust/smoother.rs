@@ -36,6 +36,8 @@
 //! Flags: rest where either pass detects it (detection needs `rest_duration_s` of history, which
 //! each pass has on its own side); disturbed where both passes reject the field.
 
+use std::ops::Range;
+
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{
@@ -44,6 +46,7 @@ use super::step::{
 };
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
+use crate::pages;
 use crate::quat::exp_step;
 use crate::Result;
 
@@ -51,7 +54,10 @@ fn quat(x: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(x[3], x[0], x[1], x[2]))
 }
 
-/// The record reversed in time (see the module doc).
+/// Rows of the record reversed in time (see the module doc), a part at a time: the backward pass
+/// is fed [`REVERSED_PART`] rows per call into buffers it reuses (a reversed copy of the whole
+/// record was 80 B per sample of fresh pages in 9D; parts give the same result, bit for bit).
+#[derive(Default)]
 struct Reversed {
     t: Vec<f64>,
     gyro: Vec<[f64; 3]>,
@@ -59,22 +65,29 @@ struct Reversed {
     mag: Option<Vec<[f64; 3]>>,
 }
 
+/// Rows of the reversed record per part of the backward pass (9D: 1.3 MB of buffers).
+const REVERSED_PART: usize = 1 << 14;
+
 impl Reversed {
-    fn new(inputs: &Inputs<'_>) -> Self {
+    /// Rows `rows` of the reversed record: its row `j` is the record's row `n − 1 − j`.
+    fn fill(&mut self, inputs: &Inputs<'_>, rows: Range<usize>) {
         let n = inputs.t.len();
-        // The forward step over (t_k, t_k+1) integrates ω_k+1; the backward one over the same
+        let back = |j: usize| n - 1 - j;
+        self.t.clear();
+        self.t.extend(rows.clone().map(|j| -inputs.t[back(j)]));
+        // The forward step over (t_k, t_k+1] integrates ω_k+1; the backward one over the same
         // interval must too (ω_k would put it one sample's rotation apart: 1° at 5 rad/s, 285 Hz).
-        let gyro = (0..n)
-            .map(|j| {
-                let w = inputs.gyro[(n - j).min(n - 1)];
-                [-w[0], -w[1], -w[2]]
-            })
-            .collect();
-        Self {
-            t: inputs.t.iter().rev().map(|t| -t).collect(),
-            gyro,
-            accel: inputs.accel.iter().rev().copied().collect(),
-            mag: inputs.mag.map(|m| m.iter().rev().copied().collect()),
+        self.gyro.clear();
+        self.gyro.extend(rows.clone().map(|j| {
+            let w = inputs.gyro[(n - j).min(n - 1)];
+            [-w[0], -w[1], -w[2]]
+        }));
+        self.accel.clear();
+        self.accel.extend(rows.clone().map(|j| inputs.accel[back(j)]));
+        if let Some(mags) = inputs.mag {
+            let mag = self.mag.get_or_insert_with(Vec::new);
+            mag.clear();
+            mag.extend(rows.map(|j| mags[back(j)]));
         }
     }
 
@@ -110,42 +123,30 @@ impl Robust {
         }
         // The two passes are independent: one thread each (every pass is the same
         // sequential loop, so the result does not depend on the threads; errors are the forward
-        // pass's first, as in sequence). Neither writes its attitude: nothing reads it.
+        // pass's first, as in sequence). Neither writes its attitude: nothing reads it. The
+        // forward pass writes its bias, σ and flags into `out`, where they are fused in place:
+        // only the backward pass has a track of its own.
+        let mut bwd = unposed(n);
         let (forward, backward) = rayon::join(
-            || {
-                let mut fwd = unposed(n);
-                let done = self.run_checked(state, inputs, (0, false), false, &mut fwd.outputs());
-                done.map(|()| fwd)
-            },
-            || {
-                let rev = Reversed::new(inputs);
-                let mut bwd = unposed(n);
-                let done = self.run_checked(
-                    &mut RobustState::default(),
-                    &rev.inputs(),
-                    (0, false),
-                    false,
-                    &mut bwd.outputs(),
-                );
-                done.map(|()| bwd)
-            },
+            || self.run_checked(state, inputs, (0, false), false, &mut out.unposed()),
+            || self.run_reversed(inputs, &mut bwd),
         );
-        let fwd = forward?;
-        let bwd = backward?;
+        forward?;
+        backward?;
 
         // The backward track is in reversed time: sample k is its row n − 1 − k (indexed so, not
-        // reversed in place: two passes over the tracks' 150 MB at 10^6 samples in 9D). The
-        // fusions are per sample: the record's halves on two threads, bit for bit.
+        // reversed in place). The fusions are per sample: the record's halves on two threads,
+        // bit for bit.
         let nine = inputs.mag.is_some();
         let half = n / 2;
-        let mut weights = if nine { vec![0.0; n] } else { Vec::new() };
+        let mut weights = if nine { pages::rows(0.0, n) } else { Vec::new() };
         {
             let (mut early, mut late) = out.split_at(half);
             let split = half.min(weights.len()); // 6D: no weights
             let (w_early, w_late) = weights.split_at_mut(split);
             rayon::join(
-                || fuse_bias(&fwd, &bwd, 0, &mut early, w_early),
-                || fuse_bias(&fwd, &bwd, half, &mut late, w_late),
+                || fuse_bias(&bwd, 0, &mut early, w_early),
+                || fuse_bias(&bwd, half, &mut late, w_late),
             );
         }
 
@@ -156,16 +157,33 @@ impl Robust {
         } else {
             initial_attitude(World::Enu, &row(&inputs.accel[0]), None)
         };
+        // The backward track is dead once fused: its rows, 24 B per sample each, are the second
+        // stage's scratch (fresh pages cost more than the passes that fill them).
+        let Track {
+            bias: scratch_a,
+            bias_sigma: scratch_b,
+            ..
+        } = &mut bwd;
         // 6D: the zero-phase attitude is the estimate, turned into the world as it is written.
-        zero_phase(&self.params, q0, inputs, out.bias, out.q, (!nine).then_some(self.world));
+        zero_phase(
+            &self.params,
+            q0,
+            inputs,
+            out.bias,
+            scratch_a,
+            out.q,
+            (!nine).then_some(self.world),
+        );
         if let Some(mags) = inputs.mag {
             let base: &[[f64; 4]] = out.q;
-            let pass = |from: &RobustState, backward: bool| {
-                let mut headings = vec![(Vector2::zeros(), 0.0); n];
-                heading_pass(&self.params, from, inputs, mags, base, backward, &mut headings);
-                headings
+            let pass = |from: &RobustState, backward: bool, headings: &mut [[f64; 3]]| {
+                heading_pass(&self.params, from, inputs, mags, base, backward, headings);
             };
-            let (fwd_h, bwd_h) = rayon::join(|| pass(&start, false), || pass(&RobustState::default(), true));
+            rayon::join(
+                || pass(&start, false, scratch_b),
+                || pass(&RobustState::default(), true, scratch_a),
+            );
+            let (fwd_h, bwd_h) = (&scratch_b[..], &scratch_a[..]);
             let (early, late) = out.q.split_at_mut(half);
             let (f, b, w) = (fwd_h.split_at(half), bwd_h.split_at(half), weights.split_at(half));
             rayon::join(
@@ -175,37 +193,71 @@ impl Robust {
         }
         Ok(())
     }
+
+    /// Stage 1's backward pass into `track`: the record reversed in time, fed a part at a time
+    /// ([`Reversed`]); errors name rows of the reversed record.
+    fn run_reversed(&self, inputs: &Inputs<'_>, track: &mut Track) -> Result<()> {
+        let n = inputs.t.len();
+        let mut state = RobustState::default();
+        let mut part = Reversed::default();
+        for first in (0..n).step_by(REVERSED_PART) {
+            let rows = first..(first + REVERSED_PART).min(n);
+            part.fill(inputs, rows.clone());
+            let mut out = Outputs {
+                q: &mut [],
+                bias: &mut track.bias[rows.clone()],
+                bias_sigma: &mut track.bias_sigma[rows.clone()],
+                rest: &mut track.rest[rows.clone()],
+                mag_disturbed: &mut track.mag_disturbed[rows],
+            };
+            self.run_checked(&mut state, &part.inputs(), (first, first > 0), false, &mut out)?;
+        }
+        Ok(())
+    }
+}
+
+impl Outputs<'_> {
+    /// These rows without the attitude, for a pass that writes none.
+    fn unposed(&mut self) -> Outputs<'_> {
+        Outputs {
+            q: &mut [],
+            bias: self.bias,
+            bias_sigma: self.bias_sigma,
+            rest: self.rest,
+            mag_disturbed: self.mag_disturbed,
+        }
+    }
 }
 
 /// A first-stage track: `n` rows of zeros but no attitude.
 fn unposed(n: usize) -> Track {
     Track {
         q: Vec::new(),
-        bias: vec![[0.0; 3]; n],
-        bias_sigma: vec![[0.0; 3]; n],
+        bias: pages::rows([0.0; 3], n),
+        bias_sigma: pages::rows([0.0; 3], n),
         rest: vec![false; n],
         mag_disturbed: vec![false; n],
     }
 }
 
 crate::simd_dispatch! {
-    /// Stage 1's fusion of the passes `fwd`, `bwd` (`bwd` in reversed time) into `out`'s bias, its
-    /// σ and the flags, and in 9D (`weights` not empty) each sample's heading weight `v_f/(v_f + v_b)`
-    /// of the backward pass (½ where both are 0); `out`'s and `weights`' rows are the record's from
-    /// row `first`. Per axis `b = b_f w_f + b_b w_b`, `w_f = σ_b²/(σ_f² + σ_b²)`: one
-    /// division for both weights and the variance `σ_f² σ_b²/(σ_f² + σ_b²)`, the three axes side by
-    /// side (no branch: an axis with both σ zero takes the mean and σ = 0).
-    fn fuse_bias<'a>(fwd: &Track, bwd: &Track, first: usize, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
-        let n = fwd.bias.len();
+    /// Stage 1's fusion of the forward pass, whose bias, σ and flags `out` holds, with `bwd` (in
+    /// reversed time), in place; and in 9D (`weights` not empty) each sample's heading weight
+    /// `v_f/(v_f + v_b)` of the backward pass (½ where both are 0); `out`'s and `weights`' rows are
+    /// the record's from row `first`. Per axis `b = b_f w_f + b_b w_b`, `w_f = σ_b²/(σ_f² + σ_b²)`:
+    /// one division for both weights and the variance `σ_f² σ_b²/(σ_f² + σ_b²)`, the three axes
+    /// side by side (no branch: an axis with both σ zero takes the mean and σ = 0).
+    fn fuse_bias<'a>(bwd: &Track, first: usize, out: &mut Outputs<'a>, weights: &mut [f64]) -> () {
+        let n = bwd.bias.len();
         for row in 0..out.bias.len() {
-            let (k, j) = (first + row, n - 1 - first - row);
-            let (sf, sb) = (fwd.bias_sigma[k], bwd.bias_sigma[j]);
+            let j = n - 1 - first - row;
+            let (sf, sb) = (out.bias_sigma[row], bwd.bias_sigma[j]);
             let (pf, pb) = (sf.map(|s| s * s), sb.map(|s| s * s));
             if let Some(weight) = weights.get_mut(row) {
                 let (vf, vb) = (pf[0] + pf[1] + pf[2], pb[0] + pb[1] + pb[2]);
                 *weight = if vf + vb > 0.0 { vf / (vf + vb) } else { 0.5 };
             }
-            let (bf, bb) = (fwd.bias[k], bwd.bias[j]);
+            let (bf, bb) = (out.bias[row], bwd.bias[j]);
             let (mut fused, mut sigma) = ([0.0; 3], [0.0; 3]);
             for i in 0..3 {
                 let sum = pf[i] + pb[i];
@@ -218,8 +270,8 @@ crate::simd_dispatch! {
             }
             out.bias[row] = fused;
             out.bias_sigma[row] = sigma;
-            out.rest[row] = fwd.rest[k] || bwd.rest[j];
-            out.mag_disturbed[row] = fwd.mag_disturbed[k] && bwd.mag_disturbed[j];
+            out.rest[row] = out.rest[row] || bwd.rest[j];
+            out.mag_disturbed[row] = out.mag_disturbed[row] && bwd.mag_disturbed[j];
         }
     }
 }
@@ -229,12 +281,14 @@ crate::simd_dispatch! {
     /// given): strapdown from `q0` with the fused `bias` into the almost-inertial frame `I`, the
     /// specific force there filtered by the Butterworth forward and then backward (zero phase,
     /// `|H|²`), the inclination the smallest rotation taking it to up, applied as the backward
-    /// pass reaches each sample. The heading is the strapdown's (its start's).
+    /// pass reaches each sample. The heading is the strapdown's (its start's). `a_i` (n rows) holds
+    /// the forward filter's output between the passes.
     fn zero_phase<'a>(
         p: &RobustParams,
         q0: UnitQuaternion<f64>,
         inputs: &Inputs<'a>,
         bias: &[[f64; 3]],
+        a_i: &mut [[f64; 3]],
         out: &mut [[f64; 4]],
         world: Option<World>,
     ) -> () {
@@ -243,7 +297,6 @@ crate::simd_dispatch! {
         let mut q = q0;
         // Strapdown as the online step (sample k integrates (t_k−1, t_k] with bias k), and the
         // specific force in I filtered forward.
-        let mut a_i = Vec::with_capacity(n);
         let mut coefs = Coefs::new(p, dt(1.min(n - 1)));
         let (mut s1, mut s2) = coefs.steady(q * row(&inputs.accel[0]));
         for k in 0..n {
@@ -252,15 +305,15 @@ crate::simd_dispatch! {
                 coefs = coefs.for_dt(p, dt(k));
             }
             out[k] = q.coords.into();
-            a_i.push(coefs.butter(q * row(&inputs.accel[k]), &mut s1, &mut s2));
+            a_i[k] = coefs.butter(q * row(&inputs.accel[k]), &mut s1, &mut s2).into();
         }
         // Backward over the forward output: sample k is reached over (t_k, t_k+1].
-        (s1, s2) = coefs.steady(a_i[n - 1]);
+        (s1, s2) = coefs.steady(row(&a_i[n - 1]));
         for k in (0..n).rev() {
             if k + 1 < n {
                 coefs = coefs.for_dt(p, dt(k + 1));
             }
-            let a = coefs.butter(a_i[k], &mut s1, &mut s2);
+            let a = coefs.butter(row(&a_i[k]), &mut s1, &mut s2);
             let mut q = quat(&out[k]);
             if let Some(tilt) = to_up(&a) {
                 q = tilt * q;
@@ -276,7 +329,7 @@ crate::simd_dispatch! {
     /// (internal ENU) in place of each pass's own inclination: forward from `start`, or
     /// (`backward`) from the last sample on an uninitialised state, each interval with the gyro
     /// sample the online pass would integrate it with. The heading after each sample into `out`
-    /// (its pair and its angle), in forward order.
+    /// (its pair `(cos ψ/2, sin ψ/2)` and its angle ψ), in forward order.
     fn heading_pass<'a>(
         p: &RobustParams,
         start: &RobustState,
@@ -284,7 +337,7 @@ crate::simd_dispatch! {
         mags: &[[f64; 3]],
         base: &[[f64; 4]],
         backward: bool,
-        out: &mut [(Vector2<f64>, f64)],
+        out: &mut [[f64; 3]],
     ) -> () {
         let n = base.len();
         let mut s = *start;
@@ -308,7 +361,7 @@ crate::simd_dispatch! {
             if let Some((gain, err)) = magnetometer(p, &coefs, &mut s, &m_e, &gyro) {
                 turn_heading(&mut s, gain * err);
             }
-            out[k] = (s.heading, s.heading_angle);
+            out[k] = [s.heading.x, s.heading.y, s.heading_angle];
         }
     }
 }
@@ -321,15 +374,73 @@ crate::simd_dispatch! {
     /// `Rz(h_b) ⊗ Rz(h_f)⁻¹`, the same to rounding).
     fn fuse_headings(
         world: World,
-        fwd: &[(Vector2<f64>, f64)],
-        bwd: &[(Vector2<f64>, f64)],
+        fwd: &[[f64; 3]],
+        bwd: &[[f64; 3]],
         weights: &[f64],
         out: &mut [[f64; 4]],
     ) -> () {
         for (k, o) in out.iter_mut().enumerate() {
-            let ((pair, angle_f), (_, angle_b)) = (fwd[k], bwd[k]);
+            let ([c, s, angle_f], angle_b) = (fwd[k], bwd[k][2]);
+            let pair = Vector2::new(c, s);
             let delta = wrap(angle_b - angle_f);
             *o = to_world(world, &yawed(&turn(&pair, weights[k] * delta), &quat(o))).coords.into();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backward pass fed in parts of [`REVERSED_PART`] rows gives the track of one run over
+    /// the whole reversed record, bit for bit, 6D and 9D, on a record of two and a half parts.
+    #[test]
+    fn backward_pass_in_parts_equals_one_run() -> Result<()> {
+        let n = 2 * REVERSED_PART + REVERSED_PART / 2;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 / 285.714).collect();
+        let wave = |s: f64, a: [f64; 3], w: [f64; 3]| [0, 1, 2].map(|i| a[i] * (w[i] * s).sin());
+        let gyro: Vec<[f64; 3]> = t.iter().map(|&s| wave(s, [0.3, 0.2, 0.5], [1.1, 0.7, 1.3])).collect();
+        let accel: Vec<[f64; 3]> = t
+            .iter()
+            .map(|&s| {
+                let a = wave(s, [0.5, 0.4, 0.2], [0.9, 0.3, 1.7]);
+                [a[0], a[1], 9.81 + a[2]]
+            })
+            .collect();
+        let mags: Vec<[f64; 3]> = t
+            .iter()
+            .map(|&s| [20.0 * (0.2 * s).cos(), 20.0 * (0.2 * s).sin(), -40.0])
+            .collect();
+        let f = Robust::new(RobustParams::default(), World::Enu)?;
+        for mag in [None, Some(&mags[..])] {
+            let inputs = Inputs {
+                t: &t,
+                gyro: &gyro,
+                accel: &accel,
+                mag,
+            };
+            let mut parts = unposed(n);
+            f.run_reversed(&inputs, &mut parts)?;
+            let mut whole = Reversed::default();
+            whole.fill(&inputs, 0..n);
+            let mut one = unposed(n);
+            let mut out = Outputs {
+                q: &mut [],
+                bias: &mut one.bias,
+                bias_sigma: &mut one.bias_sigma,
+                rest: &mut one.rest,
+                mag_disturbed: &mut one.mag_disturbed,
+            };
+            f.run_checked(
+                &mut RobustState::default(),
+                &whole.inputs(),
+                (0, false),
+                false,
+                &mut out,
+            )?;
+            assert!(parts == one, "9D: {}", mag.is_some());
+            assert!(one.bias.iter().any(|b| *b != [0.0; 3]), "the pass ran");
+        }
+        Ok(())
     }
 }
