@@ -11,7 +11,7 @@ export PATH := $(VIRTUAL_ENV)/bin:$(PATH)
 # The glue crate's build script (run by clippy too) must see the venv's interpreter.
 export PYO3_PYTHON := $(abspath $(VPY))
 
-.PHONY: demo test build lint rust-test stability-fast py-test bench lock clean stability fuzz
+.PHONY: demo test build lint rust-test stability-fast py-test path-test bench lock clean stability fuzz
 
 # Attitude steps of the stability tests (crates/imukit/tests/stability*.rs); the rotation-matrix,
 # covariance and memory runs use a tenth. Issue 9's lengths in `make stability`, a tenth in
@@ -81,7 +81,30 @@ stability:
 py-test: build
 	$(VPY) -m pytest --doctest-modules --doctest-glob=README.md python/imukit README.md tests
 
-test: lint rust-test py-test
+# Issue 20: the agreement (GTSAM, Monte Carlo), accuracy, stability and fuzz-regression suites once
+# more on every instruction-set path below the best one this CPU has, forced with IMUKIT_SIMD (the
+# runs above take the best); tests/test_simd_paths.py compares the paths' results directly.
+PATH_RUST_TESTS := --test preint --test preint_batch --test preint_midpoint --test preint_windows \
+	--test propagate --test filters --test robust --test attitude --test allan --test sim \
+	--test stability --test stability_fuzz_regressions
+PATH_PY_TESTS := tests/test_preint_gtsam.py tests/test_propagate_monte_carlo.py tests/test_preint.py \
+	tests/test_preint_lever_noise.py tests/test_preint_earth.py tests/test_propagate_earth.py \
+	tests/test_strapdown.py tests/test_attitude.py tests/test_filters.py tests/test_filters_pinned.py \
+	tests/test_filters_motion.py tests/test_robust.py tests/test_broad_accuracy.py tests/test_filters_data.py \
+	tests/test_attitude_euroc.py tests/test_preint_euroc.py tests/test_strapdown_euroc.py \
+	tests/test_noise_allan.py tests/test_sim.py tests/test_fuzz_regressions.py tests/test_extreme_values.py
+LOWER_PATHS = $(VPY) -c 'import imukit as ik; o = ["baseline", "avx2", "avx512"]; print(*o[: o.index(ik.simd_path())])'
+
+path-test: build
+	@paths=$$($(LOWER_PATHS)) || exit 1; \
+	if [ -z "$$paths" ]; then echo "path-test: $$($(VPY) -c 'import imukit as ik; print(ik.simd_path())') is the only path here"; fi; \
+	for p in $$paths; do \
+		echo "IMUKIT_SIMD=$$p: the suites on the $$p path"; \
+		IMUKIT_SIMD=$$p cargo test --locked -p imukit $(PATH_RUST_TESTS) || exit 1; \
+		IMUKIT_SIMD=$$p $(VPY) -m pytest -q -p no:cacheprovider $(PATH_PY_TESTS) || exit 1; \
+	done
+
+test: lint rust-test py-test path-test
 
 # cargo-fuzz needs the nightly toolchain (rustup toolchain install nightly). Each target runs
 # FUZZ_SECONDS; a crash stops `make` with the input under fuzz/artifacts/<target>/.
