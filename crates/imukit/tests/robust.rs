@@ -1,5 +1,6 @@
 //! `Robust` on simulated motion: accelerations do not tilt it, the bias is estimated with a
-//! consistent σ, a disturbed field changes neither inclination nor heading, streaming = batch,
+//! consistent σ, a disturbed field (norm or dip) changes neither inclination nor heading, its
+//! rejection is bounded in time, a new homogeneous field is accepted, streaming = batch,
 //! save / restore / resume, NED = ENU rotated, the smoother deterministic and finite.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
@@ -439,6 +440,128 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
         let e = (heading(&quat(&a, k)) - heading(&clean.truth[k])).to_degrees();
         assert!(e.abs() < 1.0, "{e}");
     }
+}
+
+/// Heading error of row `k` against the truth, wrapped to (−180°, 180°] [°].
+fn heading_error(out: &RobustTrack, r: &Record, k: usize) -> f64 {
+    let d = (heading(&quat(out, k)) - heading(&r.truth[k])).to_degrees();
+    (d + 180.0).rem_euclid(360.0) - 180.0
+}
+
+#[test]
+fn a_dip_disturbance_is_rejected() {
+    // From 20 s to 40 s the field keeps its norm but its dip falls from 63° to 29° (turned 0.6 rad
+    // about east) and its horizontal part turns 46°: only the dip test can reject it.
+    let disturbed = |t: f64| {
+        let f = Vector3::from(FIELD);
+        if (20.0..40.0).contains(&t) {
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 0.8) * (UnitQuaternion::from_euler_angles(0.6, 0.0, 0.0) * f)
+        } else {
+            f
+        }
+    };
+    let clean = turning_record(60.0, Vector3::zeros(), 6);
+    let dist = simulate(
+        60.0,
+        tilted(),
+        turning,
+        |_| Vector3::zeros(),
+        disturbed,
+        Vector3::zeros(),
+        (0.003, 0.03, 6),
+    );
+    let (a, b) = (run(&filter(), &clean, true, false), run(&filter(), &dist, true, false));
+    let at = |s: f64| (s * RATE) as usize;
+    assert!(!b.mag_disturbed[at(15.0)] && b.mag_disturbed[at(25.0)] && b.mag_disturbed[at(39.0)]);
+    assert!(!b.mag_disturbed[at(50.0)], "the clean field is accepted again");
+    let mut head = 0.0f64;
+    for k in 0..clean.t.len() {
+        let d = (heading(&quat(&a, k)) - heading(&quat(&b, k))).to_degrees();
+        head = head.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
+    }
+    // Accepted, the turned field would pull the heading 46° (1 − e^−1 of it in 20 s: 29°).
+    assert!(head < 2.0, "heading {head}°");
+}
+
+#[test]
+fn rejection_is_bounded_in_time() {
+    // A still sensor; from 10 s on a disturbed field (1.5× the norm, turned 46°) for 100 s. It is
+    // rejected for `mag_max_rejection_s` (60 s), then used at `mag_slow_factor × tau_mag_s` (40 s).
+    let field = |t: f64| {
+        let f = Vector3::from(FIELD);
+        if t >= 10.0 {
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 0.8) * f * 1.5
+        } else {
+            f
+        }
+    };
+    let r = simulate(
+        110.0,
+        tilted(),
+        |_| Vector3::zeros(),
+        |_| Vector3::zeros(),
+        field,
+        Vector3::zeros(),
+        (0.003, 0.03, 7),
+    );
+    let out = run(&filter(), &r, true, false);
+    let at = |s: f64| (s * RATE) as usize;
+    assert!(
+        out.mag_disturbed[at(20.0)] && out.mag_disturbed[at(109.0)],
+        "flagged while it lasts"
+    );
+    let held = heading_error(&out, &r, at(69.0));
+    assert!(held.abs() < 1.0, "rejected for 60 s: heading error {held}° at 69 s");
+    // Used from 70 s at τ = 40 s: 1 − e^(−40/40) = 63% of the 46° turn by 110 s, i.e. 29°.
+    let end = heading_error(&out, &r, r.t.len() - 1);
+    assert!(
+        (end.abs() - 29.0).abs() < 3.0,
+        "then followed slowly: heading error {end}° at 110 s"
+    );
+}
+
+#[test]
+fn a_new_homogeneous_field_is_accepted_while_turning() {
+    // At 20 s the sensor enters a new homogeneous field (1.3× the norm, turned 30° about the
+    // vertical) and keeps turning at 0.58 rad/s (> 20 °/s): the candidate stays within the thresholds
+    // of itself for `mag_new_field_s` (20 s) and becomes the reference; the heading then follows it.
+    let omega = |t: f64| Vector3::new(0.3 * (0.5 * t).sin(), 0.3 * (0.5 * t).cos(), 0.5);
+    let turned = 30.0f64.to_radians();
+    let field = |t: f64| {
+        let f = Vector3::from(FIELD);
+        if t >= 20.0 {
+            UnitQuaternion::from_euler_angles(0.0, 0.0, turned) * f * 1.3
+        } else {
+            f
+        }
+    };
+    let r = simulate(
+        140.0,
+        tilted(),
+        omega,
+        |_| Vector3::zeros(),
+        field,
+        Vector3::zeros(),
+        (0.003, 0.03, 8),
+    );
+    let out = run(&filter(), &r, true, false);
+    let at = |s: f64| (s * RATE) as usize;
+    assert!(
+        !out.mag_disturbed[at(19.0)] && out.mag_disturbed[at(25.0)],
+        "first rejected"
+    );
+    assert!(
+        !out.mag_disturbed[at(45.0)..].iter().any(|&d| d),
+        "accepted within 25 s, and kept"
+    );
+    // North is now the new field's: 30° from the truth's, reached with τ = 20 s (98% after 80 s).
+    let end = heading_error(&out, &r, r.t.len() - 1);
+    assert!((end.abs() - 30.0).abs() < 2.0, "heading error {end}° at the end");
+    // The field never tilts the estimate.
+    let tilt = (0..r.t.len())
+        .map(|k| tilt_deg(&quat(&out, k), &r.truth[k]))
+        .fold(0.0, f64::max);
+    assert!(tilt < 1.0, "tilt {tilt}°");
 }
 
 #[test]
