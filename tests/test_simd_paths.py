@@ -1,8 +1,9 @@
 """Runtime CPU dispatch (``crates/imukit/src/simd.rs``): each instruction-set path, forced with
 ``IMUKIT_SIMD`` in a fresh process (the choice is made once per process), gives the baseline
 path's results to 1e-12 relative on the deltas, covariances, bias Jacobians and states of
-preintegrate (euler, midpoint, combined), propagate, integrate and integrate_attitude, and on the
-attitudes and biases of the filters (Mahony, Madgwick 6D / 9D; Robust online and offline, 6D / 9D). The paths
+preintegrate (euler, midpoint, combined, windows), propagate, integrate and integrate_attitude, on
+the attitudes and biases of the filters (Mahony, Madgwick 6D / 9D; Robust online and offline, 6D /
+9D), on Allan deviations and on sim.simulate's truth and readings (every sensor error on). The paths
 compute the same operations in the same order, so they agree bit for bit, except the preintegration
 step, whose AVX paths fuse its 3×3 block algebra into FMAs (one rounding where the baseline rounds
 twice; measured ≤ 3e-15 relative). 1e-12 is the stated tolerance (a reassociated sum of a vectorised
@@ -63,6 +64,15 @@ for scheme in ("midpoint", "rk4"):
 out["attitude"] = ik.integrate_attitude(t, gyro).as_quat()
 out["attitude_rk4"] = ik.integrate_attitude(t, gyro, scheme="rk4").as_quat()
 out["allan"] = ik.noise.allan_deviation(gyro, 200.0).deviation
+errors = ik.sim.SensorErrors(
+    matrix=[[1.001, 2e-4, 0.0], [0.0, 0.998, -1e-4], [3e-4, 0.0, 1.0005]],
+    turn_on_sigma=1e-3, gauss_markov_sigma=1e-3, gauss_markov_tau=30.0, range=4.0, resolution=1e-4,
+)
+sim_imu, sim_truth = ik.sim.simulate(
+    ik.sim.FigureEight(), rate=200.0, duration=100.0, noise=noise, bias=bias, gyro_errors=errors, seed=3
+)
+sim_rows = (sim_imu.gyro, sim_imu.accel, sim_truth.position, sim_truth.velocity, sim_truth.rotation.as_quat())
+out["simulate"] = np.concatenate(sim_rows, axis=1)
 mag = np.c_[20.0 * np.cos(0.2 * s), 20.0 * np.sin(0.2 * s), np.full(n, -40.0)] + 0.2 * rng.normal(size=(n, 3))
 for name, f in (("mahony", ik.filters.Mahony()), ("madgwick", ik.filters.Madgwick())):
     for dim, m in (("6d", None), ("9d", mag)):

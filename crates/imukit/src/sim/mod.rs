@@ -92,15 +92,7 @@ pub fn evaluate_cancellable(
         .enumerate()
         .map(|(c, (((((ts, p), v), q), w), a))| {
             cancel.check(0)?;
-            for (i, &tk) in ts.iter().enumerate() {
-                let x = motion.at(tk);
-                p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
-                v[3 * i..3 * i + 3].copy_from_slice(x.velocity.as_slice());
-                let quat = UnitQuaternion::from_rotation_matrix(&x.rotation);
-                q[4 * i..4 * i + 4].copy_from_slice(quat.coords.as_slice());
-                w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
-                a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
-            }
+            truth_rows(motion, gravity, ts, p, v, q, w, a);
             if [&*p, &*v, &*q, &*w, &*a].iter().all(|x| all_finite(x)) {
                 return Ok(None);
             }
@@ -117,6 +109,33 @@ pub fn evaluate_cancellable(
     match bad.into_iter().flatten().next() {
         Some(index) => Err(Error::NonFinite { index }.in_argument("trajectory")),
         None => Ok(()),
+    }
+}
+
+crate::simd_dispatch! {
+    /// One chunk of [`evaluate_cancellable`]: the truth at each stamp of `ts` into the rows of
+    /// position `p`, velocity `v`, rotation `q`, body rate `w` and specific force `a`, per
+    /// instruction-set path (the same operations on each: equal bit for bit).
+    #[allow(clippy::too_many_arguments)] // one chunk's five output rows
+    fn truth_rows(
+        motion: &Motion,
+        gravity: &Vector3<f64>,
+        ts: &[f64],
+        p: &mut [f64],
+        v: &mut [f64],
+        q: &mut [f64],
+        w: &mut [f64],
+        a: &mut [f64],
+    ) -> () {
+        for (i, &tk) in ts.iter().enumerate() {
+            let x = motion.at(tk);
+            p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
+            v[3 * i..3 * i + 3].copy_from_slice(x.velocity.as_slice());
+            let quat = UnitQuaternion::from_rotation_matrix(&x.rotation);
+            q[4 * i..4 * i + 4].copy_from_slice(quat.coords.as_slice());
+            w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
+            a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
+        }
     }
 }
 

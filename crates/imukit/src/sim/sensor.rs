@@ -243,24 +243,7 @@ pub fn measure_in_place_cancellable(
         .enumerate()
         .map(|(c, bias)| {
             cancel.check(0)?;
-            let (mut walk_rng, mut gm_rng) = (
-                stream(seed, triad, Process::Walk, c),
-                stream(seed, triad, Process::GaussMarkov, c),
-            );
-            let (mut w, mut g, mut decay) = (Vector3::zeros(), Vector3::zeros(), 1.0);
-            for (i, b) in bias.chunks_exact_mut(3).enumerate() {
-                b.copy_from_slice((w + g).as_slice());
-                let h = step(t, c * CHUNK + i);
-                if walk_on {
-                    w += normal3(&mut walk_rng) * (model.random_walk * h.sqrt());
-                }
-                if gm_on {
-                    let a = (-h / model.gauss_markov_tau).exp();
-                    g = g * a + normal3(&mut gm_rng) * (model.gauss_markov_sigma * (1.0 - a * a).sqrt());
-                    decay *= a;
-                }
-            }
-            Ok((Local { end: w, decay: 1.0 }, Local { end: g, decay }))
+            Ok(bias_chunk(t, model, (seed, triad), c, bias, (walk_on, gm_on)))
         })
         .collect::<Result<_>>()?;
 
@@ -273,38 +256,90 @@ pub fn measure_in_place_cancellable(
         g0 = g0 * gm.decay + gm.end;
     }
 
-    // Pass 3 (parallel): join the chunks, add the fixed bias and the white noise, form the readings
-    // (skipping the terms that are off: most simulations have neither scale errors nor limits).
-    let ideal_sensor = model.matrix == Matrix3::identity();
-    let clean = model.range == f64::INFINITY && model.resolution == 0.0;
-    let limit = |v: f64| quantise(v.clamp(-model.range, model.range), model.resolution);
+    // Pass 3 (parallel): join the chunks, add the fixed bias and the white noise, form the readings.
     bias_out
         .par_chunks_mut(3 * CHUNK)
         .zip(values.par_chunks_mut(3 * CHUNK))
         .enumerate()
         .try_for_each(|(c, (bias, readings))| {
             cancel.check(0)?;
-            let (w_start, g_start) = starts[c];
-            let mut white = stream(seed, triad, Process::White, c);
-            let mut decay = 1.0;
-            for (i, (b, u)) in bias.chunks_exact_mut(3).zip(readings.chunks_exact_mut(3)).enumerate() {
-                let h = step(t, c * CHUNK + i);
-                let b_k = Vector3::from_column_slice(b) + w_start + g_start * decay + fixed;
-                b.copy_from_slice(b_k.as_slice());
-                let ideal = Vector3::from_column_slice(u);
-                let scaled = if ideal_sensor { ideal } else { model.matrix * ideal };
-                let reading = scaled + b_k + normal3(&mut white) * (model.density / h.sqrt());
-                let reading = if clean { reading } else { reading.map(limit) };
-                u.copy_from_slice(reading.as_slice());
-                if gm_on {
-                    decay *= (-h / model.gauss_markov_tau).exp();
-                }
-            }
+            readings_chunk(t, model, (seed, triad, c), (starts[c], fixed, gm_on), bias, readings);
             Ok(())
         })?;
     match values.iter().position(|v| !v.is_finite()) {
         Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument(overflow_culprit(t, model))),
         None => Ok(()),
+    }
+}
+
+crate::simd_dispatch! {
+    /// Pass 1 of [`measure_in_place_cancellable`] on chunk `c` of the stream `(seed, triad)`: the
+    /// walk and Gauss–Markov recursions from zero (each where `on` says), into `bias`; the chunk's
+    /// end states and the Gauss–Markov decay over it. Per instruction-set path (the same
+    /// operations on each: equal bit for bit).
+    fn bias_chunk(
+        t: &[f64],
+        model: &SensorModel,
+        stream_of: (u64, u64),
+        c: usize,
+        bias: &mut [f64],
+        on: (bool, bool),
+    ) -> (Local, Local) {
+        let ((seed, triad), (walk_on, gm_on)) = (stream_of, on);
+        let (mut walk_rng, mut gm_rng) = (
+            stream(seed, triad, Process::Walk, c),
+            stream(seed, triad, Process::GaussMarkov, c),
+        );
+        let (mut w, mut g, mut decay) = (Vector3::zeros(), Vector3::zeros(), 1.0);
+        for (i, b) in bias.chunks_exact_mut(3).enumerate() {
+            b.copy_from_slice((w + g).as_slice());
+            let h = step(t, c * CHUNK + i);
+            if walk_on {
+                w += normal3(&mut walk_rng) * (model.random_walk * h.sqrt());
+            }
+            if gm_on {
+                let a = (-h / model.gauss_markov_tau).exp();
+                g = g * a + normal3(&mut gm_rng) * (model.gauss_markov_sigma * (1.0 - a * a).sqrt());
+                decay *= a;
+            }
+        }
+        (Local { end: w, decay: 1.0 }, Local { end: g, decay })
+    }
+}
+
+crate::simd_dispatch! {
+    /// Pass 3 of [`measure_in_place_cancellable`] on chunk `c` of the stream `(seed, triad)`: the
+    /// chunk's walk and Gauss–Markov states at its start and the fixed bias joined to `bias`, and
+    /// the readings formed in `readings` (the ideal values in, skipping the terms that are off:
+    /// most simulations have neither scale errors nor limits). Per instruction-set path (equal
+    /// bit for bit).
+    fn readings_chunk(
+        t: &[f64],
+        model: &SensorModel,
+        stream_of: (u64, u64, usize),
+        start: ((Vector3<f64>, Vector3<f64>), Vector3<f64>, bool),
+        bias: &mut [f64],
+        readings: &mut [f64],
+    ) -> () {
+        let ((seed, triad, c), ((w_start, g_start), fixed, gm_on)) = (stream_of, start);
+        let ideal_sensor = model.matrix == Matrix3::identity();
+        let clean = model.range == f64::INFINITY && model.resolution == 0.0;
+        let limit = |v: f64| quantise(v.clamp(-model.range, model.range), model.resolution);
+        let mut white = stream(seed, triad, Process::White, c);
+        let mut decay = 1.0;
+        for (i, (b, u)) in bias.chunks_exact_mut(3).zip(readings.chunks_exact_mut(3)).enumerate() {
+            let h = step(t, c * CHUNK + i);
+            let b_k = Vector3::from_column_slice(b) + w_start + g_start * decay + fixed;
+            b.copy_from_slice(b_k.as_slice());
+            let ideal = Vector3::from_column_slice(u);
+            let scaled = if ideal_sensor { ideal } else { model.matrix * ideal };
+            let reading = scaled + b_k + normal3(&mut white) * (model.density / h.sqrt());
+            let reading = if clean { reading } else { reading.map(limit) };
+            u.copy_from_slice(reading.as_slice());
+            if gm_on {
+                decay *= (-h / model.gauss_markov_tau).exp();
+            }
+        }
     }
 }
 
