@@ -259,29 +259,40 @@ fn sustained_acceleration_leaks_in_bounded_and_leaves() {
 /// Bias errors of 8 seeds × 6D / 9D: rests of `rest_s` seconds then 25 s of turning, five times;
 /// the error in the world (x, y horizontal, z vertical) at the end of the fifth rest, per run
 /// and axis, and how many of the σ checks (second half, every 5 s) have `|error| ≤ 2σ`.
-fn bias_errors(rest_s: f64) -> (Vec<[f64; 3]>, usize, usize) {
-    let deg = 1f64.to_radians();
-    let bias = Vector3::new(1.0, -1.0, 1.0) * deg;
+/// The bias tests' gyro bias, 1 °/s per axis [rad/s].
+fn rest_turn_bias() -> Vector3<f64> {
+    Vector3::new(1.0, -1.0, 1.0) * 1f64.to_radians()
+}
+
+/// The bias tests' record: rests of `rest_s` seconds then 25 s of turning, four times, and a last
+/// rest; gyro bias [`rest_turn_bias`], noise 0.003 rad/s and 0.03 m/s² per sample.
+fn rest_turn_record(rest_s: f64, seed: u64) -> Record {
     let period = rest_s + 25.0;
-    let omega = |t: f64| {
+    let omega = move |t: f64| {
         if t % period < rest_s {
             Vector3::zeros()
         } else {
             turning(t)
         }
     };
+    simulate(
+        4.0 * period + rest_s,
+        tilted(),
+        omega,
+        |_| Vector3::zeros(),
+        |_| FIELD.into(),
+        rest_turn_bias(),
+        (0.003, 0.03, seed),
+    )
+}
+
+fn bias_errors(rest_s: f64) -> (Vec<[f64; 3]>, usize, usize) {
+    let deg = 1f64.to_radians();
+    let bias = rest_turn_bias();
     let (mut errors, mut covered, mut total) = (Vec::new(), 0, 0);
     for nine in [false, true] {
         for seed in 0..8 {
-            let r = simulate(
-                4.0 * period + rest_s,
-                tilted(),
-                omega,
-                |_| Vector3::zeros(),
-                |_| FIELD.into(),
-                bias,
-                (0.003, 0.03, seed),
-            );
+            let r = rest_turn_record(rest_s, seed);
             let out = run(&filter(), &r, nine, false);
             let k = r.t.len() - 10; // 0.1 s before the end of the fifth rest
             let err = r.truth[k] * (Vector3::from(out.bias[k]) - bias) / deg;
@@ -772,33 +783,17 @@ fn bias_sigma_is_consistent_when_the_rest_noise_matches_the_sensor() {
     // of rests 2–5 (16 seeds × 6D/9D × 3 axes) have an RMS near 1. Measured 0.84; with σ_rest
     // halved 1.80, doubled 0.40, so a covariance doubled (RMS / √2 = 0.59) or halved fails, and a
     // zero σ (z infinite) too.
-    let deg = 1f64.to_radians();
-    let bias = Vector3::new(1.0, -1.0, 1.0) * deg;
+    let bias = rest_turn_bias();
     let params = RobustParams {
         bias_sigma_rest_rad_s: 0.003 / RATE.sqrt(),
         ..RobustParams::default()
     };
     let f = Robust::new(params, World::Enu).unwrap();
     let (rest_s, period) = (10.0, 35.0);
-    let omega = |t: f64| {
-        if t % period < rest_s {
-            Vector3::zeros()
-        } else {
-            turning(t)
-        }
-    };
     let mut z2 = Vec::new();
     for nine in [false, true] {
         for seed in 0..16 {
-            let r = simulate(
-                4.0 * period + rest_s,
-                tilted(),
-                omega,
-                |_| Vector3::zeros(),
-                |_| FIELD.into(),
-                bias,
-                (0.003, 0.03, seed),
-            );
+            let r = rest_turn_record(rest_s, seed);
             let out = run(&f, &r, nine, false);
             for cycle in 1..5 {
                 let k = ((f64::from(cycle) * period + rest_s - 0.1) * RATE) as usize;
