@@ -421,26 +421,15 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
     };
     for offline in [false, true] {
         let clean = turning_record(60.0, Vector3::zeros(), 4);
-        let dist = simulate(
-            60.0,
-            tilted(),
-            turning,
-            |_| Vector3::zeros(),
-            disturbed,
-            Vector3::zeros(),
-            (0.003, 0.03, 4),
-        );
+        let dist = turning_in_field(60.0, disturbed, 4);
         let (a, b) = (
             run(&filter(), &clean, true, offline),
             run(&filter(), &dist, true, offline),
         );
-        let (mut incl, mut head) = (0.0f64, 0.0f64);
-        for k in 0..clean.t.len() {
-            let (qa, qb) = (quat(&a, k), quat(&b, k));
-            incl = incl.max(tilt_deg(&qa, &qb));
-            let d = (heading(&qa) - heading(&qb)).to_degrees();
-            head = head.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
-        }
+        let incl = (0..clean.t.len())
+            .map(|k| tilt_deg(&quat(&a, k), &quat(&b, k)))
+            .fold(0.0, f64::max);
+        let head = largest_heading_difference(&a, &b);
         // The smoother fuses two bias estimates, each of which saw the disturbance differently.
         let bound = if offline { 0.2 } else { 0.1 };
         assert!(incl < bound, "offline {offline}: inclination {incl}°");
@@ -453,10 +442,29 @@ fn magnetic_disturbance_changes_neither_inclination_nor_heading() {
     }
 }
 
-/// Heading error of row `k` against the truth, wrapped to (−180°, 180°] [°].
+/// Heading error of row `k` against the truth, wrapped to [−180°, 180°) [°].
 fn heading_error(out: &RobustTrack, r: &Record, k: usize) -> f64 {
-    let d = (heading(&quat(out, k)) - heading(&r.truth[k])).to_degrees();
-    (d + 180.0).rem_euclid(360.0) - 180.0
+    wrap_pi(heading(&quat(out, k)) - heading(&r.truth[k])).to_degrees()
+}
+
+/// The largest heading difference between two runs' rows, wrapped [°].
+fn largest_heading_difference(a: &RobustTrack, b: &RobustTrack) -> f64 {
+    (0..a.q.len())
+        .map(|k| wrap_pi(heading(&quat(a, k)) - heading(&quat(b, k))).to_degrees().abs())
+        .fold(0.0, f64::max)
+}
+
+/// Turning as [`turning_record`] (no bias) in the world field `field(t)`.
+fn turning_in_field(seconds: f64, field: impl Fn(f64) -> Vector3<f64>, seed: u64) -> Record {
+    simulate(
+        seconds,
+        tilted(),
+        turning,
+        |_| Vector3::zeros(),
+        field,
+        Vector3::zeros(),
+        (0.003, 0.03, seed),
+    )
 }
 
 #[test]
@@ -472,24 +480,12 @@ fn a_dip_disturbance_is_rejected() {
         }
     };
     let clean = turning_record(60.0, Vector3::zeros(), 6);
-    let dist = simulate(
-        60.0,
-        tilted(),
-        turning,
-        |_| Vector3::zeros(),
-        disturbed,
-        Vector3::zeros(),
-        (0.003, 0.03, 6),
-    );
+    let dist = turning_in_field(60.0, disturbed, 6);
     let (a, b) = (run(&filter(), &clean, true, false), run(&filter(), &dist, true, false));
     let at = |s: f64| (s * RATE) as usize;
     assert!(!b.mag_disturbed[at(15.0)] && b.mag_disturbed[at(25.0)] && b.mag_disturbed[at(39.0)]);
     assert!(!b.mag_disturbed[at(50.0)], "the clean field is accepted again");
-    let mut head = 0.0f64;
-    for k in 0..clean.t.len() {
-        let d = (heading(&quat(&a, k)) - heading(&quat(&b, k))).to_degrees();
-        head = head.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
-    }
+    let head = largest_heading_difference(&a, &b);
     // Accepted, the turned field would pull the heading 46° (1 − e^−1 of it in 20 s: 29°).
     assert!(head < 2.0, "heading {head}°");
 }
