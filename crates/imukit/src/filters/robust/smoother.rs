@@ -157,8 +157,8 @@ impl Robust {
         } else {
             initial_attitude(World::Enu, &row(&inputs.accel[0]), None)
         };
-        // The backward track is dead once fused: its rows, 24 B per sample each, are the second
-        // stage's scratch (fresh pages cost more than the passes that fill them).
+        // The backward track is dead once fused: its two rows of 24 B per sample are the second
+        // stage's scratch, pages already mapped (fresh ones fault on first write, `pages`).
         let Track {
             bias: scratch_a,
             bias_sigma: scratch_b,
