@@ -97,7 +97,7 @@ LOWER_PATHS = $(VPY) -c 'import imukit as ik; o = ["baseline", "avx2", "avx512"]
 
 path-test: build
 	@paths=$$($(LOWER_PATHS)) || exit 1; \
-	if [ -z "$$paths" ]; then echo "path-test: $$($(VPY) -c 'import imukit as ik; print(ik.simd_path())') is the only path here"; fi; \
+	if [ -z "$$paths" ]; then echo "path-test: the path in use, $$($(VPY) -c 'import imukit as ik; print(ik.simd_path())'), has no path below it"; fi; \
 	for p in $$paths; do \
 		echo "IMUKIT_SIMD=$$p: the suites on the $$p path"; \
 		IMUKIT_SIMD=$$p cargo test --locked -p imukit $(PATH_RUST_TESTS) || exit 1; \
