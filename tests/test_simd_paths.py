@@ -2,7 +2,8 @@
 ``IMUKIT_SIMD`` in a fresh process (the choice is made once per process), gives the baseline
 path's results to 1e-12 relative (per quantity: each column of a table of samples, each matrix of a
 stack) on the deltas, covariances, bias Jacobians and states of
-preintegrate (euler, midpoint, combined, windows), propagate, integrate and integrate_attitude, on
+preintegrate (euler, midpoint, combined, windows, clipped samples), propagate and integrate (also
+in a rotating local-level frame, with and without transport), integrate_attitude, on
 the attitudes and biases of the filters (Mahony, Madgwick 6D / 9D; Robust online and offline, 6D /
 9D), on Allan deviations and on sim.simulate's truth and readings (every sensor error on). The paths
 compute the same operations in the same order, so they agree bit for bit, except the preintegration
@@ -62,6 +63,24 @@ out["propagate_position"] = prop.position
 for scheme in ("midpoint", "rk4"):
     traj = ik.integrate(imu, initial=initial, bias=bias, scheme=scheme)
     out["integrate_" + scheme] = np.c_[traj.position, traj.velocity]
+traj = ik.integrate(imu, initial=initial, bias=bias, scheme="lie_euler")
+out["integrate_lie_euler"] = np.c_[traj.position, traj.velocity]
+# The rotating-world loops; a frame that follows the vehicle starts at its own (latitude, 0, height).
+at = ik.NavState([0.7, 0.0, 120.0], initial.velocity, initial.rotation)
+for transport in (False, True):
+    frame = ik.LocalLevel(0.7, 120.0, transport=transport)
+    traj = ik.integrate(imu, initial=at, bias=bias, frame=frame)
+    out[f"integrate_earth_{transport}"] = np.c_[traj.position, traj.velocity]
+    prop = ik.propagate(
+        imu, initial=at, covariance=np.eye(15) * 1e-4, noise=noise, bias=bias, covariance_every=997, frame=frame
+    )
+    out[f"propagate_earth_{transport}"] = prop.covariance
+clipped = ik.ImuData(t, np.clip(gyro, -1.2, 1.2), np.clip(accel, -10.5, 10.5), gyro_range=1.2, accel_range=10.5)
+p = ik.preintegrate(clipped, noise=noise, bias=bias)
+out["preintegrate_clipped_deltas"] = np.r_[p.delta_velocity, p.delta_position]
+out["preintegrate_clipped_covariance"] = p.covariance
+out["allan_1"] = ik.noise.allan_deviation(gyro[:, 0], 200.0).deviation
+out["allan_2"] = ik.noise.allan_deviation(gyro[:, :2], 200.0).deviation
 out["attitude"] = ik.integrate_attitude(t, gyro).as_quat()
 out["attitude_rk4"] = ik.integrate_attitude(t, gyro, scheme="rk4").as_quat()
 out["allan"] = ik.noise.allan_deviation(gyro, 200.0).deviation
