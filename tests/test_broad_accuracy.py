@@ -80,13 +80,13 @@ MEASURED = {
         "magnets": (1.28, 6.89),
     },
     "Madgwick": {
-        "rotation": (0.73, 2.93),
-        "translation": (0.77, 1.63),
-        "tapping+vibration": (0.73, 4.42),
-        "magnets": (1.02, 2.00),
+        "rotation": (0.90, 2.91),
+        "translation": (0.46, 1.61),
+        "tapping+vibration": (0.52, 4.39),
+        "magnets": (0.84, 1.93),
     },
 }
-MEAN = {"Mahony": (0.90, 3.96), "Madgwick": (0.81, 2.62)}  # over the 12 trials
+MEAN = {"Mahony": (0.90, 3.96), "Madgwick": (0.71, 2.59)}  # over the 12 trials
 
 
 @pytest.fixture(scope="module")

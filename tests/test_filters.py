@@ -402,6 +402,9 @@ def test_bad_input_names_argument() -> None:
         Mahony(kp=-1.0)
     with pytest.raises(ik.ParameterError, match=r"^beta: "):
         Madgwick(beta=float("nan"))
+    for bad in (-0.01, 1.5, float("inf")):
+        with pytest.raises(ik.ParameterError, match=r"^full_rate_angle_rad: .*\[0, 1\]"):
+            Madgwick(full_rate_angle_rad=bad)
     with pytest.raises(ik.ParameterError, match=r"^world: "):
         Mahony(world="NWU")
     with pytest.raises(ik.ParameterError, match=r"^acc_rejection.angle: "):

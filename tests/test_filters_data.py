@@ -118,7 +118,7 @@ DOCUMENTED = {
     MagRejection: {"norm_fraction": 0.1, "dip_rad": math.radians(10.0), "recovery_s": 10.0},
     RestDetection: {"gyro": 0.05, "accel": 1.0, "duration_s": 1.0, "tau_s": 1.0, "max_bias": 0.1},
     _core.MahonyGains: {"kp": 0.3, "ki": 0.01},
-    _core.MadgwickGains: {"beta": 0.041},
+    _core.MadgwickGains: {"beta": 0.035, "full_rate_angle_rad": 0.08},
 }
 
 
@@ -139,7 +139,7 @@ def test_filter_keyword_defaults_come_from_the_core() -> None:
     assert core.acc_lowpass == AccelLowPass()
     for f in (Mahony(), Madgwick()):
         assert f.options == core and (f.world, f.gravity) == ("ENU", 9.81)
-    assert (Mahony().kp, Mahony().ki, Madgwick().beta) == (0.3, 0.01, 0.041)
+    assert (Mahony().kp, Mahony().ki, Madgwick().beta, Madgwick().full_rate_angle_rad) == (0.3, 0.01, 0.035, 0.08)
     # Switching an option off is None; a plain tuple of the fields is still an option.
     assert Mahony(gain_ramp=None).options.gain_ramp is None
     assert Mahony(gain_ramp=(1.0, 2.0)).options.gain_ramp == GainRamp(1.0, 2.0)  # type: ignore[arg-type]

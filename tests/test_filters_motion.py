@@ -7,6 +7,7 @@ Trajectories are analytic; the gyro is the exact body-rate increment between sam
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,40 +20,8 @@ from imukit.filters import AccelLowPass, AccelRejection, Madgwick, Mahony
 
 XIO = Path(__file__).resolve().parents[2] / "shared" / "data" / "xio_fusion_example" / "sensor_data.csv"
 
-G = 9.81
-RATE = 100.0
-
-
-def imu_from(t: np.ndarray, rot: Rotation, accel_world: np.ndarray) -> ik.ImuData:
-    """The IMU of a body at ``rot`` (``R_wb``, ENU) accelerating by ``accel_world`` [m/s²]."""
-    gyro = np.zeros((len(t), 3))
-    gyro[1:] = (rot[:-1].inv() * rot[1:]).as_rotvec() * RATE
-    return ik.ImuData(t, gyro, rot.inv().apply(accel_world + np.array([0.0, 0.0, G])))
-
-
-def tilt_deg(est: Rotation, truth: Rotation) -> np.ndarray:
-    """Angle between estimated and true up, in body axes [°] (heading does not enter)."""
-    a, b = est.inv().apply([0.0, 0.0, 1.0]), truth.inv().apply([0.0, 0.0, 1.0])
-    return np.degrees(np.arccos(np.clip((a * b).sum(axis=1), -1.0, 1.0)))
-
-
-def turning(t: np.ndarray) -> Rotation:
-    """A slow yaw turn with roll and pitch swinging by ±0.2 and ±0.15 rad."""
-    return Rotation.from_euler("zyx", np.c_[0.3 * t, 0.15 * np.sin(0.4 * t), 0.2 * np.sin(0.7 * t)])
-
-
-def sustained_then_figure_eight() -> tuple[ik.ImuData, Rotation, np.ndarray]:
-    """60 s: 10 s still(ish), 5 m/s² along world x for 10 s, 10 s coasting, a horizontal
-    figure-eight with 3 m/s² peaks on each axis (period 3 s: 0.68 m across) for 25 s, rest."""
-    t = np.arange(int(60 * RATE)) / RATE
-    acc = np.zeros((len(t), 3))
-    acc[(t >= 10.0) & (t < 20.0), 0] = 5.0
-    eight = (t >= 30.0) & (t < 55.0)
-    w = 2.0 * np.pi / 3.0
-    acc[eight, 0] = -3.0 * np.sin(w * (t[eight] - 30.0))
-    acc[eight, 1] = -3.0 * np.sin(2.0 * w * (t[eight] - 30.0))
-    rot = turning(t)
-    return imu_from(t, rot, acc), rot, t
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+from accel_scenario import RATE, G, imu_from, sustained_then_figure_eight, tilt_deg, turning  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -75,18 +44,19 @@ def test_mahony_holds_tilt_under_sustained_and_periodic_acceleration(
     assert textbook[eight].max() > 3.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="Madgwick's normalised step turns the estimate at 2β = 4.7°/s whatever the gap, so the "
-    "gap to the low-passed vector (27° (1 − (1 + t) e^−t) under 5 m/s²) reaches the 3° gate only "
-    "with the estimate ≈ 5° over: 5.5° sustained, 5.6° figure-eight (docs/filters.md, Limits)",
-)
 def test_madgwick_holds_tilt_under_sustained_and_periodic_acceleration(
     accelerating: tuple[ik.ImuData, Rotation, np.ndarray],
 ) -> None:
     imu, truth, t = accelerating
     err = tilt_deg(Madgwick().run(imu).rotation, truth)
-    assert err[t >= 10.0].max() < 2.0, err[t >= 10.0].max()
+    sustained, eight = (t >= 10.0) & (t < 30.0), t >= 30.0
+    # measured 1.65° and 1.75° (docs/filters.md)
+    assert err[sustained].max() < 2.0, err[sustained].max()
+    assert err[eight].max() < 2.0, err[eight].max()
+    # and the test can fail: Madgwick's normalised step (θ₀ = 0, same β) turns the estimate at 2β
+    # whatever the gap, so it follows the leaning low-passed vector until the 3° gate: 4.6° / 5.3°
+    textbook = tilt_deg(Madgwick(full_rate_angle_rad=0.0).run(imu).rotation, truth)
+    assert textbook[sustained].max() > 4.0 and textbook[eight].max() > 4.0
 
 
 def test_low_pass_carries_gravity_through_rotation() -> None:
@@ -184,7 +154,9 @@ def test_a_steady_turn_is_not_taken_for_a_bias() -> None:
 @requires_euroc
 def test_euroc_mav_holds_inclination_at_the_defaults() -> None:
     """The EuRoC MAV excerpt (6D against its ground truth): gyro bias 0.08 rad/s, rotor vibration.
-    Measured 4.93° (Mahony) and 3.02° (Madgwick); the former defaults 7.8° / 8.1°, vqf's VQF 6.4°.
+    Measured 4.93° (Mahony) and 3.74° (Madgwick; 3.02° with the textbook step, β = 0.041, θ₀ = 0,
+    before 2026-12-06: its floor corrects a small gap more slowly on the drone's sustained
+    accelerations); the former defaults 7.8° / 8.1°, vqf's VQF 6.4°.
     Without rest detection and the drift rule, the 3° angle gate held the drifting estimate on the
     gyro until each 15 s recovery: 30.5° / 26.5°."""
     import euroc
@@ -199,7 +171,7 @@ def test_euroc_mav_holds_inclination_at_the_defaults() -> None:
         return float(err.rmse(degrees=True).inclination)
 
     assert inclination(Mahony()) < 5.5
-    assert inclination(Madgwick()) < 3.5
+    assert inclination(Madgwick()) < 4.3
     stuck = AccelRejection(drift_s=1e9)
     assert inclination(Mahony(rest_detection=None, acc_rejection=stuck)) > 20.0
 

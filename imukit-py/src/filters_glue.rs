@@ -111,7 +111,7 @@ value_class!(
 );
 value_class!(
     /// Madgwick's gain (`imukit::filters::Madgwick`).
-    PyMadgwickGains = Madgwick as "MadgwickGains", errors "" { beta: "beta" }
+    PyMadgwickGains = Madgwick as "MadgwickGains", errors "" { beta: "beta", full_rate_angle_rad: "full_rate_angle_rad" }
 );
 
 /// The shared options (`imukit::filters::Options`); `None` switches an option off.

@@ -343,7 +343,8 @@ class MahonyGains:
 @final
 class MadgwickGains:
     beta: float
-    def __new__(cls, beta: _Number | None = None) -> MadgwickGains: ...
+    full_rate_angle_rad: float
+    def __new__(cls, beta: _Number | None = None, full_rate_angle_rad: _Number | None = None) -> MadgwickGains: ...
     def __getnewargs__(self) -> tuple[float, ...]: ...
 
 @final

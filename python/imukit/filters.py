@@ -385,26 +385,42 @@ class Mahony(_Filter):
 
 class Madgwick(_Filter):
     """Madgwick's gradient-descent filter (Madgwick 2010; Madgwick, Harrison & Vaidyanathan, ICORR
-    2011): ``q̇ = ½ q ⊗ (ω − b̂) − β ∇f/‖∇f‖``.
+    2011): ``q̇ = ½ q ⊗ (ω − b̂) − β ∇f/max(‖∇f‖, θ₀)``.
 
     Parameters
     ----------
     beta
-        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.041, tuned on BROAD:
+        ``β`` [1/s], the norm of the correction's quaternion rate (default 0.035, tuned on BROAD:
         docs/filters_accuracy.md). The bias estimate changes only through ``rest_detection``.
+    full_rate_angle_rad
+        ``θ₀`` [rad] (default 0.08): the step is ``2β ∇/max(‖∇‖, θ₀)``, proportional below a gap of
+        about ``θ₀`` and Madgwick's full rate ``2β`` above; applied when the step has no field term
+        (6D, or the field rejected). 0 is the textbook normalised step, which lets a sustained
+        acceleration tilt the estimate by 5.5° where the default holds 1.7° (docs/filters.md).
     world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection
         As for :class:`Mahony`.
     """
 
-    def __init__(self, *, beta: float = _MADGWICK.beta, **options: Any) -> None:
+    def __init__(
+        self,
+        *,
+        beta: float = _MADGWICK.beta,
+        full_rate_angle_rad: float = _MADGWICK.full_rate_angle_rad,
+        **options: Any,
+    ) -> None:
         super().__init__(**options)
-        self.gains = _core.MadgwickGains(_real(beta, "beta"))
+        self.gains = _core.MadgwickGains(_real(beta, "beta"), _real(full_rate_angle_rad, "full_rate_angle_rad"))
         self._setup(_core.MadgwickFilter(self.gains, self.options))
 
     @property
     def beta(self) -> float:
         """``β`` [1/s]."""
         return float(self.gains.beta)
+
+    @property
+    def full_rate_angle_rad(self) -> float:
+        """``θ₀`` [rad]: the gap below which the step is proportional."""
+        return float(self.gains.full_rate_angle_rad)
 
 
 from imukit._robust import Robust, RobustResult, RobustState  # noqa: E402  (builds on the helpers above)

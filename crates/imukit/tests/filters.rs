@@ -2,7 +2,7 @@
 //! inclination, 9D fully), streaming = batch, save/restore, errors naming the sample, no panics.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
-use imukit::filters::{Filter, Inputs, Law, Madgwick, Mahony, Options, State, World};
+use imukit::filters::{Filter, GainRamp, Inputs, Law, Madgwick, Mahony, Options, State, World};
 use imukit::Error;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
@@ -80,6 +80,60 @@ fn run<L: Law>(
 
 fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]))
+}
+
+/// The angle [rad] one Madgwick step turns an estimate tilted by `gap` about x, the sensor level
+/// and still (gyro zero, 0.01 s from the state's time), every shared stage off so that the law alone acts.
+fn madgwick_step(law: Madgwick, gap: f64, nine: bool) -> f64 {
+    let options = Options {
+        gain_ramp: GainRamp {
+            duration_s: 0.0,
+            factor: 1.0,
+        },
+        acc_lowpass: None,
+        acc_rejection: None,
+        mag_rejection: None,
+        rest_detection: None,
+        ..options(World::Enu)
+    };
+    let f = Filter::new(law, options).unwrap();
+    let start = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), gap);
+    let mut state = State::at(start, Vector3::zeros(), 0.0);
+    let (accel, mag) = readings(World::Enu, &Matrix3::identity());
+    let q = run(&f, &mut state, 2, accel, nine.then_some(mag));
+    assert!(
+        quaternion(&q[0]).angle_to(&start) < 1e-15,
+        "no step at the state's own time"
+    );
+    quaternion(&q[1]).angle_to(&start)
+}
+
+#[test]
+fn madgwick_step_is_proportional_below_the_floor_and_normalised_above() {
+    let (beta, dt) = (0.5, 0.01);
+    let floored = Madgwick {
+        beta,
+        full_rate_angle_rad: 0.1,
+    };
+    for gap in [1e-3_f64, 0.02, 0.05, 0.099, 0.101, 0.3, 1.0] {
+        // the step's rate 2β ‖s × v̂‖ / max(‖s × v̂‖, θ₀), ‖s × v̂‖ = sin(gap)
+        let expected = 2.0 * beta * dt * (gap.sin() / 0.1).min(1.0);
+        let got = madgwick_step(floored, gap, false);
+        assert!((got / expected - 1.0).abs() < 1e-6, "gap {gap}: {got} vs {expected}");
+        // Madgwick's own normalised step at every gap, and in 9D (the field's heading term is
+        // weighted by cos(dip): a shared floor would slow the heading correction)
+        let textbook = Madgwick {
+            full_rate_angle_rad: 0.0,
+            ..floored
+        };
+        for (law, nine) in [(textbook, false), (floored, true)] {
+            let got = madgwick_step(law, gap, nine);
+            assert!(
+                (got / (2.0 * beta * dt) - 1.0).abs() < 1e-6,
+                "gap {gap}, 9D {nine}: {got}"
+            );
+        }
+    }
 }
 
 #[test]

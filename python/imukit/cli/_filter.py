@@ -28,7 +28,7 @@ from imukit.filters import WORLDS, FilterResult, FilterState, Madgwick, Mahony
 from imukit.io import write_tum
 from imukit.state import Trajectory
 
-METHODS = {"mahony": Mahony, "madgwick": Madgwick}
+METHODS: dict[str, type[Mahony | Madgwick]] = {"mahony": Mahony, "madgwick": Madgwick}
 _DEFAULTS = _core.FilterOptions.default()  # the core's Options::default(), as the filters use
 CHUNK = 50_000  # samples per native call: a progress step, state carried across (FilterState)
 

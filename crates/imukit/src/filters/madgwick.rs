@@ -8,6 +8,16 @@
 //! measurements and normalised. `β` keeps Madgwick's meaning, the norm of the correction's
 //! quaternion rate, hence a correction rate of `2β` rad/s about `Σ s × v̂ / ‖Σ s × v̂‖`. The radial
 //! part of his 4-vector gradient (which his renormalisation removes) is left out of the norm.
+//!
+//! **Floor on the normalisation** (`full_rate_angle_rad`, `θ₀`): the step is
+//! `2β d/max(‖d‖, θ₀)`, `d = Σ s × v̂`. The normalised step turns the estimate at `2β` whatever the
+//! gap, so a slowly growing gap (the low-passed specific force leaning under a sustained
+//! acceleration) is followed at full rate until the acceleration gate's angle is reached, the
+//! estimate by then ≈ 5° over (docs/filters.md, Limits). Below `θ₀` the step is proportional
+//! (`2β/θ₀` per radian, as Mahony's `k_P`), so the gap grows to the gate while the estimate has
+//! moved less; above it Madgwick's law is unchanged. The floor applies when the step has no field
+//! term: the field's heading gap ψ enters `‖d‖` as `cos δ sin ψ` (dip δ, 67° on BROAD), so a shared
+//! floor slowed the heading correction (9D mean 2.62° → 2.98° on BROAD).
 
 use nalgebra::Vector3;
 
@@ -19,14 +29,23 @@ use crate::Result;
 pub struct Madgwick {
     /// `β` [1/s]: norm of the correction's quaternion rate (rotation rate `2β` rad/s).
     pub beta: f64,
+    /// `θ₀` [rad]: the floor on the norm of the descent direction `‖Σ s × v̂‖` (the sine of the
+    /// gap, for one measurement), so that below a gap of about `θ₀` the step is proportional,
+    /// `2β ‖Σ s × v̂‖ / θ₀`, and above it Madgwick's full rate `2β`; 0 is his normalised step at
+    /// every gap.
+    pub full_rate_angle_rad: f64,
 }
 
 impl Default for Madgwick {
-    /// `β = 0.041`: tuned on the 12 BROAD trials with the default options
-    /// (`bench/tune_filters.py`, `docs/filters_accuracy.md`), the value Madgwick's own experiments
-    /// (2010 / 2011) found best for MARG.
+    /// `β = 0.035`, `θ₀ = 0.08` rad: the best point of `bench/tune_filters.py`'s grid on the 12 BROAD
+    /// trials among those that hold a simulated 5 m/s² for 10 s and a 3 m/s² figure-eight below 2°
+    /// of tilt (the textbook `θ₀ = 0` does not: 5.6°); leave-one-group-out picks the same point in
+    /// every fold (docs/filters_accuracy.md).
     fn default() -> Self {
-        Self { beta: 0.041 }
+        Self {
+            beta: 0.035,
+            full_rate_angle_rad: 0.08,
+        }
     }
 }
 
@@ -34,7 +53,13 @@ impl Law for Madgwick {
     type Extra = ();
 
     fn validate(&self) -> Result<()> {
-        check("beta", self.beta, "finite and ≥ 0", |x| x >= 0.0)
+        check("beta", self.beta, "finite and ≥ 0", |x| x >= 0.0)?;
+        check(
+            "full_rate_angle_rad",
+            self.full_rate_angle_rad,
+            "finite, in [0, 1]",
+            |x| (0.0..=1.0).contains(&x),
+        )
     }
 
     /// `ω_c dt = 2β ρ g/‖g‖ dt`; the bias is left to rest detection.
@@ -49,6 +74,11 @@ impl Law for Madgwick {
             &step.up_pred,
             step.accel_dir.as_ref(),
             mag_dir.as_ref(),
+            if mag_dir.is_some() {
+                0.0
+            } else {
+                self.full_rate_angle_rad * self.full_rate_angle_rad
+            },
         ) * (2.0 * self.beta * step.gain * step.dt)
     }
 }
@@ -62,6 +92,7 @@ fn direction(
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,
     mag_dir: Option<&Vector3<f64>>,
+    floor2: f64,
 ) -> Vector3<f64> {
     let mut d = Vector3::zeros();
     if let Some(s) = accel_dir {
@@ -74,7 +105,7 @@ fn direction(
         // square root instead of after it (the step's dependency chain; the same to rounding).
         d += m.cross(north_pred) * horizontal + m.cross(up_pred) * vertical;
     }
-    let n2 = d.norm_squared();
+    let n2 = d.norm_squared().max(floor2);
     if n2 > 1e-24 {
         over_norm(&d, n2)
     } else {
