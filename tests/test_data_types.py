@@ -132,6 +132,43 @@ def test_imudata_is_immutable_and_owns_its_arrays() -> None:
     assert imu.gyro[0, 0] == 0.0 and imu.t[0] == 100.0
 
 
+def test_immutable_inputs_are_read_in_place_and_the_rest_copied(tmp_path: Path) -> None:
+    """Issue 20 (no avoidable copies): C-contiguous float64 arrays nothing can write (frozen and
+    owning their memory, views of read-only ``bytes``, a read-only memory map, another ImuData's
+    arrays) are kept as they are; a read-only view of a writeable array is copied, since its owner
+    can still write it, and so are strided and other-dtype inputs."""
+    t, gyro, accel = (a.copy() for a in imu_arrays(1000))  # np.tile's result is a view of a writeable array
+    for a in (t, gyro, accel):
+        a.flags.writeable = False
+    imu = ik.ImuData(t, gyro, accel)
+    assert imu.t is t and imu.gyro is gyro and imu.accel is accel
+    again = ik.ImuData(imu.t, imu.gyro, imu.accel, mag=imu.accel)
+    assert again.gyro is imu.gyro and again.mag is imu.accel
+    raw = ik.ImuData(t, np.frombuffer(gyro.tobytes()).reshape(-1, 3), accel)
+    assert raw.gyro.base is not None and np.array_equal(raw.gyro, gyro)
+    assert not raw.gyro.flags.owndata and not raw.gyro.flags.writeable
+    path = tmp_path / "gyro.npy"
+    np.save(path, gyro)
+    mapped = np.load(path, mmap_mode="r")
+    assert np.shares_memory(ik.ImuData(t, mapped, accel).gyro, mapped)  # a plain ndarray view of the map
+    # can still be written through its owner: copied, and the ImuData does not see the write
+    owner = gyro.copy()
+    view = owner[:]
+    view.flags.writeable = False
+    held = ik.ImuData(t, view, accel)
+    owner[0, 0] = 123.0
+    assert not np.shares_memory(held.gyro, owner) and held.gyro[0, 0] == gyro[0, 0]
+    # copy-on-write memory map: writeable, so copied
+    assert not np.shares_memory(ik.ImuData(t, np.load(path, mmap_mode="c"), accel).gyro, mapped)
+    wide = np.zeros((1000, 6))
+    wide[:, :3] = gyro
+    wide.flags.writeable = False
+    assert not np.shares_memory(ik.ImuData(t, wide[:, :3], accel).gyro, wide)  # strided
+    f32 = gyro.astype(np.float32)
+    f32.flags.writeable = False
+    assert ik.ImuData(t, f32, accel).gyro.dtype == np.float64
+
+
 def test_repr_is_short() -> None:
     text = repr(ik.ImuData(*imu_arrays()))
     assert text == "ImuData(10 samples, 0.045 s, 200 Hz, t in float s)"

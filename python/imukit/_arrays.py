@@ -308,6 +308,32 @@ def readonly_copy(arr: NDArray[_T]) -> NDArray[_T]:
     return out
 
 
+def immutable(arr: np.ndarray) -> bool:
+    """Whether nothing can write ``arr``'s memory: it and every array it views are read-only, and the
+    buffer at the root is read-only too (``bytes``, a read-only ``mmap`` or memoryview) or owned by
+    a read-only array. A read-only view of a writeable array is not: the owner can still write."""
+    root: object = arr
+    while isinstance(root, np.ndarray):
+        if root.flags.writeable:
+            return False
+        root = root.base
+    if root is None:
+        return True
+    try:
+        return memoryview(root).readonly  # type: ignore[arg-type]
+    except TypeError:
+        return False
+
+
+def frozen(arr: NDArray[_T]) -> NDArray[_T]:
+    """``arr`` itself when it is C-contiguous and :func:`immutable` (read in place: no copy, the
+    view keeps its owner alive as any numpy view does), else :func:`readonly_copy`. An owner that
+    sets the flag back and writes anyway breaks the promise the flag made, not this function."""
+    if arr.flags.c_contiguous and immutable(arr):
+        return arr
+    return readonly_copy(arr)
+
+
 def check_finite_rows(arr: FloatArray, name: str, what: str = "sample") -> None:
     """Raise :class:`NonFiniteError` naming the first row (along axis 0) holding NaN or ±inf."""
     bad = ~np.isfinite(arr)
@@ -360,7 +386,8 @@ def relative_seconds(seconds: FloatArray, name: str) -> FloatArray:
 def readonly_array(
     x: ArrayLike, name: str, shape: tuple[int, ...], shape_text: str, what: str = "sample"
 ) -> FloatArray:
-    """``x`` as a finite float64 array of exactly ``shape``, copied and read-only.
+    """``x`` as a finite float64 array of exactly ``shape``, read-only: :func:`frozen` (an immutable
+    C-contiguous float64 input is read in place, anything else copied).
 
     ``shape_text`` is how the message states the expected shape, e.g. ``"(N, 3) with N = len(t) = 5"``.
     """
@@ -368,7 +395,7 @@ def readonly_array(
     if arr.shape != shape:
         raise ShapeError(f"expected shape {shape_text}, got {arr.shape}", argument=name)
     check_finite_rows(arr, name, what)
-    return readonly_copy(arr)
+    return frozen(arr)
 
 
 def row_norms(x: FloatArray, name: str) -> FloatArray:

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_stamps, readonly_array, readonly_copy, real_scalar, relative_seconds
+from imukit._arrays import FloatArray, as_stamps, frozen, readonly_array, readonly_copy, real_scalar, relative_seconds
 from imukit._errors import NonFiniteError, ShapeError, TimestampError
 from imukit._frozen import Frozen
 
@@ -161,9 +161,9 @@ class ImuData(Frozen):
                 raise TimestampError(
                     f"gap into sample {k + 1} has dt = {step}, larger than max_gap = {gap!r} s", argument="t"
                 )
-        # t may be the caller's array; t_ns and seconds are fresh.
+        # t may be the caller's array (kept if frozen); t_ns and seconds are fresh.
         ranges = _ranges(gyro_range, accel_range)
-        self._set(readonly_copy(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *ranges, mag_arr)
+        self._set(frozen(stamps.t), stamps.t_ns, gyro_arr, accel_arr, seconds, *ranges, mag_arr)
 
     @classmethod
     def _from_core(
