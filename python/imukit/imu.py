@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_stamps, frozen, readonly_array, readonly_copy, real_scalar, relative_seconds
+from imukit._arrays import FloatArray, as_stamps, frozen, readonly_array, real_scalar, relative_seconds
 from imukit._errors import NonFiniteError, ShapeError, TimestampError
 from imukit._frozen import Frozen
 
