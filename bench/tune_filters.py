@@ -2,7 +2,7 @@
 cross-validation.
 
 Usage: ``python bench/tune_filters.py [--data ../shared/data/broad] [--filter Mahony Madgwick]``
-(about 20 minutes for both on a 2-core machine: 624 grid points).
+(about 15 minutes for both on a 2-core machine: 624 grid points).
 
 Generic: :func:`grid` takes any filter class whose instances have ``run(imu, mag=..., **run_kw)``
 returning an object with ``.rotation`` (``R_wb``, ENU), and a dict of keyword axes; every point is
