@@ -17,6 +17,8 @@ import numpy as np
 import imukit as ik
 from _timing import median_s
 
+FLOPS_PER_TERM = 19
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -41,6 +43,11 @@ def main() -> None:
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, allantools {allantools.__version__}"
     )
     print(f"# largest relative difference to allantools: {worst:.1e}")
+    # Work per input row, counted from the code (docs/performance.md, "Filters, simulator and Allan:
+    # work per sample"): 19 flops per column per cluster term (compensated sums), N − 2m + 1 terms.
+    terms = float(np.sum((args.n - 2 * allan.cluster_sizes + 1) / args.n))
+    flops = 3 * FLOPS_PER_TERM * terms
+    print(f"# work: {flops:.0f} flops per row (3 columns x {terms:.1f} terms), 24 B read; floor {flops / 48:.0f} ns")
     print("| method | median [s] |")
     print("|---|---|")
     print(f"| imukit.noise.allan_deviation | {ours:.3f} |")

@@ -26,6 +26,12 @@ from _timing import median_s, synthetic_imu
 
 TARGET_NS = {"6D": 35.0, "9D": 50.0}
 TARGET_RATIO_9D = 7.0
+# Flops and bytes (inputs read + outputs written) per sample of the steady-state step at the
+# defaults, counted from the code (docs/performance.md, "Filters, simulator and Allan: work per
+# sample"), and the floor at one core's FMA peak (48 flops/ns); the step is a dependent chain of
+# ~60 cycles (Mahony, Madgwick), so the chain, not the flops, is the realistic bound.
+WORK = {"Mahony 6D": (310, 112), "Mahony 9D": (390, 136), "Madgwick 6D": (310, 112), "Madgwick 9D": (390, 136)}
+FLOPS_PER_NS = 48.0
 
 
 def main() -> None:
@@ -111,15 +117,18 @@ def main() -> None:
 def issue20_table(ours: dict[str, float], peers: dict[str, float]) -> None:
     """Issue 20's rows of the filters, as its table: ns/sample, vqf of the same sensor set in the
     same run, the ratio, and whether the targets (ns, and ≥ 7× vqf for 9D) are met."""
-    print("\n| kernel | ns/sample | vqf same run | vqf / ours | target |")
-    print("|---|---|---|---|---|")
+    print("\n| kernel | flops | bytes | floor ns | ns/sample | vqf same run | vqf / ours | target |")
+    print("|---|---|---|---|---|---|---|---|")
     for name in ("Mahony", "Madgwick"):
         for dim in ("6D", "9D"):
             ns, peer = ours[f"{name} {dim}"], peers.get(f"vqf {dim} (updateBatch)")
             target = f"≤ {TARGET_NS[dim]:.0f}" + (f", ≥ {TARGET_RATIO_9D:.0f}× vqf" if dim == "9D" else "")
             met = ns <= TARGET_NS[dim] and (dim == "6D" or (peer is not None and peer / ns >= TARGET_RATIO_9D))
             shown = ("—", "—") if peer is None else (f"{peer:.0f}", f"{peer / ns:.1f}×")
-            print(f"| {name} {dim} | {ns:.1f} | {shown[0]} | {shown[1]} | {target}: {'met' if met else 'MISSED'} |")
+            flops, nbytes = WORK[f"{name} {dim}"]
+            work = f"{flops} | {nbytes} | {flops / FLOPS_PER_NS:.1f}"
+            verdict = "met" if met else "MISSED"
+            print(f"| {name} {dim} | {work} | {ns:.1f} | {shown[0]} | {shown[1]} | {target}: {verdict} |")
 
 
 def robust_vs_vqf(imu: ik.ImuData, mag: np.ndarray, repeats: int, clock: Callable[[], float]) -> None:

@@ -16,6 +16,10 @@ import imukit as ik
 from _timing import median_s
 
 TARGET_NS = 80.0
+# Per sample, counted from the code (docs/performance.md, "Filters, simulator and Allan: work per
+# sample"): flops, libm calls (3 sincos) and normal draws (12), bytes (t read, truth and readings
+# written); libm and the draws, not the flops (floor 4 ns at 48 flops/ns), bound it: ~85 ns/core.
+FLOPS, SINCOS, NORMALS, BYTES = 210, 3, 12, 184
 
 
 def main() -> None:
@@ -53,10 +57,14 @@ def main() -> None:
     # Issue 20's row, as its table prints it (target ≤ 80 ns/sample on 10^7 samples).
     ns, peer = (seconds / args.n * 1e9 for _, seconds in rows)
     met = "met" if ns <= TARGET_NS else "MISSED"
-    print("\n| kernel | ns/sample | numpy noise alone, same run | numpy / ours | target |")
-    print("|---|---|---|---|---|")
+    print(
+        "\n| kernel | flops | sincos + normals | bytes | ns/sample | numpy noise alone, same run "
+        "| numpy / ours | target |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     kernel = f"sim.simulate {args.n:.0e} ({args.motion})"
-    print(f"| {kernel} | {ns:.1f} | {peer:.1f} | {peer / ns:.2f}× | ≤ {TARGET_NS:.0f}: {met} |")
+    work = f"{FLOPS} | {SINCOS} + {NORMALS} | {BYTES}"
+    print(f"| {kernel} | {work} | {ns:.1f} | {peer:.1f} | {peer / ns:.2f}× | ≤ {TARGET_NS:.0f}: {met} |")
 
 
 if __name__ == "__main__":
