@@ -44,7 +44,7 @@ OPTIONS = [
     MagRejection(norm_fraction=0.2, dip_rad=0.1, recovery_s=7.0),
     RestDetection(gyro=0.1, accel=0.3, duration_s=0.5, tau_s=2.0),
     _core.MahonyGains(kp=0.7, ki=0.02),
-    _core.MadgwickGains(beta=0.1),
+    _core.MadgwickGains(beta=0.1, full_rate_angle_rad=0.05),
     _core.FilterOptions.default(),
 ]
 
