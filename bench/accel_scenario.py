@@ -5,6 +5,8 @@ the accelerometer's."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -32,6 +34,7 @@ def turning(t: np.ndarray) -> Rotation:
     return Rotation.from_euler("zyx", np.c_[0.3 * t, 0.15 * np.sin(0.4 * t), 0.2 * np.sin(0.7 * t)])
 
 
+@functools.cache  # the tuner scores hundreds of points on the same record
 def sustained_then_figure_eight() -> tuple[ik.ImuData, Rotation, np.ndarray]:
     """60 s: 10 s still(ish), 5 m/s² along world x for 10 s, 10 s coasting, a horizontal
     figure-eight with 3 m/s² peaks on each axis (period 3 s: 0.68 m across) for 25 s, rest."""

@@ -39,8 +39,8 @@ pub struct Madgwick {
 impl Default for Madgwick {
     /// `β = 0.035`, `θ₀ = 0.08` rad: the best point of `bench/tune_filters.py`'s grid on the 12 BROAD
     /// trials among those that hold a simulated 5 m/s² for 10 s and a 3 m/s² figure-eight below 2°
-    /// of tilt (the textbook `θ₀ = 0` does not: 5.6°); leave-one-group-out picks the same point in
-    /// every fold (docs/filters_accuracy.md).
+    /// of tilt (the textbook `θ₀ = 0` does not: 4.6° / 5.3° at this `β`); leave-one-group-out picks
+    /// the same point in three folds of four (docs/filters_accuracy.md).
     fn default() -> Self {
         Self {
             beta: 0.035,
