@@ -134,9 +134,10 @@ def test_imudata_is_immutable_and_owns_its_arrays() -> None:
 
 def test_immutable_inputs_are_read_in_place_and_the_rest_copied(tmp_path: Path) -> None:
     """Issue 20 (no avoidable copies): C-contiguous float64 arrays nothing can write (frozen and
-    owning their memory, views of read-only ``bytes``, a read-only memory map, another ImuData's
-    arrays) are kept as they are; a read-only view of a writeable array is copied, since its owner
-    can still write it, and so are strided and other-dtype inputs."""
+    owning their memory, views of read-only ``bytes``, another ImuData's arrays) are kept as they
+    are; a read-only view of a writeable array is copied, since its owner can still write it, and so
+    are memory maps (the file under a read-only one can be rewritten), strided and other-dtype
+    inputs."""
     t, gyro, accel = (a.copy() for a in imu_arrays(1000))  # np.tile's result is a view of a writeable array
     for a in (t, gyro, accel):
         a.flags.writeable = False
@@ -150,7 +151,7 @@ def test_immutable_inputs_are_read_in_place_and_the_rest_copied(tmp_path: Path) 
     path = tmp_path / "gyro.npy"
     np.save(path, gyro)
     mapped = np.load(path, mmap_mode="r")
-    assert np.shares_memory(ik.ImuData(t, mapped, accel).gyro, mapped)  # a plain ndarray view of the map
+    assert not np.shares_memory(ik.ImuData(t, mapped, accel).gyro, mapped)
     # can still be written through its owner: copied, and the ImuData does not see the write
     owner = gyro.copy()
     view = owner[:]
@@ -158,7 +159,6 @@ def test_immutable_inputs_are_read_in_place_and_the_rest_copied(tmp_path: Path) 
     held = ik.ImuData(t, view, accel)
     owner[0, 0] = 123.0
     assert not np.shares_memory(held.gyro, owner) and held.gyro[0, 0] == gyro[0, 0]
-    # copy-on-write memory map: writeable, so copied
     assert not np.shares_memory(ik.ImuData(t, np.load(path, mmap_mode="c"), accel).gyro, mapped)
     wide = np.zeros((1000, 6))
     wide[:, :3] = gyro

@@ -309,20 +309,17 @@ def readonly_copy(arr: NDArray[_T]) -> NDArray[_T]:
 
 
 def immutable(arr: np.ndarray) -> bool:
-    """Whether nothing can write ``arr``'s memory: it and every array it views are read-only, and the
-    buffer at the root is read-only too (``bytes``, a read-only ``mmap`` or memoryview) or owned by
-    a read-only array. A read-only view of a writeable array is not: the owner can still write."""
+    """Whether nothing can write ``arr``'s memory: it and every array it views are read-only, down to
+    an owner that is none (a read-only array owning its memory) or ``bytes`` (an unpickled array).
+    A read-only view of a writeable array is not (its owner can still write), nor is a memory map,
+    even a read-only one (the file under it can be rewritten). The same rule as the glue's
+    ``frozen_or_copy`` (imukit-py/src/convert.rs), which the kernels apply to their inputs."""
     root: object = arr
     while isinstance(root, np.ndarray):
         if root.flags.writeable:
             return False
         root = root.base
-    if root is None:
-        return True
-    try:
-        return memoryview(root).readonly  # type: ignore[arg-type]
-    except TypeError:
-        return False
+    return root is None or isinstance(root, bytes)
 
 
 def frozen(arr: NDArray[_T]) -> NDArray[_T]:
