@@ -58,6 +58,7 @@
 mod batch;
 mod blocks;
 mod continuity;
+mod lanes;
 mod lever;
 mod merge;
 mod midpoint;

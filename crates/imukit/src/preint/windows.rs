@@ -13,6 +13,7 @@ use std::cmp::Ordering;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use super::lanes::{self, Span};
 use super::{clipped_at, ClipMask, Clipped, End, Ends, Preintegrator, Scheme};
 use crate::error::{try_vec, Cancel, Error, Result};
 use crate::imu::Samples;
@@ -54,11 +55,7 @@ pub fn preintegrate_windows_clipped_cancellable(
     for first in (0..m).step_by(block) {
         cancel.check(0)?;
         let edges = &boundaries[first..(first + block + 1).min(m + 1)];
-        windows.par_extend(
-            edges
-                .par_windows(2)
-                .map(|w| window(samples, clipped, w[0], w[1], template)),
-        );
+        windows.extend(run_block(samples, clipped, edges, template));
     }
     check_windows(samples, boundaries, 0, &windows)?;
     Ok(windows)
@@ -157,10 +154,7 @@ pub fn preintegrate_windows_cancellable(
     for first in (0..m).step_by(block) {
         cancel.check(0)?;
         let edges = &boundaries[first..(first + block + 1).min(m + 1)];
-        let windows: Vec<Preintegrator> = edges
-            .par_windows(2)
-            .map(|w| window(samples, clipped, w[0], w[1], template))
-            .collect();
+        let windows = run_block(samples, clipped, edges, template);
         check_windows(samples, boundaries, first, &windows)?;
         for (k, p) in windows.iter().enumerate() {
             let row = first + k;
@@ -271,9 +265,9 @@ crate::simd_dispatch! {
         let t = samples.t;
         let scheme = template.scheme;
         let mut p = template.clone();
-        // Samples strictly inside (lo, hi); k0 is the last sample at or before lo.
-        let inside = t.partition_point(|&x| x <= lo)..t.partition_point(|&x| x < hi);
-        let k0 = inside.start - 1;
+        let Span { k0, steps, .. } = span(t, lo, hi);
+        // Samples strictly inside (lo, hi).
+        let inside = k0 + 1..k0 + steps;
         let first = at(samples, clipped, k0, lo, scheme);
         let mut current = first;
         let mut time = lo;
@@ -295,18 +289,82 @@ crate::simd_dispatch! {
         }
         let last = at(samples, clipped, inside.end - 1, hi, scheme);
         add(&mut p, hi, last);
-        // The signal at each boundary, which the adjacent window shares: euler holds the sample at
-        // or before it (the one starting there when the boundary is a sample time).
-        let held = t.partition_point(|&x| x <= hi) - 1;
         let end_at = |(accel, gyro, _): Point| End { t: None, accel, gyro };
-        let last = match scheme {
-            Scheme::Euler => (samples.accel_at(held), samples.gyro_at(held), Clipped::NONE),
-            Scheme::Midpoint => last,
-        };
-        p.boundary = Ends {
-            first: Some(end_at(first)),
-            last: Some(end_at(last)),
+        p.boundary = match scheme {
+            Scheme::Euler => held_ends(samples, k0, hi),
+            Scheme::Midpoint => Ends {
+                first: Some(end_at(first)),
+                last: Some(end_at(last)),
+            },
         };
         p
     }
 }
+
+/// The intervals of the window `[lo, hi]` (k0: the last sample at or before lo; then one interval
+/// per sample strictly inside).
+fn span(t: &[f64], lo: f64, hi: f64) -> Span {
+    let (start, end) = (t.partition_point(|&x| x <= lo), t.partition_point(|&x| x < hi));
+    Span {
+        k0: start - 1,
+        steps: end - start + 1,
+        lo,
+        hi,
+    }
+}
+
+/// The signal at each end of an euler window, which the adjacent window shares: the sample held
+/// from its start, and the one held at `hi` (the one starting there when `hi` is a sample time).
+fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
+    let held = samples.t.partition_point(|&x| x <= hi) - 1;
+    let end = |k: usize| End {
+        t: None,
+        accel: samples.accel_at(k),
+        gyro: samples.gyro_at(k),
+    };
+    Ends {
+        first: Some(end(k0)),
+        last: Some(end(held)),
+    }
+}
+
+/// The windows between consecutive `edges`, in order, in parallel: euler windows without a bias
+/// walk or a clipped sample in SIMD lanes (`lanes.rs`), bundled in order of length so that a
+/// bundle's windows end together; every other window on the per-window kernel.
+fn run_block(
+    samples: &Samples<'_>,
+    clipped: Option<&ClipMask<'_>>,
+    edges: &[f64],
+    template: &Preintegrator,
+) -> Vec<Preintegrator> {
+    let alone = |w: &[f64]| window(samples, clipped, w[0], w[1], template);
+    if template.scheme != Scheme::Euler || template.bias_walk.is_some() {
+        return edges.par_windows(2).map(alone).collect();
+    }
+    let spans: Vec<Span> = edges.windows(2).map(|w| span(samples.t, w[0], w[1])).collect();
+    let flagged = |s: &Span| clipped.is_some_and(|m| (s.k0..s.k0 + s.steps).any(|k| m.gyro[k] || m.accel[k]));
+    let (mut in_lanes, per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
+    in_lanes.sort_by_key(|&i| spans[i].steps);
+    let bundled = in_lanes.par_chunks(lanes::width()).flat_map_iter(|chunk| {
+        let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
+        let done = lanes::run(samples, &bundle, template);
+        chunk
+            .iter()
+            .zip(done)
+            .map(|(&i, mut p)| {
+                p.boundary = held_ends(samples, spans[i].k0, spans[i].hi);
+                (i, p)
+            })
+            .collect::<Vec<_>>()
+    });
+    let single = per_window.par_iter().map(|&i| (i, alone(&edges[i..i + 2])));
+    let mut slots: Vec<Option<Preintegrator>> = (0..spans.len()).map(|_| None).collect();
+    for (i, p) in bundled.chain(single).collect::<Vec<_>>() {
+        slots[i] = Some(p);
+    }
+    slots.into_iter().flatten().collect()
+}
+
+#[cfg(test)]
+#[path = "windows_tests.rs"]
+mod tests;

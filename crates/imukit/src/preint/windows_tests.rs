@@ -1,0 +1,178 @@
+//! The lanes (`lanes.rs`) against the per-window kernel and against a dense reference.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use nalgebra::{Matrix3, SMatrix, Vector3};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+
+use super::lanes::{self, Span};
+use super::{run_block, span, window};
+use crate::imu::{Noise, Samples};
+use crate::preint::{Covariance9, Preintegrator};
+use crate::simd::{self, Path};
+use crate::so3;
+
+const NOISE: Noise = Noise {
+    gyro_density: 1.7e-4,
+    accel_density: 2e-3,
+    gyro_random_walk: 2e-5,
+    accel_random_walk: 3e-3,
+};
+
+/// A jittered 200 Hz stream of `n` samples turning on all axes.
+fn stream(n: usize) -> (Vec<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(20);
+    let t: Vec<f64> = (0..n)
+        .map(|k| 0.3 + k as f64 * 0.005 + rng.random::<f64>() * 1e-3)
+        .collect();
+    let gyro = t
+        .iter()
+        .map(|&s| {
+            [
+                0.9 * (1.1 * s).sin() + 0.3,
+                0.6 * (0.7 * s).cos(),
+                1.5 * (1.3 * s).sin() - rng.random::<f64>(),
+            ]
+        })
+        .collect();
+    let accel = t
+        .iter()
+        .map(|&s| {
+            [
+                0.5 * (0.9 * s).sin(),
+                0.4 * (0.3 * s).cos() + rng.random::<f64>(),
+                9.81 + (1.7 * s).sin(),
+            ]
+        })
+        .collect();
+    (t, gyro, accel)
+}
+
+/// Boundaries whose windows hold 1, 2, 3, 4, 5, 7, 8, 9, 17, 1, 2, 40, … intervals (1, 2, L − 1 and
+/// L + 1 for both lane widths), some on sample times and some between samples.
+fn boundaries(t: &[f64]) -> Vec<f64> {
+    // A one-interval window between samples starts on a sample (m % 3 == 1) or is on one.
+    let lengths = [1, 2, 3, 4, 5, 7, 8, 9, 17, 1, 2, 40, 3, 5, 9, 1, 7, 30, 6, 1, 2, 11];
+    let mut b = vec![t[2] + 0.0025];
+    let mut k0 = 2; // the sample held at the last boundary
+    for (m, len) in lengths.iter().enumerate() {
+        // On a sample, the window ends at t[k0 + len]; between samples, after t[k0 + len − 1].
+        if m % 3 == 0 {
+            k0 += len;
+            b.push(t[k0]);
+        } else {
+            k0 += len - 1;
+            b.push(t[k0] + 0.0025);
+        }
+    }
+    b
+}
+
+fn template() -> Preintegrator {
+    Preintegrator::new(Vector3::new(0.01, -0.02, 0.005), Vector3::new(0.05, 0.02, -0.1), NOISE)
+}
+
+/// `a` equals `b` bit for bit on the baseline path (no FMA in either kernel), else within 1e-12
+/// of the largest entry in deltas, covariance and bias Jacobian.
+fn assert_same(a: &Preintegrator, b: &Preintegrator) {
+    if simd::path() == Path::Baseline {
+        assert_eq!(a, b);
+        return;
+    }
+    let close = |x: &[f64], y: &[f64]| {
+        let scale = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        x.iter().zip(y).all(|(p, q)| (p - q).abs() <= 1e-12 * scale)
+    };
+    assert!(close(a.delta_rotation.as_slice(), b.delta_rotation.as_slice()));
+    assert!(close(a.delta_velocity.as_slice(), b.delta_velocity.as_slice()));
+    assert!(close(a.delta_position.as_slice(), b.delta_position.as_slice()));
+    assert!(close(a.covariance().as_slice(), b.covariance().as_slice()));
+    assert!(close(a.bias_jacobian().as_slice(), b.bias_jacobian().as_slice()));
+    assert_eq!((a.delta_t, a.boundary), (b.delta_t, b.boundary));
+}
+
+#[test]
+fn lanes_equal_the_per_window_kernel_on_windows_of_mixed_lengths() {
+    let (t, gyro, accel) = stream(400);
+    let samples = Samples::new(&t, &gyro, &accel).unwrap();
+    let b = boundaries(&t);
+    let spans: Vec<Span> = b.windows(2).map(|w| span(&t, w[0], w[1])).collect();
+    let steps: Vec<usize> = spans.iter().map(|s| s.steps).collect();
+    for len in [1, 2, 3, 5, 7, 9] {
+        assert!(steps.contains(&len), "{steps:?}");
+    }
+    let reference: Vec<Preintegrator> = b
+        .windows(2)
+        .map(|w| window(&samples, None, w[0], w[1], &template()))
+        .collect();
+    // The windows grouped by length (as `preintegrate_windows` runs them)…
+    let grouped = run_block(&samples, None, &b, &template());
+    // … and bundled in order, so that lanes of very different lengths run in lockstep.
+    let in_order: Vec<Preintegrator> = spans
+        .chunks(lanes::width())
+        .flat_map(|bundle| lanes::run(&samples, bundle, &template()))
+        .collect();
+    assert_eq!(grouped.len(), reference.len());
+    for (m, want) in reference.iter().enumerate() {
+        assert_same(&grouped[m], want);
+        let mut lane = in_order[m].clone();
+        lane.boundary = want.boundary;
+        assert_same(&lane, want);
+    }
+}
+
+/// Forster's update with dense 9×9 matrices (`Preintegrator::step_matrices`, the module docs'
+/// equations): `Σ ← A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ`, `J ← A J − [C, B]`.
+fn dense(
+    samples: &Samples<'_>,
+    span: &Span,
+    p0: &Preintegrator,
+) -> (Matrix3<f64>, Vector3<f64>, Covariance9, SMatrix<f64, 9, 6>) {
+    let mut at = p0.clone();
+    let (mut v, mut p) = (Vector3::zeros(), Vector3::zeros());
+    let mut cov = Covariance9::zeros();
+    let mut jac = SMatrix::<f64, 9, 6>::zeros();
+    for j in 0..span.steps {
+        let (a, w, h) = span.interval(samples, j);
+        let s = at.step_matrices(&a, &w, h);
+        let var = |d: f64| d * d / h;
+        cov = s.a * cov * s.a.transpose()
+            + s.b * s.b.transpose() * var(NOISE.accel_density)
+            + s.c * s.c.transpose() * var(NOISE.gyro_density);
+        let mut g = SMatrix::<f64, 9, 6>::zeros();
+        g.fixed_view_mut::<9, 3>(0, 0).copy_from(&-s.c);
+        g.fixed_view_mut::<9, 3>(0, 3).copy_from(&-s.b);
+        jac = s.a * jac + g;
+        let ra = at.delta_rotation * (a - at.bias_accel);
+        p += v * h + ra * (0.5 * h * h);
+        v += ra * h;
+        at.delta_rotation *= so3::exp(&((w - at.bias_gyro) * h)).matrix();
+    }
+    (at.delta_rotation, p, cov, jac)
+}
+
+#[test]
+fn lanes_match_a_dense_reference() {
+    let (t, gyro, accel) = stream(400);
+    let samples = Samples::new(&t, &gyro, &accel).unwrap();
+    let b = boundaries(&t);
+    let spans: Vec<Span> = b.windows(2).map(|w| span(&t, w[0], w[1])).collect();
+    let lanes_out: Vec<Preintegrator> = spans
+        .chunks(lanes::width())
+        .flat_map(|bundle| lanes::run(&samples, bundle, &template()))
+        .collect();
+    let rel = |x: &[f64], y: &[f64]| {
+        let scale = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        x.iter().zip(y).fold(0.0_f64, |m, (p, q)| m.max((p - q).abs())) / scale
+    };
+    for (got, s) in lanes_out.iter().zip(&spans) {
+        let (r, p, cov, jac) = dense(&samples, s, &template());
+        let errors = [
+            rel(got.delta_rotation.as_slice(), r.as_slice()),
+            rel(got.delta_position.as_slice(), p.as_slice()),
+            rel(got.covariance().as_slice(), cov.as_slice()),
+            rel(got.bias_jacobian().as_slice(), jac.as_slice()),
+        ];
+        assert!(errors.iter().all(|&e| e < 1e-12), "{} intervals: {errors:?}", s.steps);
+    }
+}
