@@ -62,11 +62,7 @@ macro_rules! lane_op {
             type Output = Self;
             #[inline(always)]
             fn $method(self, o: Self) -> Self {
-                let mut out = self;
-                for i in 0..L {
-                    out.0[i] = self.0[i] $op o.0[i];
-                }
-                out
+                X(std::array::from_fn(|i| self.0[i] $op o.0[i]))
             }
         }
     )*};
@@ -92,8 +88,12 @@ impl<const L: usize> Lanes for X<L> {
         X([x; L])
     }
     #[inline(always)]
-    fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
-        X(std::array::from_fn(f))
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
+        let mut out = [0.0; L];
+        for (i, v) in out.iter_mut().enumerate() {
+            *v = f(i);
+        }
+        X(out)
     }
     #[inline(always)]
     fn lane(&self, i: usize) -> f64 {
@@ -112,9 +112,20 @@ impl<V: Lanes> B<V> {
         self.0[3 * c + r]
     }
 
+    // Written out: `array::from_fn` and `map` over arrays of lanes stayed out-of-line calls.
     #[inline(always)]
-    fn from_fn(mut f: impl FnMut(usize, usize) -> V) -> Self {
-        B(std::array::from_fn(|k| f(k % 3, k / 3)))
+    fn from_fn(f: impl Fn(usize, usize) -> V) -> Self {
+        B([
+            f(0, 0),
+            f(1, 0),
+            f(2, 0),
+            f(0, 1),
+            f(1, 1),
+            f(2, 1),
+            f(0, 2),
+            f(1, 2),
+            f(2, 2),
+        ])
     }
 
     /// Lane `i` of every element as a matrix.
@@ -122,10 +133,10 @@ impl<V: Lanes> B<V> {
         Matrix3::from_fn(|r, c| self.e(r, c).lane(i))
     }
 
-    /// Lane `i` of every element is `m[i]`.
+    /// Lane `i` of every element is `m[i]` (column-major).
     #[inline(always)]
-    fn of_lanes(m: &[Matrix3<f64>]) -> Self {
-        B::from_fn(|r, c| V::from_fn(|i| m[i][(r, c)]))
+    fn of_lanes(m: &[[f64; 9]; MAX_LANES]) -> Self {
+        B::from_fn(|r, c| V::from_fn(|i| m[i][3 * c + r]))
     }
 
     #[inline(always)]
@@ -177,7 +188,7 @@ impl<V: Lanes> B<V> {
 
     #[inline(always)]
     fn zip(&self, o: &Self, f: impl Fn(V, V) -> V) -> Self {
-        B(std::array::from_fn(|k| f(self.0[k], o.0[k])))
+        B::from_fn(|r, c| f(self.e(r, c), o.e(r, c)))
     }
 
     #[inline(always)]
@@ -192,12 +203,12 @@ impl<V: Lanes> B<V> {
 
     #[inline(always)]
     fn scale(&self, s: V) -> Self {
-        B(self.0.map(|x| x * s))
+        B::from_fn(|r, c| self.e(r, c) * s)
     }
 
     #[inline(always)]
     fn neg(&self) -> Self {
-        B(self.0.map(|x| -x))
+        B::from_fn(|r, c| -self.e(r, c))
     }
 }
 
@@ -318,8 +329,17 @@ impl<V: Lanes> State<V> {
     /// One euler interval in every lane (`integrate_euler`, element for element).
     #[inline(always)]
     fn step(&mut self, accel: &[V; 3], gyro: &[V; 3], h: V, p: &Preintegrator) {
-        let a: [V; 3] = std::array::from_fn(|k| accel[k] - V::splat(p.bias_accel[k]));
-        let w: [V; 3] = std::array::from_fn(|k| gyro[k] - V::splat(p.bias_gyro[k]));
+        let (ba, bg) = (&p.bias_accel, &p.bias_gyro);
+        let a = [
+            accel[0] - V::splat(ba.x),
+            accel[1] - V::splat(ba.y),
+            accel[2] - V::splat(ba.z),
+        ];
+        let w = [
+            gyro[0] - V::splat(bg.x),
+            gyro[1] - V::splat(bg.y),
+            gyro[2] - V::splat(bg.z),
+        ];
         let r = self.rotation;
         // `blocks::times_hat`: column j is `R (a × e_j)`.
         let r_a_cross = B::from_fn(|i, c| match c {
@@ -327,16 +347,15 @@ impl<V: Lanes> State<V> {
             1 => r.e(i, 2) * a[0] - r.e(i, 0) * a[2],
             _ => r.e(i, 0) * a[1] - r.e(i, 1) * a[0],
         });
-        let wh: [V; 3] = std::array::from_fn(|k| w[k] * h);
-        let pairs: [(Matrix3<f64>, Matrix3<f64>); 8] = std::array::from_fn(|i| {
-            if i < V::L {
-                so3::exp_and_right_jacobian(&Vector3::new(wh[0].lane(i), wh[1].lane(i), wh[2].lane(i)))
-            } else {
-                (Matrix3::zeros(), Matrix3::zeros())
-            }
-        });
-        let step = B::<V>::of_lanes(&pairs.map(|(e, _)| e));
-        let jr = B::<V>::of_lanes(&pairs.map(|(_, j)| j));
+        let wh = [w[0] * h, w[1] * h, w[2] * h];
+        let (mut exp_l, mut jr_l) = ([[0.0; 9]; MAX_LANES], [[0.0; 9]; MAX_LANES]);
+        for i in 0..V::L {
+            let (e, j) = so3::exp_and_right_jacobian(&Vector3::new(wh[0].lane(i), wh[1].lane(i), wh[2].lane(i)));
+            exp_l[i].copy_from_slice(e.as_slice());
+            jr_l[i].copy_from_slice(j.as_slice());
+        }
+        let step = B::<V>::of_lanes(&exp_l);
+        let jr = B::<V>::of_lanes(&jr_l);
         let half_h2 = V::splat(0.5) * h * h;
         let var_a = V::splat(p.noise.accel_density * p.noise.accel_density) / h;
         let var_g = V::splat(p.noise.gyro_density * p.noise.gyro_density) / h;
@@ -355,7 +374,8 @@ impl<V: Lanes> State<V> {
             jpa.add(&jva.scale(h)).sub(&r.scale(half_h2)),
         ];
 
-        let ra: [V; 3] = std::array::from_fn(|i| r.e(i, 0) * a[0] + r.e(i, 1) * a[1] + r.e(i, 2) * a[2]);
+        let ra_row = |i: usize| r.e(i, 0) * a[0] + r.e(i, 1) * a[1] + r.e(i, 2) * a[2];
+        let ra = [ra_row(0), ra_row(1), ra_row(2)];
         for ((p, v), ra) in self.position.iter_mut().zip(self.velocity.iter_mut()).zip(ra) {
             *p = *p + (*v * h + ra * half_h2);
             *v = *v + ra * h;
@@ -370,13 +390,10 @@ impl<V: Lanes> State<V> {
         *since_projection += 1;
         if *since_projection >= PROJECT_EVERY {
             *since_projection = 0;
-            let projected: [Matrix3<f64>; 8] = std::array::from_fn(|i| {
-                if i < V::L {
-                    project_rotation(&self.rotation.lane(i))
-                } else {
-                    Matrix3::zeros()
-                }
-            });
+            let mut projected = [[0.0; 9]; MAX_LANES];
+            for (i, lane) in projected.iter_mut().enumerate().take(V::L) {
+                lane.copy_from_slice(project_rotation(&self.rotation.lane(i)).as_slice());
+            }
             self.rotation = B::of_lanes(&projected);
         }
     }
