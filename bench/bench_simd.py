@@ -50,6 +50,9 @@ KERNELS = {
     "integrate_attitude": (120, 64, None),
     "preintegrate_windows euler, 1 thread": (950, 56, None),
     "preintegrate_windows euler, 2 threads": (950, 56, None),
+    # The same windows with one sample each flagged as clipped, which keeps them off the SIMD lanes
+    # of the AVX paths (`preint/lanes.rs`): the per-window kernel, for the lanes' gain.
+    "preintegrate_windows euler, per-window kernel, 1 thread": (950, 56, None),
 }
 # The rows with a GTSAM peer.
 PEER_ROWS = ("preintegrate euler (9×9 + 9×6)", "preintegrate combined (15×15)")
@@ -85,13 +88,17 @@ def cases(n: int) -> dict[str, Callable[[], object]]:
 def windows_cases(
     t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, noise: ik.ImuNoise, names: list[str]
 ) -> dict[str, Callable[[], object]]:
-    """``preintegrate_windows`` (euler) over windows of ``WINDOW`` samples, one and two threads."""
+    """``preintegrate_windows`` (euler) over windows of ``WINDOW`` samples, one and two threads, and
+    on one thread with one sample of each window at the gyro's range (the per-window kernel)."""
     imu = ik.ImuData(t, gyro, accel)
+    flagged = gyro.copy()
+    flagged[WINDOW // 2 :: WINDOW, 0] = 100.0
+    clipped = ik.ImuData(t, flagged, accel, gyro_range=100.0)
     boundaries = t[::WINDOW]
     params = ik.PreintParams(noise, scheme="lie_euler")
     return {
-        name: (lambda k=k: ik.preintegrate_windows(imu, boundaries, params, threads=k))
-        for name, k in zip(names, (1, 2), strict=True)
+        name: (lambda k=k, d=d: ik.preintegrate_windows(d, boundaries, params, threads=k))
+        for name, k, d in zip(names, (1, 2, 1), (imu, imu, clipped), strict=True)
     }
 
 

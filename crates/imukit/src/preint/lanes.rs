@@ -1,110 +1,151 @@
-//! Structure-of-arrays preintegration: L euler windows in lockstep, one window per SIMD lane.
+//! Structure-of-arrays preintegration: four euler windows in lockstep, one window per SIMD lane.
 //!
-//! The per-window kernel (`Preintegrator::integrate_measurement_clipped`) is a chain of dependent
-//! 3×3 products, so one window leaves most of a vector register idle. Here every scalar of the
-//! state (ΔR, Δv, Δp, Δt, the six covariance blocks, the five non-zero Jacobian blocks) is an
-//! array of L values, one per window, and every operation acts on all L at once:
+//! The per-window kernel (`Preintegrator::integrate_euler`) is a chain of dependent 3×3 products,
+//! so one window leaves most of a vector register idle. Here every scalar of the state (ΔR, Δv,
+//! Δp, Δt, the six covariance blocks, the five non-zero bias-Jacobian blocks) holds four values,
+//! one per window, and every operation acts on the four at once:
 //!
-//! | path | lanes L | one lane operation |
-//! |---|---|---|
-//! | `avx512` | 8 | one 512-bit instruction |
-//! | `avx2` | 4 | one 256-bit instruction |
-//! | `baseline` | 4 | two 128-bit SSE2 instructions |
-//!
-//! What the lanes run: the euler scheme with the 9×9 covariance and the 9×6 bias Jacobian, no
-//! flagged (clipped) sample, no bias walk. `preint/windows.rs` sends everything else (midpoint,
-//! `combined`, windows holding a clipped sample) to the per-window kernel.
+//! | path | lanes | one lane operation | `a·s + c` |
+//! |---|---|---|---|
+//! | `avx512`, `avx2` | [`P4`] (a `pulp` AVX2+FMA token and a 256-bit vector) | one 256-bit instruction | one fused multiply-add |
+//! | `baseline` | none: the per-window kernel | | |
 //!
 //! Each element is computed with the same operations in the same order as the per-window kernel
-//! (`preint/mod.rs`, `integrate_euler`; `preint/blocks.rs`, `propagate`): a lane is that kernel,
-//! bit for bit, on every path where it does not contract multiply-adds into FMA. `Exp(ω̂h)` and
-//! `J_r(ω̂h)` (a norm, `sin`, `cos`: branches on θ) and the projection of ΔR every
-//! `PROJECT_EVERY` intervals are computed per lane by the per-window functions themselves.
+//! (`preint/mod.rs`, `integrate_euler`; `preint/blocks.rs`, `propagate_frame_i`, `transition`,
+//! `add_held_noise`, `Input::added_to`; `mat3.rs`), fused where that kernel fuses on the same path
+//! (`mat3::Fused::scale_add`, the `Lanes` products, never the plain `Matrix3` ones): a lane is the
+//! per-window kernel of its path bit for bit (tested on every path). `Exp(ω̂h)` and `J_r(ω̂h)` (a
+//! norm and branches on θ) and the projection of ΔR every `PROJECT_EVERY` intervals are computed
+//! per lane by the per-window functions themselves.
 //!
-//! A bundle runs in lockstep for the intervals all its windows have; each window then finishes
-//! alone on the per-window kernel (the caller groups windows of near-equal length, so that tail
-//! is short).
+//! What the lanes run: the euler scheme with the 9×9 covariance and the 9×6 bias Jacobian, no
+//! flagged (clipped) sample, no bias walk. `windows.rs` sends everything else to the per-window
+//! kernel. A bundle runs in lockstep for the intervals all its windows have; each window then
+//! finishes alone on the per-window kernel (the caller groups windows of near-equal length, so
+//! that tail is short).
 
-use std::marker::PhantomData;
-use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::ops::{Add, Mul, Neg, Sub};
 
 use nalgebra::{Matrix3, Vector3};
 
 use super::blocks::Cross;
+use super::windows::Span;
 use super::{project_rotation, Clipped, Preintegrator, PROJECT_EVERY};
 use crate::imu::Samples;
+use crate::mat3::{Col, M3};
 use crate::simd::{self, Path};
 use crate::so3;
 
-/// L f64 values, one per window.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C, align(32))]
-pub(super) struct X<const L: usize>([f64; L]);
+/// Windows per bundle.
+pub(super) const WIDTH: usize = 4;
 
-/// What the kernel needs of a lane vector: element-wise arithmetic, a broadcast and lane access.
+/// Four f64 values, one per window: element-wise arithmetic. New values come from an existing one
+/// (`like`), which carries what the type needs to exist (the AVX token of [`P4`]).
 pub(super) trait Lanes:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
 {
-    /// The number of lanes.
-    const L: usize;
-    /// `x` in every lane.
-    fn splat(x: f64) -> Self;
     /// Lane `i` is `f(i)`.
-    fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
+    fn like(self, f: impl FnMut(usize) -> f64) -> Self;
     /// Lane `i`.
     fn lane(&self, i: usize) -> f64;
+    /// `self s + acc`, fused as `mat3::Lanes::scale_add` is on this path.
+    fn scale_add(self, s: Self, acc: Self) -> Self;
+    /// `x` in every lane.
+    #[inline(always)]
+    fn splat(self, x: f64) -> Self {
+        self.like(|_| x)
+    }
 }
 
-/// The element-wise binary operators of [`X`].
-macro_rules! lane_op {
-    ($($trait:ident $method:ident $op:tt),*) => {$(
-        impl<const L: usize> $trait for X<L> {
+/// The AVX lanes: one 256-bit register, `a s + c` one fused multiply-add. The token proves the CPU
+/// has AVX2 and FMA, so a `P4` exists only where its instructions run.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct P4(pulp::x86::V3, pulp::f64x4);
+
+impl P4 {
+    /// Zero lanes, where the CPU has AVX2 and FMA.
+    fn try_new() -> Option<P4> {
+        pulp::x86::V3::try_new().map(|t| P4(t, t.splat_f64x4(0.0)))
+    }
+}
+
+/// The lanes of this process's path: [`P4`] on the AVX paths (`crate::simd`), none on the
+/// baseline, which keeps the per-window kernel (measured: lanes of plain `[f64; 4]` arrays, which
+/// LLVM leaves scalar, ran at half its speed; `docs/performance.md`).
+pub(super) fn lanes() -> Option<P4> {
+    if simd::path() == Path::Baseline {
+        None
+    } else {
+        P4::try_new()
+    }
+}
+
+/// The element-wise binary operators of [`P4`].
+macro_rules! p4_op {
+    ($($trait:ident $method:ident $simd:ident),*) => {$(
+        impl $trait for P4 {
             type Output = Self;
             #[inline(always)]
             fn $method(self, o: Self) -> Self {
-                X(std::array::from_fn(|i| self.0[i] $op o.0[i]))
+                P4(self.0, self.0.$simd(self.1, o.1))
             }
         }
     )*};
 }
-lane_op!(Add add +, Sub sub -, Mul mul *, Div div /);
+p4_op!(Add add add_f64x4, Sub sub sub_f64x4, Mul mul mul_f64x4);
 
-impl<const L: usize> Neg for X<L> {
+impl Neg for P4 {
     type Output = Self;
+    /// `(−1) x`: exact, and the sign of a zero flips as with `−x`.
     #[inline(always)]
     fn neg(self) -> Self {
-        let mut out = self;
-        for v in out.0.iter_mut() {
-            *v = -*v;
-        }
-        out
+        P4(self.0, self.0.mul_f64x4(self.1, self.0.splat_f64x4(-1.0)))
     }
 }
 
-impl<const L: usize> Lanes for X<L> {
-    const L: usize = L;
+impl Lanes for P4 {
     #[inline(always)]
-    fn splat(x: f64) -> Self {
-        X([x; L])
-    }
-    #[inline(always)]
-    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
-        let mut out = [0.0; L];
-        for (i, v) in out.iter_mut().enumerate() {
-            *v = f(i);
-        }
-        X(out)
+    fn like(self, mut f: impl FnMut(usize) -> f64) -> Self {
+        P4(self.0, pulp::f64x4(f(0), f(1), f(2), f(3)))
     }
     #[inline(always)]
     fn lane(&self, i: usize) -> f64 {
-        self.0[i]
+        let v = self.1;
+        [v.0, v.1, v.2, v.3][i]
+    }
+    #[inline(always)]
+    fn scale_add(self, s: Self, acc: Self) -> Self {
+        P4(self.0, self.0.mul_add_f64x4(self.1, s.1, acc.1))
     }
 }
 
-/// A 3×3 block of lanes, column-major (`e(r, c)` is `self.0[3c + r]`); each method is the
-/// per-lane twin of `mat3::M3`'s, element for element.
+/// A 3×3 block of lanes, column-major (`e(r, c)` is `self.0[3c + r]`); each method computes its
+/// elements as `mat3::M3`'s twin does.
 #[derive(Debug, Clone, Copy)]
 struct B<V>([V; 9]);
+
+/// The block whose element `(r, c)` is `$e`, written out nine times with `r`, `c` constants: no
+/// closure calls a lane operation, since a closure is compiled without the target features of the
+/// dispatched copy it is inlined into, and the AVX lane operations would stay calls.
+macro_rules! block {
+    (|$r:ident, $c:ident| $e:expr) => {
+        B([
+            block!(@ $r $c 0 0 $e),
+            block!(@ $r $c 1 0 $e),
+            block!(@ $r $c 2 0 $e),
+            block!(@ $r $c 0 1 $e),
+            block!(@ $r $c 1 1 $e),
+            block!(@ $r $c 2 1 $e),
+            block!(@ $r $c 0 2 $e),
+            block!(@ $r $c 1 2 $e),
+            block!(@ $r $c 2 2 $e),
+        ])
+    };
+    (@ $r:ident $c:ident $rv:literal $cv:literal $e:expr) => {{
+        let ($r, $c): (usize, usize) = ($rv, $cv);
+        $e
+    }};
+}
 
 impl<V: Lanes> B<V> {
     #[inline(always)]
@@ -112,69 +153,91 @@ impl<V: Lanes> B<V> {
         self.0[3 * c + r]
     }
 
-    // Written out: `array::from_fn` and `map` over arrays of lanes stayed out-of-line calls.
-    #[inline(always)]
-    fn from_fn(f: impl Fn(usize, usize) -> V) -> Self {
-        B([
-            f(0, 0),
-            f(1, 0),
-            f(2, 0),
-            f(0, 1),
-            f(1, 1),
-            f(2, 1),
-            f(0, 2),
-            f(1, 2),
-            f(2, 2),
-        ])
-    }
-
-    /// Lane `i` of every element as a matrix.
+    /// Lane `i` as a matrix.
     fn lane(&self, i: usize) -> Matrix3<f64> {
         Matrix3::from_fn(|r, c| self.e(r, c).lane(i))
     }
 
-    /// Lane `i` of every element is `m[i]` (column-major).
+    /// Lane `i` of element `(r, c)` is `m[i][(r, c)]`.
     #[inline(always)]
-    fn of_lanes(m: &[[f64; 9]; MAX_LANES]) -> Self {
-        B::from_fn(|r, c| V::from_fn(|i| m[i][3 * c + r]))
+    fn of_lanes(k: V, m: &[Matrix3<f64>; WIDTH]) -> Self {
+        block!(|r, c| k.like(|i| m[i][(r, c)]))
     }
 
+    /// Element `(r, c)` of `self b`, fused as `M3::mul_with` (`Col::combine`: the first product,
+    /// then two multiply-adds).
     #[inline(always)]
-    fn splat(m: &Matrix3<f64>) -> Self {
-        B::from_fn(|r, c| V::splat(m[(r, c)]))
+    fn dot(&self, r: usize, b: &Self, c: usize) -> V {
+        let acc = self.e(r, 0) * b.e(0, c);
+        self.e(r, 2)
+            .scale_add(b.e(2, c), self.e(r, 1).scale_add(b.e(1, c), acc))
     }
 
-    /// `self b` (`M3::mul`).
+    /// `self b` (`M3::mul_with`).
     #[inline(always)]
     fn mul(&self, b: &Self) -> Self {
-        B::from_fn(|r, c| self.e(r, 0) * b.e(0, c) + self.e(r, 1) * b.e(1, c) + self.e(r, 2) * b.e(2, c))
+        block!(|r, c| self.dot(r, b, c))
     }
 
-    /// `self bᵀ` (`M3::mul_t`).
+    /// `self b`, never fused (`mat3::mul` on `Matrix3`).
     #[inline(always)]
-    fn mul_t(&self, b: &Self) -> Self {
-        B::from_fn(|r, c| self.e(r, 0) * b.e(c, 0) + self.e(r, 1) * b.e(c, 1) + self.e(r, 2) * b.e(c, 2))
+    fn mul_plain(&self, b: &Self) -> Self {
+        block!(|r, c| self.e(r, 0) * b.e(0, c) + self.e(r, 1) * b.e(1, c) + self.e(r, 2) * b.e(2, c))
     }
 
-    /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (`M3::mul_t_symmetric`).
+    /// `self b` for a `self` with a zero diagonal: each element's two nonzero terms, the second
+    /// as a multiply-add on the first (`Unfused::zero_diagonal_mul`; on the fused path the dense
+    /// product, whose zero terms add exact zeros, gives the same bits).
+    #[inline(always)]
+    fn zero_diagonal_mul(&self, b: &Self) -> Self {
+        block!(|r, c| {
+            let (j, k) = [(1, 2), (0, 2), (0, 1)][r];
+            self.e(r, k).scale_add(b.e(k, c), self.e(r, j) * b.e(j, c))
+        })
+    }
+
+    /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (`M3::mul_t_symmetric_with`).
     #[inline(always)]
     fn mul_t_symmetric(&self, b: &Self) -> Self {
-        let d = |r: usize, c: usize| self.e(r, 0) * b.e(c, 0) + self.e(r, 1) * b.e(c, 1) + self.e(r, 2) * b.e(c, 2);
-        let (xy, xz, yz) = (d(0, 1), d(0, 2), d(1, 2));
-        B([d(0, 0), xy, xz, xy, d(1, 1), yz, xz, yz, d(2, 2)])
+        let bt = b.transpose();
+        let (xy, xz, yz) = (self.dot(0, &bt, 1), self.dot(0, &bt, 2), self.dot(1, &bt, 2));
+        B([
+            self.dot(0, &bt, 0),
+            xy,
+            xz,
+            xy,
+            self.dot(1, &bt, 1),
+            yz,
+            xz,
+            yz,
+            self.dot(2, &bt, 2),
+        ])
     }
 
     #[inline(always)]
     fn transpose(&self) -> Self {
-        B::from_fn(|r, c| self.e(c, r))
+        block!(|r, c| self.e(c, r))
     }
 
-    /// `(b + bᵀ)/2` (`M3::symmetric`).
+    /// `self s + acc` (`M3::mul_add`).
     #[inline(always)]
-    fn symmetric(&self) -> Self {
-        let s = |r: usize, c: usize| (self.e(r, c) + self.e(c, r)) * V::splat(0.5);
-        let (xy, xz, yz) = (s(0, 1), s(0, 2), s(1, 2));
-        B([s(0, 0), xy, xz, xy, s(1, 1), yz, xz, yz, s(2, 2)])
+    fn mul_add(&self, s: V, acc: &Self) -> Self {
+        block!(|r, c| self.e(r, c).scale_add(s, acc.e(r, c)))
+    }
+
+    #[inline(always)]
+    fn scale(&self, s: V) -> Self {
+        block!(|r, c| self.e(r, c) * s)
+    }
+
+    #[inline(always)]
+    fn add(&self, o: &Self) -> Self {
+        block!(|r, c| self.e(r, c) + o.e(r, c))
+    }
+
+    #[inline(always)]
+    fn neg(&self) -> Self {
+        block!(|r, c| -self.e(r, c))
     }
 
     /// `self + s I`.
@@ -185,67 +248,6 @@ impl<V: Lanes> B<V> {
         }
         self
     }
-
-    #[inline(always)]
-    fn zip(&self, o: &Self, f: impl Fn(V, V) -> V) -> Self {
-        B::from_fn(|r, c| f(self.e(r, c), o.e(r, c)))
-    }
-
-    #[inline(always)]
-    fn add(&self, o: &Self) -> Self {
-        self.zip(o, |x, y| x + y)
-    }
-
-    #[inline(always)]
-    fn sub(&self, o: &Self) -> Self {
-        self.zip(o, |x, y| x - y)
-    }
-
-    #[inline(always)]
-    fn scale(&self, s: V) -> Self {
-        B::from_fn(|r, c| self.e(r, c) * s)
-    }
-
-    #[inline(always)]
-    fn neg(&self) -> Self {
-        B::from_fn(|r, c| -self.e(r, c))
-    }
-}
-
-/// One euler window as a sequence of intervals: interval j holds sample `k0 + j` from `T(j)` to
-/// `T(j + 1)`, with `T(0) = lo`, `T(steps) = hi` and `T(j) = t[k0 + j]` between.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Span {
-    /// The sample held at `lo` (the last one at or before it).
-    pub k0: usize,
-    /// The number of intervals.
-    pub steps: usize,
-    /// Start time.
-    pub lo: f64,
-    /// End time.
-    pub hi: f64,
-}
-
-impl Span {
-    /// `T(j)`.
-    #[inline(always)]
-    fn time(&self, t: &[f64], j: usize) -> f64 {
-        if j == 0 {
-            self.lo
-        } else if j == self.steps {
-            self.hi
-        } else {
-            t[self.k0 + j]
-        }
-    }
-
-    /// `(accel, gyro, h)` of interval j.
-    #[inline(always)]
-    pub fn interval(&self, samples: &Samples<'_>, j: usize) -> (Vector3<f64>, Vector3<f64>, f64) {
-        let k = self.k0 + j;
-        let h = self.time(samples.t, j + 1) - self.time(samples.t, j);
-        (samples.accel_at(k), samples.gyro_at(k), h)
-    }
 }
 
 /// The lockstep state: the per-window fields, one window per lane.
@@ -254,133 +256,145 @@ struct State<V> {
     velocity: [V; 3],
     position: [V; 3],
     t: V,
-    /// `[θθ, θv, θp, vv, vp, pp]`.
+    /// `[θθ, θv, θp, vv, vp, pp]` in frame i (`blocks.rs`).
     cov: [B<V>; 6],
     /// `[θg, vg, va, pg, pa]` (the θa block stays zero).
     jac: [B<V>; 5],
 }
 
-/// `A Σ Aᵀ + B Σ_a Bᵀ + C Σ_g Cᵀ`: `blocks::propagate`, lane-wise.
+/// `A Σ Aᵀ` for the frame-i transition of `w`, `h`: `blocks::propagate_frame_i`, lane-wise.
 #[inline(always)]
-fn propagate<V: Lanes>(cov: &[B<V>; 6], phi: &B<V>, m: &B<V>, jr: &B<V>, h: V, var_a: V, var_g: V) -> [B<V>; 6] {
+fn propagate<V: Lanes>(cov: &[B<V>; 6], w: &B<V>, h: V, half_h2: V) -> [B<V>; 6] {
     let [tt, tv, tp, vv, vp, pp] = cov;
-    let (vt, pt, pv) = (tv.transpose(), tp.transpose(), vp.transpose());
-    let half_h2 = V::splat(0.5) * h * h;
-    let phi_tt = phi.mul(tt);
-    let m_tt = m.mul(tt);
-    let (m_tv, m_tp) = (m.mul(tv), m.mul(tp));
-    let a_vt = m_tt.scale(h).add(&vt);
-    let a_vv = m_tv.scale(h).add(vv);
-    let a_vp = m_tp.scale(h).add(vp);
-    let a_pt = m_tt.scale(half_h2).add(&vt.scale(h)).add(&pt);
-    let a_pv = m_tv.scale(half_h2).add(&vv.scale(h)).add(&pv);
-    let a_pp = m_tp.scale(half_h2).add(&vp.scale(h)).add(pp);
-    let phi_tt_mt = phi_tt.mul_t(m);
-    let new_tt = phi_tt
-        .mul_t_symmetric(phi)
-        .add(&jr.mul_t_symmetric(jr).scale(var_g * h * h));
-    let phi_tv = phi.mul(tv);
-    let new_tv = phi_tt_mt.scale(h).add(&phi_tv);
-    let new_tp = phi_tt_mt.scale(half_h2).add(&phi_tv.scale(h)).add(&phi.mul(tp));
-    let a_vt_mt = a_vt.mul_t(m);
-    let new_vv = a_vt_mt.scale(h).add(&a_vv).plus_identity(var_a * h * h);
-    let new_vp = a_vt_mt
-        .scale(half_h2)
-        .add(&a_vv.scale(h))
-        .add(&a_vp)
-        .plus_identity(var_a * h * half_h2);
-    let new_pp = a_pt
-        .mul_t(m)
-        .scale(half_h2)
-        .add(&a_pv.scale(h))
-        .add(&a_pp)
-        .plus_identity(var_a * half_h2 * half_h2);
-    [new_tt, new_tv, new_tp, new_vv.symmetric(), new_vp, new_pp.symmetric()]
+    let h2 = h * h;
+    let (w_tt, w_tv, w_tp) = (
+        w.zero_diagonal_mul(tt),
+        w.zero_diagonal_mul(tv),
+        w.zero_diagonal_mul(tp),
+    );
+    let (w_tt_t, w_tv_t) = (w_tt.transpose(), w_tv.transpose());
+    let w_tt_wt = w_tt.mul_t_symmetric(w);
+    let sym_v = w_tv.add(&w_tv_t);
+    let sym_p = w_tp.add(&w_tp.transpose());
+    let sym_vp = vp.add(&vp.transpose());
+    let new_vv = w_tt_wt.mul_add(h, &sym_v).mul_add(h, vv);
+    let new_vp = w_tt_wt
+        .mul_add(h, &w_tv_t)
+        .mul_add(half_h2, &w_tv.mul_add(h2, &vv.mul_add(h, &w_tp.mul_add(h, vp))));
+    let new_pp = w_tt_wt
+        .mul_add(half_h2, &sym_v.mul_add(h, &sym_p))
+        .mul_add(half_h2, &vv.mul_add(h2, &sym_vp.mul_add(h, pp)));
+    [
+        *tt,
+        w_tt_t.mul_add(h, tv),
+        w_tt_t.mul_add(half_h2, &tv.mul_add(h, tp)),
+        new_vv,
+        new_vp,
+        new_pp,
+    ]
 }
 
 impl<V: Lanes> State<V> {
     /// Every lane at `p`'s state.
-    fn of(p: &Preintegrator) -> Self {
-        let splat3 = |v: &Vector3<f64>| [V::splat(v.x), V::splat(v.y), V::splat(v.z)];
+    fn of(k: V, p: &Preintegrator) -> Self {
+        let block = |m: &M3| block!(|r, c| k.splat(m.0[c].0[r]));
+        let splat3 = |v: &Vector3<f64>| [k.splat(v.x), k.splat(v.y), k.splat(v.z)];
         let [[tg, _], [vg, va], [pg, pa]] = &p.jac;
         State {
-            rotation: B::splat(&p.delta_rotation),
+            rotation: block!(|r, c| k.splat(p.delta_rotation[(r, c)])),
             velocity: splat3(&p.delta_velocity),
             position: splat3(&p.delta_position),
-            t: V::splat(p.delta_t),
-            cov: p.covariance.each_ref().map(B::splat),
-            jac: [tg, vg, va, pg, pa].map(B::splat),
+            t: k.splat(p.delta_t),
+            cov: p.covariance.each_ref().map(block),
+            jac: [tg, vg, va, pg, pa].map(block),
         }
     }
 
     /// Lane `i` written into `p` (a copy of the template the lanes started from).
     fn write_lane(&self, i: usize, p: &mut Preintegrator) {
         let vector = |v: &[V; 3]| Vector3::new(v[0].lane(i), v[1].lane(i), v[2].lane(i));
+        let block = |b: &B<V>| {
+            M3(std::array::from_fn(|c| {
+                Col([b.e(0, c).lane(i), b.e(1, c).lane(i), b.e(2, c).lane(i), 0.0])
+            }))
+        };
         p.delta_rotation = self.rotation.lane(i);
         p.delta_velocity = vector(&self.velocity);
         p.delta_position = vector(&self.position);
         p.delta_t = self.t.lane(i);
-        p.covariance = self.cov.each_ref().map(|b| b.lane(i));
-        let [tg, vg, va, pg, pa] = self.jac.each_ref().map(|b| b.lane(i));
-        let jac: Cross = [[tg, Matrix3::zeros()], [vg, va], [pg, pa]];
+        p.covariance = self.cov.each_ref().map(block);
+        let [tg, vg, va, pg, pa] = self.jac.each_ref().map(block);
+        let jac: Cross = [[tg, M3::ZERO], [vg, va], [pg, pa]];
         p.jac = jac;
     }
 
-    /// One euler interval in every lane (`integrate_euler`, element for element).
+    /// One euler interval in every lane (`integrate_euler` with no bias walk and unit variance
+    /// scales, element for element).
     #[inline(always)]
     fn step(&mut self, accel: &[V; 3], gyro: &[V; 3], h: V, p: &Preintegrator) {
+        let k = h;
         let (ba, bg) = (&p.bias_accel, &p.bias_gyro);
         let a = [
-            accel[0] - V::splat(ba.x),
-            accel[1] - V::splat(ba.y),
-            accel[2] - V::splat(ba.z),
+            accel[0] - k.splat(ba.x),
+            accel[1] - k.splat(ba.y),
+            accel[2] - k.splat(ba.z),
         ];
         let w = [
-            gyro[0] - V::splat(bg.x),
-            gyro[1] - V::splat(bg.y),
-            gyro[2] - V::splat(bg.z),
+            gyro[0] - k.splat(bg.x),
+            gyro[1] - k.splat(bg.y),
+            gyro[2] - k.splat(bg.z),
         ];
         let r = self.rotation;
-        // `blocks::times_hat`: column j is `R (a × e_j)`.
-        let r_a_cross = B::from_fn(|i, c| match c {
-            0 => r.e(i, 1) * a[2] - r.e(i, 2) * a[1],
-            1 => r.e(i, 2) * a[0] - r.e(i, 0) * a[2],
-            _ => r.e(i, 0) * a[1] - r.e(i, 1) * a[0],
-        });
         let wh = [w[0] * h, w[1] * h, w[2] * h];
-        let (mut exp_l, mut jr_l) = ([[0.0; 9]; MAX_LANES], [[0.0; 9]; MAX_LANES]);
-        for i in 0..V::L {
+        let (mut exp_l, mut jrh_l) = ([Matrix3::zeros(); WIDTH], [Matrix3::zeros(); WIDTH]);
+        for i in 0..WIDTH {
             let (e, j) = so3::exp_and_right_jacobian(&Vector3::new(wh[0].lane(i), wh[1].lane(i), wh[2].lane(i)));
-            exp_l[i].copy_from_slice(e.as_slice());
-            jr_l[i].copy_from_slice(j.as_slice());
+            exp_l[i] = e;
+            jrh_l[i] = j * h.lane(i);
         }
-        let step = B::<V>::of_lanes(&exp_l);
-        let jr = B::<V>::of_lanes(&jr_l);
-        let half_h2 = V::splat(0.5) * h * h;
-        let var_a = V::splat(p.noise.accel_density * p.noise.accel_density) / h;
-        let var_g = V::splat(p.noise.gyro_density * p.noise.gyro_density) / h;
-        let phi = step.transpose();
-        let m = r_a_cross.neg();
-        self.cov = propagate(&self.cov, &phi, &m, &jr, h, var_a, var_g);
+        let step = B::of_lanes(k, &exp_l);
+        let jr_h = B::of_lanes(k, &jrh_l);
+        let r1 = r.mul_plain(&step);
+        let mut ra = a;
+        for (i, x) in ra.iter_mut().enumerate() {
+            *x = r.e(i, 0) * a[0] + r.e(i, 1) * a[1] + r.e(i, 2) * a[2];
+        }
 
-        let [jtg, jvg, jva, jpg, jpa] = self.jac;
-        let jr_h = jr.scale(h);
-        let ra_drot = r_a_cross.mul(&jtg);
+        let (d_a, d_g) = (p.noise.accel_density, p.noise.gyro_density);
+        let var_a = k.like(|i| d_a * d_a / h.lane(i));
+        let var_g = k.like(|i| d_g * d_g / h.lane(i));
+        // W = [−ΔR â]× (`so3::hat(&−ra)`).
+        let zero = k.splat(0.0);
+        let w_m = B([zero, -ra[2], ra[1], ra[2], zero, -ra[0], -ra[1], ra[0], zero]);
+        let g = r1.mul(&jr_h);
+        let (tg, va) = (g.neg(), r.scale(-h));
+        let half_h = k.splat(0.5) * h;
+        let half_h2 = half_h * h;
+        let mut cov = propagate(&self.cov, &w_m, h, half_h2);
+        // `blocks::add_held_noise`.
+        cov[0] = g.mul_t_symmetric(&g).mul_add(var_g, &cov[0]);
+        let q_a_h = var_a * h;
+        cov[3] = cov[3].plus_identity(q_a_h * h);
+        cov[4] = cov[4].plus_identity(q_a_h * half_h2);
+        cov[5] = cov[5].plus_identity(var_a * half_h2 * half_h2);
+        self.cov = cov;
+
+        // `Input::added_to(blocks::transition(…))` with the input's vg block zero.
+        let [xtg, xvg, xva, xpg, xpa] = self.jac;
+        let w_tg = w_m.zero_diagonal_mul(&xtg);
         self.jac = [
-            phi.mul(&jtg).sub(&jr_h),
-            jvg.sub(&ra_drot.scale(h)),
-            jva.sub(&r.scale(h)),
-            jpg.add(&jvg.scale(h)).sub(&ra_drot.scale(half_h2)),
-            jpa.add(&jva.scale(h)).sub(&r.scale(half_h2)),
+            xtg.add(&tg),
+            w_tg.mul_add(h, &xvg),
+            xva.add(&va),
+            xvg.mul_add(h, &w_tg.scale(half_h2)).add(&xpg),
+            va.mul_add(half_h, &xva.mul_add(h, &xpa)),
         ];
 
-        let ra_row = |i: usize| r.e(i, 0) * a[0] + r.e(i, 1) * a[1] + r.e(i, 2) * a[2];
-        let ra = [ra_row(0), ra_row(1), ra_row(2)];
         for ((p, v), ra) in self.position.iter_mut().zip(self.velocity.iter_mut()).zip(ra) {
             *p = *p + (*v * h + ra * half_h2);
             *v = *v + ra * h;
         }
-        self.rotation = r.mul(&step);
+        self.rotation = r1;
         self.t = self.t + h;
     }
 
@@ -390,60 +404,28 @@ impl<V: Lanes> State<V> {
         *since_projection += 1;
         if *since_projection >= PROJECT_EVERY {
             *since_projection = 0;
-            let mut projected = [[0.0; 9]; MAX_LANES];
-            for (i, lane) in projected.iter_mut().enumerate().take(V::L) {
-                lane.copy_from_slice(project_rotation(&self.rotation.lane(i)).as_slice());
-            }
-            self.rotation = B::of_lanes(&projected);
+            let projected: [Matrix3<f64>; WIDTH] = std::array::from_fn(|i| project_rotation(&self.rotation.lane(i)));
+            self.rotation = B::of_lanes(self.t, &projected);
         }
     }
 }
 
-/// The widest lane count supported (the AVX-512 path's).
-const MAX_LANES: usize = 8;
-
-/// Windows per bundle on the path in use.
-pub(super) fn width() -> usize {
-    match simd::path() {
-        Path::Avx512 => 8,
-        _ => 4,
-    }
-}
-
-/// `template` (euler, no bias walk) run over each of `spans` (at most [`width`]), without
-/// clipping flags; the boundary samples are left as in `template` (the caller sets them).
-pub(super) fn run(samples: &Samples<'_>, spans: &[Span], template: &Preintegrator) -> Vec<Preintegrator> {
-    match simd::path() {
-        Path::Avx512 => bundle::<X<8>>(samples, spans, template, PhantomData),
-        _ => bundle::<X<4>>(samples, spans, template, PhantomData),
-    }
-}
-
 crate::simd_dispatch! {
-    /// Up to `V::L` windows in lockstep for the intervals they all have, then each alone (module
-    /// docs); lanes beyond `spans` repeat its first window and are dropped.
-    fn bundle<V: Lanes>(
-        samples: &Samples<'_>,
-        spans: &[Span],
-        template: &Preintegrator,
-        _lanes: PhantomData<V>,
-    ) -> Vec<Preintegrator> {
+    /// `template` (euler, no bias walk) run over each of `spans` (at most [`WIDTH`]) without
+    /// clipping flags, in lockstep for the intervals they all have, then each alone (module docs);
+    /// lanes beyond `spans` repeat its first window and are dropped. `k`: any lane value (from
+    /// [`lanes`]). The boundary samples are left as in `template` (the caller sets them).
+    pub(super) fn run<V: Lanes>(samples: &Samples<'_>, spans: &[Span], template: &Preintegrator, k: V) -> Vec<Preintegrator> {
         let lane_span = |i: usize| spans[if i < spans.len() { i } else { 0 }];
         let common = spans.iter().map(|s| s.steps).min().unwrap_or(0);
-        let mut state = State::<V>::of(template);
+        let mut state = State::of(k, template);
         let mut since_projection = template.since_projection;
         for j in 0..common {
-            let mut hs = [0.0; MAX_LANES];
-            let mut lanes = [[0.0; 6]; MAX_LANES];
-            for (i, (lane, h)) in lanes.iter_mut().zip(hs.iter_mut()).enumerate().take(V::L) {
-                let (a, w, dt) = lane_span(i).interval(samples, j);
-                *lane = [a.x, a.y, a.z, w.x, w.y, w.z];
-                *h = dt;
-            }
-            let value = |k: usize| V::from_fn(|i| lanes[i][k]);
-            let accel = [value(0), value(1), value(2)];
-            let gyro = [value(3), value(4), value(5)];
-            state.step(&accel, &gyro, V::from_fn(|i| hs[i]), template);
+            let lanes: [(Vector3<f64>, Vector3<f64>, f64); WIDTH] = std::array::from_fn(|i| lane_span(i).interval(samples, j));
+            let accel = [0, 1, 2].map(|c| k.like(|i| lanes[i].0[c]));
+            let gyro = [0, 1, 2].map(|c| k.like(|i| lanes[i].1[c]));
+            let h = k.like(|i| lanes[i].2);
+            state.step(&accel, &gyro, h, template);
             state.count_interval(&mut since_projection);
         }
         spans

@@ -58,6 +58,7 @@
 mod batch;
 mod blocks;
 mod continuity;
+#[cfg(target_arch = "x86_64")]
 mod lanes;
 mod lever;
 mod merge;

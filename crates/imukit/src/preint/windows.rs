@@ -13,7 +13,8 @@ use std::cmp::Ordering;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::lanes::{self, Span};
+#[cfg(target_arch = "x86_64")]
+use super::lanes;
 use super::{clipped_at, ClipMask, Clipped, End, Ends, Preintegrator, Scheme};
 use crate::error::{try_vec, Cancel, Error, Result};
 use crate::imu::Samples;
@@ -301,6 +302,42 @@ crate::simd_dispatch! {
     }
 }
 
+/// One euler window as a sequence of intervals: interval j holds sample `k0 + j` from `T(j)` to
+/// `T(j + 1)`, with `T(0) = lo`, `T(steps) = hi` and `T(j) = t[k0 + j]` between.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Span {
+    /// The sample held at `lo` (the last one at or before it).
+    pub k0: usize,
+    /// The number of intervals.
+    pub steps: usize,
+    /// Start time.
+    pub lo: f64,
+    /// End time.
+    pub hi: f64,
+}
+
+impl Span {
+    /// `T(j)`.
+    #[inline(always)]
+    fn time(&self, t: &[f64], j: usize) -> f64 {
+        if j == 0 {
+            self.lo
+        } else if j == self.steps {
+            self.hi
+        } else {
+            t[self.k0 + j]
+        }
+    }
+
+    /// `(accel, gyro, h)` of interval j.
+    #[inline(always)]
+    pub fn interval(&self, samples: &Samples<'_>, j: usize) -> (Vector3<f64>, Vector3<f64>, f64) {
+        let k = self.k0 + j;
+        let h = self.time(samples.t, j + 1) - self.time(samples.t, j);
+        (samples.accel_at(k), samples.gyro_at(k), h)
+    }
+}
+
 /// The intervals of the window `[lo, hi]` (k0: the last sample at or before lo; then one interval
 /// per sample strictly inside).
 fn span(t: &[f64], lo: f64, hi: f64) -> Span {
@@ -329,25 +366,43 @@ fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
 }
 
 /// The windows between consecutive `edges`, in order, in parallel: euler windows without a bias
-/// walk or a clipped sample in SIMD lanes (`lanes.rs`), bundled in order of length so that a
-/// bundle's windows end together; every other window on the per-window kernel.
+/// walk or a clipped sample in SIMD lanes on the AVX paths (`lanes.rs`), every other window on the
+/// per-window kernel.
 fn run_block(
     samples: &Samples<'_>,
     clipped: Option<&ClipMask<'_>>,
     edges: &[f64],
     template: &Preintegrator,
 ) -> Vec<Preintegrator> {
-    let alone = |w: &[f64]| window(samples, clipped, w[0], w[1], template);
-    if template.scheme != Scheme::Euler || template.bias_walk.is_some() {
-        return edges.par_windows(2).map(alone).collect();
+    #[cfg(target_arch = "x86_64")]
+    if let Some(k) = lanes::lanes() {
+        if template.scheme == Scheme::Euler && template.bias_walk.is_none() {
+            return run_block_in_lanes(samples, clipped, edges, template, k);
+        }
     }
+    edges
+        .par_windows(2)
+        .map(|w| window(samples, clipped, w[0], w[1], template))
+        .collect()
+}
+
+/// [`run_block`] with the lanes `k`: the unflagged windows bundled in order of length, so that a
+/// bundle's windows end together (the grouping does not depend on the thread count).
+#[cfg(target_arch = "x86_64")]
+fn run_block_in_lanes(
+    samples: &Samples<'_>,
+    clipped: Option<&ClipMask<'_>>,
+    edges: &[f64],
+    template: &Preintegrator,
+    k: lanes::P4,
+) -> Vec<Preintegrator> {
     let spans: Vec<Span> = edges.windows(2).map(|w| span(samples.t, w[0], w[1])).collect();
-    let flagged = |s: &Span| clipped.is_some_and(|m| (s.k0..s.k0 + s.steps).any(|k| m.gyro[k] || m.accel[k]));
+    let flagged = |s: &Span| clipped.is_some_and(|m| (s.k0..s.k0 + s.steps).any(|j| m.gyro[j] || m.accel[j]));
     let (mut in_lanes, per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
     in_lanes.sort_by_key(|&i| spans[i].steps);
-    let bundled = in_lanes.par_chunks(lanes::width()).flat_map_iter(|chunk| {
+    let bundled = in_lanes.par_chunks(lanes::WIDTH).flat_map_iter(|chunk| {
         let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
-        let done = lanes::run(samples, &bundle, template);
+        let done = lanes::run(samples, &bundle, template, k);
         chunk
             .iter()
             .zip(done)
@@ -357,7 +412,9 @@ fn run_block(
             })
             .collect::<Vec<_>>()
     });
-    let single = per_window.par_iter().map(|&i| (i, alone(&edges[i..i + 2])));
+    let single = per_window
+        .par_iter()
+        .map(|&i| (i, window(samples, clipped, edges[i], edges[i + 1], template)));
     let mut slots: Vec<Option<Preintegrator>> = (0..spans.len()).map(|_| None).collect();
     for (i, p) in bundled.chain(single).collect::<Vec<_>>() {
         slots[i] = Some(p);
@@ -365,6 +422,6 @@ fn run_block(
     slots.into_iter().flatten().collect()
 }
 
-#[cfg(test)]
+#[cfg(all(test, target_arch = "x86_64"))]
 #[path = "windows_tests.rs"]
 mod tests;
