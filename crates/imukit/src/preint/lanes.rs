@@ -14,9 +14,9 @@
 //! (`preint/mod.rs`, `integrate_euler`; `preint/blocks.rs`, `propagate_frame_i`, `transition`,
 //! `add_held_noise`, `Input::added_to`; `mat3.rs`), fused where that kernel fuses on the same path
 //! (`mat3::Fused::scale_add`, the `Lanes` products, never the plain `Matrix3` ones): a lane is the
-//! per-window kernel of its path bit for bit (tested on every path). `Exp(ω̂h)` and `J_r(ω̂h)` (a
-//! norm and branches on θ) and the projection of ΔR every `PROJECT_EVERY` intervals are computed
-//! per lane by the per-window functions themselves.
+//! per-window kernel of its path bit for bit (tested on every path). The coefficients of `Exp(ω̂h)`
+//! and `J_r(ω̂h)` (branches on θ) and the projection of ΔR every `PROJECT_EVERY` intervals are
+//! computed per lane by the per-window functions themselves.
 //!
 //! What the lanes run: the euler scheme with the 9×9 covariance and the 9×6 bias Jacobian, no
 //! flagged (clipped) sample, no bias walk. `windows.rs` sends everything else to the per-window
@@ -32,9 +32,9 @@ use super::blocks::Cross;
 use super::windows::Span;
 use super::{project_rotation, Clipped, Preintegrator, PROJECT_EVERY};
 use crate::imu::Samples;
+use crate::lie::series;
 use crate::mat3::{Col, M3};
 use crate::simd::{self, Path};
-use crate::so3;
 
 /// Windows per bundle.
 pub(super) const WIDTH: usize = 4;
@@ -262,6 +262,47 @@ struct State<V> {
     jac: [B<V>; 5],
 }
 
+/// `(Exp(φ), J_r(φ))` in every lane: `so3::exp_and_right_jacobian`'s elements, lane-wise, with its
+/// coefficients from θ² computed per lane (the series below θ² = 1e-4, else a square root and
+/// `sin`, `cos`: a branch per lane).
+#[inline(always)]
+fn exp_and_right_jacobian<V: Lanes>(k: V, phi: &[V; 3]) -> (B<V>, B<V>) {
+    // A loop, not `array::from_fn`, which stayed an out-of-line call.
+    let mut coef = [(0.0, 0.0, 0.0); WIDTH];
+    for (i, c) in coef.iter_mut().enumerate() {
+        let phi = Vector3::new(phi[0].lane(i), phi[1].lane(i), phi[2].lane(i));
+        *c = series::exp_jacobian_small(phi.norm_squared());
+    }
+    let (a, b, c) = (k.like(|i| coef[i].0), k.like(|i| coef[i].1), k.like(|i| coef[i].2));
+    let [x, y, z] = *phi;
+    let (xy, xz, yz) = (x * y, x * z, y * z);
+    let (d0, d1, d2) = (y * y + z * z, x * x + z * z, x * x + y * y);
+    let one = k.splat(1.0);
+    let exp = B([
+        one - b * d0,
+        b * xy + a * z,
+        b * xz - a * y,
+        b * xy - a * z,
+        one - b * d1,
+        b * yz + a * x,
+        b * xz + a * y,
+        b * yz - a * x,
+        one - b * d2,
+    ]);
+    let jr = B([
+        one - c * d0,
+        c * xy - b * z,
+        c * xz + b * y,
+        c * xy + b * z,
+        one - c * d1,
+        c * yz - b * x,
+        c * xz - b * y,
+        c * yz + b * x,
+        one - c * d2,
+    ]);
+    (exp, jr)
+}
+
 /// `A Σ Aᵀ` for the frame-i transition of `w`, `h`: `blocks::propagate_frame_i`, lane-wise.
 #[inline(always)]
 fn propagate<V: Lanes>(cov: &[B<V>; 6], w: &B<V>, h: V, half_h2: V) -> [B<V>; 6] {
@@ -346,14 +387,8 @@ impl<V: Lanes> State<V> {
         ];
         let r = self.rotation;
         let wh = [w[0] * h, w[1] * h, w[2] * h];
-        let (mut exp_l, mut jrh_l) = ([Matrix3::zeros(); WIDTH], [Matrix3::zeros(); WIDTH]);
-        for i in 0..WIDTH {
-            let (e, j) = so3::exp_and_right_jacobian(&Vector3::new(wh[0].lane(i), wh[1].lane(i), wh[2].lane(i)));
-            exp_l[i] = e;
-            jrh_l[i] = j * h.lane(i);
-        }
-        let step = B::of_lanes(k, &exp_l);
-        let jr_h = B::of_lanes(k, &jrh_l);
+        let (step, jr) = exp_and_right_jacobian(k, &wh);
+        let jr_h = jr.scale(h);
         let r1 = r.mul_plain(&step);
         let mut ra = a;
         for (i, x) in ra.iter_mut().enumerate() {
@@ -421,9 +456,12 @@ crate::simd_dispatch! {
         let mut state = State::of(k, template);
         let mut since_projection = template.since_projection;
         for j in 0..common {
-            let lanes: [(Vector3<f64>, Vector3<f64>, f64); WIDTH] = std::array::from_fn(|i| lane_span(i).interval(samples, j));
-            let accel = [0, 1, 2].map(|c| k.like(|i| lanes[i].0[c]));
-            let gyro = [0, 1, 2].map(|c| k.like(|i| lanes[i].1[c]));
+            let mut lanes = [(Vector3::zeros(), Vector3::zeros(), 0.0); WIDTH];
+            for (i, lane) in lanes.iter_mut().enumerate() {
+                *lane = lane_span(i).interval(samples, j);
+            }
+            let accel = [k.like(|i| lanes[i].0.x), k.like(|i| lanes[i].0.y), k.like(|i| lanes[i].0.z)];
+            let gyro = [k.like(|i| lanes[i].1.x), k.like(|i| lanes[i].1.y), k.like(|i| lanes[i].1.z)];
             let h = k.like(|i| lanes[i].2);
             state.step(&accel, &gyro, h, template);
             state.count_interval(&mut since_projection);
