@@ -25,6 +25,7 @@ pub(crate) struct PyPreintegrator {
 }
 
 /// Private copies of the per-sample saturation flags `(gyro, accel)`: the run releases the GIL.
+/// None are made when no sample is flagged (the common case): the run then reads no flag.
 struct FlagCopies {
     gyro: Vec<bool>,
     accel: Vec<bool>,
@@ -32,15 +33,21 @@ struct FlagCopies {
 
 impl FlagCopies {
     fn new(py: Python<'_>, gyro: &PyReadonlyArray1<'_, bool>, accel: &PyReadonlyArray1<'_, bool>) -> PyResult<Self> {
-        let copy = |name: &'static str, flags: &PyReadonlyArray1<'_, bool>| {
-            let flags = flags.as_array();
+        let (gyro, accel) = (gyro.as_array(), accel.as_array());
+        if !gyro.iter().chain(accel.iter()).any(|&f| f) {
+            return Ok(Self {
+                gyro: Vec::new(),
+                accel: Vec::new(),
+            });
+        }
+        let copy = |name: &'static str, flags: &numpy::ndarray::ArrayView1<'_, bool>| {
             let mut out = imukit::try_vec(flags.len(), "flags").map_err(|e| to_py(py, name, e))?;
             out.extend(flags.iter().copied());
             Ok::<_, PyErr>(out)
         };
         Ok(Self {
-            gyro: copy("gyro_saturated", gyro)?,
-            accel: copy("accel_saturated", accel)?,
+            gyro: copy("gyro_saturated", &gyro)?,
+            accel: copy("accel_saturated", &accel)?,
         })
     }
 

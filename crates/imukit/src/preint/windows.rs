@@ -400,26 +400,35 @@ fn run_block_in_lanes(
     let flagged = |s: &Span| clipped.is_some_and(|m| (s.k0..s.k0 + s.steps).any(|j| m.gyro[j] || m.accel[j]));
     let (mut in_lanes, per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
     in_lanes.sort_by_key(|&i| spans[i].steps);
-    let bundled = in_lanes.par_chunks(lanes::WIDTH).flat_map_iter(|chunk| {
-        let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
-        let done = lanes::run(samples, &bundle, template, k);
-        chunk
-            .iter()
-            .zip(done)
-            .map(|(&i, mut p)| {
-                p.boundary = held_ends(samples, spans[i].k0, spans[i].hi);
-                (i, p)
-            })
-            .collect::<Vec<_>>()
-    });
-    let single = per_window
+    // Each result (3 kB) is moved as few times as possible: the indexed collects write in place,
+    // then once into `done` and once into place.
+    let bundles: Vec<Vec<Preintegrator>> = in_lanes
+        .par_chunks(lanes::WIDTH)
+        .map(|chunk| {
+            let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
+            let mut done = lanes::run(samples, &bundle, template, k);
+            for (p, s) in done.iter_mut().zip(&bundle) {
+                p.boundary = held_ends(samples, s.k0, s.hi);
+            }
+            done
+        })
+        .collect();
+    let singles: Vec<Preintegrator> = per_window
         .par_iter()
-        .map(|&i| (i, window(samples, clipped, edges[i], edges[i + 1], template)));
-    let mut slots: Vec<Option<Preintegrator>> = (0..spans.len()).map(|_| None).collect();
-    for (i, p) in bundled.chain(single).collect::<Vec<_>>() {
-        slots[i] = Some(p);
+        .map(|&i| window(samples, clipped, edges[i], edges[i + 1], template))
+        .collect();
+    // `done[j]` is window `order[j]`.
+    let order = in_lanes.iter().chain(&per_window);
+    let mut slot = vec![0; spans.len()];
+    for (j, &i) in order.enumerate() {
+        slot[i] = j;
     }
-    slots.into_iter().flatten().collect()
+    // Sized up front: a collect from `flatten` or `filter_map` grows by reallocation (copies).
+    let mut done: Vec<Option<Preintegrator>> = Vec::with_capacity(spans.len());
+    done.extend(bundles.into_iter().flatten().chain(singles).map(Some));
+    let mut out = Vec::with_capacity(spans.len());
+    out.extend(slot.iter().filter_map(|&j| done[j].take()));
+    out
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]
