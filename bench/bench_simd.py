@@ -51,8 +51,10 @@ KERNELS = {
     "preintegrate_windows euler, 1 thread": (950, 56, None),
     "preintegrate_windows euler, 2 threads": (950, 56, None),
     # The same windows with one sample each flagged as clipped, which keeps them off the SIMD lanes
-    # of the AVX paths (`preint/lanes.rs`): the per-window kernel, for the lanes' gain.
+    # of the AVX paths (`preint/lanes/`): the per-window kernel, for the lanes' gain.
     "preintegrate_windows euler, per-window kernel, 1 thread": (950, 56, None),
+    "preintegrate_windows midpoint, 1 thread": (2400, 56, None),
+    "preintegrate_windows midpoint, per-window kernel, 1 thread": (2400, 56, None),
 }
 # The rows with a GTSAM peer.
 PEER_ROWS = ("preintegrate euler (9×9 + 9×6)", "preintegrate combined (15×15)")
@@ -88,17 +90,19 @@ def cases(n: int) -> dict[str, Callable[[], object]]:
 def windows_cases(
     t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, noise: ik.ImuNoise, names: list[str]
 ) -> dict[str, Callable[[], object]]:
-    """``preintegrate_windows`` (euler) over windows of ``WINDOW`` samples, one and two threads, and
-    on one thread with one sample of each window at the gyro's range (the per-window kernel)."""
+    """``preintegrate_windows`` over windows of ``WINDOW`` samples: euler on one and two threads,
+    and on one thread with one sample of each window at the gyro's range (the per-window kernel);
+    midpoint on one thread, both ways."""
     imu = ik.ImuData(t, gyro, accel)
     flagged = gyro.copy()
     flagged[WINDOW // 2 :: WINDOW, 0] = 100.0
     clipped = ik.ImuData(t, flagged, accel, gyro_range=100.0)
     boundaries = t[::WINDOW]
-    params = ik.PreintParams(noise, scheme="lie_euler")
+    euler, midpoint = (ik.PreintParams(noise, scheme=s) for s in ("lie_euler", "midpoint"))
+    runs = ((euler, imu, 1), (euler, imu, 2), (euler, clipped, 1), (midpoint, imu, 1), (midpoint, clipped, 1))
     return {
-        name: (lambda k=k, d=d: ik.preintegrate_windows(d, boundaries, params, threads=k))
-        for name, k, d in zip(names, (1, 2, 1), (imu, imu, clipped), strict=True)
+        name: (lambda p=p, d=d, k=k: ik.preintegrate_windows(d, boundaries, p, threads=k))
+        for name, (p, d, k) in zip(names, runs, strict=True)
     }
 
 

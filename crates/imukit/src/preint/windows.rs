@@ -329,12 +329,33 @@ impl Span {
         }
     }
 
-    /// `(accel, gyro, h)` of interval j.
+    /// `(accel, gyro, h)` of interval j in the euler scheme: the sample held over it.
     #[inline(always)]
     pub fn interval(&self, samples: &Samples<'_>, j: usize) -> (Vector3<f64>, Vector3<f64>, f64) {
         let k = self.k0 + j;
         let h = self.time(samples.t, j + 1) - self.time(samples.t, j);
         (samples.accel_at(k), samples.gyro_at(k), h)
+    }
+
+    /// `(accel, gyro, 0)` at the start of a midpoint window (interpolated at `lo`, as [`window`]
+    /// takes it), unflagged.
+    pub fn start_point(&self, samples: &Samples<'_>) -> (Vector3<f64>, Vector3<f64>, f64) {
+        let (a, w, _) = at(samples, None, self.k0, self.lo, Scheme::Midpoint);
+        (a, w, 0.0)
+    }
+
+    /// `(accel, gyro, h)` of interval j in the midpoint scheme: the point at its end (the next
+    /// sample, or the one interpolated at `hi`), unflagged.
+    #[inline(always)]
+    pub fn end_point(&self, samples: &Samples<'_>, j: usize) -> (Vector3<f64>, Vector3<f64>, f64) {
+        let h = self.time(samples.t, j + 1) - self.time(samples.t, j);
+        if j + 1 < self.steps {
+            let k = self.k0 + j + 1;
+            (samples.accel_at(k), samples.gyro_at(k), h)
+        } else {
+            let (a, w, _) = at(samples, None, self.k0 + self.steps - 1, self.hi, Scheme::Midpoint);
+            (a, w, h)
+        }
     }
 }
 
@@ -365,8 +386,8 @@ fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
     }
 }
 
-/// The windows between consecutive `edges`, in order, in parallel: euler windows without a bias
-/// walk or a clipped sample in SIMD lanes on the AVX paths (`lanes.rs`), every other window on the
+/// The windows between consecutive `edges`, in order, in parallel: windows without a bias walk
+/// or a clipped sample in SIMD lanes on the AVX paths (`lanes/`), every other window on the
 /// per-window kernel.
 fn run_block(
     samples: &Samples<'_>,
@@ -376,7 +397,7 @@ fn run_block(
 ) -> Vec<Preintegrator> {
     #[cfg(target_arch = "x86_64")]
     if let Some(k) = lanes::lanes() {
-        if template.scheme == Scheme::Euler && template.bias_walk.is_none() {
+        if template.bias_walk.is_none() {
             return run_block_in_lanes(samples, clipped, edges, template, k);
         }
     }
@@ -397,7 +418,13 @@ fn run_block_in_lanes(
     k: lanes::P4,
 ) -> Vec<Preintegrator> {
     let spans: Vec<Span> = edges.windows(2).map(|w| span(samples.t, w[0], w[1])).collect();
-    let flagged = |s: &Span| clipped.is_some_and(|m| (s.k0..s.k0 + s.steps).any(|j| m.gyro[j] || m.accel[j]));
+    // The samples a window reads: euler holds k0 … k0 + steps − 1; midpoint's end point at `hi`
+    // may be interpolated towards the next one, whose flag it takes.
+    let reach = usize::from(template.scheme == Scheme::Midpoint);
+    let flagged = |s: &Span| {
+        let end = (s.k0 + s.steps + reach).min(samples.t.len());
+        clipped.is_some_and(|m| (s.k0..end).any(|j| m.gyro[j] || m.accel[j]))
+    };
     let (mut in_lanes, per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
     in_lanes.sort_by_key(|&i| spans[i].steps);
     // Each result (3 kB) is moved as few times as possible: the indexed collects write in place,
@@ -408,7 +435,16 @@ fn run_block_in_lanes(
             let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
             let mut done = lanes::run(samples, &bundle, template, k);
             for (p, s) in done.iter_mut().zip(&bundle) {
-                p.boundary = held_ends(samples, s.k0, s.hi);
+                p.boundary = match template.scheme {
+                    Scheme::Euler => held_ends(samples, s.k0, s.hi),
+                    Scheme::Midpoint => {
+                        let end = |(accel, gyro, _): (Vector3<f64>, Vector3<f64>, f64)| End { t: None, accel, gyro };
+                        Ends {
+                            first: Some(end(s.start_point(samples))),
+                            last: Some(end(s.end_point(samples, s.steps - 1))),
+                        }
+                    }
+                };
             }
             done
         })

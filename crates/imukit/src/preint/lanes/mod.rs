@@ -30,11 +30,14 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::blocks::Cross;
 use super::windows::Span;
-use super::{project_rotation, Clipped, Preintegrator, PROJECT_EVERY};
+use super::{project_rotation, Clipped, Preintegrator, Scheme, PROJECT_EVERY};
 use crate::imu::Samples;
 use crate::lie::series;
 use crate::mat3::{Col, M3};
 use crate::simd::{self, Path};
+use midpoint::Mid;
+
+mod midpoint;
 
 /// Windows per bundle.
 pub(super) const WIDTH: usize = 4;
@@ -158,6 +161,23 @@ impl<V: Lanes> B<V> {
         Matrix3::from_fn(|r, c| self.e(r, c).lane(i))
     }
 
+    /// Lane `i` as a padded block.
+    fn m3(&self, i: usize) -> M3 {
+        M3(std::array::from_fn(|c| {
+            Col([self.e(0, c).lane(i), self.e(1, c).lane(i), self.e(2, c).lane(i), 0.0])
+        }))
+    }
+
+    /// `self a`, never fused (nalgebra's `Matrix3 * Vector3`: each row summed left to right).
+    #[inline(always)]
+    fn apply(&self, a: &[V; 3]) -> [V; 3] {
+        let mut out = *a;
+        for (i, x) in out.iter_mut().enumerate() {
+            *x = self.e(i, 0) * a[0] + self.e(i, 1) * a[1] + self.e(i, 2) * a[2];
+        }
+        out
+    }
+
     /// Lane `i` of element `(r, c)` is `m[i][(r, c)]`.
     #[inline(always)]
     fn of_lanes(k: V, m: &[Matrix3<f64>; WIDTH]) -> Self {
@@ -194,6 +214,13 @@ impl<V: Lanes> B<V> {
             let (j, k) = [(1, 2), (0, 2), (0, 1)][r];
             self.e(r, k).scale_add(b.e(k, c), self.e(r, j) * b.e(j, c))
         })
+    }
+
+    /// `self bᵀ` (`M3::mul_t_with`).
+    #[inline(always)]
+    fn mul_t(&self, b: &Self) -> Self {
+        let bt = b.transpose();
+        block!(|r, c| self.dot(r, &bt, c))
     }
 
     /// `self bᵀ` known to be symmetric: the upper triangle, mirrored (`M3::mul_t_symmetric_with`).
@@ -335,6 +362,51 @@ fn propagate<V: Lanes>(cov: &[B<V>; 6], w: &B<V>, h: V, half_h2: V) -> [B<V>; 6]
     ]
 }
 
+/// `W` = `[−v]×` for the vector `v` (`so3::hat(&−v)`, zero diagonal).
+#[inline(always)]
+fn hat_neg<V: Lanes>(v: &[V; 3]) -> B<V> {
+    let zero = v[0].splat(0.0);
+    B([zero, -v[2], v[1], v[2], zero, -v[0], -v[1], v[0], zero])
+}
+
+/// `A X` for a 9×6 cross covariance `X = [θg, vg, va, pg, pa]` (its θa block zero):
+/// `blocks::transition`, lane-wise.
+#[inline(always)]
+fn transition<V: Lanes>(x: &[B<V>; 5], w: &B<V>, h: V, half_h2: V) -> [B<V>; 5] {
+    let [xtg, xvg, xva, xpg, xpa] = x;
+    let w_tg = w.zero_diagonal_mul(xtg);
+    [
+        *xtg,
+        w_tg.mul_add(h, xvg),
+        *xva,
+        xvg.mul_add(h, &w_tg.scale(half_h2)).add(xpg),
+        xva.mul_add(h, xpa),
+    ]
+}
+
+/// A step's 9×6 input `G = [[tg, 0], [vg, va], [h/2 vg, h/2 va]]` in lanes (`blocks::Input`).
+#[derive(Debug, Clone, Copy)]
+struct In<V> {
+    tg: B<V>,
+    vg: B<V>,
+    va: B<V>,
+    half_h: V,
+}
+
+impl<V: Lanes> In<V> {
+    /// `x + G` (`Input::added_to`).
+    #[inline(always)]
+    fn added_to(&self, x: &[B<V>; 5]) -> [B<V>; 5] {
+        [
+            x[0].add(&self.tg),
+            x[1].add(&self.vg),
+            x[2].add(&self.va),
+            self.vg.mul_add(self.half_h, &x[3]),
+            self.va.mul_add(self.half_h, &x[4]),
+        ]
+    }
+}
+
 impl<V: Lanes> State<V> {
     /// Every lane at `p`'s state.
     fn of(k: V, p: &Preintegrator) -> Self {
@@ -354,11 +426,7 @@ impl<V: Lanes> State<V> {
     /// Lane `i` written into `p` (a copy of the template the lanes started from).
     fn write_lane(&self, i: usize, p: &mut Preintegrator) {
         let vector = |v: &[V; 3]| Vector3::new(v[0].lane(i), v[1].lane(i), v[2].lane(i));
-        let block = |b: &B<V>| {
-            M3(std::array::from_fn(|c| {
-                Col([b.e(0, c).lane(i), b.e(1, c).lane(i), b.e(2, c).lane(i), 0.0])
-            }))
-        };
+        let block = |b: &B<V>| b.m3(i);
         p.delta_rotation = self.rotation.lane(i);
         p.delta_velocity = vector(&self.velocity);
         p.delta_position = vector(&self.position);
@@ -372,7 +440,7 @@ impl<V: Lanes> State<V> {
     /// One euler interval in every lane (`integrate_euler` with no bias walk and unit variance
     /// scales, element for element).
     #[inline(always)]
-    fn step(&mut self, accel: &[V; 3], gyro: &[V; 3], h: V, p: &Preintegrator) {
+    fn step_euler(&mut self, accel: &[V; 3], gyro: &[V; 3], h: V, p: &Preintegrator) {
         let k = h;
         let (ba, bg) = (&p.bias_accel, &p.bias_gyro);
         let a = [
@@ -390,20 +458,20 @@ impl<V: Lanes> State<V> {
         let (step, jr) = exp_and_right_jacobian(k, &wh);
         let jr_h = jr.scale(h);
         let r1 = r.mul_plain(&step);
-        let mut ra = a;
-        for (i, x) in ra.iter_mut().enumerate() {
-            *x = r.e(i, 0) * a[0] + r.e(i, 1) * a[1] + r.e(i, 2) * a[2];
-        }
+        let ra = r.apply(&a);
 
         let (d_a, d_g) = (p.noise.accel_density, p.noise.gyro_density);
         let var_a = k.like(|i| d_a * d_a / h.lane(i));
         let var_g = k.like(|i| d_g * d_g / h.lane(i));
-        // W = [−ΔR â]× (`so3::hat(&−ra)`).
-        let zero = k.splat(0.0);
-        let w_m = B([zero, -ra[2], ra[1], ra[2], zero, -ra[0], -ra[1], ra[0], zero]);
+        let w_m = hat_neg(&ra);
         let g = r1.mul(&jr_h);
-        let (tg, va) = (g.neg(), r.scale(-h));
         let half_h = k.splat(0.5) * h;
+        let g_b = In {
+            tg: g.neg(),
+            vg: B([k.splat(0.0); 9]),
+            va: r.scale(-h),
+            half_h,
+        };
         let half_h2 = half_h * h;
         let mut cov = propagate(&self.cov, &w_m, h, half_h2);
         // `blocks::add_held_noise`.
@@ -414,16 +482,7 @@ impl<V: Lanes> State<V> {
         cov[5] = cov[5].plus_identity(var_a * half_h2 * half_h2);
         self.cov = cov;
 
-        // `Input::added_to(blocks::transition(…))` with the input's vg block zero.
-        let [xtg, xvg, xva, xpg, xpa] = self.jac;
-        let w_tg = w_m.zero_diagonal_mul(&xtg);
-        self.jac = [
-            xtg.add(&tg),
-            w_tg.mul_add(h, &xvg),
-            xva.add(&va),
-            xvg.mul_add(h, &w_tg.scale(half_h2)).add(&xpg),
-            va.mul_add(half_h, &xva.mul_add(h, &xpa)),
-        ];
+        self.jac = g_b.added_to(&transition(&self.jac, &w_m, h, half_h2));
 
         for ((p, v), ra) in self.position.iter_mut().zip(self.velocity.iter_mut()).zip(ra) {
             *p = *p + (*v * h + ra * half_h2);
@@ -446,24 +505,46 @@ impl<V: Lanes> State<V> {
 }
 
 crate::simd_dispatch! {
-    /// `template` (euler, no bias walk) run over each of `spans` (at most [`WIDTH`]) without
-    /// clipping flags, in lockstep for the intervals they all have, then each alone (module docs);
-    /// lanes beyond `spans` repeat its first window and are dropped. `k`: any lane value (from
+    /// `template` (no bias walk) run over each of `spans` (at most [`WIDTH`]) without clipping
+    /// flags, in lockstep for the intervals they all have, then each alone (module docs); lanes
+    /// beyond `spans` repeat its first window and are dropped. `k`: any lane value (from
     /// [`lanes`]). The boundary samples are left as in `template` (the caller sets them).
     pub(super) fn run<V: Lanes>(samples: &Samples<'_>, spans: &[Span], template: &Preintegrator, k: V) -> Vec<Preintegrator> {
         let lane_span = |i: usize| spans[if i < spans.len() { i } else { 0 }];
         let common = spans.iter().map(|s| s.steps).min().unwrap_or(0);
         let mut state = State::of(k, template);
         let mut since_projection = template.since_projection;
-        for j in 0..common {
-            let mut lanes = [(Vector3::zeros(), Vector3::zeros(), 0.0); WIDTH];
-            for (i, lane) in lanes.iter_mut().enumerate() {
-                *lane = lane_span(i).interval(samples, j);
-            }
+        // Each lane's `(accel, gyro, h)` of interval j: euler's held sample, midpoint's end point.
+        let gather = |lanes: &[(Vector3<f64>, Vector3<f64>, f64); WIDTH]| {
             let accel = [k.like(|i| lanes[i].0.x), k.like(|i| lanes[i].0.y), k.like(|i| lanes[i].0.z)];
             let gyro = [k.like(|i| lanes[i].1.x), k.like(|i| lanes[i].1.y), k.like(|i| lanes[i].1.z)];
-            let h = k.like(|i| lanes[i].2);
-            state.step(&accel, &gyro, h, template);
+            ([accel, gyro], k.like(|i| lanes[i].2))
+        };
+        let mut lanes = [(Vector3::zeros(), Vector3::zeros(), 0.0); WIDTH];
+        let mut mid = None;
+        if template.scheme == Scheme::Midpoint {
+            for (i, lane) in lanes.iter_mut().enumerate() {
+                *lane = lane_span(i).start_point(samples);
+            }
+            mid = Some(Mid::start(gather(&lanes).0));
+        }
+        for j in 0..common {
+            match &mut mid {
+                None => {
+                    for (i, lane) in lanes.iter_mut().enumerate() {
+                        *lane = lane_span(i).interval(samples, j);
+                    }
+                    let ([accel, gyro], h) = gather(&lanes);
+                    state.step_euler(&accel, &gyro, h, template);
+                }
+                Some(mid) => {
+                    for (i, lane) in lanes.iter_mut().enumerate() {
+                        *lane = lane_span(i).end_point(samples, j);
+                    }
+                    let (point, h) = gather(&lanes);
+                    state.step_midpoint(mid, &point, h, j == 0, template);
+                }
+            }
             state.count_interval(&mut since_projection);
         }
         spans
@@ -473,8 +554,14 @@ crate::simd_dispatch! {
                 let mut p = template.clone();
                 state.write_lane(i, &mut p);
                 p.since_projection = since_projection;
+                if let Some(mid) = &mid {
+                    mid.write_lane(i, &mut p);
+                }
                 for j in common..span.steps {
-                    let (a, w, h) = span.interval(samples, j);
+                    let (a, w, h) = match mid {
+                        None => span.interval(samples, j),
+                        Some(_) => span.end_point(samples, j),
+                    };
                     p.integrate_measurement_clipped(&a, &w, h, Clipped::NONE);
                 }
                 p
