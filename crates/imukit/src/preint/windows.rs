@@ -386,9 +386,8 @@ fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
     }
 }
 
-/// The windows between consecutive `edges`, in order, in parallel: windows without a bias walk
-/// or a clipped sample in SIMD lanes on the AVX paths (`lanes/`), every other window on the
-/// per-window kernel.
+/// The windows between consecutive `edges`, in order, in parallel: windows without a clipped
+/// sample in SIMD lanes on the AVX paths (`lanes/`), the others on the per-window kernel.
 fn run_block(
     samples: &Samples<'_>,
     clipped: Option<&ClipMask<'_>>,
@@ -397,9 +396,7 @@ fn run_block(
 ) -> Vec<Preintegrator> {
     #[cfg(target_arch = "x86_64")]
     if let Some(k) = lanes::lanes() {
-        if template.bias_walk.is_none() {
-            return run_block_in_lanes(samples, clipped, edges, template, k);
-        }
+        return run_block_in_lanes(samples, clipped, edges, template, k);
     }
     edges
         .par_windows(2)

@@ -83,6 +83,7 @@ fn assert_same(a: &Preintegrator, b: &Preintegrator) {
             ("covariance", a.covariance == b.covariance),
             ("jac", a.jac == b.jac),
             ("ends", a.ends == b.ends),
+            ("bias walk", a.bias_walk == b.bias_walk),
             ("boundary", a.boundary == b.boundary),
         ];
         panic!("path {:?}: equal fields {fields:?}", simd::path());
@@ -91,6 +92,14 @@ fn assert_same(a: &Preintegrator, b: &Preintegrator) {
 
 /// The template's scheme for each run of the comparisons.
 const SCHEMES: [Scheme; 2] = [Scheme::Euler, Scheme::Midpoint];
+
+/// Every template the lanes run: each scheme, without and with the bias walk (`combined`).
+fn templates() -> Vec<Preintegrator> {
+    SCHEMES
+        .into_iter()
+        .flat_map(|s| [template().with_scheme(s), template().with_scheme(s).with_bias_walk()])
+        .collect()
+}
 
 #[test]
 fn lanes_equal_the_per_window_kernel_on_windows_of_mixed_lengths() {
@@ -102,8 +111,7 @@ fn lanes_equal_the_per_window_kernel_on_windows_of_mixed_lengths() {
     for len in [1, 2, 3, 5, 7, 9] {
         assert!(steps.contains(&len), "{steps:?}");
     }
-    for scheme in SCHEMES {
-        let template = template().with_scheme(scheme);
+    for template in templates() {
         let reference: Vec<Preintegrator> = b
             .windows(2)
             .map(|w| window(&samples, None, w[0], w[1], &template))

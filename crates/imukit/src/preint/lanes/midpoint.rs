@@ -1,5 +1,5 @@
 //! The midpoint interval in lanes: `Preintegrator::integrate_midpoint` (`preint/midpoint.rs`),
-//! element for element, with no bias walk and unit variance scales. What the scheme carries from
+//! element for element, with unit variance scales. What the scheme carries from
 //! one interval to the next (the last point, its noise variances, the pending input `P`, the
 //! window's start cross covariance) is kept per lane in [`Mid`].
 
@@ -154,6 +154,10 @@ impl<V: Lanes> State<V> {
         cov[3] = cov[3].add(&sv.mul_t_symmetric(&dv)).plus_identity(q_a * c_v * c_v);
         cov[4] = cov[4].add(&sv.mul_t(&dp)).plus_identity(q_a * c_v * c_p);
         cov[5] = cov[5].add(&sp.mul_t_symmetric(&dp)).plus_identity(q_a * c_p * c_p);
+        if let Some(walk) = &mut self.walk {
+            g_b.add_quadratic(&mut cov, walk.var);
+            walk.step(&mut cov, &w_m, &g_b, &p.noise);
+        }
         self.cov = cov;
         mid.pending = In { va: va1, ..b0 };
         mid.start_cross = if first {

@@ -1,6 +1,6 @@
-//! Structure-of-arrays preintegration: four euler windows in lockstep, one window per SIMD lane.
+//! Structure-of-arrays preintegration: four windows in lockstep, one window per SIMD lane.
 //!
-//! The per-window kernel (`Preintegrator::integrate_euler`) is a chain of dependent 3×3 products,
+//! The per-window kernel (`Preintegrator::integrate_euler` / `integrate_midpoint`) is a chain of dependent 3×3 products,
 //! so one window leaves most of a vector register idle. Here every scalar of the state (ΔR, Δv,
 //! Δp, Δt, the six covariance blocks, the five non-zero bias-Jacobian blocks) holds four values,
 //! one per window, and every operation acts on the four at once:
@@ -11,16 +11,16 @@
 //! | `baseline` | none: the per-window kernel | | |
 //!
 //! Each element is computed with the same operations in the same order as the per-window kernel
-//! (`preint/mod.rs`, `integrate_euler`; `preint/blocks.rs`, `propagate_frame_i`, `transition`,
-//! `add_held_noise`, `Input::added_to`; `mat3.rs`), fused where that kernel fuses on the same path
+//! (`preint/mod.rs`, `integrate_euler`, `BiasWalk::step`; `preint/midpoint.rs`;
+//! `preint/blocks.rs`; `mat3.rs`), fused where that kernel fuses on the same path
 //! (`mat3::Fused::scale_add`, the `Lanes` products, never the plain `Matrix3` ones): a lane is the
 //! per-window kernel of its path bit for bit (tested on every path). The coefficients of `Exp(ω̂h)`
 //! and `J_r(ω̂h)` (branches on θ) and the projection of ΔR every `PROJECT_EVERY` intervals are
 //! computed per lane by the per-window functions themselves.
 //!
-//! What the lanes run: the euler scheme with the 9×9 covariance and the 9×6 bias Jacobian, no
-//! flagged (clipped) sample, no bias walk. `windows.rs` sends everything else to the per-window
-//! kernel. A bundle runs in lockstep for the intervals all its windows have; each window then
+//! What the lanes run: both schemes with the 9×9 covariance, the 9×6 bias Jacobian and, with
+//! `combined`, the bias walk (`walk.rs`), on windows with no flagged (clipped) sample; `windows.rs`
+//! sends those to the per-window kernel. A bundle runs in lockstep for the intervals all its windows have; each window then
 //! finishes alone on the per-window kernel (the caller groups windows of near-equal length, so
 //! that tail is short).
 
@@ -36,8 +36,10 @@ use crate::lie::series;
 use crate::mat3::{Col, M3};
 use crate::simd::{self, Path};
 use midpoint::Mid;
+use walk::Walk;
 
 mod midpoint;
+mod walk;
 
 /// Windows per bundle.
 pub(super) const WIDTH: usize = 4;
@@ -159,6 +161,11 @@ impl<V: Lanes> B<V> {
     /// Lane `i` as a matrix.
     fn lane(&self, i: usize) -> Matrix3<f64> {
         Matrix3::from_fn(|r, c| self.e(r, c).lane(i))
+    }
+
+    /// The padded block `m` in every lane.
+    fn splat(k: V, m: &M3) -> Self {
+        block!(|r, c| k.splat(m.0[c].0[r]))
     }
 
     /// Lane `i` as a padded block.
@@ -287,6 +294,8 @@ struct State<V> {
     cov: [B<V>; 6],
     /// `[θg, vg, va, pg, pa]` (the θa block stays zero).
     jac: [B<V>; 5],
+    /// The bias random walk, when tracked (`combined`).
+    walk: Option<Walk<V>>,
 }
 
 /// `(Exp(φ), J_r(φ))` in every lane: `so3::exp_and_right_jacobian`'s elements, lane-wise, with its
@@ -410,7 +419,7 @@ impl<V: Lanes> In<V> {
 impl<V: Lanes> State<V> {
     /// Every lane at `p`'s state.
     fn of(k: V, p: &Preintegrator) -> Self {
-        let block = |m: &M3| block!(|r, c| k.splat(m.0[c].0[r]));
+        let block = |m: &M3| B::splat(k, m);
         let splat3 = |v: &Vector3<f64>| [k.splat(v.x), k.splat(v.y), k.splat(v.z)];
         let [[tg, _], [vg, va], [pg, pa]] = &p.jac;
         State {
@@ -420,6 +429,7 @@ impl<V: Lanes> State<V> {
             t: k.splat(p.delta_t),
             cov: p.covariance.each_ref().map(block),
             jac: [tg, vg, va, pg, pa].map(block),
+            walk: p.bias_walk.as_ref().map(|w| Walk::of(k, w)),
         }
     }
 
@@ -435,10 +445,11 @@ impl<V: Lanes> State<V> {
         let [tg, vg, va, pg, pa] = self.jac.each_ref().map(block);
         let jac: Cross = [[tg, M3::ZERO], [vg, va], [pg, pa]];
         p.jac = jac;
+        p.bias_walk = self.walk.as_ref().map(|w| w.lane(i));
     }
 
-    /// One euler interval in every lane (`integrate_euler` with no bias walk and unit variance
-    /// scales, element for element).
+    /// One euler interval in every lane (`integrate_euler` with unit variance scales, element for
+    /// element).
     #[inline(always)]
     fn step_euler(&mut self, accel: &[V; 3], gyro: &[V; 3], h: V, p: &Preintegrator) {
         let k = h;
@@ -474,12 +485,19 @@ impl<V: Lanes> State<V> {
         };
         let half_h2 = half_h * h;
         let mut cov = propagate(&self.cov, &w_m, h, half_h2);
-        // `blocks::add_held_noise`.
-        cov[0] = g.mul_t_symmetric(&g).mul_add(var_g, &cov[0]);
-        let q_a_h = var_a * h;
+        // `blocks::add_held_noise`, the bias step folded into the white noise's quadratic.
+        let [q_g, q_a] = match &self.walk {
+            Some(walk) => [var_g + walk.var[0], var_a + walk.var[1]],
+            None => [var_g, var_a],
+        };
+        cov[0] = g.mul_t_symmetric(&g).mul_add(q_g, &cov[0]);
+        let q_a_h = q_a * h;
         cov[3] = cov[3].plus_identity(q_a_h * h);
         cov[4] = cov[4].plus_identity(q_a_h * half_h2);
-        cov[5] = cov[5].plus_identity(var_a * half_h2 * half_h2);
+        cov[5] = cov[5].plus_identity(q_a * half_h2 * half_h2);
+        if let Some(walk) = &mut self.walk {
+            walk.step(&mut cov, &w_m, &g_b, &p.noise);
+        }
         self.cov = cov;
 
         self.jac = g_b.added_to(&transition(&self.jac, &w_m, h, half_h2));
@@ -505,7 +523,7 @@ impl<V: Lanes> State<V> {
 }
 
 crate::simd_dispatch! {
-    /// `template` (no bias walk) run over each of `spans` (at most [`WIDTH`]) without clipping
+    /// `template` run over each of `spans` (at most [`WIDTH`]) without clipping
     /// flags, in lockstep for the intervals they all have, then each alone (module docs); lanes
     /// beyond `spans` repeat its first window and are dropped. `k`: any lane value (from
     /// [`lanes`]). The boundary samples are left as in `template` (the caller sets them).
