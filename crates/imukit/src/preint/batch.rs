@@ -1,21 +1,34 @@
 //! Batch preintegration of sampled data: N samples, N − 1 intervals.
 //!
 //! Long euler batches run in parallel: preintegration is associative ([`Preintegrator::merge`]
-//! is exact composition, covariance and bias Jacobians included), so fixed chunks of
-//! [`CHUNK`] intervals are preintegrated on separate cores and merged in order. The chunking
-//! depends on N only, never on the thread count, so results are reproducible; they differ from
-//! sample-by-sample streaming by rounding only (1e-12 relative, tested). The midpoint scheme
-//! (whose samples' noise correlates across a chunk boundary) and the bias random walk (not merged)
-//! run sequentially.
+//! is exact composition, covariance and bias Jacobians included), so chunks of at most [`CHUNK`]
+//! intervals are preintegrated as keyframe windows (`windows.rs`: on separate cores, and four at
+//! a time in the SIMD lanes of one core on the AVX paths) and merged in order. The chunks are
+//! equal to within one interval and their number is a multiple of the lanes' bundle, so that each
+//! bundle's chunks end together. The chunking depends on N only, never on the thread count or the
+//! path, so results are reproducible; they differ from sample-by-sample streaming by rounding only
+//! (1e-12 relative, tested). The midpoint scheme (whose samples' noise correlates across a chunk
+//! boundary) and the bias random walk (not merged) run sequentially.
 
-use rayon::prelude::*;
-
+use super::windows::{run_block, BUNDLE};
 use super::{clipped_at, ClipMask, End, Ends, Preintegrator, Scheme};
 use crate::error::{Cancel, Error, Result};
 use crate::imu::Samples;
 
-/// Intervals per parallel chunk: long enough that a merge (a few dense 9×9 products) is noise.
+/// Most intervals per parallel chunk: long enough that a merge (a few dense 9×9 products) is noise.
 pub const CHUNK: usize = 1 << 15;
+
+/// Chunks run between two polls of the cancellation flag (about 2^19 samples).
+const CHUNKS_PER_POLL: usize = 4 * BUNDLE;
+
+/// The times where the chunks of the intervals of `t` (N samples, N − 1 intervals) start and end:
+/// the fewest chunks of at most [`CHUNK`] intervals whose number is a multiple of [`BUNDLE`],
+/// cut equal to within one interval, on sample times.
+fn chunk_edges(t: &[f64]) -> Vec<f64> {
+    let intervals = t.len() - 1;
+    let m = intervals.div_ceil(CHUNK).next_multiple_of(BUNDLE);
+    (0..=m).map(|i| t[i * intervals / m]).collect()
+}
 
 impl Preintegrator {
     /// Adds the N − 1 intervals of `samples` (euler: sample k held over `[t_k, t_k+1)`; midpoint:
@@ -97,18 +110,17 @@ impl Preintegrator {
                     saturation_noise_factor: self.saturation_noise_factor,
                     ..Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise)
                 };
-                let chunks: Vec<Preintegrator> = (0..n - 1)
-                    .step_by(CHUNK)
-                    .collect::<Vec<_>>()
-                    .into_par_iter()
-                    .map(|start| {
-                        let mut p = template.clone();
-                        run_euler(&mut p, samples, clipped, start, (start + CHUNK).min(n - 1), cancel)?;
-                        Ok(p)
-                    })
-                    .collect::<Result<_>>()?;
-                for chunk in &chunks {
-                    *self = self.merge_unchecked(chunk)?;
+                let edges = chunk_edges(samples.t);
+                let mut chunks = Vec::with_capacity(edges.len() - 1);
+                for first in (0..edges.len() - 1).step_by(CHUNKS_PER_POLL) {
+                    cancel.check(0)?;
+                    let block = &edges[first..(first + CHUNKS_PER_POLL + 1).min(edges.len())];
+                    chunks.extend(run_block(samples, clipped, block, &template));
+                }
+                for mut chunk in chunks {
+                    // Each chunk's ends are its neighbours' (sample times): none to check.
+                    chunk.boundary = Ends::default();
+                    *self = self.merge_unchecked(&chunk)?;
                 }
             }
             Scheme::Euler => run_euler(self, samples, clipped, 0, n - 1, cancel)?,

@@ -386,9 +386,13 @@ fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
     }
 }
 
+/// Windows per bundle of the SIMD lanes (`lanes/`): batches cut a long sequence into a multiple of
+/// it.
+pub(super) const BUNDLE: usize = 4;
+
 /// The windows between consecutive `edges`, in order, in parallel: windows without a clipped
 /// sample in SIMD lanes on the AVX paths (`lanes/`), the others on the per-window kernel.
-fn run_block(
+pub(super) fn run_block(
     samples: &Samples<'_>,
     clipped: Option<&ClipMask<'_>>,
     edges: &[f64],

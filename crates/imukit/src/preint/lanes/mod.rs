@@ -42,7 +42,7 @@ mod midpoint;
 mod walk;
 
 /// Windows per bundle.
-pub(super) const WIDTH: usize = 4;
+pub(super) const WIDTH: usize = super::windows::BUNDLE;
 
 /// Four f64 values, one per window: element-wise arithmetic. New values come from an existing one
 /// (`like`), which carries what the type needs to exist (the AVX token of [`P4`]).
