@@ -25,10 +25,18 @@ from pathlib import Path
 # The kernel's call (a statement on the CHILD's inputs) and the function (callgrind pattern)
 # whose call tree is counted.
 PREINT = "ik.preintegrate(imu, noise=noise, threads=1, {})"
+WINDOWS = "ik.preintegrate_windows({}, t[::200], ik.PreintParams(noise, scheme='lie_euler'), threads=1)"
 KERNELS = {
     "preintegrate euler": (PREINT.format("scheme='lie_euler'"), "*integrate_samples_cancellable*"),
     "preintegrate midpoint": (PREINT.format("scheme='midpoint'"), "*integrate_samples_cancellable*"),
     "preintegrate combined": (PREINT.format("scheme='lie_euler', combined=True"), "*integrate_samples_cancellable*"),
+    # Keyframe windows of 200 samples: four at a time in the SIMD lanes on the AVX paths; the
+    # second form flags one sample per window, which keeps every window on the per-window kernel.
+    "preintegrate_windows euler": (WINDOWS.format("imu"), "*preintegrate_windows_cancellable*"),
+    "preintegrate_windows euler, per-window kernel": (
+        WINDOWS.format("flagged"),
+        "*preintegrate_windows_cancellable*",
+    ),
     # The whole Rust call: a pattern on propagate_model would also match its closures, and
     # callgrind toggles collection off again on entering them.
     "propagate": (
@@ -55,6 +63,9 @@ t, gyro, accel = synthetic_imu({n})
 imu = ik.ImuData(t, gyro, accel)
 mag = np.stack([20.0 * np.cos(0.2 * t), 20.0 * np.sin(0.2 * t), np.full_like(t, -40.0)], axis=-1)
 imu_mag = ik.ImuData(t, gyro, accel, mag=mag)
+clip = gyro.copy()
+clip[100::200, 0] = 100.0
+flagged = ik.ImuData(t, clip, accel, gyro_range=100.0)
 noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
 {call}
 """
