@@ -266,7 +266,8 @@ crate::simd_dispatch! {
         let t = samples.t;
         let scheme = template.scheme;
         let mut p = template.clone();
-        let Span { k0, steps, .. } = span(t, lo, hi);
+        let whole = span(t, lo, hi);
+        let Span { k0, steps, .. } = whole;
         // Samples strictly inside (lo, hi).
         let inside = k0 + 1..k0 + steps;
         let first = at(samples, clipped, k0, lo, scheme);
@@ -290,14 +291,7 @@ crate::simd_dispatch! {
         }
         let last = at(samples, clipped, inside.end - 1, hi, scheme);
         add(&mut p, hi, last);
-        let end_at = |(accel, gyro, _): Point| End { t: None, accel, gyro };
-        p.boundary = match scheme {
-            Scheme::Euler => held_ends(samples, k0, hi),
-            Scheme::Midpoint => Ends {
-                first: Some(end_at(first)),
-                last: Some(end_at(last)),
-            },
-        };
+        p.boundary = boundary(samples, &whole, scheme);
         p
     }
 }
@@ -371,6 +365,22 @@ fn span(t: &[f64], lo: f64, hi: f64) -> Span {
     }
 }
 
+/// The signal at each end of window `s`, which the adjacent window shares (`Preintegrator`'s
+/// `boundary`): in euler the samples held at its ends ([`held_ends`]), in midpoint its first and
+/// last points.
+fn boundary(samples: &Samples<'_>, s: &Span, scheme: Scheme) -> Ends {
+    match scheme {
+        Scheme::Euler => held_ends(samples, s.k0, s.hi),
+        Scheme::Midpoint => {
+            let end = |(accel, gyro, _): (Vector3<f64>, Vector3<f64>, f64)| End { t: None, accel, gyro };
+            Ends {
+                first: Some(end(s.start_point(samples))),
+                last: Some(end(s.end_point(samples, s.steps - 1))),
+            }
+        }
+    }
+}
+
 /// The signal at each end of an euler window, which the adjacent window shares: the sample held
 /// from its start, and the one held at `hi` (the one starting there when `hi` is a sample time).
 fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
@@ -436,16 +446,7 @@ fn run_block_in_lanes(
             let bundle: Vec<Span> = chunk.iter().map(|&i| spans[i]).collect();
             let mut done = lanes::run(samples, &bundle, template, k);
             for (p, s) in done.iter_mut().zip(&bundle) {
-                p.boundary = match template.scheme {
-                    Scheme::Euler => held_ends(samples, s.k0, s.hi),
-                    Scheme::Midpoint => {
-                        let end = |(accel, gyro, _): (Vector3<f64>, Vector3<f64>, f64)| End { t: None, accel, gyro };
-                        Ends {
-                            first: Some(end(s.start_point(samples))),
-                            last: Some(end(s.end_point(samples, s.steps - 1))),
-                        }
-                    }
-                };
+                p.boundary = boundary(samples, s, template.scheme);
             }
             done
         })
