@@ -18,11 +18,11 @@
 //! and `J_r(ω̂h)` (branches on θ) and the projection of ΔR every `PROJECT_EVERY` intervals are
 //! computed per lane by the per-window functions themselves.
 //!
-//! What the lanes run: both schemes with the 9×9 covariance, the 9×6 bias Jacobian and, with
-//! `combined`, the bias walk (`walk.rs`), on windows with no flagged (clipped) sample; `windows.rs`
-//! sends those to the per-window kernel. A bundle runs in lockstep for the intervals all its windows have; each window then
-//! finishes alone on the per-window kernel (the caller groups windows of near-equal length, so
-//! that tail is short).
+//! What the lanes run: both schemes (`midpoint.rs` for the midpoint step) with the 9×9
+//! covariance, the 9×6 bias Jacobian and, with `combined`, the bias walk (`walk.rs`), on windows
+//! with no flagged (clipped) sample; `windows.rs` sends those to the per-window kernel. A bundle
+//! runs in lockstep for the intervals all its windows have; each window then finishes alone on the
+//! per-window kernel (the caller groups windows of near-equal length, so that tail is short).
 
 use std::ops::{Add, Mul, Neg, Sub};
 
