@@ -100,12 +100,39 @@ pub(crate) fn zeros<'py, const K: usize>(
 where
     numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
 {
+    allocate(py, "zeros", demand, shape)
+}
+
+/// [`zeros`] without the zeros, for an output the kernel writes whole before it is returned (an
+/// error drops it): memory reused from numpy's heap is then written once, not cleared first
+/// (a 16 MB `memset` per call of `integrate` on 2·10^5 samples, 8 ns a sample).
+pub(crate) fn empty<'py, const K: usize>(
+    py: Python<'py>,
+    demand: &Demand<'_>,
+    shape: [usize; K],
+) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Dim<[usize; K]>>>>
+where
+    numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
+{
+    allocate(py, "empty", demand, shape)
+}
+
+/// `numpy.<constructor>(shape)` as float64, part of `demand` ([`zeros`]).
+fn allocate<'py, const K: usize>(
+    py: Python<'py>,
+    constructor: &str,
+    demand: &Demand<'_>,
+    shape: [usize; K],
+) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Dim<[usize; K]>>>>
+where
+    numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
+{
     if demand.bytes > isize::MAX as u128 || Demand::of("", "", &shape).bytes > isize::MAX as u128 {
         return Err(demand.refuse(py));
     }
     let array = py
         .import("numpy")?
-        .getattr("zeros")?
+        .getattr(constructor)?
         .call1((PyTuple::new(py, shape)?,))
         .map_err(|e| {
             if e.is_instance_of::<PyMemoryError>(py) {

@@ -11,7 +11,7 @@ use nalgebra::{Matrix3, Vector3};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, zeros, BiasFields, Demand, Name, NavStateFields, NoiseFields, SampleCopies};
+use crate::convert::{contiguous, empty, zeros, BiasFields, Demand, Name, NavStateFields, NoiseFields, SampleCopies};
 use crate::earth_glue::LocalLevelFields;
 use crate::{raise, to_py};
 
@@ -78,7 +78,8 @@ pub(crate) fn integrate_states<'py>(
         count: n,
         bytes: n as u128 * STATE_BYTES,
     };
-    let (pv, rot) = state_arrays(py, &demand, n)?;
+    // Every row is written (the initial state, then one per step) or the call fails.
+    let (pv, rot) = (empty(py, &demand, [n, 6])?, empty(py, &demand, [n, 4])?);
     {
         let (mut pv_guard, mut rot_guard) = (pv.readwrite(), rot.readwrite());
         let out = StatesOut {
