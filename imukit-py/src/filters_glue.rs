@@ -21,7 +21,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::frozen_or_copy;
+use crate::convert::{empty_for, frozen_or_copy};
 use crate::convert::{real_number, Name};
 use crate::{contiguous, to_py};
 
@@ -588,8 +588,9 @@ fn run<'py, L: Law>(
             None => None,
         },
     };
-    let out_q = PyArray2::<f64>::zeros(py, [n, 4], false);
-    let out_b = PyArray2::<f64>::zeros(py, [n, 3], false);
+    // Every row is written (one per sample) or the call fails.
+    let out_q = empty_for(py, "imu", "attitudes", [n, 4])?;
+    let out_b = empty_for(py, "imu", "gyro biases", [n, 3])?;
     {
         let mut gq = out_q.readwrite();
         let mut gb = out_b.readwrite();

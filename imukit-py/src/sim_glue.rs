@@ -7,7 +7,7 @@ use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyRead
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{contiguous, unit_quaternion, zeros, zeros_for, Demand, Name};
+use crate::convert::{contiguous, empty, unit_quaternion, zeros_for, Demand, Name};
 use crate::{raise, threads, to_py};
 
 fn vec3(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
@@ -153,7 +153,8 @@ pub(crate) fn sim_motion<'py>(
         count: n,
         bytes: n as u128 * 8 * 16,
     };
-    let make = |w: usize| zeros(py, &demand, [n, w]);
+    // Every row is written (each chunk whole) or the call fails.
+    let make = |w: usize| empty(py, &demand, [n, w]);
     let (p, v, q, w, a) = (make(3)?, make(3)?, make(4)?, make(3)?, make(3)?);
     {
         let (mut pg, mut vg, mut qg, mut wg, mut ag) = (
