@@ -4,7 +4,7 @@ use imukit::attitude::{self, Representation, Scheme};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::convert::{contiguous, empty_for, frozen_or_copy, rows, unit_quaternion, Name};
+use crate::convert::{contiguous, empty, frozen_or_copy, rows, unit_quaternion, Demand, Name};
 use crate::{threads, to_py};
 
 /// `(n, 4)` attitudes `[x, y, z, w]`, or `(1, 4)` with `final_only`; on `threads` threads (None: the
@@ -35,7 +35,7 @@ pub(crate) fn attitude_integrate<'py>(
     let n = if final_only { 1 } else { t.len() };
     // Every row is written (`attitude::integrate` stores all, or the final one is copied in) or
     // the call fails.
-    let out = empty_for(py, "t", "attitudes", [n, 4])?;
+    let out = empty(py, &Demand::of("t", "attitudes", &[n, 4]), [n, 4])?;
     {
         let mut guard = out.readwrite();
         let out_slice = guard.as_slice_mut()?;

@@ -157,19 +157,6 @@ where
     zeros(py, &Demand::of(argument, what, &shape), shape)
 }
 
-/// [`empty`] of one array, the whole demand.
-pub(crate) fn empty_for<'py, const K: usize>(
-    py: Python<'py>,
-    argument: &str,
-    what: &'static str,
-    shape: [usize; K],
-) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Dim<[usize; K]>>>>
-where
-    numpy::ndarray::Dim<[usize; K]>: numpy::ndarray::Dimension,
-{
-    empty(py, &Demand::of(argument, what, &shape), shape)
-}
-
 /// The buffer of a C-contiguous array.
 pub(crate) fn contiguous<'a, 'py, D: numpy::ndarray::Dimension>(
     py: Python<'py>,

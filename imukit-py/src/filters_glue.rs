@@ -21,7 +21,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{empty_for, frozen_or_copy};
+use crate::convert::{empty, frozen_or_copy, Demand};
 use crate::convert::{real_number, Name};
 use crate::{contiguous, to_py};
 
@@ -588,9 +588,10 @@ fn run<'py, L: Law>(
             None => None,
         },
     };
-    // Every row is written (one per sample) or the call fails.
-    let out_q = empty_for(py, "imu", "attitudes", [n, 4])?;
-    let out_b = empty_for(py, "imu", "gyro biases", [n, 3])?;
+    // Every row is written (one per sample) or the call fails. The demand is both outputs': seven
+    // values a sample.
+    let demand = Demand::of("imu", "samples", &[n, 7]);
+    let (out_q, out_b) = (empty(py, &demand, [n, 4])?, empty(py, &demand, [n, 3])?);
     {
         let mut gq = out_q.readwrite();
         let mut gb = out_b.readwrite();

@@ -51,10 +51,10 @@ impl FlagCopies {
         })
     }
 
-    /// The mask, or None when nothing is flagged (the unflagged path, bit for bit).
+    /// The mask, or None when nothing is flagged (the unflagged path, bit for bit): the copies
+    /// exist only when a flag is set.
     fn mask(&self) -> Option<ClipMask<'_>> {
-        let any = self.gyro.iter().chain(&self.accel).any(|&f| f);
-        any.then_some(ClipMask {
+        (!self.gyro.is_empty()).then_some(ClipMask {
             gyro: &self.gyro,
             accel: &self.accel,
         })
