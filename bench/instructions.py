@@ -50,6 +50,11 @@ KERNELS = {
         for law in ("Mahony", "Madgwick")
         for dim, use in (("6D", "False"), ("9D", "None"))
     },
+    # Issue 15's online filter, the same way (bench_filters.py --only-robust --imu-mag).
+    **{
+        f"Robust online {dim}": (f"ik.filters.Robust().run(imu_mag, mag={use})", "*Robust::run_checked*")
+        for dim, use in (("6D", "False"), ("9D", "None"))
+    },
 }
 
 CHILD = """

@@ -1,14 +1,15 @@
 //! Batch preintegration of sampled data: N samples, N − 1 intervals.
 //!
-//! Long euler batches run in parallel: preintegration is associative ([`Preintegrator::merge`]
+//! Long batches run in parallel: preintegration is associative ([`Preintegrator::merge`]
 //! is exact composition, covariance and bias Jacobians included), so chunks of at most [`CHUNK`]
 //! intervals are preintegrated as keyframe windows (`windows.rs`: on separate cores, and four at
 //! a time in the SIMD lanes of one core on the AVX paths) and merged in order. The chunks are
 //! equal to within one interval and their number is a multiple of the lanes' bundle, so that each
 //! bundle's chunks end together. The chunking depends on N only, never on the thread count or the
 //! path, so results are reproducible; they differ from sample-by-sample streaming by rounding only
-//! (1e-12 relative, tested). The midpoint scheme (whose samples' noise correlates across a chunk
-//! boundary) and the bias random walk (not merged) run sequentially.
+//! (1e-12 relative, tested). Long midpoint batches the same way: adjacent chunks share a sample,
+//! whose noise correlation and variance the merge accounts for exactly (`merge.rs`). The bias random
+//! walk (not merged) runs sequentially.
 
 use super::windows::{run_block, BUNDLE};
 use super::{clipped_at, ClipMask, End, Ends, Preintegrator, Scheme};
@@ -105,10 +106,10 @@ impl Preintegrator {
         let n = samples.t.len();
         let first = (samples.accel_at(0), samples.gyro_at(0));
         match self.scheme {
-            Scheme::Euler if self.bias_walk.is_none() && n > 2 * CHUNK => {
+            _ if self.bias_walk.is_none() && n > 2 * CHUNK => {
                 let template = Preintegrator {
                     saturation_noise_factor: self.saturation_noise_factor,
-                    ..Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise)
+                    ..Preintegrator::new(self.bias_gyro, self.bias_accel, self.noise).with_scheme(self.scheme)
                 };
                 let edges = chunk_edges(samples.t);
                 let mut chunks = Vec::with_capacity(edges.len() - 1);
@@ -117,6 +118,9 @@ impl Preintegrator {
                     let block = &edges[first..(first + CHUNKS_PER_POLL + 1).min(edges.len())];
                     chunks.extend(run_block(samples, clipped, block, &template));
                 }
+                // Midpoint: the first chunk starts with sample 0, this one's last sample (when it
+                // has one), and each chunk with the one before's last; the merge gives a shared
+                // sample the variance of its first interval, as one run does.
                 for mut chunk in chunks {
                     // Each chunk's ends are its neighbours' (sample times): none to check.
                     chunk.boundary = Ends::default();

@@ -6,7 +6,9 @@
 //! `δp_ik = δp_ij + Δt_jk δv_ij − ΔR_ij[Δp_jk]× δθ_ij + ΔR_ij δp_jk`, so the bias Jacobians
 //! compose as `J_1 J_b,ij + J_2 J_b,jk` and the covariance as `J_1 Σ_ij J_1ᵀ + J_2 Σ_jk J_2ᵀ`, plus,
 //! in the midpoint scheme, the correlation through the shared sample j:
-//! `Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Cov(n_j)⁻¹ Cov(n_j, δx_jk)`.
+//! `Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Cov(n_j)⁻¹ Cov(n_j, δx_jk)`. The shared sample's variance
+//! is i → j's (`σ²/h` of its first interval, as one run over both gives it): j → k's share of it,
+//! taken with its own first interval, is rescaled.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -15,6 +17,11 @@ use super::{Covariance9, Preintegrator, Scheme};
 use crate::error::{Error, Result};
 use crate::mat3::M3;
 use crate::so3;
+
+/// `diag(g, g, g, a, a, a)`: one factor per sensor of the `[gyro, accel]` noise.
+fn per_axis(g: f64, a: f64) -> SMatrix<f64, 6, 6> {
+    SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(g, g, g, a, a, a))
+}
 
 fn mismatch(expected: &'static str, got: String) -> Error {
     Error::Parameter {
@@ -108,6 +115,13 @@ impl Preintegrator {
                     ..self.clone()
                 });
             }
+            if self.ends.last.is_some_and(|s| s.var.is_none()) {
+                // This one holds only `next`'s first sample, whose variance `next` set.
+                return Ok(Preintegrator {
+                    bias_walk: None,
+                    ..next.clone()
+                });
+            }
         }
         let r = self.delta_rotation;
         let dt_jk = next.delta_t;
@@ -117,29 +131,33 @@ impl Preintegrator {
         );
         // Dense 9×9 products: merging is rare.
         // `next`'s covariance without its last sample's noise: the merged window holds that apart too.
-        let cov_jk = blocks::assemble(&next.covariance_blocks(false));
-        let mut cov = j1 * self.covariance() * j1.transpose() + j2 * cov_jk * j2.transpose();
+        let mut cov_jk = blocks::assemble(&next.covariance_blocks(false));
         let transport = |m: &Covariance9, x: &Cross| blocks::cross_of(&(m * blocks::cross_matrix(x)));
         let mut ends = next.ends.clone();
+        let mut between = None;
         if let (Scheme::Midpoint, Some(first)) = (self.scheme, &next.ends.first) {
             // Cov(δx_jk, n_j) Cov(n_j)⁻¹ is n_j's sensitivity D; Cov(δx_ij, δx_jk) = Cov(δx_ij, n_j) Dᵀ.
             let [q_g, q_a] = first.var.unwrap_or([0.0; 2]);
             let inv = |q: f64| if q > 0.0 { 1.0 / q } else { 0.0 };
-            let d = blocks::cross_matrix(&next.body_rows(&next.ends.start_cross))
-                * SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
-                    inv(q_g),
-                    inv(q_g),
-                    inv(q_g),
-                    inv(q_a),
-                    inv(q_a),
-                    inv(q_a),
-                ));
-            let between = j1 * blocks::cross_matrix(&self.end_cross()) * d.transpose() * j2.transpose();
-            cov += between + between.transpose();
+            let cross_jk = blocks::cross_matrix(&next.body_rows(&next.ends.start_cross));
+            let d = cross_jk * per_axis(inv(q_g), inv(q_a));
+            // n_j's variance is σ²/h of its first interval, which is this one's last; `next` gave
+            // it its own first interval's (`q'`): its share `D q' Dᵀ` becomes `D q Dᵀ`, so that a
+            // merge over jittered stamps equals one run over all the samples.
+            if let Some([q_g_ij, q_a_ij]) = self.ends.last.and_then(|s| s.var).filter(|&q| q != [q_g, q_a]) {
+                let rescale = |q_ij: f64, q_jk: f64| (q_ij - q_jk) * inv(q_jk) * inv(q_jk);
+                let s = per_axis(rescale(q_g_ij, q_g), rescale(q_a_ij, q_a));
+                cov_jk += cross_jk * s * cross_jk.transpose();
+            }
+            between = Some(j1 * blocks::cross_matrix(&self.end_cross()) * d.transpose() * j2.transpose());
             ends.first = self.ends.first;
             ends.start_cross = transport(&j1, &self.body_rows(&self.ends.start_cross));
             // In frame i: J_2 = diag(I, ΔR_ij, ΔR_ij) between body frames, ΔR_ij on every row.
             ends.pending = next.ends.pending.rotated(&M3::of(&r));
+        }
+        let mut cov = j1 * self.covariance() * j1.transpose() + j2 * cov_jk * j2.transpose();
+        if let Some(b) = between {
+            cov += b + b.transpose();
         }
         let body_jac = |p: &Preintegrator| blocks::cross_matrix(&p.body_rows(&p.jac));
         let jac = j1 * body_jac(self) + j2 * body_jac(next);
