@@ -269,7 +269,7 @@ class PreintegratedImu:
     def integrate(self, imu: ImuData, *, span: tuple[float, float] | None = None, threads: int | None = None) -> None:
         """Add the N − 1 intervals between the samples of ``imu``, GIL released. In the midpoint
         scheme a batch after earlier samples must start with the last of them (consecutive windows
-        share their boundary sample). Long lie_euler batches (over 65,536 intervals, without
+        share their boundary sample). Long batches of either scheme (over 65,536 intervals, without
         ``combined``) run as fixed chunks on all cores, merged in order: equal to streaming to
         rounding (1e-12 relative) and independent of the core count.
 
