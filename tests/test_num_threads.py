@@ -76,7 +76,7 @@ def test_gravity_is_the_core_constant() -> None:
 # Each entry runs one public entry point on an input of `rows` rows: with ROWS it takes the kernel's
 # parallel path (ffi row maps from 8192 rows; attitude's exp / magnus chunks of 4096 samples; the
 # simulator's motion chunks of 4096 rows and sensor chunks of 65,536 samples; the Allan variance's
-# tasks per cluster size and its 65,536-value check chunks).
+# tasks per cluster size and its 65,536-value check chunks; strapdown's chunks of 32,768 steps).
 ROWS = 70_000
 SMALL = 8
 
@@ -117,6 +117,7 @@ _ENTRIES: dict[str, Callable[..., Any]] = {
     "PreintegratedImu.integrate": lambda rows, **kw: _integrated(rows, **kw),
     "preintegrate_windows": lambda rows, **kw: _windows(rows, **kw),
     "reintegrate": lambda rows, **kw: _reintegrated(rows, **kw),
+    "integrate": lambda rows, **kw: _strapdown(rows, **kw),
 }
 _PARAMS = ik.PreintParams(noise=ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3), scheme="lie_euler")
 
@@ -156,6 +157,13 @@ def _reintegrated(rows: int, **kw: Any) -> list[np.ndarray]:
     return [r.delta_rotation, r.delta_velocity, r.delta_position, r.covariance, r.bias_jacobian]
 
 
+def _strapdown(rows: int, **kw: Any) -> list[np.ndarray]:
+    # Over 65,537 samples in an inertial world: parallel chunks (strapdown/chunks.rs).
+    initial = ik.NavState([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], Rotation.identity())
+    x = ik.integrate(_imu(rows), initial=initial, scheme="midpoint", **kw)
+    return [x.position, x.velocity, x.rotation.as_quat()]
+
+
 def _simulated(rows: int, **kw: Any) -> list[np.ndarray]:
     noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
     imu, truth = ik.sim.simulate(ik.sim.Helix(), rate=100.0, duration=(rows - 1) / 100.0, noise=noise, seed=3, **kw)
@@ -193,7 +201,7 @@ def test_a_bad_threads_is_a_parameter_error_naming_threads(name: str, bad: objec
 
 def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> None:
     batch = [getattr(m, n) for m in (ik.so3, ik.quat, ik.euler) for n in m.__all__]
-    others = (ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate, ik.preintegrate)
+    others = (ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate, ik.preintegrate, ik.integrate)
     for fn in (*batch, *others, ik.PreintegratedImu.integrate, ik.preintegrate_windows, ik.preint.reintegrate):
         threads = inspect.signature(fn).parameters["threads"]
         assert (threads.kind, threads.default) == (inspect.Parameter.KEYWORD_ONLY, None), fn.__qualname__

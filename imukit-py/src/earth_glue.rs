@@ -54,7 +54,15 @@ pub(crate) fn ellipsoid_integrate<'py>(
 ) -> PyResult<States<'py>> {
     let (initial, bias, start) = (NavState::from(initial), Bias::from(bias), frame.frame(py)?);
     integrate_states(py, (&t, &gyro, &accel), |samples, out, cancel| {
-        ellipsoid::integrate(samples, &initial, &bias, &start, scheme.0, Some(out), cancel)
+        Ok(ellipsoid::integrate(
+            samples,
+            &initial,
+            &bias,
+            &start,
+            scheme.0,
+            Some(out),
+            cancel,
+        ))
     })
 }
 

@@ -46,6 +46,7 @@ pub(crate) fn strapdown_integrate<'py>(
     gravity: [f64; 3],
     scheme: Name<Scheme>,
     earth_rate: [f64; 3],
+    threads: Option<usize>,
 ) -> PyResult<States<'py>> {
     let options = Options {
         scheme: scheme.0,
@@ -54,7 +55,10 @@ pub(crate) fn strapdown_integrate<'py>(
     };
     let (initial, bias) = (NavState::from(initial), Bias::from(bias));
     integrate_states(py, (&t, &gyro, &accel), |samples, out, cancel| {
-        strapdown::integrate_cancellable(samples, &initial, &bias, &options, Some(out), cancel)
+        // Long records in an inertial world run in parallel chunks (`strapdown/chunks.rs`).
+        crate::threads::run_in_pool(threads, || {
+            strapdown::integrate_cancellable(samples, &initial, &bias, &options, Some(out), cancel)
+        })
     })
 }
 
@@ -67,7 +71,7 @@ pub(crate) fn integrate_states<'py>(
         &PyReadonlyArray2<'py, f64>,
         &PyReadonlyArray2<'py, f64>,
     ),
-    run: impl FnOnce(&imukit::imu::Samples<'_>, StatesOut<'_>, &imukit::Cancel) -> imukit::Result<NavState> + Send,
+    run: impl FnOnce(&imukit::imu::Samples<'_>, StatesOut<'_>, &imukit::Cancel) -> PyResult<imukit::Result<NavState>> + Send,
 ) -> PyResult<States<'py>> {
     let copies = SampleCopies::new(py, t, gyro, accel)?;
     let samples = copies.samples(py)?;
@@ -86,7 +90,7 @@ pub(crate) fn integrate_states<'py>(
             position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
             rotation: rot_guard.as_slice_mut()?.as_chunks_mut().0,
         };
-        crate::threads::interruptible(py, n, |cancel| run(&samples, out, cancel))?
+        crate::threads::interruptible(py, n, |cancel| run(&samples, out, cancel))??
             .map_err(|e| to_py(py, "imu / bias", e))?;
     }
     Ok((pv, rot))

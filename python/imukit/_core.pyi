@@ -218,6 +218,7 @@ def strapdown_integrate(
     gravity: list[float],
     scheme: _StrapdownScheme | str,
     earth_rate: list[float],
+    threads: int | None,
 ) -> tuple[_Rows, _Rows]: ...
 
 # (gyro, accel) (N, 3) at the body origin from a sensor at (R_bs rows, lever arm), biases removed.

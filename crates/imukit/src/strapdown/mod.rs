@@ -28,11 +28,16 @@
 //! `g`, evaluated at the step's start (lie_euler, exp) or at its mid-point estimate (midpoint) and
 //! inside each stage (rk4). With `ω = 0` (the default) the loops are those without these terms.
 
+use std::ops::Range;
+
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::imu::{Bias, NavState, Samples};
 use crate::interp::{Cubic, StepInterpolator};
 use crate::{imu, quat, so3, Cancel, Error, Result};
+
+mod chunks;
+pub use chunks::CHUNK;
 
 /// Integration scheme; see the module table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -94,6 +99,14 @@ pub struct StatesOut<'a> {
 }
 
 impl StatesOut<'_> {
+    /// The same rows, borrowed again.
+    fn reborrow(&mut self) -> StatesOut<'_> {
+        StatesOut {
+            position_velocity: self.position_velocity,
+            rotation: self.rotation,
+        }
+    }
+
     pub(crate) fn check(&self, n: usize) -> Result<()> {
         for len in [self.position_velocity.len(), self.rotation.len()] {
             if len != n {
@@ -107,6 +120,16 @@ impl StatesOut<'_> {
         let (p, v, q) = (x.position, x.velocity, x.rotation.coords);
         self.position_velocity[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
         self.rotation[k] = [q.x, q.y, q.z, q.w];
+    }
+
+    /// The state stored at row `k`.
+    pub(crate) fn load(&self, k: usize) -> NavState {
+        let ([px, py, pz, vx, vy, vz], [x, y, z, w]) = (self.position_velocity[k], self.rotation[k]);
+        NavState {
+            position: Vector3::new(px, py, pz),
+            velocity: Vector3::new(vx, vy, vz),
+            rotation: UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
+        }
     }
 
     /// The first stored state with a non-finite value.
@@ -145,10 +168,21 @@ impl<'a> Stepper<'a> {
         x0: NavState,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
+        self.run_steps(x0, 0..self.samples.t.len() - 1, visit)
+    }
+
+    /// [`Stepper::run`] over the steps `k → k+1` for `k` in `steps`, from `x0` at sample
+    /// `steps.start` (a chunk of a longer run, `chunks.rs`).
+    pub(crate) fn run_steps(
+        &self,
+        x0: NavState,
+        steps: Range<usize>,
+        visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
+    ) -> Result<NavState> {
         if self.options.earth_rate == Vector3::zeros() {
-            drive_inertial(self, x0, visit)
+            drive_inertial(self, x0, steps, visit)
         } else {
-            drive_rotating(self, x0, visit)
+            drive_rotating(self, x0, steps, visit)
         }
     }
 
@@ -157,13 +191,14 @@ impl<'a> Stepper<'a> {
     fn drive_scheme<const E: bool>(
         &self,
         x0: NavState,
+        steps: Range<usize>,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
         match self.options.scheme {
-            Scheme::LieEuler => self.drive::<EULER, E>(x0, visit),
-            Scheme::Midpoint => self.drive::<MIDPOINT, E>(x0, visit),
-            Scheme::Rk4 => self.drive::<RK4, E>(x0, visit),
-            Scheme::Exp => self.drive::<EXP, E>(x0, visit),
+            Scheme::LieEuler => self.drive::<EULER, E>(x0, steps, visit),
+            Scheme::Midpoint => self.drive::<MIDPOINT, E>(x0, steps, visit),
+            Scheme::Rk4 => self.drive::<RK4, E>(x0, steps, visit),
+            Scheme::Exp => self.drive::<EXP, E>(x0, steps, visit),
         }
     }
 
@@ -171,15 +206,16 @@ impl<'a> Stepper<'a> {
     fn drive<const S: u8, const E: bool>(
         &self,
         x0: NavState,
+        steps: Range<usize>,
         mut visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
         let samples = &self.samples;
-        if !samples.first_ok() {
+        if steps.start == 0 && !samples.first_ok() {
             return Err(samples.value_error());
         }
         let mut x = x0;
         let mut rotated = None;
-        for k in 0..samples.t.len() - 1 {
+        for k in steps {
             if !samples.step_ok(k) {
                 return Err(samples.value_error());
             }
@@ -335,7 +371,27 @@ pub fn integrate_cancellable(
     if let Some(out) = out.as_mut() {
         out.store(0, initial);
     }
-    let x = Stepper::new(*samples, *bias, *options).run(*initial, |k, _, next| {
+    let stepper = Stepper::new(*samples, *bias, *options);
+    if chunks::chunked(n, options) {
+        let without_gravity = Stepper::new(
+            *samples,
+            *bias,
+            Options {
+                gravity: Vector3::zeros(),
+                ..*options
+            },
+        );
+        let x = chunks::integrate(
+            samples,
+            initial,
+            (&stepper, &without_gravity),
+            out.as_mut().map(StatesOut::reborrow),
+            cancel,
+        )?;
+        check_finite_result(&x, out.as_ref(), (samples, initial, bias, options))?;
+        return Ok(x);
+    }
+    let x = stepper.run(*initial, |k, _, next| {
         if let Some(out) = out.as_mut() {
             out.store(k + 1, next);
         }
@@ -408,9 +464,10 @@ crate::simd_dispatch! {
     fn drive_inertial(
         stepper: &Stepper<'_>,
         x0: NavState,
+        steps: Range<usize>,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
-        stepper.drive_scheme::<false>(x0, visit)
+        stepper.drive_scheme::<false>(x0, steps, visit)
     }
 }
 
@@ -419,9 +476,10 @@ crate::simd_dispatch! {
     fn drive_rotating(
         stepper: &Stepper<'_>,
         x0: NavState,
+        steps: Range<usize>,
         visit: impl FnMut(usize, &NavState, &NavState) -> Result<()>,
     ) -> Result<NavState> {
-        stepper.drive_scheme::<true>(x0, visit)
+        stepper.drive_scheme::<true>(x0, steps, visit)
     }
 }
 
