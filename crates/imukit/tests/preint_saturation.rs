@@ -321,7 +321,13 @@ fn an_interpolated_midpoint_boundary_takes_either_neighbours_flag() {
 }
 
 #[test]
-fn the_parallel_euler_path_inflates_as_streaming_does() {
+fn the_parallel_paths_inflate_as_streaming_does() {
+    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+        parallel_path_inflates_as_streaming_does(scheme);
+    }
+}
+
+fn parallel_path_inflates_as_streaming_does(scheme: Scheme) {
     let n = 2 * CHUNK + 1000;
     let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
     let gyro: Vec<f64> = (0..3 * n).map(|i| 0.1 * ((i as f64) * 0.37).sin()).collect();
@@ -329,25 +335,42 @@ fn the_parallel_euler_path_inflates_as_streaming_does() {
         .map(|i| 9.81 * (i % 3 == 2) as u8 as f64 + 0.2 * ((i as f64) * 0.11).cos())
         .collect();
     let samples = view(&t, &gyro, &accel);
-    // Flags on both sides of a chunk boundary.
-    let a: Vec<bool> = (0..n).map(|k| (CHUNK - 3..CHUNK + 3).contains(&k) || k == 17).collect();
-    let g: Vec<bool> = (0..n).map(|k| k == CHUNK + 500 || k == 2 * CHUNK + 10).collect();
-    let mut par = template(Scheme::Euler);
+    // Four equal chunks: flags on both sides of the boundary at the middle sample (shared by two
+    // midpoint chunks), inside chunks, and on the first sample.
+    let edge = (n - 1) / 2;
+    let a: Vec<bool> = (0..n)
+        .map(|k| (edge - 3..edge + 3).contains(&k) || k == 17 || k == 0)
+        .collect();
+    let g: Vec<bool> = (0..n)
+        .map(|k| k == edge || k == CHUNK + 500 || k == 2 * CHUNK + 10)
+        .collect();
+    let mut par = template(scheme);
     par.integrate_samples_clipped(&samples, Some(&ClipMask { gyro: &g, accel: &a }))
         .unwrap();
-    let mut seq = template(Scheme::Euler);
+    let mut seq = template(scheme);
+    let clipped = |k: usize| Clipped {
+        gyro: g[k],
+        accel: a[k],
+    };
     for k in 0..n - 1 {
-        let c = Clipped {
-            gyro: g[k],
-            accel: a[k],
-        };
-        seq.integrate_measurement_clipped(&samples.accel_at(k), &samples.gyro_at(k), t[k + 1] - t[k], c);
+        let h = t[k + 1] - t[k];
+        match scheme {
+            Scheme::Euler => {
+                seq.integrate_measurement_clipped(&samples.accel_at(k), &samples.gyro_at(k), h, clipped(k))
+            }
+            Scheme::Midpoint => {
+                if k == 0 {
+                    seq.integrate_measurement_clipped(&samples.accel_at(0), &samples.gyro_at(0), 0.0, clipped(0));
+                }
+                seq.integrate_measurement_clipped(&samples.accel_at(k + 1), &samples.gyro_at(k + 1), h, clipped(k + 1));
+            }
+        }
     }
     let err = rel(&par.covariance(), &seq.covariance());
-    assert!(err < 1e-10, "relative error {err:e}");
-    let mut plain = template(Scheme::Euler);
+    assert!(err < 1e-10, "{scheme:?}: relative error {err:e}");
+    let mut plain = template(scheme);
     plain.integrate_samples(&samples).unwrap();
-    assert!(rel(&plain.covariance(), &seq.covariance()) > 1e-3);
+    assert!(rel(&plain.covariance(), &seq.covariance()) > 1e-3, "{scheme:?}");
 }
 
 #[test]
