@@ -321,3 +321,29 @@ fn measure_names_the_first_bad_ideal_row_before_any_overflow() {
     assert_eq!(err.argument(), Some("density"));
     assert!(err.index().is_some_and(|k| k < CHUNK));
 }
+
+#[test]
+fn measure_names_the_first_bad_stamp_and_ideal_value_whatever_the_block() {
+    // The checks search blocks of 65,536 values on every core: the error must still name the
+    // first offender, and a non-finite stamp before a repeated one (as `time::check_increasing`).
+    let n = 3 * CHUNK;
+    let good: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+    let model = SensorModel::default();
+    let run = |t: &[f64], ideal: &[f64]| {
+        let (mut values, mut bias) = (ideal.to_vec(), vec![0.0; 3 * n]);
+        imukit::sim::measure_in_place(t, &mut values, &model, 1, 0, &mut bias).unwrap_err()
+    };
+    let zeros = vec![0.0; 3 * n];
+    let mut t = good.clone();
+    (t[3 * CHUNK - 5], t[CHUNK + 3]) = (t[3 * CHUNK - 6], t[CHUNK + 2]);
+    let err = run(&t, &zeros);
+    assert_eq!((err.argument(), err.index()), (Some("t"), Some(CHUNK + 3)), "{err}");
+    assert!(err.to_string().contains("must increase strictly"), "{err}");
+    t[2 * CHUNK + 1] = f64::NAN;
+    let err = run(&t, &zeros);
+    assert_eq!((err.argument(), err.index()), (Some("t"), Some(2 * CHUNK + 1)), "{err}");
+    let mut ideal = zeros.clone();
+    (ideal[3 * (2 * CHUNK) + 2], ideal[3 * (CHUNK + 1)]) = (f64::INFINITY, f64::NAN);
+    let err = run(&good, &ideal);
+    assert_eq!((err.argument(), err.index()), (Some("ideal"), Some(CHUNK + 1)), "{err}");
+}

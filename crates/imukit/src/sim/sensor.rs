@@ -225,8 +225,8 @@ pub fn measure_in_place_cancellable(
             .in_argument(name));
         }
     }
-    crate::time::check_increasing(t).map_err(|e| e.in_argument("t"))?;
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+    check_increasing(t).map_err(|e| e.in_argument("t"))?;
+    if let Some(i) = first_non_finite(values) {
         return Err(Error::NonFinite { index: i / 3 }.in_argument("ideal"));
     }
     let turn_on = normal3(&mut stream(seed, triad, Process::TurnOn, 0)) * model.turn_on_sigma;
@@ -266,7 +266,7 @@ pub fn measure_in_place_cancellable(
             readings_chunk(t, model, (seed, triad, c), (starts[c], fixed, gm_on), bias, readings);
             Ok(())
         })?;
-    match values.iter().position(|v| !v.is_finite()) {
+    match first_non_finite(values) {
         Some(i) => Err(Error::Overflow { index: i / 3 }.in_argument(overflow_culprit(t, model))),
         None => Ok(()),
     }
@@ -341,6 +341,37 @@ crate::simd_dispatch! {
             }
         }
     }
+}
+
+/// Values per block of the parallel searches.
+const SEARCH_BLOCK: usize = 1 << 16;
+
+/// The first index in `0..n` where `bad` holds, searched block by block on every core: the three
+/// checks of a run read 64 bytes per sample per triad, 10 ns per sample of `simulate` on one core.
+fn first_where(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
+    (0..n.div_ceil(SEARCH_BLOCK))
+        .into_par_iter()
+        .filter_map(|b| (b * SEARCH_BLOCK..((b + 1) * SEARCH_BLOCK).min(n)).find(|&i| bad(i)))
+        .min()
+}
+
+/// The index of the first value that is not finite.
+fn first_non_finite(values: &[f64]) -> Option<usize> {
+    first_where(values.len(), |i| !values[i].is_finite())
+}
+
+/// [`crate::time::check_increasing`] (the same error), searched on every core.
+fn check_increasing(t: &[f64]) -> Result<()> {
+    if let Some(index) = first_non_finite(t) {
+        return Err(Error::NonFinite { index });
+    }
+    if let Some(k) = first_where(t.len(), |k| k > 0 && t[k] <= t[k - 1]) {
+        return Err(Error::NonIncreasingTime {
+            index: k,
+            dt: t[k] - t[k - 1],
+        });
+    }
+    Ok(())
 }
 
 /// The model field to blame for readings that overflowed: the largest of the white noise's
