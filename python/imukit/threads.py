@@ -1,7 +1,8 @@
 """Threads of the parallel kernels: ``set_num_threads``, ``get_num_threads``.
 
-The Rust kernels (batched so3 / quat / euler maps, attitude integration, preintegration windows,
-the simulator, the Allan variance) run on a rayon pool. By default that is rayon's global pool, one
+The Rust kernels (batched so3 / quat / euler maps, attitude integration, long strapdown
+integrations, preintegration windows and long batches, the simulator, the Allan variance) run on a
+rayon pool. By default that is rayon's global pool, one
 thread per core. ``set_num_threads(n)`` makes every later call use ``n`` threads (e.g.
 ``set_num_threads(1)`` in a Dask or multiprocessing worker, so that N workers do not each start one
 thread per core); a ``threads=`` argument on a call overrides it for that call. Results do not
@@ -10,8 +11,8 @@ depend on the count.
 Every public function that reaches a parallel kernel takes the keyword-only ``threads``: the number
 of threads for that call, an int in [1, MAX_THREADS]; None (the default) uses the setting of
 ``set_num_threads``. They are the so3 / quat / euler batch functions, ``integrate_attitude``, ``noise.allan_deviation``,
-``sim.simulate``, ``preintegrate``, ``PreintegratedImu.integrate``, ``preintegrate_windows`` and
-``preint.reintegrate``.
+``sim.simulate``, ``integrate``, ``preintegrate``, ``PreintegratedImu.integrate``,
+``preintegrate_windows`` and ``preint.reintegrate``.
 """
 
 from __future__ import annotations
