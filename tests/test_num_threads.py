@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import functools
 import inspect
+import multiprocessing
+import os
+import queue
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -206,3 +209,41 @@ def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> No
         threads = inspect.signature(fn).parameters["threads"]
         assert (threads.kind, threads.default) == (inspect.Parameter.KEYWORD_ONLY, None), fn.__qualname__
     assert len([n for n in _ENTRIES if n.startswith(("so3.", "quat.", "euler."))]) == len(batch)
+
+
+# ----------------------------------------------------------------------------- fork()
+_FORKED_ENTRIES = ("integrate", "preintegrate", "sim.simulate")
+
+
+def _in_forked_child(results: Any) -> None:
+    # Each entry on the process setting (the global pool when unset) and on a pool of 2.
+    runs = [(name, threads) for name in _FORKED_ENTRIES for threads in (None, 2)]
+    results.put({(name, threads): _ENTRIES[name](ROWS, threads=threads) for name, threads in runs})
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="fork() exists on POSIX systems only")
+@pytest.mark.usefixtures("restore_threads")
+@pytest.mark.parametrize("setting", [None, 2])
+def test_a_forked_child_runs_the_parallel_kernels_on_pools_of_its_own(setting: int | None) -> None:
+    # The parent's pools exist when it forks (built by the calls below), but their threads are not
+    # copied into the child: a kernel sent to one waited for ever there (a ProcessPoolExecutor
+    # worker on Linux's default start method hung in `integrate`, 2026-12-06).
+    if setting is not None:
+        ik.set_num_threads(setting)
+    want = {name: _ENTRIES[name](ROWS, threads=2) for name in _FORKED_ENTRIES}
+    for name in _FORKED_ENTRIES:
+        _ENTRIES[name](ROWS)
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    child = context.Process(target=_in_forked_child, args=(results,))
+    child.start()
+    try:
+        got = results.get(timeout=120)
+    except queue.Empty:
+        child.kill()
+        pytest.fail("the forked child did not finish its kernels within 120 s")
+    finally:
+        child.join(timeout=30)
+    assert child.exitcode == 0
+    for (name, _), value in got.items():
+        _assert_identical(value, want[name])

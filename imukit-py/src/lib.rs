@@ -57,6 +57,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(strapdown_glue::strapdown_propagate, m)?,
         wrap_pyfunction!(adjoint_glue::preint_adjoint, m)?,
         wrap_pyfunction!(threads::set_num_threads, m)?,
+        wrap_pyfunction!(threads::after_fork_in_child, m)?,
         wrap_pyfunction!(threads::get_num_threads, m)?,
         wrap_pyfunction!(threads::simd_path, m)?,
     ] {

@@ -8,6 +8,7 @@
 //! within a few ms instead of when they return (11.6 s on a 25 M-sample `propagate`).
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
@@ -46,12 +47,35 @@ fn pool(n: usize) -> PyResult<Arc<ThreadPool>> {
     Ok(built)
 }
 
+/// Set in a child made by `fork()`: it holds copies of the pools but none of their threads, so a
+/// kernel sent to one waited for ever (a `ProcessPoolExecutor` worker on Linux's default start
+/// method hung in `integrate`). The child builds its pools afresh, rayon's global pool included.
+static FORKED: AtomicBool = AtomicBool::new(false);
+
+/// Called by `os.register_at_fork(after_in_child=…)` (`imukit.threads`): forgets the parent's
+/// pools (dropping one would signal threads that do not exist here) and routes the global pool's
+/// calls to a fresh one. A pool being built by another thread at the instant of the fork keeps the
+/// cache locked; the cache is then left as it is (a kernel sent to one of its pools would wait).
+#[pyfunction]
+pub(crate) fn after_fork_in_child() {
+    FORKED.store(true, Ordering::SeqCst);
+    if let Ok(mut pools) = POOLS.try_lock() {
+        if let Some(parents) = pools.take() {
+            std::mem::forget(parents);
+        }
+    }
+}
+
 /// Runs `f` (which may use rayon) on `threads` threads when given, else in the process-wide
 /// pool. Call it with the GIL released.
 pub(crate) fn run_in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
     // A statement of its own: the lock is released before the kernel runs, so that calls from
     // several Python threads run at once.
-    let size = threads.or(*lock(&PROCESS));
+    let size = threads.or(*lock(&PROCESS)).or_else(|| {
+        FORKED
+            .load(Ordering::SeqCst)
+            .then(|| std::thread::available_parallelism().map_or(1, usize::from))
+    });
     match size {
         Some(n) => Ok(pool(n)?.install(f)),
         None => Ok(f()),

@@ -43,6 +43,7 @@ __all__ = [
     "RobustParams",
     "RobustState",
     "__version__",
+    "after_fork_in_child",
     "allan_variance",
     "attitude_integrate",
     "body_readings",
@@ -140,6 +141,7 @@ FILTER_WORLDS: tuple[str, ...]
 # The process-wide thread count of the parallel kernels (default: rayon's, one per core). Every
 # kernel below that takes `threads` runs on that many threads, None: on this process-wide count.
 def set_num_threads(n: int) -> None: ...
+def after_fork_in_child() -> None: ...
 def get_num_threads() -> int: ...
 def simd_path() -> str: ...
 

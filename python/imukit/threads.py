@@ -6,7 +6,8 @@ rayon pool. By default that is rayon's global pool, one
 thread per core. ``set_num_threads(n)`` makes every later call use ``n`` threads (e.g.
 ``set_num_threads(1)`` in a Dask or multiprocessing worker, so that N workers do not each start one
 thread per core); a ``threads=`` argument on a call overrides it for that call. Results do not
-depend on the count.
+depend on the count. A child process made by ``fork()`` (``multiprocessing``'s default start
+method on Linux) builds its own pools: the parent's threads do not exist there.
 
 Every public function that reaches a parallel kernel takes the keyword-only ``threads``: the number
 of threads for that call, an int in [1, MAX_THREADS]; None (the default) uses the setting of
@@ -18,6 +19,7 @@ of threads for that call, an int in [1, MAX_THREADS]; None (the default) uses th
 from __future__ import annotations
 
 import operator
+import os
 
 from imukit import _core
 from imukit._errors import ParameterError
@@ -25,6 +27,11 @@ from imukit._errors import ParameterError
 __all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads", "simd_path"]
 
 MAX_THREADS = 4096  # a thread pool beyond this is a mistake (and past usize for huge ints)
+
+# A child made by fork() (multiprocessing's default start method on Linux) holds copies of the
+# Rust thread pools without their threads: the core then builds its pools afresh there.
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_core.after_fork_in_child)
 
 
 def _count(n: object, argument: str) -> int:
