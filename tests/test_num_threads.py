@@ -215,10 +215,16 @@ def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> No
 _FORKED_ENTRIES = ("integrate", "preintegrate", "sim.simulate")
 
 
+def _smoothed() -> np.ndarray:
+    # The smoother's two passes run side by side on the process's pool (no `threads=` of its own).
+    return ik.filters.Robust().run(_imu(ROWS), offline=True).rotation.as_quat()
+
+
 def _in_forked_child(results: Any) -> None:
     # Each entry on the process setting (the global pool when unset) and on a pool of 2.
     runs = [(name, threads) for name in _FORKED_ENTRIES for threads in (None, 2)]
-    results.put({(name, threads): _ENTRIES[name](ROWS, threads=threads) for name, threads in runs})
+    got = {(name, threads): _ENTRIES[name](ROWS, threads=threads) for name, threads in runs}
+    results.put({**got, ("smoother", None): _smoothed()})
 
 
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="fork() exists on POSIX systems only")
@@ -230,7 +236,7 @@ def test_a_forked_child_runs_the_parallel_kernels_on_pools_of_its_own(setting: i
     # worker on Linux's default start method hung in `integrate`, 2026-12-06).
     if setting is not None:
         ik.set_num_threads(setting)
-    want = {name: _ENTRIES[name](ROWS, threads=2) for name in _FORKED_ENTRIES}
+    want = {name: _ENTRIES[name](ROWS, threads=2) for name in _FORKED_ENTRIES} | {"smoother": _smoothed()}
     for name in _FORKED_ENTRIES:
         _ENTRIES[name](ROWS)
     context = multiprocessing.get_context("fork")

@@ -271,7 +271,9 @@ fn smooth(
             None => None,
         },
     };
-    py.detach(|| f.smooth(s, &inputs, out))
+    // Its passes run side by side (`rayon::join`): on the process's pool (`set_num_threads`, or a
+    // fresh one in a forked child).
+    py.detach(|| crate::threads::run_in_pool(None, || f.smooth(s, &inputs, out)))?
         .map_err(|e| to_py(py, "imu / params", e))
 }
 

@@ -282,15 +282,18 @@ pub(crate) fn sim_rotating_world<'py>(
     let (mut wg, mut ag) = (gyro.readwrite(), accel.readwrite());
     let (w, a) = (wg.as_slice_mut()?, ag.as_slice_mut()?);
     let w_rate = Vector3::from(earth_rate);
+    // In parallel, on the process's pool (`simulate`'s `threads=` is not passed down here).
     py.detach(|| {
-        sim::in_rotating_world(
-            &w_rate,
-            q.as_chunks().0,
-            v.as_chunks().0,
-            w.as_chunks_mut().0,
-            a.as_chunks_mut().0,
-        )
-    })
+        threads::run_in_pool(None, || {
+            sim::in_rotating_world(
+                &w_rate,
+                q.as_chunks().0,
+                v.as_chunks().0,
+                w.as_chunks_mut().0,
+                a.as_chunks_mut().0,
+            )
+        })
+    })?
     .map_err(|e| to_py(py, "simulate", e))
 }
 
