@@ -118,9 +118,8 @@ impl Preintegrator {
                     let block = &edges[first..(first + CHUNKS_PER_POLL + 1).min(edges.len())];
                     chunks.extend(run_block(samples, clipped, block, &template));
                 }
-                // Midpoint: the first chunk starts with sample 0, this one's last sample (when it
-                // has one), and each chunk with the one before's last; the merge gives a shared
-                // sample the variance of its first interval, as one run does.
+                // Midpoint chunks share their edge samples (the first chunk this one's last); the
+                // merge keeps a shared sample's first-interval variance, as one run does.
                 for mut chunk in chunks {
                     // Each chunk's ends are its neighbours' (sample times): none to check.
                     chunk.boundary = Ends::default();

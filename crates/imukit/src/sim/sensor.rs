@@ -360,7 +360,9 @@ fn first_non_finite(values: &[f64]) -> Option<usize> {
     first_where(values.len(), |i| !values[i].is_finite())
 }
 
-/// [`crate::time::check_increasing`] (the same error), searched on every core.
+/// [`crate::time::check_increasing`] (the same error), searched on every core. That one stays
+/// serial: it also runs outside the bindings' thread pools, where a parallel search would use
+/// rayon's global pool (which a forked child has without its threads).
 fn check_increasing(t: &[f64]) -> Result<()> {
     if let Some(index) = first_non_finite(t) {
         return Err(Error::NonFinite { index });
