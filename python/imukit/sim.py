@@ -31,7 +31,6 @@ from typing import Any, ClassVar, Literal, Union, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imukit import _core
@@ -182,6 +181,9 @@ class Waypoints:
         if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
             raise ShapeError(f"expected a scipy Rotation of length M = len(times) = {len(t)}", argument="rotations")
         self.times = t
+        # scipy.interpolate is imported here: at the top it was 0.2 s of every `import imukit`.
+        from scipy.interpolate import CubicSpline
+
         # Steps that are positive but tiny next to the span (1e-300 s) overflow the splines' 1/h³
         # terms: scipy then raised its own ValueError ("array must not contain infs or NaNs").
         try:

@@ -27,7 +27,6 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import stats
 
 from imukit._arrays import FloatArray, as_float_array, check_finite_rows
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
@@ -79,6 +78,8 @@ class NoiseCalibration:
     def chi2_bound(self) -> float:
         """The χ²₉ quantile at :attr:`confidence` (21.67 at 0.99): about ``1 − confidence`` of consistent
         windows exceed it."""
+        from scipy import stats  # here, not at the top: scipy.stats is 0.7 s of `import imukit`
+
         return float(stats.chi2(9).ppf(self.confidence))
 
     def __str__(self) -> str:
@@ -183,6 +184,8 @@ def calibrate_from_residuals(
         )
     whole = y.sum(axis=1)
     chi2_before = np.einsum("mi,mi->m", whole, whole)
+    from scipy import stats
+
     z = float(stats.norm.ppf(0.5 + confidence / 2.0))
     given = windows.params.noise
     with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused just below

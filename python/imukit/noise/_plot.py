@@ -6,7 +6,6 @@ import os
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from imukit._errors import MissingDependencyError, ParameterError
 from imukit.noise._allan import AllanDeviation
@@ -48,6 +47,8 @@ def plot_allan(
     dev = np.asarray(allan.deviation).reshape(len(allan.taus), -1)
     bars = None
     if fit is not None:
+        from scipy import stats
+
         parts = _design(allan.taus) * np.array([fit.noise_density, fit.bias_instability, fit.random_walk]) ** 2
         model = parts.sum(axis=1)
         fractions = parts / np.where(model > 0.0, model, 1.0)[:, None]
