@@ -1,7 +1,7 @@
 //! PyO3 glue for imukit: conversion only. Each binding copies its arrays, converts its values
-//! by field name and its enums by name ([`convert`]), releases the GIL, calls the core, and maps
+//! by field name and its enums by name (module `convert`), releases the GIL, calls the core, and maps
 //! a core error to the `imukit` exception hierarchy with its argument and index as fields
-//! ([`errors`]). No value checks, no math, no defaults: those live in the core (`crates/imukit`).
+//! (module `errors`). No value checks, no math, no defaults: those live in the core (`crates/imukit`).
 //! The public Python API (shapes, broadcasting, scipy interop) lives in `python/imukit`; nothing
 //! here is meant to be called directly.
 

@@ -7,7 +7,7 @@ use imukit::imu::Noise;
 use imukit::preint::{Preintegrator, Scheme};
 use imukit::so3;
 
-/// Sample spacing [s].
+/// Sample spacing \[s\].
 pub const H: f64 = 0.005;
 /// Samples in the window.
 pub const N: usize = 200;

@@ -61,9 +61,9 @@ pub enum Estimator {
 /// Allan variances of every column at every cluster size.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AllanVariance {
-    /// `τ = m / rate` [s], one per cluster size, in the order given.
+    /// `τ = m / rate` \[s\], one per cluster size, in the order given.
     pub taus: Vec<f64>,
-    /// `M × C` row-major: `variance[i * columns + c]` is column `c` at `taus[i]` [unit²].
+    /// `M × C` row-major: `variance[i * columns + c]` is column `c` at `taus[i]` \[unit²\].
     pub variance: Vec<f64>,
     /// Number of squared differences averaged at each `τ` (allantools' `ns`).
     pub terms: Vec<usize>,

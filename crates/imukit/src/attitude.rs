@@ -2,7 +2,7 @@
 //!
 //! | item | convention |
 //! |---|---|
-//! | input | timestamps `t` [s] (strictly increasing, any spacing), body rates `ω` [rad/s], one row per sample |
+//! | input | timestamps `t` \[s\] (strictly increasing, any spacing), body rates `ω` [rad/s], one row per sample |
 //! | ODE | `Ṙ = R [ω]×`; `q̇ = ½ q ⊗ [ω, 0]`; `χ̇ = E(χ) ω` for ZYX angles χ |
 //! | output | Hamilton `q_wb` per sample, `[x, y, z, w]`, element 0 = the initial attitude |
 //!
@@ -24,7 +24,7 @@
 //! Representation × scheme: quaternion and matrix take all five; ZYX Euler angles have no group
 //! structure and take `euler`, `rk2` and `rk4` only. Quaternions are renormalised and
 //! matrices re-orthonormalised (nearest rotation, Björck–Bowie iteration) after every step of the
-//! ODE schemes, and every [`RENORMALIZE_EVERY`] steps of `exp`/`magnus`, which multiply exact
+//! ODE schemes, and every `RENORMALIZE_EVERY` steps of `exp`/`magnus`, which multiply exact
 //! rotations. Euler angles are refused within the gimbal tolerance of ±90°, and when cos(pitch)
 //! changes sign between two samples (the path jumped across the singularity).
 
@@ -216,7 +216,7 @@ impl State for Vector3<f64> {
     }
 }
 
-/// Largest yaw or roll change [rad] one Euler-angle step may make before it counts as jumping over
+/// Largest yaw or roll change \[rad\] one Euler-angle step may make before it counts as jumping over
 /// the singularity (1 rad: 200 rad/s at 200 Hz, far beyond any gyro's range).
 const MAX_EULER_STEP: f64 = 1.0;
 

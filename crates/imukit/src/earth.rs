@@ -2,7 +2,7 @@
 //!
 //! | item | convention |
 //! |---|---|
-//! | frame | [`LocalLevel`]: origin at geodetic `latitude` [rad] and `height` [m] above the ellipsoid, axes ENU (x east, y north, z up) or NED; it turns with the Earth |
+//! | frame | [`LocalLevel`]: origin at geodetic `latitude` \[rad\] and `height` \[m\] above the ellipsoid, axes ENU (x east, y north, z up) or NED; it turns with the Earth |
 //! | Earth rate | `ω_ie` in the frame's axes: ENU `Ω (0, cos φ, sin φ)`, NED `Ω (cos φ, 0, −sin φ)`, `Ω = 7.292115e-5` rad/s (Groves 2013, eq. 2.123) |
 //! | gravity | plumb-bob gravity at the origin (mass attraction plus centrifugal), pointing down: Somigliana's normal gravity on the ellipsoid (Groves eq. 2.134) with the free-air height correction to second order (Groves eq. 2.139) |
 //! | model | in this frame `v̇ = R f + g − 2 ω_ie × v`, `Ṙ = R [ω]× − [ω_ie]× R`; the change of gravity and of the centrifugal term across the frame (a few 1e-6 m/s² per metre) and the transport rate of a frame that follows the vehicle are not modelled |
@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 
 /// WGS-84 Earth rotation rate Ω [rad/s].
 pub const EARTH_RATE: f64 = 7.292_115e-5;
-/// WGS-84 equatorial radius a [m].
+/// WGS-84 equatorial radius a \[m\].
 pub const SEMI_MAJOR_AXIS: f64 = 6_378_137.0;
 /// WGS-84 flattening f.
 pub const FLATTENING: f64 = 1.0 / 298.257_223_563;
@@ -42,15 +42,15 @@ crate::named_enum!(Axes, "axes", [Enu => "enu", Ned => "ned"]);
 /// A local-level frame fixed on the Earth (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocalLevel {
-    /// Geodetic latitude φ [rad], in [−π/2, π/2].
+    /// Geodetic latitude φ \[rad\], in [−π/2, π/2].
     pub latitude: f64,
-    /// Height above the WGS-84 ellipsoid [m].
+    /// Height above the WGS-84 ellipsoid \[m\].
     pub height: f64,
     /// ENU or NED.
     pub axes: Axes,
 }
 
-/// The highest origin [m] a frame takes (see [`LocalLevel::new`]).
+/// The highest origin \[m\] a frame takes (see [`LocalLevel::new`]).
 pub const MAX_HEIGHT: f64 = 1.0e6;
 
 impl LocalLevel {

@@ -3,7 +3,7 @@
 //!
 //! | item | convention |
 //! |---|---|
-//! | state | position `(φ, λ, h)`: geodetic latitude [rad], longitude [rad], height [m] (the [`NavState`]'s `position` holds them); `v` the velocity relative to the Earth in the local-level axes at the vehicle; `q = q_nb` |
+//! | state | position `(φ, λ, h)`: geodetic latitude \[rad\], longitude \[rad\], height \[m\] (the [`NavState`]'s `position` holds them); `v` the velocity relative to the Earth in the local-level axes at the vehicle; `q = q_nb` |
 //! | axes | ENU or NED ([`Axes`]), the frame at the vehicle's own position |
 //! | radii | meridian `R_N = a(1 − e²)/(1 − e² sin²φ)^{3/2}`, transverse `R_E = a/√(1 − e² sin²φ)` (Groves eqs. 2.105, 2.106) |
 //! | position rates | `φ̇ = v_N/(R_N + h)`, `λ̇ = v_E/((R_E + h) cos φ)`, `ḣ = v_U` (Groves eq. 5.56) |
@@ -28,7 +28,7 @@ use crate::{quat, Cancel, Error, Result};
 /// First eccentricity squared `e² = f (2 − f)`.
 pub(crate) const E2: f64 = FLATTENING * (2.0 - FLATTENING);
 
-/// Meridian and transverse radii of curvature `(R_N, R_E)` at latitude φ [m] (module docs).
+/// Meridian and transverse radii of curvature `(R_N, R_E)` at latitude φ \[m\] (module docs).
 pub fn radii(latitude: f64) -> (f64, f64) {
     let d = 1.0 - E2 * latitude.sin().powi(2);
     (
@@ -247,9 +247,9 @@ fn culprit(samples: &Samples<'_>, initial: &NavState, bias: &Bias) -> &'static s
 /// `[x, y, z, w]`; `mid_position` / `mid_velocity` at the step mid-points (one row fewer).
 #[derive(Debug, Clone, Copy)]
 pub struct Track<'a> {
-    /// Sample times [s].
+    /// Sample times \[s\].
     pub t: &'a [f64],
-    /// Positions of the motion [m] (only the vertical part is used, as the height change).
+    /// Positions of the motion \[m\] (only the vertical part is used, as the height change).
     pub position: &'a [[f64; 3]],
     /// Velocities [m/s] in the moving frame.
     pub velocity: &'a [[f64; 3]],

@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, Vector3};
 use crate::error::{Error, Result};
 use crate::imu::{Bias, Samples};
 
-/// The largest lever-arm component accepted [m] (about the Earth's radius).
+/// The largest lever-arm component accepted \[m\] (about the Earth's radius).
 pub const MAX_LEVER_ARM: f64 = 1e7;
 
 /// The sensor's pose in the body frame (module docs).
@@ -25,7 +25,7 @@ pub const MAX_LEVER_ARM: f64 = 1e7;
 pub struct SensorPose {
     /// `R_bs`: sensor axes to body axes (a rotation matrix).
     pub rotation: Matrix3<f64>,
-    /// The sensor's origin in body coordinates [m].
+    /// The sensor's origin in body coordinates \[m\].
     pub lever_arm: Vector3<f64>,
 }
 

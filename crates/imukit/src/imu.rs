@@ -28,7 +28,7 @@ pub fn gravity() -> Vector3<f64> {
 /// Position, velocity and attitude.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NavState {
-    /// Position in the world frame [m].
+    /// Position in the world frame \[m\].
     pub position: Vector3<f64>,
     /// Velocity in the world frame [m/s].
     pub velocity: Vector3<f64>,
@@ -79,7 +79,7 @@ impl Noise {
     }
 }
 
-/// The samples of one run: times [s], body rates [rad/s] and specific forces [m/s²], one row per
+/// The samples of one run: times \[s\], body rates [rad/s] and specific forces [m/s²], one row per
 /// sample. Built by [`Samples::new`], which checks the shapes; the values are checked later.
 #[derive(Debug, Clone, Copy)]
 pub struct Samples<'a> {
@@ -112,7 +112,7 @@ impl<'a> Samples<'a> {
         Ok(Self { t, gyro, accel })
     }
 
-    /// Timestamps [s].
+    /// Timestamps \[s\].
     pub fn t(&self) -> &'a [f64] {
         self.t
     }

@@ -6,7 +6,7 @@
 //! | error state δx (15) | `[δp, δv, δθ, δb_a, δb_g]` (Solà's order) |
 //! | perturbations | `p = p̂ + δp`, `v = v̂ + δv`, `R = R̂ Exp(δθ)` (right, local), `b = b̂ + δb` |
 //! | impulses i (12) | `[v_i, θ_i, a_i, ω_i]`: velocity, angle, accelerometer-bias and gyro-bias steps |
-//! | `Q_i` | `diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃` from continuous densities ([`Noise`](crate::imu::Noise)) |
+//! | `Q_i` | `diag(σ_a² h, σ_g² h, σ_ba² h, σ_bg² h) ⊗ I₃` from continuous densities ([`Noise`]) |
 //!
 //! The discrete step whose Jacobians are used is the first-order one, with impulses:
 //! `p⁺ = p + v h + ½(R â + g) h²`, `v⁺ = v + (R â + g) h + v_i`, `R⁺ = R Exp(ω̂ h + θ_i)`,
@@ -26,7 +26,7 @@
 //! the mean takes the Earth's turn and Coriolis as strapdown does; with the right perturbation the
 //! turn `Exp(−Ωh)` on the left of `R` leaves `δθ` unchanged, and the Coriolis term adds
 //! `−2h [Ω]×` to `∂δv⁺/∂δv` and `−h² [Ω]×` to `∂δp⁺/∂δv`, applied as a separate factor after the
-//! step ([`coriolis_blocks`]; its cross terms with the step are O(h²), below the step's order).
+//! step (`coriolis_blocks`; its cross terms with the step are O(h²), below the step's order).
 //!
 //! **Lever arm and a frame that follows the vehicle** ([`Model`], [`propagate_model`]): a dense
 //! step that carries the lever-arm conversion's gyro noise across the three samples it spans, and
@@ -34,7 +34,7 @@
 //!
 //! Solà's §5.4.3 drops the h² terms of the position row and uses `I` for `J_r`; both are kept here
 //! because they cost nothing in the block product. The mean may be integrated with any
-//! [`strapdown::Scheme`](crate::strapdown::Scheme); the covariance always uses these Jacobians at
+//! [`strapdown::Scheme`]; the covariance always uses these Jacobians at
 //! the state and sample at the start of each step (their difference from the scheme's own
 //! Jacobians is O(h) relative per step).
 
@@ -56,7 +56,7 @@ pub type Covariance = SMatrix<f64, 15, 15>;
 /// ([`propagate_model`]); the default is neither.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Model {
-    /// The sensor's lever arm `r` in body axes [m]: the readings given are the body origin's,
+    /// The sensor's lever arm `r` in body axes \[m\]: the readings given are the body origin's,
     /// converted by [`crate::extrinsics::to_body`] (biases removed, α the central difference of
     /// the gyro), and the covariance carries the gyro noise that conversion puts into the specific
     /// force (`augmented` module docs). Zero for none.

@@ -82,7 +82,7 @@ fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]))
 }
 
-/// The angle [rad] one Madgwick step turns an estimate tilted by `gap` about x, the sensor level
+/// The angle \[rad\] one Madgwick step turns an estimate tilted by `gap` about x, the sensor level
 /// and still (gyro zero, 0.01 s from the state's time), every shared stage off so that the law alone acts.
 fn madgwick_step(law: Madgwick, gap: f64, nine: bool) -> f64 {
     let options = Options {

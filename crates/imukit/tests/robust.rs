@@ -125,7 +125,7 @@ fn tilt_deg(est: &UnitQuaternion<f64>, truth: &UnitQuaternion<f64>) -> f64 {
     a.angle(&b).to_degrees()
 }
 
-/// Heading of `q`'s body x axis projected on the horizontal [rad] (ENU).
+/// Heading of `q`'s body x axis projected on the horizontal \[rad\] (ENU).
 fn heading(q: &UnitQuaternion<f64>) -> f64 {
     let x = q * Vector3::x();
     x.y.atan2(x.x)

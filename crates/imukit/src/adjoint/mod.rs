@@ -6,7 +6,7 @@
 //!
 //! | buffer | per interval | meaning |
 //! |---|---|---|
-//! | `h` | 1 | its step [s], ≥ 0 (0: an identity step, how ragged windows are padded) |
+//! | `h` | 1 | its step \[s\], ≥ 0 (0: an identity step, how ragged windows are padded) |
 //! | `w` | 3 | its rate ω [rad/s], bias-corrected (midpoint: the mean of its two samples) |
 //! | `a` | 3 | its specific force [m/s²], bias-corrected (midpoint: at its start) |
 //! | `a_end` | 3 | midpoint only: the specific force at its end |

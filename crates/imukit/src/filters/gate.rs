@@ -25,7 +25,7 @@ enum Verdict {
     Recover,
 }
 
-/// The gate proper: `rejected` is its clock [s], `recovery_s` None when no rejection is
+/// The gate proper: `rejected` is its clock \[s\], `recovery_s` None when no rejection is
 /// configured, `passes` the sample's test given the clock (only evaluated when it matters).
 #[inline(always)]
 fn decide(

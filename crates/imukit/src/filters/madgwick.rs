@@ -29,7 +29,7 @@ use crate::Result;
 pub struct Madgwick {
     /// `β` [1/s]: norm of the correction's quaternion rate (rotation rate `2β` rad/s).
     pub beta: f64,
-    /// `θ₀` [rad]: the floor on the norm of the descent direction `‖Σ s × v̂‖` (the sine of the
+    /// `θ₀` \[rad\]: the floor on the norm of the descent direction `‖Σ s × v̂‖` (the sine of the
     /// gap, for one measurement), so that below a gap of about `θ₀` the step is proportional,
     /// `2β ‖Σ s × v̂‖ / θ₀`, and above it Madgwick's full rate `2β`; 0 is his normalised step at
     /// every gap.

@@ -84,7 +84,7 @@ pub trait Law: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     /// Checks the gains ([`check`] names each one); [`Filter::new`] calls it.
     fn validate(&self) -> Result<()>;
 
-    /// The correction rotation `ω_c dt` [rad] of one step. May update the gyro-bias estimate
+    /// The correction rotation `ω_c dt` \[rad\] of one step. May update the gyro-bias estimate
     /// `bias` (subtracted from the gyro in this step's exponential) and the law's own state.
     fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, extra: &mut Self::Extra) -> Vector3<f64>;
 }
@@ -118,7 +118,7 @@ pub struct Step<'a> {
     pub drifting: bool,
     /// The ramp multiplier `ρ` of the correction gain (1 after the ramp).
     pub gain: f64,
-    /// The step [s].
+    /// The step \[s\].
     pub dt: f64,
 }
 
@@ -136,7 +136,7 @@ pub struct Filter<L: Law> {
 /// Samples of a batch run, one row per sample.
 #[derive(Debug, Clone, Copy)]
 pub struct Inputs<'a> {
-    /// Timestamps [s], strictly increasing.
+    /// Timestamps \[s\], strictly increasing.
     pub t: &'a [f64],
     /// Body rates [rad/s].
     pub gyro: &'a [[f64; 3]],
@@ -247,7 +247,7 @@ impl<L: Law> Filter<L> {
     }
 
     /// One sample. An uninitialised `state` is initialised from `accel` (and `mag`) and `dt` is
-    /// ignored; otherwise `dt` [s] must be positive and finite. Errors name the argument.
+    /// ignored; otherwise `dt` \[s\] must be positive and finite. Errors name the argument.
     pub fn update(
         &self,
         state: &mut State<L>,

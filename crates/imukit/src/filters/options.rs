@@ -12,7 +12,7 @@ use super::world::World;
 /// (see [`AccelRejection`]) restarts the ramp.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GainRamp {
-    /// Ramp length [s]; 0 disables the ramp.
+    /// Ramp length \[s\]; 0 disables the ramp.
     pub duration_s: f64,
     /// Gain multiplier at the start (≥ 1).
     pub factor: f64,
@@ -45,13 +45,13 @@ impl Default for GainRamp {
 pub struct AccelRejection {
     /// Threshold on `|‖a‖ − g|` of the raw sample [m/s²].
     pub norm: f64,
-    /// Threshold on the angle between measured and predicted up [rad].
+    /// Threshold on the angle between measured and predicted up \[rad\].
     pub angle_rad: f64,
-    /// Continuous rejection time after which the filter recovers [s].
+    /// Continuous rejection time after which the filter recovers \[s\].
     pub recovery_s: f64,
     /// Threshold on `|‖f‖ − g|` of the vector the law uses [m/s²].
     pub filtered_norm: f64,
-    /// Rejection time with `‖f‖` near `g` after which an angle beyond `angle_rad` is taken for a drift [s].
+    /// Rejection time with `‖f‖` near `g` after which an angle beyond `angle_rad` is taken for a drift \[s\].
     pub drift_s: f64,
 }
 
@@ -89,7 +89,7 @@ impl Default for AccelRejection {
 /// `2 tau_s δb` (its lag).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AccelLowPass {
-    /// Time constant of each of the two stages [s].
+    /// Time constant of each of the two stages \[s\].
     pub tau_s: f64,
 }
 
@@ -111,9 +111,9 @@ impl Default for AccelLowPass {
 pub struct MagRejection {
     /// Relative threshold on the field norm (fraction of `m₀`).
     pub norm_fraction: f64,
-    /// Threshold on the dip-angle change [rad].
+    /// Threshold on the dip-angle change \[rad\].
     pub dip_rad: f64,
-    /// Continuous rejection time after which the reference is re-learned [s].
+    /// Continuous rejection time after which the reference is re-learned \[s\].
     pub recovery_s: f64,
 }
 
@@ -142,9 +142,9 @@ pub struct RestDetection {
     pub gyro: f64,
     /// Threshold on the rms of `‖a‖ − g` [m/s²].
     pub accel: f64,
-    /// Time the thresholds must hold [s].
+    /// Time the thresholds must hold \[s\].
     pub duration_s: f64,
-    /// Time constant of the low passes of the tests and of the bias at rest [s].
+    /// Time constant of the low passes of the tests and of the bias at rest \[s\].
     pub tau_s: f64,
     /// Largest `‖ω̄‖` taken for a bias [rad/s].
     pub max_bias: f64,

@@ -15,7 +15,7 @@ pub struct CommonState {
     pub bias: Vector3<f64>,
     /// False until the first sample has initialised the attitude.
     pub initialized: bool,
-    /// Time of the last sample [s] (batch: its timestamp; streaming: the sum of the `dt`s).
+    /// Time of the last sample \[s\] (batch: its timestamp; streaming: the sum of the `dt`s).
     pub time: f64,
     /// Seconds since start-up or the last recovery (drives the gain ramp).
     pub ramp_elapsed: f64,

@@ -217,7 +217,7 @@ pub fn cos_remainder(theta: f64) -> f64 {
 /// `atan2(y, x)` within about 1 ulp, in ~40 instructions where libm's takes ~140 (the 9D
 /// `Robust` step's costliest call). `|y|, |x|` are reduced to `t ∈ [−0.66, 0.66]` as Cephes does
 /// (`t = a/b`; up to `a/b = tan 3π/8` `(a − b)/(a + b)` plus π/4, above `−b/a` plus π/2, the
-/// constants' low bits added to the small part), then [`ATAN_P`]/[`ATAN_Q`], then the quadrant.
+/// constants' low bits added to the small part), then `ATAN_P`/`ATAN_Q`, then the quadrant.
 /// Both zero, infinities and NaN go to libm (its special cases).
 #[inline(always)]
 pub fn atan2(y: f64, x: f64) -> f64 {

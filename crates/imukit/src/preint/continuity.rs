@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 /// readings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct End {
-    /// Time on the caller's clock [s], when known.
+    /// Time on the caller's clock \[s\], when known.
     pub t: Option<f64>,
     /// Accelerometer reading [m/s²].
     pub accel: Vector3<f64>,

@@ -228,9 +228,9 @@ pub struct Preintegrator {
     pub delta_rotation: Matrix3<f64>,
     /// `Δv_ij` [m/s].
     pub delta_velocity: Vector3<f64>,
-    /// `Δp_ij` [m].
+    /// `Δp_ij` \[m\].
     pub delta_position: Vector3<f64>,
-    /// `Δt_ij` [s].
+    /// `Δt_ij` \[s\].
     pub delta_t: f64,
     covariance: CovarianceBlocks,
     /// The bias Jacobian; it evolves as `J ← A J + G_b` (`∂ΔR/∂b_a` stays 0).

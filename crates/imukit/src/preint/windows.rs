@@ -20,7 +20,7 @@ use crate::error::{try_vec, Cancel, Error, Result};
 use crate::imu::Samples;
 
 /// `template` (an empty preintegrator: scheme, bias, noise, bias walk) run over each window
-/// `[boundaries[m], boundaries[m + 1]]` of `samples`.
+/// `[boundaries\[m\], boundaries[m + 1]]` of `samples`.
 pub fn preintegrate_windows(
     samples: &Samples<'_>,
     boundaries: &[f64],
@@ -71,9 +71,9 @@ pub struct WindowsOut<'a> {
     pub delta_rotation: &'a mut [[[f64; 3]; 3]],
     /// `Δv` (M, 3) [m/s].
     pub delta_velocity: &'a mut [[f64; 3]],
-    /// `Δp` (M, 3) [m].
+    /// `Δp` (M, 3) \[m\].
     pub delta_position: &'a mut [[f64; 3]],
-    /// `Δt` (M,) [s].
+    /// `Δt` (M,) \[s\].
     pub delta_t: &'a mut [f64],
     /// Covariance of `[δθ, δv, δp]` (M, 9, 9).
     pub covariance: &'a mut [[[f64; 9]; 9]],

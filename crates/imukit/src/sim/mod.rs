@@ -17,7 +17,7 @@ use crate::error::{Cancel, Error, Result};
 /// Output buffers of [`evaluate`], flat row-major: `position`, `velocity`, `gyro` (body rate) and
 /// `accel` (specific force) `3N`, `rotation` `4N` as `[x, y, z, w]` quaternions of `R_wb`.
 pub struct Truth<'a> {
-    /// Positions [m].
+    /// Positions \[m\].
     pub position: &'a mut [f64],
     /// Velocities [m/s].
     pub velocity: &'a mut [f64],

@@ -20,7 +20,7 @@ use crate::{euler, so3};
 /// The kinematic state at one instant, world frame unless stated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Kinematics {
-    /// Position [m].
+    /// Position \[m\].
     pub position: Vector3<f64>,
     /// Velocity [m/s].
     pub velocity: Vector3<f64>,
@@ -44,14 +44,14 @@ impl Kinematics {
 pub enum Motion {
     /// At rest.
     Static {
-        /// `p₀` [m].
+        /// `p₀` \[m\].
         position: Vector3<f64>,
         /// `R₀`.
         rotation: Rotation3<f64>,
     },
     /// Constant body rate and body-frame velocity (a screw motion).
     ConstantTwist {
-        /// `p₀` [m].
+        /// `p₀` \[m\].
         position: Vector3<f64>,
         /// `R₀`.
         rotation: Rotation3<f64>,
@@ -62,9 +62,9 @@ pub enum Motion {
     },
     /// Horizontal circle of radius `radius` at `angular_rate` Ω, climbing at `climb_rate`.
     Helix {
-        /// Centre of the circle at t = 0 [m].
+        /// Centre of the circle at t = 0 \[m\].
         center: Vector3<f64>,
-        /// `r` [m].
+        /// `r` \[m\].
         radius: f64,
         /// Ω [rad/s], positive counter-clockwise seen from above.
         angular_rate: f64,
@@ -73,30 +73,30 @@ pub enum Motion {
     },
     /// Gerono-style figure eight with banking and pitching.
     FigureEight {
-        /// Centre [m].
+        /// Centre \[m\].
         center: Vector3<f64>,
-        /// `(A, B, C)` [m].
+        /// `(A, B, C)` \[m\].
         amplitude: Vector3<f64>,
         /// Ω [rad/s]: one eight every 2π/Ω seconds.
         angular_rate: f64,
-        /// Roll amplitude φ₀ [rad].
+        /// Roll amplitude φ₀ \[rad\].
         roll: f64,
-        /// Pitch amplitude θ₀ [rad].
+        /// Pitch amplitude θ₀ \[rad\].
         pitch: f64,
     },
     /// The VIO teaching ellipse (module docs).
     VioEllipse {
-        /// Centre [m].
+        /// Centre \[m\].
         center: Vector3<f64>,
-        /// `(a, b, c)` [m].
+        /// `(a, b, c)` \[m\].
         amplitude: Vector3<f64>,
         /// K [rad/s].
         angular_rate: f64,
         /// K₁: height oscillations per revolution.
         height_frequency: f64,
-        /// Roll amplitude φ₀ [rad].
+        /// Roll amplitude φ₀ \[rad\].
         roll: f64,
-        /// Pitch amplitude θ₀ [rad].
+        /// Pitch amplitude θ₀ \[rad\].
         pitch: f64,
     },
 }
@@ -134,7 +134,7 @@ fn from_euler(chi: Vector3<f64>, chi_dot: Vector3<f64>) -> (Rotation3<f64>, Vect
 }
 
 impl Motion {
-    /// The kinematic state at time `t` [s].
+    /// The kinematic state at time `t` \[s\].
     pub fn at(&self, t: f64) -> Kinematics {
         match self {
             Motion::Static { position, rotation } => Kinematics {

@@ -53,7 +53,7 @@ pub struct SensorModel {
     pub random_walk: f64,
     /// σ_gm: stationary std of the Gauss–Markov bias.
     pub gauss_markov_sigma: f64,
-    /// τ [s]: its correlation time (∞ or 0 with σ_gm = 0: none).
+    /// τ \[s\]: its correlation time (∞ or 0 with σ_gm = 0: none).
     pub gauss_markov_tau: f64,
     /// Saturation range (∞: none).
     pub range: f64,

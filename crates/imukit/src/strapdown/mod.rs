@@ -2,7 +2,7 @@
 //!
 //! | item | convention |
 //! |---|---|
-//! | state | `p` [m], `v` [m/s] in the world frame, `q = q_wb` (body to world, Hamilton) |
+//! | state | `p` \[m\], `v` [m/s] in the world frame, `q = q_wb` (body to world, Hamilton) |
 //! | inputs | `ω_m` [rad/s] and specific force `a_m` [m/s²] in the body frame, biases `b_g`, `b_a` |
 //! | model | `ṗ = v`, `v̇ = R (a_m − b_a) + g`, `Ṙ = R [ω_m − b_g]×`; g added (default `(0, 0, −9.81)`) |
 //! | output | [`StatesOut`]: `n` rows `[p (3), v (3)]` and `n` rows `q (4, xyzw)`; row 0 = the initial state |

@@ -18,7 +18,7 @@ const DEFAULT_STEPS: usize = 1_000_000;
 /// Intervals per chunk: every long run calls the API once per chunk, continuing from its state.
 pub const CHUNK_STEPS: usize = 100_000;
 
-/// Sample interval [s] (1 kHz).
+/// Sample interval \[s\] (1 kHz).
 pub const H: f64 = 1e-3;
 
 /// The number of attitude steps (see the module docs).
@@ -47,7 +47,7 @@ pub fn long_steps() -> usize {
 /// The rate stays a few rad/s and its axis keeps turning: `ω = (2 sin 0.71t + 0.5, 3 cos 0.37t,
 /// 1.5 sin(1.13t + 0.4) − 1)` rad/s; the specific force is gravity-sized with a wobble.
 pub struct Chunk {
-    /// Stamps [s].
+    /// Stamps \[s\].
     pub t: Vec<f64>,
     /// Body rates [rad/s], flat 3n.
     pub gyro: Vec<f64>,

@@ -208,7 +208,7 @@ impl Robust {
     }
 
     /// One streaming sample: an uninitialised `state` is initialised (and `dt` ignored);
-    /// otherwise `dt` [s] must be positive and finite. Errors name the argument.
+    /// otherwise `dt` \[s\] must be positive and finite. Errors name the argument.
     pub fn update(
         &self,
         state: &mut RobustState,

@@ -9,16 +9,16 @@ use crate::filters::{check, Fields};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RobustParams {
     /// Time constant of the 2nd-order Butterworth low pass of the specific force in the
-    /// almost-inertial frame [s] (cut-off `1/(2π τ)`).
+    /// almost-inertial frame \[s\] (cut-off `1/(2π τ)`).
     pub tau_acc_s: f64,
-    /// Time constant of the first-order heading correction from the magnetometer [s].
+    /// Time constant of the first-order heading correction from the magnetometer \[s\].
     pub tau_mag_s: f64,
-    /// Length of one bias-estimation window [s]: corrections are summed over it, then one Kalman
+    /// Length of one bias-estimation window \[s\]: corrections are summed over it, then one Kalman
     /// update (successive low-passed samples are not independent measurements).
     pub bias_window_s: f64,
     /// Prior standard deviation of each gyro-bias component [rad/s].
     pub bias_sigma_init_rad_s: f64,
-    /// Time in which the bias variance grows by `bias_sigma_init²` without measurements [s]
+    /// Time in which the bias variance grows by `bias_sigma_init²` without measurements \[s\]
     /// (random-walk process noise `σ_init²/T` per second).
     pub bias_forgetting_s: f64,
     /// Standard deviation of a window's mean correction rate as a bias measurement in motion
@@ -27,7 +27,7 @@ pub struct RobustParams {
     /// Standard deviation of one second's mean gyro at rest as a bias measurement [rad/s] (a rest
     /// segment of `T` seconds counts with `σ/√T`).
     pub bias_sigma_rest_rad_s: f64,
-    /// At rest, one bias update per this much rest (and one when the rest ends) [s].
+    /// At rest, one bias update per this much rest (and one when the rest ends) \[s\].
     pub bias_rest_window_s: f64,
     /// The bias estimate is clipped to ± this per axis [rad/s].
     pub bias_clip_rad_s: f64,
@@ -37,24 +37,24 @@ pub struct RobustParams {
     pub rest_gyro_rad_s: f64,
     /// Rest: `‖ã − ā‖` below this [m/s²] (the accelerometer low-passed as the gyro).
     pub rest_accel: f64,
-    /// Rest: time the thresholds must hold [s].
+    /// Rest: time the thresholds must hold \[s\].
     pub rest_duration_s: f64,
-    /// Time constant of the rest-detection low passes `ω̄`, `ā` (the window means) [s].
+    /// Time constant of the rest-detection low passes `ω̄`, `ā` (the window means) \[s\].
     pub rest_tau_s: f64,
     /// Time constant of the low passes `ω̃`, `ã` that take sensor noise and vibration off the
-    /// samples the rest tests compare with the window means [s].
+    /// samples the rest tests compare with the window means \[s\].
     pub rest_noise_tau_s: f64,
     /// Magnetic disturbance: relative threshold on `|‖m‖ − m₀|/m₀`.
     pub mag_norm_fraction: f64,
-    /// Magnetic disturbance: threshold on the dip-angle change `|δ − δ₀|` [rad].
+    /// Magnetic disturbance: threshold on the dip-angle change `|δ − δ₀|` \[rad\].
     pub mag_dip_rad: f64,
     /// After this much uninterrupted rejection the field is used again, with the heading time
-    /// constant multiplied by `mag_slow_factor` [s].
+    /// constant multiplied by `mag_slow_factor` \[s\].
     pub mag_max_rejection_s: f64,
     /// Heading time-constant multiplier for a field used after `mag_max_rejection_s`.
     pub mag_slow_factor: f64,
     /// A new field, homogeneous (norm and dip within the thresholds of a candidate) while the
-    /// sensor turns, becomes the reference after this many seconds of turning [s].
+    /// sensor turns, becomes the reference after this many seconds of turning \[s\].
     pub mag_new_field_s: f64,
     /// Minimum rotation rate for time to count towards a new field [rad/s].
     pub mag_new_field_gyro_rad_s: f64,

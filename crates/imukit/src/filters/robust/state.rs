@@ -85,7 +85,7 @@ macro_rules! state {
 state!(
     /// False until the first sample (or an initial attitude) has set the attitude.
     initialized: bool = ["initialized"],
-    /// Time of the last sample [s].
+    /// Time of the last sample \[s\].
     time: f64 = ["time"],
     /// The output attitude `q_wb` in the configured world frame (what the last step produced).
     q: UnitQuaternion<f64> = ["qx", "qy", "qz", "qw"],
@@ -97,7 +97,7 @@ state!(
     /// (the w, z of its quaternion; w ≥ 0, i.e. ψ ∈ [−π, π]): turned by a small rotation each
     /// sample, without trigonometry.
     heading: Vector2<f64> = ["heading_w", "heading_z"],
-    /// The same heading ψ [rad] as an angle in [−π, π] (equal to `heading`'s to rounding): the
+    /// The same heading ψ \[rad\] as an angle in [−π, π] (equal to `heading`'s to rounding): the
     /// heading error is the field's own angle less ψ, so the loop-carried chain of the heading
     /// filter is a subtraction, a wrap and a multiply-add, with no `atan2` on it.
     heading_angle: f64 = ["heading_angle"],
@@ -132,23 +132,23 @@ state!(
     loop_bias1: Vector2<f64> = ["lb1_x", "lb1_y"],
     /// Second delay elements of the same.
     loop_bias2: Vector2<f64> = ["lb2_x", "lb2_y"],
-    /// Heading loop's error driven by row z of `R_E'b` [s].
+    /// Heading loop's error driven by row z of `R_E'b` \[s\].
     loop_head_rot: Vector3<f64> = ["lh_x", "lh_y", "lh_z"],
-    /// Heading loop's error driven by `(R_E'b b̂)_z` [rad].
+    /// Heading loop's error driven by `(R_E'b b̂)_z` \[rad\].
     loop_head_bias: f64 = ["lh_b"],
     /// Seconds in the current bias window.
     win_time: f64 = ["win_time"],
-    /// Sum of the gyro over the current rest segment, `Σ ω dt` [rad].
+    /// Sum of the gyro over the current rest segment, `Σ ω dt` \[rad\].
     rest_sum: Vector3<f64> = ["rest_sum_x", "rest_sum_y", "rest_sum_z"],
     /// Seconds in the current rest segment.
     rest_sum_time: f64 = ["rest_sum_time"],
     /// Whether the current still segment has been declared rest.
     rest_segment: bool = ["rest_segment"],
-    /// Sum of the corrections over the window (x, y: inclination; z: heading) [rad].
+    /// Sum of the corrections over the window (x, y: inclination; z: heading) \[rad\].
     win_corr: Vector3<f64> = ["win_corr_x", "win_corr_y", "win_corr_z"],
-    /// Sum of the loops' responses to the rotation, `S` with `C = −S b + O` [s].
+    /// Sum of the loops' responses to the rotation, `S` with `C = −S b + O` \[s\].
     win_rot: Matrix3<f64> = ["w00", "w10", "w20", "w01", "w11", "w21", "w02", "w12", "w22"],
-    /// Sum of the loops' responses to the estimated bias, `O` [rad].
+    /// Sum of the loops' responses to the estimated bias, `O` \[rad\].
     win_off: Vector3<f64> = ["win_off_x", "win_off_y", "win_off_z"],
     /// Seconds of the window with a heading correction.
     win_mag_time: f64 = ["win_mag_time"],

@@ -35,7 +35,7 @@ pub(super) struct Coefs {
 }
 
 impl Coefs {
-    /// For step `dt` [s] (a non-positive step, the first sample's, gives inert coefficients).
+    /// For step `dt` \[s\] (a non-positive step, the first sample's, gives inert coefficients).
     pub(super) fn new(p: &RobustParams, dt: f64) -> Self {
         let exact = dt;
         let key = Self::key(dt);
@@ -135,7 +135,7 @@ pub(super) fn compose(q: &UnitQuaternion<f64>, r: &UnitQuaternion<f64>) -> UnitQ
     UnitQuaternion::new_unchecked(p * (0.5 * (3.0 - p.norm_squared())))
 }
 
-/// Sets the heading to `psi` [rad] ∈ [−π, π]: its angle and `Rz(ψ)` as the pair
+/// Sets the heading to `psi` \[rad\] ∈ [−π, π]: its angle and `Rz(ψ)` as the pair
 /// `(cos ψ/2, sin ψ/2)` (the w, z of its quaternion).
 pub(super) fn set_heading(s: &mut RobustState, psi: f64) {
     let (sin, cos) = (0.5 * psi).sin_cos();
@@ -164,7 +164,7 @@ pub(super) fn wrap(x: f64) -> f64 {
     }
 }
 
-/// The heading turned by `angle` [rad] (`k e`, |angle| ≤ π): the pair by [`turn`], the angle by
+/// The heading turned by `angle` \[rad\] (`k e`, |angle| ≤ π): the pair by [`turn`], the angle by
 /// a wrapped addition. The two are kept side by side so that the filter's loop-carried chain
 /// (angle → error → angle) has no `atan2`; they stay equal to rounding (each turn adds an
 /// error of about an ulp to each, independently: ~1e-13 rad after 10^6 samples).
@@ -174,7 +174,7 @@ pub(super) fn turn_heading(s: &mut RobustState, angle: f64) {
     s.heading_angle = wrap(s.heading_angle + angle);
 }
 
-/// The heading pair `h` turned by `angle` [rad] about the vertical, `Rz(angle) ⊗ h`: the half-angle
+/// The heading pair `h` turned by `angle` \[rad\] about the vertical, `Rz(angle) ⊗ h`: the half-angle
 /// rotation by `series::half_angle_small` (exact to rounding, no libm call below 0.5 rad), whose
 /// short series holds below 0.01 rad: the heading loop's `k e` is there whenever the field's gain
 /// `k = 1 − exp(−dt/τ_mag)` is below 0.01/π (|e| ≤ π; dt/τ_mag < 0.0032, every rate above 16 Hz
@@ -273,7 +273,7 @@ pub(super) fn step(
 }
 
 /// Feeds `a_i` (specific force in `I`) to the low pass and rotates `E'` so that its output points
-/// up; returns the correction's x, y [rad] (z 0).
+/// up; returns the correction's x, y \[rad\] (z 0).
 #[inline(always)]
 fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector3<f64> {
     let a_f = c.butter(*a_i, &mut s.lp_s1, &mut s.lp_s2);
