@@ -67,13 +67,13 @@ def test_aliases_duplicate_keys_and_deep_nesting_are_file_format_errors(tmp_path
 
 def test_messages_quote_values_bounded(tmp_path: Path) -> None:
     path = tmp_path / "imu.yaml"
-    path.write_text(VALID.replace("200.0", "[" + ", ".join(["1"] * 100_000) + "]"))
+    path.write_text(VALID.replace("200.0", "[" + ", ".join(["1"] * 10_000) + "]"))
     with pytest.raises(ik.FileFormatError) as caught:
         io.read_kalibr_imu(path)
     assert len(str(caught.value)) < 200 and "key 'update_rate': expected a positive, finite number" in str(caught.value)
     (tmp_path / "imu0").mkdir()
     (tmp_path / "imu0" / "sensor.yaml").write_text(
-        VALID.replace("update_rate", "rate_hz") + "T_BS:\n  rows: 4\n  cols: 4\n  data: [" + "1, " * 100_000 + "1]\n"
+        VALID.replace("update_rate", "rate_hz") + "T_BS:\n  rows: 4\n  cols: 4\n  data: [" + "1, " * 10_000 + "1]\n"
     )
     with pytest.raises(ik.FileFormatError, match="key 'T_BS'") as caught:
         io.read_euroc_sensor(tmp_path)
