@@ -37,7 +37,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{finite, row, Inputs, World};
 use crate::{Error, Result};
-use step::Coefs;
+use step::{Coefs, CoefsCache};
 
 /// Per-sample outputs of a run, one row per sample.
 #[derive(Debug)]
@@ -316,7 +316,7 @@ impl Robust {
         out: &mut Outputs<'_>,
     ) -> Result<()> {
         let p = &self.params;
-        let mut coefs = Coefs::new(p, 0.0);
+        let mut cache = CoefsCache::new(Coefs::new(p, 0.0));
         let mut previous = state.time;
         // Bits of 0.0: the cache starts valid for a zero diagonal, whose roots are 0.0.
         let mut sigma = Sigma::default();
@@ -338,7 +338,7 @@ impl Robust {
                 dt
             };
             if dt > 0.0 || !state.initialized {
-                coefs = coefs.for_dt(p, dt);
+                let coefs = cache.for_dt(p, dt);
                 step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
                 check_overflow(state, first + k)?;
             }

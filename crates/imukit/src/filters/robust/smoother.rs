@@ -42,7 +42,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{
     compose, from_world, magnetometer, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap, yawed,
-    Coefs,
+    Coefs, CoefsCache,
 };
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
@@ -298,11 +298,12 @@ crate::simd_dispatch! {
         // Strapdown as the online step (sample k integrates (t_k−1, t_k] with bias k), and the
         // specific force in I filtered forward.
         let mut coefs = Coefs::new(p, dt(1.min(n - 1)));
+        let mut cache = CoefsCache::new(coefs);
         let (mut s1, mut s2) = coefs.steady(q * row(&inputs.accel[0]));
         for k in 0..n {
             if k > 0 {
                 q = compose(&q, &exp_step(&((row(&inputs.gyro[k]) - row(&bias[k])) * dt(k))));
-                coefs = coefs.for_dt(p, dt(k));
+                coefs = cache.for_dt(p, dt(k));
             }
             out[k] = q.coords.into();
             a_i[k] = coefs.butter(q * row(&inputs.accel[k]), &mut s1, &mut s2).into();
@@ -311,7 +312,7 @@ crate::simd_dispatch! {
         (s1, s2) = coefs.steady(row(&a_i[n - 1]));
         for k in (0..n).rev() {
             if k + 1 < n {
-                coefs = coefs.for_dt(p, dt(k + 1));
+                coefs = cache.for_dt(p, dt(k + 1));
             }
             let a = coefs.butter(row(&a_i[k]), &mut s1, &mut s2);
             let mut q = quat(&out[k]);
@@ -341,7 +342,7 @@ crate::simd_dispatch! {
     ) -> () {
         let n = base.len();
         let mut s = *start;
-        let mut coefs = Coefs::new(p, 0.0);
+        let mut cache = CoefsCache::new(Coefs::new(p, 0.0));
         for i in 0..n {
             // The interval reached: (t_k−1, t_k] forward, (t_k, t_k+1] backward, both with the
             // later gyro sample (as `Reversed`).
@@ -357,7 +358,7 @@ crate::simd_dispatch! {
                 start_heading(&mut s, &m_e);
                 s.initialized = true;
             }
-            coefs = coefs.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
+            let coefs = cache.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
             if let Some((gain, err)) = magnetometer(p, &coefs, &mut s, &m_e, &gyro) {
                 turn_heading(&mut s, gain * err);
             }
