@@ -342,6 +342,10 @@ fn measure_names_the_first_bad_stamp_and_ideal_value_whatever_the_block() {
     t[2 * CHUNK + 1] = f64::NAN;
     let err = run(&t, &zeros);
     assert_eq!((err.argument(), err.index()), (Some("t"), Some(2 * CHUNK + 1)), "{err}");
+    // A repeat across a block's edge: the pair (t[k − 1], t[k]) of a block's first k.
+    let mut t = good.clone();
+    t[2 * CHUNK] = t[2 * CHUNK - 1];
+    assert_eq!(run(&t, &zeros).index(), Some(2 * CHUNK));
     let mut ideal = zeros.clone();
     (ideal[3 * (2 * CHUNK) + 2], ideal[3 * (CHUNK + 1)]) = (f64::INFINITY, f64::NAN);
     let err = run(&good, &ideal);

@@ -6,7 +6,7 @@
 mod motion;
 mod sensor;
 
-pub use motion::{Kinematics, Motion, MotionKind};
+pub use motion::{sin_cos_lanes, Kinematics, Motion, MotionKind, LANES};
 pub use sensor::{measure, measure_in_place, measure_in_place_cancellable, SensorModel, CHUNK};
 
 use nalgebra::{UnitQuaternion, Vector3};
@@ -39,7 +39,7 @@ pub fn evaluate(motion: &Motion, t: &[f64], gravity: &Vector3<f64>, out: Truth<'
 /// Whether every value is finite: `v · 0` is 0 for a finite `v` and NaN otherwise, and a NaN
 /// stays in a sum. Eight independent sums, so the pass is not one chain of dependent additions
 /// (the rows are still in cache).
-fn all_finite(values: &[f64]) -> bool {
+pub(crate) fn all_finite(values: &[f64]) -> bool {
     let mut lanes = [0.0; 8];
     let blocks = values.chunks_exact(8);
     let rest = blocks.remainder();
@@ -127,14 +127,19 @@ crate::simd_dispatch! {
         w: &mut [f64],
         a: &mut [f64],
     ) -> () {
-        for (i, &tk) in ts.iter().enumerate() {
-            let x = motion.at(tk);
-            p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
-            v[3 * i..3 * i + 3].copy_from_slice(x.velocity.as_slice());
-            let quat = UnitQuaternion::from_rotation_matrix(&x.rotation);
-            q[4 * i..4 * i + 4].copy_from_slice(quat.coords.as_slice());
-            w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
-            a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
+        // Four stamps at a time; the last lanes of a short block repeat its last stamp, and
+        // each lane depends on its stamp alone (Motion::at_lanes).
+        for (b, block) in ts.chunks(LANES).enumerate() {
+            let stamps = std::array::from_fn(|k| block[k.min(block.len() - 1)]);
+            for (j, x) in motion.at_lanes(stamps).iter().take(block.len()).enumerate() {
+                let i = b * LANES + j;
+                p[3 * i..3 * i + 3].copy_from_slice(x.position.as_slice());
+                v[3 * i..3 * i + 3].copy_from_slice(x.velocity.as_slice());
+                let quat = UnitQuaternion::from_rotation_matrix(&x.rotation);
+                q[4 * i..4 * i + 4].copy_from_slice(quat.coords.as_slice());
+                w[3 * i..3 * i + 3].copy_from_slice(x.body_rate.as_slice());
+                a[3 * i..3 * i + 3].copy_from_slice(x.specific_force(gravity).as_slice());
+            }
         }
     }
 }
