@@ -131,6 +131,20 @@ def test_bad_input() -> None:
         sim.simulate(sim.Static(), rate=100.0, duration=1.0, gyro_errors=NOISE)  # type: ignore[arg-type]
     with pytest.raises(ik.ShapeError, match="center"):
         sim.simulate(sim.Helix(center=(0, 0)), rate=100.0, duration=1.0)
+    # 10 ms steps vanish in the rounding of 1e17 s.
+    with pytest.raises(ik.ParameterError, match="too large for steps") as caught:
+        sim.simulate(sim.Static(), rate=100.0, duration=1.0, start=1e17)
+    assert caught.value.argument == "start"
+
+
+def test_the_stamps_are_k_over_rate_from_start() -> None:
+    """``start + k / rate`` rounded once each (the in-place construction), and from 0 the seconds
+    since the first sample are the stamps themselves."""
+    for start in (0.0, -3.25, 1.7e9):
+        imu, truth = sim.simulate(sim.Static(), rate=300.0, duration=50.0, start=start)
+        expected = np.array([start + k / 300.0 for k in range(15_001)])
+        assert np.array_equal(imu.t, expected) and np.array_equal(truth.t, expected)
+        assert np.array_equal(imu.seconds, expected - expected[0])
 
 
 def test_a_simulation_exports_to_euroc_and_tum_exactly(tmp_path: Path) -> None:

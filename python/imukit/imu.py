@@ -178,7 +178,9 @@ class ImuData(Frozen):
         finite, strictly increasing float seconds by construction; copying 10⁷ samples cost more than
         simulating them). The arrays are made read-only here and must not be shared elsewhere."""
         ranges = _ranges(gyro_range, accel_range)
-        return cls._from_validated(t, None, gyro, accel, relative_seconds(t, "t"), *ranges, None)
+        # From a first stamp of 0, t − t[0] is t itself (increasing, as the core's stamps are).
+        relative = t if t[0] == 0.0 else relative_seconds(t, "t")
+        return cls._from_validated(t, None, gyro, accel, relative, *ranges, None)
 
     @property
     def gyro_saturated(self) -> NDArray[np.bool_]:
