@@ -17,8 +17,9 @@ from _timing import median_s
 
 TARGET_NS = 80.0
 # Per sample, counted from the code (docs/performance.md, "Filters, simulator and Allan: work per
-# sample"): flops, libm calls (3 sincos) and normal draws (12), bytes (t read, truth and readings
-# written); libm and the draws, not the flops (floor 4 ns at 48 flops/ns), bound it: ~85 ns/core.
+# sample" and "The simulator in lanes of four"): flops, sines (3 sincos, four stamps at a time) and
+# normal draws (12), bytes (t read, truth and readings written); the sines and the draws, not the
+# flops (floor 4 ns at 48 flops/ns), bound it.
 FLOPS, SINCOS, NORMALS, BYTES = 210, 3, 12, 184
 
 
