@@ -6,6 +6,7 @@ import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -66,8 +67,33 @@ def forced_path(results: dict[str, dict[str, np.ndarray]], path: str) -> dict[st
     return got
 
 
-def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
-    """The malformed-input corpus's case count (tests/test_malformed_corpus.py), when it ran."""
+# The corpus's summary lines that pytest-xdist's workers sent back (make test runs on every core).
+_WORKER_SUMMARIES: list[str] = []
+
+
+def _corpus_summary() -> str | None:
     corpus = sys.modules.get("malformed_strategies")
-    if corpus is not None and corpus.STATS.cases:
-        terminalreporter.write_line(corpus.STATS.summary())
+    return corpus.STATS.summary() if corpus is not None and corpus.STATS.cases else None
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """On a pytest-xdist worker, hand the corpus's summary to the controller, which prints it."""
+    output = getattr(session.config, "workeroutput", None)
+    summary = _corpus_summary()
+    if output is not None and summary is not None:
+        output["malformed_corpus"] = summary
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: Any, error: object) -> None:
+    summary = getattr(node, "workeroutput", {}).get("malformed_corpus")
+    if summary is not None:
+        _WORKER_SUMMARIES.append(summary)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """The malformed-input corpus's case count (tests/test_malformed_corpus.py), when it ran here
+    or on a worker."""
+    own = _corpus_summary()
+    for line in ([own] if own is not None else []) + _WORKER_SUMMARIES:
+        terminalreporter.write_line(line)

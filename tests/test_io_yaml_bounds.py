@@ -70,14 +70,16 @@ def test_messages_quote_values_bounded(tmp_path: Path) -> None:
     path.write_text(VALID.replace("200.0", "[" + ", ".join(["1"] * 10_000) + "]"))
     with pytest.raises(ik.FileFormatError) as caught:
         io.read_kalibr_imu(path)
-    assert len(str(caught.value)) < 200 and "key 'update_rate': expected a positive, finite number" in str(caught.value)
+    # Bounded apart from the file's path, whose length is the temporary folder's (longer under xdist).
+    message = str(caught.value).replace(str(path), "")
+    assert len(message) < 150 and "key 'update_rate': expected a positive, finite number" in message
     (tmp_path / "imu0").mkdir()
     (tmp_path / "imu0" / "sensor.yaml").write_text(
         VALID.replace("update_rate", "rate_hz") + "T_BS:\n  rows: 4\n  cols: 4\n  data: [" + "1, " * 10_000 + "1]\n"
     )
     with pytest.raises(ik.FileFormatError, match="key 'T_BS'") as caught:
         io.read_euroc_sensor(tmp_path)
-    assert len(str(caught.value)) < 300
+    assert len(str(caught.value).replace(str(tmp_path), "")) < 250
 
 
 @pytest.mark.parametrize("section", [[], {}, 3, b"imu0"])
