@@ -131,7 +131,7 @@ bench: build
 	$(VPY) bench/bench_sim.py
 	$(VPY) bench/bench_filters.py
 	$(VPY) bench/bench_torch.py
-	cargo bench --locked -p imukit
+	cargo bench --locked -p imukit-bench
 
 # Re-pin the Python closure after editing requirements/dev.in.
 lock: | $(VPY)

@@ -15,7 +15,7 @@ Usage: ``python bench/bench_preint.py [--n 1000000] [--loop-n 20000] [--gtsam-n 
 result, old against new, alternated (a noisy shared machine): the deprecated list of
 ``PreintegratedImu`` (one core handle per window) read into arrays property by property as the CLI
 did, the list alone, and the one ``Preintegration`` record filled by one native call. Compare with
-``cargo bench -p imukit --bench preint`` for the Rust figure.
+``cargo bench -p imukit-bench --bench preint`` for the Rust figure.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 //! Criterion benchmarks of the SO(3)/quaternion kernels: one element at a time, and the batch
 //! entry points (what the Python bindings call) on 10⁶ rows.
 //!
-//! `cargo bench -p imukit` (full), `cargo bench -p imukit -- --quick` (short), or
-//! `cargo bench -p imukit -- --test` (run each once, as a smoke test).
+//! `cargo bench -p imukit-bench` (full), `cargo bench -p imukit-bench -- --quick` (short), or
+//! `cargo bench -p imukit-bench -- --test` (run each once, as a smoke test).
 #![allow(missing_docs)] // criterion_group! generates undocumented public functions
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
