@@ -403,10 +403,10 @@ def simulate(
     t /= rate_hz
     if begin != 0.0:
         t += begin
-    if begin != 0.0 and not np.all(t[1:] > t[:-1]):
-        raise ParameterError(
-            f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
-        )
+        if not np.all(t[1:] > t[:-1]):
+            raise ParameterError(
+                f"{start!r} s is too large for steps of 1 / rate = {1 / rate_hz!r} s to show", argument="start"
+            )
     moving = frame if frame is not None and frame.transport else None
     try:
         # The core checks its values as it writes them (no pass of its own); Waypoints checks here.

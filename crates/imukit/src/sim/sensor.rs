@@ -351,7 +351,7 @@ const SEARCH_BLOCK: usize = 1 << 16;
 /// The first index in `0..n` where `bad` holds, searched block by block on every core; a block
 /// that `clean` passes (one pass with no early exit, which vectorises) is not searched. The checks
 /// of a run read 64 bytes per sample per triad: an element-wise search was 74 instructions per
-/// sample and triad, 15% of `simulate`'s measuring.
+/// sample and triad, 18% of `simulate`'s measuring.
 fn first_where(
     n: usize,
     clean: impl Fn(std::ops::Range<usize>) -> bool + Sync,
