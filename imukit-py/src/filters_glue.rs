@@ -23,6 +23,7 @@ use pyo3::types::{PyDict, PyTuple};
 
 use crate::convert::{empty, frozen_or_copy, Demand};
 use crate::convert::{real_number, Name};
+use crate::threads::Fresh;
 use crate::{contiguous, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
@@ -600,8 +601,11 @@ fn run<'py, L: Law>(
             gb.as_slice_mut()?.as_chunks_mut().0,
         );
         let state = &mut s;
-        crate::threads::interruptible(py, n, |cancel| {
-            filter.run_cancellable(state, &inputs, continued, (sq, sb), cancel)
+        let fresh = [Fresh::of(sq), Fresh::of(sb)];
+        crate::threads::prefaulting(n, &fresh, || {
+            crate::threads::interruptible(py, n, |cancel| {
+                filter.run_cancellable(state, &inputs, continued, (sq, sb), cancel)
+            })
         })?
         .map_err(|e| to_py(py, "imu / gains", e))?;
     }

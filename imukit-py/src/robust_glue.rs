@@ -15,6 +15,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::convert::{contiguous, frozen_or_copy, real_number, rows, unit_quaternion, Name};
+use crate::threads::{prefaulting, Fresh};
 use crate::{raise, to_py};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
@@ -231,7 +232,14 @@ impl PyRobustFilter {
                 smooth(py, &self.inner, &mut s, (&t, &gyro, &accel, mag.as_ref()), &mut out)?;
             } else {
                 let record = Record::new(py, &t, &gyro, &accel, mag.as_ref())?;
-                record.run(py, &self.inner, &mut s, continued, &mut out)?;
+                let fresh = [
+                    Fresh::of(out.q),
+                    Fresh::of(out.bias),
+                    Fresh::of(out.bias_sigma),
+                    Fresh::of(out.rest),
+                    Fresh::of(out.mag_disturbed),
+                ];
+                prefaulting(n, &fresh, || record.run(py, &self.inner, &mut s, continued, &mut out))?;
             }
         }
         Ok((out_q, out_b, out_s, out_rest, out_mag, PyRobustState(s)))

@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 
 use crate::convert::{contiguous, empty, zeros, BiasFields, Demand, Name, NavStateFields, NoiseFields, SampleCopies};
 use crate::earth_glue::LocalLevelFields;
+use crate::threads::Fresh;
 use crate::{raise, to_py};
 
 /// `(N, 6)` rows `[p, v]` and `(N, 4)` quaternions.
@@ -144,6 +145,7 @@ pub(crate) fn strapdown_propagate<'py>(
     let covariances = zeros(py, &demand, [count, 225])?;
     {
         let (mut pv_guard, mut rot_guard, mut c_guard) = (pv.readwrite(), rot.readwrite(), covariances.readwrite());
+        let fresh = [pv_guard.as_slice()?, rot_guard.as_slice()?, c_guard.as_slice()?].map(Fresh::of);
         let outputs = propagate::Outputs {
             states: Some(StatesOut {
                 position_velocity: pv_guard.as_slice_mut()?.as_chunks_mut().0,
@@ -152,14 +154,16 @@ pub(crate) fn strapdown_propagate<'py>(
             covariances: c_guard.as_slice_mut()?.as_chunks_mut().0,
             every,
         };
-        crate::threads::interruptible(py, n, |cancel| {
-            let setup = propagate::Setup {
-                bias: &bias,
-                noise: &noise,
-                options: &options,
-                model: &model,
-            };
-            propagate::propagate_model(&samples, &initial, &p0, setup, outputs, cancel)
+        crate::threads::prefaulting(n, &fresh, || {
+            crate::threads::interruptible(py, n, |cancel| {
+                let setup = propagate::Setup {
+                    bias: &bias,
+                    noise: &noise,
+                    options: &options,
+                    model: &model,
+                };
+                propagate::propagate_model(&samples, &initial, &p0, setup, outputs, cancel)
+            })
         })?
         .map_err(|e| to_py(py, "imu / bias", e))?;
     }

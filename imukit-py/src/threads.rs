@@ -159,3 +159,58 @@ pub(crate) fn interruptible<R: Send>(
         }
     })
 }
+
+/// An output that a kernel fills in order, from its start, at an even pace over its `n` samples
+/// (a row per sample, or per `k` samples): its address and its length in bytes (an address, not a
+/// slice: the kernel holds the array mutably meanwhile).
+#[derive(Clone, Copy)]
+pub(crate) struct Fresh {
+    addr: usize,
+    bytes: usize,
+}
+
+impl Fresh {
+    /// The output `rows`, which must stay allocated until [`prefaulting`] returns.
+    pub(crate) fn of<T>(rows: &[T]) -> Self {
+        Self {
+            addr: rows.as_ptr() as usize,
+            bytes: std::mem::size_of_val(rows),
+        }
+    }
+
+    /// Faults in its share of samples `from..to` of `n`; false where the system refuses.
+    fn populate(&self, from: usize, to: usize, n: usize) -> bool {
+        let at = |k: usize| (self.bytes as u128 * k as u128 / n as u128) as usize;
+        imukit::pages::populate(self.addr + at(from), at(to) - at(from))
+    }
+}
+
+/// Samples whose outputs [`prefaulting`] faults in at a time: the outputs' shares advance
+/// together, in the order the kernel writes them.
+const PREFAULT_SAMPLES: usize = 1 << 14;
+
+/// `f()` while a scoped thread faults in the pages of its `fresh` outputs ahead of it
+/// ([`imukit::pages::populate`]), for `n` samples from [`INTERRUPTIBLE_FROM`]: the kernel's thread
+/// then finds them present instead of stopping for the system to clear each fresh page (a tenth to
+/// a half of a long single-threaded run: a filter's 56 B a sample, propagate's 1.8 kB). The same
+/// pages are cleared either way, on the other core; the results do not change.
+pub(crate) fn prefaulting<R>(n: usize, fresh: &[Fresh], f: impl FnOnce() -> R) -> R {
+    if n < INTERRUPTIBLE_FROM || fresh.is_empty() {
+        return f();
+    }
+    // Set when `f` returns (an error or Ctrl-C included): the rest would be cleared for nothing.
+    let done = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            for from in (0..n).step_by(PREFAULT_SAMPLES) {
+                let to = (from + PREFAULT_SAMPLES).min(n);
+                if done.load(Ordering::Relaxed) || !fresh.iter().all(|o| o.populate(from, to, n)) {
+                    break; // a kernel older than 5.14: the writer faults its pages as before
+                }
+            }
+        });
+        let result = f();
+        done.store(true, Ordering::Relaxed);
+        result
+    })
+}

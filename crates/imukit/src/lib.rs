@@ -38,7 +38,7 @@ pub mod interp;
 pub mod lie;
 mod mat3;
 pub mod names;
-mod pages;
+pub mod pages;
 pub mod preint;
 pub mod propagate;
 pub mod quat;
