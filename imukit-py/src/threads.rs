@@ -189,13 +189,17 @@ impl Fresh {
 /// together, in the order the kernel writes them.
 const PREFAULT_SAMPLES: usize = 1 << 14;
 
-/// `f()` while a scoped thread faults in the pages of its `fresh` outputs ahead of it
-/// ([`imukit::pages::populate`]), for `n` samples from [`INTERRUPTIBLE_FROM`]: the kernel's thread
-/// then finds them present instead of stopping for the system to clear each fresh page (a tenth to
-/// a half of a long single-threaded run: a filter's 56 B a sample, propagate's 1.8 kB). The same
-/// pages are cleared either way, on the other core; the results do not change.
+/// Output bytes from which [`prefaulting`] starts its thread (~20 µs): clearing 8 MiB of fresh
+/// pages takes ~1.5 ms on this project's 2-core VM.
+const PREFAULT_FROM_BYTES: usize = 8 << 20;
+
+/// `f()` while a scoped thread faults in the pages of its `fresh` outputs (`n` samples) ahead of
+/// it ([`imukit::pages::populate`]), for outputs of [`PREFAULT_FROM_BYTES`] or more: the kernel's
+/// thread then finds them present instead of stopping for the system to clear each fresh page (a
+/// tenth to a half of a single-threaded run: a filter's 56 B a sample, propagate's 1.8 kB). The
+/// same pages are cleared either way, on the other core; the results do not change.
 pub(crate) fn prefaulting<R>(n: usize, fresh: &[Fresh], f: impl FnOnce() -> R) -> R {
-    if n < INTERRUPTIBLE_FROM || fresh.is_empty() {
+    if fresh.iter().map(|o| o.bytes).sum::<usize>() < PREFAULT_FROM_BYTES {
         return f();
     }
     // Set when `f` returns (an error or Ctrl-C included): the rest would be cleared for nothing.
