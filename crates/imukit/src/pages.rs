@@ -7,9 +7,9 @@
 //! mode. numpy advises every array of 4 MiB or more (imukit's outputs are on huge pages already);
 //! [`rows`] does the same for the core's own scratch, e.g. the smoother's backward track.
 //!
-//! Even on huge pages the kernel clears each fresh page at its first write, on the writing
-//! thread: 7–24% of a long filter, propagate or simulate run. [`populate`] has another thread
-//! take those faults ahead of the writer (the Python glue's waiting thread).
+//! Even on huge pages the system clears each fresh page at its first write, on the writing
+//! thread (7–24% of a long filter, propagate or simulate run in `perf`). [`populate`] lets another
+//! thread take those faults ahead of the writer (the Python glue's `threads::prefaulting`).
 
 /// Below this many bytes a buffer is left as the allocator gives it (numpy's threshold).
 const HUGE_FROM: usize = 4 << 20;
@@ -83,23 +83,32 @@ fn page_size() -> Option<usize> {
 mod tests {
     use super::*;
 
-    /// Populating keeps every value, whether written before, while (by another thread) or after
-    /// it runs: advice that dropped pages (`MADV_DONTNEED`, `MADV_FREE`) would zero them.
+    /// Populating a fresh mapping keeps every value, whether written before it runs, while it runs
+    /// (by another thread) or after: advice that dropped pages (`MADV_DONTNEED`, `MADV_FREE`)
+    /// would zero them.
     #[test]
     fn populate_keeps_the_contents_while_another_thread_writes() {
-        let n = 3 << 20;
-        let mut v = rows(0.0f64, n);
-        v[..n / 3].iter_mut().enumerate().for_each(|(i, x)| *x = i as f64);
+        // 48 MB: above glibc's largest mmap threshold, so fresh pages.
+        let n = 6 << 20;
+        let mut v: Vec<f64> = Vec::with_capacity(n);
         let (addr, bytes) = (v.as_ptr() as usize, n * 8);
+        let (before, rest) = v.spare_capacity_mut().split_at_mut(n / 3);
+        before.iter_mut().enumerate().for_each(|(i, x)| {
+            x.write(i as f64);
+        });
         std::thread::scope(|scope| {
-            let (_, written) = v.split_at_mut(n / 3);
-            scope.spawn(move || {
-                for (i, x) in written.iter_mut().enumerate() {
-                    *x = (n / 3 + i) as f64;
-                }
+            scope.spawn(|| {
+                rest.iter_mut().enumerate().for_each(|(i, x)| {
+                    x.write((n / 3 + i) as f64);
+                });
             });
             populate(addr, bytes);
         });
+        // SAFETY: every element of the capacity was written above.
+        #[allow(unsafe_code)]
+        unsafe {
+            v.set_len(n);
+        }
         populate(addr, bytes);
         assert!(v.iter().enumerate().all(|(i, &x)| x == i as f64));
     }
