@@ -5,7 +5,7 @@
 //! pages (`python bench/bandwidth.py --pages --n 1000000`). Linux backs a mapping advised
 //! `MADV_HUGEPAGE` with huge pages when transparent huge pages are in their default "madvise"
 //! mode. numpy advises every array of 4 MiB or more (imukit's outputs are on huge pages already);
-//! [`rows`] does the same for the core's own scratch, e.g. the smoother's backward track.
+//! `rows` does the same for the core's own scratch, e.g. the smoother's backward track.
 //!
 //! Even on huge pages the system clears each fresh page at its first write, on the writing
 //! thread (7–24% of a long filter, propagate or simulate run in `perf`). [`populate`] lets another

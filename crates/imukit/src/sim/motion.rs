@@ -141,7 +141,7 @@ const VECTOR_ANGLE: f64 = 134_217_728.0; // 2^27
 
 /// `(sin x, cos x)` of four angles: `wide`'s 4-lane polynomial (Agner Fog's vector class library
 /// scheme), 7 ns a value against libm's 16 on this project's host, within 2 ulp of libm; a lane
-/// beyond [`VECTOR_ANGLE`] (or not finite) is libm's own. Each lane depends on its angle alone, so
+/// beyond `VECTOR_ANGLE` (or not finite) is libm's own. Each lane depends on its angle alone, so
 /// a stamp's value does not depend on the stamps beside it.
 pub fn sin_cos_lanes(x: [f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
     let (s, c) = wide::f64x4::from(x).sin_cos();
