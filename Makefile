@@ -60,6 +60,7 @@ demo: build
 lint: build
 	cargo fmt --all --check
 	cargo clippy --workspace --all-targets --locked -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked --quiet
 	$(VPY) -m ruff check python tests bench
 	$(VPY) -m ruff format --check python tests bench
 	@if $(HAVE_TORCH); then echo "$(VPY) -m mypy"; $(VPY) -m mypy; else \
