@@ -42,6 +42,8 @@ def paired(
     inside a pair alternating: a ratio of two medians taken seconds apart follows another tenant's
     load (on this 2-core VM vqf's own time moved 395–776 ns/sample between runs), while the two
     calls of a pair see the same load."""
+    if repeats < 1:
+        raise ValueError(f"repeats must be at least 1, got {repeats}")
     a()
     b()
     ta, tb = [], []

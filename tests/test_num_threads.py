@@ -253,3 +253,42 @@ def test_a_forked_child_runs_the_parallel_kernels_on_pools_of_its_own(setting: i
     assert child.exitcode == 0
     for (name, _), value in got.items():
         _assert_identical(value, want[name])
+
+
+@pytest.mark.usefixtures("restore_threads")
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one CPU: the glue starts no helper thread to compare against")
+def test_outputs_faulted_in_ahead_by_a_helper_thread_are_the_same() -> None:
+    """The single-threaded kernels with 8 MiB of output or more have a helper thread fault their
+    output pages in while they write them (`threads::prefaulting`); with one thread set there is no
+    helper. The arrays must be the same bit for bit."""
+    rng = np.random.default_rng(7)
+    n = 200_000
+    t = np.arange(n) * 0.005
+    gyro = 0.3 * np.sin(np.outer(t, [1.1, 0.7, 1.3])) + 1e-3 * rng.normal(size=(n, 3))
+    accel = np.array([0.0, 0.0, 9.81]) + 0.3 * np.cos(np.outer(t, [0.9, 0.3, 1.7])) + 0.02 * rng.normal(size=(n, 3))
+    mag = np.column_stack([20.0 * np.cos(0.2 * t), 20.0 * np.sin(0.2 * t), np.full(n, -40.0)])
+    imu = ik.ImuData(t, gyro, accel)
+    noise = ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3)
+    short = imu[:6000]  # propagate: 1.8 kB of covariance a sample, 10.8 MB
+    initial = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+
+    def outputs() -> list[np.ndarray]:
+        mahony = ik.filters.Mahony().run(imu, mag=mag)
+        robust = ik.filters.Robust().run(imu, mag=mag)
+        track = ik.propagate(short, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise)
+        return [
+            mahony.rotation.as_quat(canonical=False),
+            mahony.gyro_bias,
+            robust.rotation.as_quat(canonical=False),
+            robust.gyro_bias_sigma,
+            robust.rest,
+            track.position,
+            track.covariance,
+        ]
+
+    ik.set_num_threads(1)
+    alone = outputs()
+    ik.set_num_threads(2)
+    helped = outputs()
+    for a, b in zip(alone, helped, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -178,7 +178,8 @@ impl Fresh {
         }
     }
 
-    /// Faults in its share of samples `from..to` of `n`; false where the system refuses.
+    /// Faults in the pages of its share of samples `from..to` of `n` (a page that straddles two
+    /// shares in both); false where the system refuses.
     fn populate(&self, from: usize, to: usize, n: usize) -> bool {
         let at = |k: usize| (self.bytes as u128 * k as u128 / n as u128) as usize;
         imukit::pages::populate(self.addr + at(from), at(to) - at(from))
@@ -193,28 +194,43 @@ const PREFAULT_SAMPLES: usize = 1 << 14;
 /// pages takes ~1.5 ms on this project's 2-core VM.
 const PREFAULT_FROM_BYTES: usize = 8 << 20;
 
+/// Sets its flag when dropped: when [`prefaulting`]'s `f` returns or unwinds.
+struct SetOnDrop<'a>(&'a AtomicBool);
+
+impl Drop for SetOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}
+
 /// `f()` while a scoped thread faults in the pages of its `fresh` outputs (`n` samples) ahead of
 /// it ([`imukit::pages::populate`]), for outputs of [`PREFAULT_FROM_BYTES`] or more: the kernel's
 /// thread then finds them present instead of stopping for the system to clear each fresh page (a
 /// tenth to a half of a single-threaded run: a filter's 56 B a sample, propagate's 1.8 kB). The
-/// same pages are cleared either way, on the other core; the results do not change.
+/// same pages are cleared either way, by the helper; the results do not change. Not where the
+/// process has one thread to give (`set_num_threads(1)`, one CPU): there the helper would only
+/// take turns with the kernel.
 pub(crate) fn prefaulting<R>(n: usize, fresh: &[Fresh], f: impl FnOnce() -> R) -> R {
-    if fresh.iter().map(|o| o.bytes).sum::<usize>() < PREFAULT_FROM_BYTES {
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    if fresh.iter().map(|o| o.bytes).sum::<usize>() < PREFAULT_FROM_BYTES || cores < 2 || get_num_threads() < 2 {
         return f();
     }
-    // Set when `f` returns (an error or Ctrl-C included): the rest would be cleared for nothing.
+    // Set when `f` returns or unwinds (an error, Ctrl-C, a panic): the rest would be cleared for
+    // nothing.
     let done = AtomicBool::new(false);
     std::thread::scope(|scope| {
-        scope.spawn(|| {
-            for from in (0..n).step_by(PREFAULT_SAMPLES) {
-                let to = (from + PREFAULT_SAMPLES).min(n);
-                if done.load(Ordering::Relaxed) || !fresh.iter().all(|o| o.populate(from, to, n)) {
-                    break; // a kernel older than 5.14: the writer faults its pages as before
+        let helper = std::thread::Builder::new()
+            .name("imukit-prefault".into())
+            .spawn_scoped(scope, || {
+                for from in (0..n).step_by(PREFAULT_SAMPLES) {
+                    let to = (from + PREFAULT_SAMPLES).min(n);
+                    if done.load(Ordering::Relaxed) || !fresh.iter().all(|o| o.populate(from, to, n)) {
+                        break; // done, or refused (a kernel before 5.14, a memory limit): the writer faults the rest
+                    }
                 }
-            }
-        });
-        let result = f();
-        done.store(true, Ordering::Relaxed);
-        result
+            });
+        // No thread to be had: the kernel faults its own pages, as without the helper.
+        let _stop = helper.is_ok().then_some(SetOnDrop(&done));
+        f()
     })
 }

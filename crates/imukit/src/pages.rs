@@ -34,19 +34,34 @@ fn advise_huge(start: *const u8, bytes: usize) {
 #[cfg(not(target_os = "linux"))]
 fn advise_huge(_: *const u8, _: usize) {}
 
-/// Faults in the whole pages of `[start, start + bytes)` writable without writing them
-/// (`MADV_POPULATE_WRITE`, Linux 5.14), so that the thread that then writes them finds them present
-/// and cleared. The contents do not change, so another thread may write the range meanwhile; a
-/// page it faulted first is skipped. Whether the system did it: false on an older kernel or
-/// another system, where it does nothing.
+/// Faults in every page that holds a byte of `[start, start + bytes)` writable without writing
+/// it (`MADV_POPULATE_WRITE`, Linux 5.14), so that the thread that then writes the range finds the
+/// pages present and cleared. On anonymous memory (numpy's arrays, `Vec`s) the contents do not
+/// change, so another thread may write the range meanwhile; a page it faulted first is skipped. On
+/// a file mapping the pages would be dirtied (shared) or detached from the file (private): not for
+/// those. Whether the system did it: false on an older kernel, under a memory limit, or on another
+/// system, where it does nothing.
 ///
 /// The range must lie inside one live allocation of the caller's for the whole call (an address,
-/// not a reference, so that the writer may hold the buffer mutably meanwhile).
+/// not a reference, so that the writer may hold the buffer mutably meanwhile). The pages at its
+/// ends are faulted whole: they hold part of the range, so they are mapped, and populating leaves
+/// the neighbours' bytes as they are.
 pub fn populate(start: usize, bytes: usize) -> bool {
     #[cfg(target_os = "linux")]
-    return advise(start, bytes, libc::MADV_POPULATE_WRITE);
+    {
+        let Some(page) = page_size() else { return false };
+        if bytes == 0 {
+            return true;
+        }
+        let first = start & !(page - 1);
+        let end = (start + bytes).next_multiple_of(page);
+        madvise(first, end - first, libc::MADV_POPULATE_WRITE)
+    }
     #[cfg(not(target_os = "linux"))]
-    return false;
+    {
+        let _ = (start, bytes);
+        false
+    }
 }
 
 /// `madvise(advice)` on the whole pages inside `[start, start + bytes)`; whether it was taken (a
@@ -57,15 +72,19 @@ fn advise(start: usize, bytes: usize, advice: libc::c_int) -> bool {
     // madvise wants a page-aligned start: the whole pages inside the buffer.
     let first = start.next_multiple_of(page);
     let end = (start + bytes) & !(page - 1);
-    if end <= first {
-        return true;
-    }
-    // SAFETY: the range lies inside the caller's own allocation (both callers' contract).
-    // MADV_HUGEPAGE changes how the kernel backs the pages and MADV_POPULATE_WRITE when they are
-    // faulted in, never their contents or their validity. A refusal (a kernel without THP or
-    // older than 5.14) leaves the buffer as it was.
+    end <= first || madvise(first, end - first, advice)
+}
+
+/// `madvise` on page-aligned `[first, first + len)`, pages of the caller's mapped buffers; whether
+/// it was taken.
+#[cfg(target_os = "linux")]
+fn madvise(first: usize, len: usize, advice: libc::c_int) -> bool {
+    // SAFETY: the pages are mapped memory of the caller's (both callers' contract). MADV_HUGEPAGE
+    // changes how the kernel backs them and MADV_POPULATE_WRITE when they are faulted in, never
+    // their contents on anonymous memory or their validity. A refusal (a kernel without THP or
+    // older than 5.14) leaves them as they were.
     #[allow(unsafe_code)]
-    let status = unsafe { libc::madvise(first as *mut libc::c_void, end - first, advice) };
+    let status = unsafe { libc::madvise(first as *mut libc::c_void, len, advice) };
     status == 0
 }
 
@@ -84,8 +103,8 @@ mod tests {
     use super::*;
 
     /// Populating a fresh mapping keeps every value, whether written before it runs, while it runs
-    /// (by another thread) or after: advice that dropped pages (`MADV_DONTNEED`, `MADV_FREE`)
-    /// would zero them.
+    /// (by another thread, in no set order with it) or after: advice that dropped pages
+    /// (`MADV_DONTNEED`) would zero them.
     #[test]
     fn populate_keeps_the_contents_while_another_thread_writes() {
         // 48 MB: above glibc's largest mmap threshold, so fresh pages.
@@ -113,31 +132,45 @@ mod tests {
         assert!(v.iter().enumerate().all(|(i, &x)| x == i as f64));
     }
 
-    /// Populating a fresh mapping makes its pages resident before anything writes them (where
-    /// the kernel takes the advice).
+    /// Linux's version as (major, minor), from uname.
+    #[cfg(target_os = "linux")]
+    fn kernel_version() -> (u32, u32) {
+        let release = std::fs::read_to_string("/proc/sys/kernel/osrelease").expect("the kernel's release");
+        let mut parts = release.trim().split(['.', '-']).map(|p| p.parse::<u32>().unwrap_or(0));
+        (parts.next().unwrap_or(0), parts.next().unwrap_or(0))
+    }
+
+    /// Populating a fresh mapping gives every page of the range, the partial pages at its ends
+    /// included, a private page of its own before anything writes it: `/proc/self/pagemap`'s
+    /// "present" and "exclusively mapped" bits (a read fault, `MADV_POPULATE_READ`, maps the
+    /// shared zero page: present, not exclusive). Linux ≥ 5.14 must take the advice.
     #[cfg(target_os = "linux")]
     #[test]
-    fn populate_makes_fresh_pages_resident() {
+    fn populate_gives_every_page_of_the_range_its_own_page() {
+        use std::io::{Read, Seek, SeekFrom};
         // 64 MB: above glibc's largest mmap threshold, so a fresh mapping, never touched.
         let v: Vec<u8> = Vec::with_capacity(64 << 20);
         let page = page_size().expect("a power-of-two page size");
-        let first = (v.as_ptr() as usize).next_multiple_of(page);
-        let pages = (v.capacity() - (first - v.as_ptr() as usize)) / page;
-        let resident = || {
-            let mut flags = vec![0u8; pages];
-            // SAFETY: `[first, first + pages·page)` lies inside `v`'s allocation; mincore writes
-            // one byte per page into `flags`, which holds `pages` bytes.
-            #[allow(unsafe_code)]
-            let status = unsafe { libc::mincore(first as *mut libc::c_void, pages * page, flags.as_mut_ptr()) };
-            assert_eq!(status, 0);
-            flags.iter().filter(|&&f| f & 1 == 1).count()
+        // A range that starts and ends inside a page.
+        let (start, bytes) = (v.as_ptr() as usize + 3 * page + 100, 40 * page);
+        let pages = (start - (start & !(page - 1)) + bytes).div_ceil(page);
+        let flags = || {
+            let mut file = std::fs::File::open("/proc/self/pagemap").expect("pagemap");
+            file.seek(SeekFrom::Start((start / page * 8) as u64)).expect("seek");
+            let mut raw = vec![0u8; pages * 8];
+            file.read_exact(&mut raw).expect("read");
+            let entries: Vec<u64> = raw.as_chunks::<8>().0.iter().map(|b| u64::from_le_bytes(*b)).collect();
+            let count = |bit: u32| entries.iter().filter(|&&e| e >> bit & 1 == 1).count();
+            (count(63), count(56))
         };
-        assert!(resident() < pages / 2, "a fresh mapping is mostly not resident");
-        if populate(v.as_ptr() as usize, v.capacity()) {
-            assert_eq!(resident(), pages);
-        } else {
-            eprintln!("skipped: this kernel refuses MADV_POPULATE_WRITE (Linux < 5.14)");
+        assert_eq!(flags(), (0, 0), "a fresh mapping is not present");
+        let taken = populate(start, bytes);
+        if kernel_version() < (5, 14) {
+            assert!(!taken, "kernels before 5.14 do not know MADV_POPULATE_WRITE");
+            return;
         }
+        assert!(taken, "Linux {:?} refused MADV_POPULATE_WRITE", kernel_version());
+        assert_eq!(flags(), (pages, pages));
     }
 
     /// The rows are `n` copies of the value, small and large (advised) alike.
