@@ -17,7 +17,7 @@ use std::array::from_fn;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
-use crate::{euler, so3};
+use crate::{euler, lie::sincos, so3};
 
 /// The kinematic state at one instant, world frame unless stated.
 #[derive(Debug, Clone, PartialEq)]
@@ -134,20 +134,18 @@ crate::named_enum!(
 /// taken four at a time ([`sin_cos_lanes`]).
 pub const LANES: usize = 4;
 
-/// Angles up to this magnitude [rad] take the vector path of [`sin_cos_lanes`]: `wide`'s reduction
-/// by π/2 (three constants, Cody & Waite) stays within 2 ulp of libm to 3e8 rad and fails by 1e9
-/// (measured; `sines_and_cosines_are_libms_within_two_ulp`).
+/// Angles up to this magnitude [rad] take [`sincos::sin_cos_x4`]: its reduction by π/2 (three
+/// constants, Cody & Waite) stays within 2 ulp of libm to 3e8 rad and fails by 1e9 (measured;
+/// `sines_and_cosines_are_libms_within_two_ulp`).
 const VECTOR_ANGLE: f64 = 134_217_728.0; // 2^27
 
-/// `(sin x, cos x)` of four angles: `wide`'s 4-lane polynomial (Agner Fog's vector class library
-/// scheme), 7 ns a value against libm's 16 on this project's host, within 2 ulp of libm; a lane
-/// beyond `VECTOR_ANGLE` (or not finite) is libm's own. Each lane depends on its angle alone, so
-/// a stamp's value does not depend on the stamps beside it.
+/// `(sin x, cos x)` of four angles: [`sincos::sin_cos_x4`] (AVX2 on the AVX paths), within 2 ulp
+/// of libm; a lane beyond `VECTOR_ANGLE` (or not finite) is libm's own. Each lane depends on its
+/// angle alone, so a stamp's value does not depend on the stamps beside it.
 pub fn sin_cos_lanes(x: [f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
-    let (s, c) = wide::f64x4::from(x).sin_cos();
-    let (mut s, mut c) = (s.to_array(), c.to_array());
+    let (mut s, mut c) = sincos::sin_cos_x4(x);
     for (k, &v) in x.iter().enumerate() {
-        if v.abs() > VECTOR_ANGLE || v.is_nan() {
+        if v.is_nan() || v.abs() > VECTOR_ANGLE {
             (s[k], c[k]) = v.sin_cos();
         }
     }
