@@ -2,8 +2,8 @@
 //!
 //! | function | lanes | instructions | agreement |
 //! |---|---|---|---|
-//! | [`sin_cos`] | one | scalar, no call, no branch | within 2 ulp of libm for `|x| ≤ 2^27` |
-//! | [`sin_cos_x4`] | four | AVX2 on the `avx2` and `avx512` paths ([`crate::simd::path`]), else four [`sin_cos`] | the same bits as four [`sin_cos`] |
+//! | [`sin_cos`] | one | scalar, no call, no branch | within 2 ulp of libm for `|x| ≤` [`RANGE`] |
+//! | [`sin_cos_x4`] | four | AVX2 on the `avx2` and `avx512` paths ([`crate::simd::path`]), else four [`sin_cos`]; libm's own for a lane beyond [`RANGE`] or NaN | the same bits as four [`sin_cos`] |
 //!
 //! The method (Cody & Waite, *Software Manual for the Elementary Functions*, 1980): `x` is reduced
 //! by the nearest multiple `k` of π/2 to `r ∈ [−π/4, π/4]`, `π/2` split in three constants so that
@@ -12,8 +12,8 @@
 //! swaps and signs them. `k` is rounded half to even by adding and subtracting 2^52, whose sum's
 //! low bits then hold `k` (no rounding or conversion instruction, which SSE2 lacks). Multiplies and
 //! adds stay separate (no fused multiply-add) and in the same order on every path, so the vector
-//! path equals the scalar one bit for bit. Beyond `2^27` rad the constants run out of bits (the
-//! error reaches 1e9 ulp by `1e9` rad): callers take libm there.
+//! path equals the scalar one bit for bit. Beyond [`RANGE`] the constants run out of bits (more
+//! than 10³ ulp by 1e9 rad): [`sin_cos_x4`] takes libm there. Each lane depends on its angle alone.
 
 /// π/2 in three parts, the first two with 25 significant bits: `k · PIO2[i]` is exact for `k < 2^27`.
 const PIO2: [f64; 3] = [
@@ -42,12 +42,16 @@ const COS_P: [f64; 6] = [
     -1.1358536521387682e-11,
 ];
 
+/// The largest `|x|` [rad] [`sin_cos`] takes: 2^27 (quadrants `k < 2^27`, where `k · PIO2[i]` is
+/// exact; the error stays within 2 ulp of libm to 3e8 rad, measured).
+pub const RANGE: f64 = 134_217_728.0;
+
 /// 2^52: adding it to `0 ≤ v < 2^51` rounds `v` to an integer, half to even, held in the low bits.
 const ROUND: f64 = 4_503_599_627_370_496.0;
 
 const SIGN: u64 = 1 << 63;
 
-/// `(sin x, cos x)` for finite `|x| ≤ 2^27`, within 2 ulp of libm.
+/// `(sin x, cos x)` for `|x| ≤` [`RANGE`], within 2 ulp of libm (beyond, wrong: see [`RANGE`]).
 #[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     let a = x.abs();
@@ -76,19 +80,35 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     (sin, cos)
 }
 
-/// [`sin_cos`] of four angles (finite, `|x| ≤ 2^27`), in one AVX2 sequence where the dispatched
-/// path has it: the same bits as four calls.
+/// `(sin x, cos x)` of four angles: [`sin_cos`] in each lane, in one AVX2 sequence where the
+/// dispatched path has it (the same bits as four calls), and libm's own value in a lane beyond
+/// [`RANGE`] or NaN.
 #[inline]
 pub fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
     #[cfg(target_arch = "x86_64")]
-    if matches!(crate::simd::path(), crate::simd::Path::Avx2 | crate::simd::Path::Avx512) {
-        // SAFETY: `path()` is `Avx2` or `Avx512` only where the CPU has AVX2.
+    let vector = matches!(crate::simd::path(), crate::simd::Path::Avx2 | crate::simd::Path::Avx512);
+    #[cfg(not(target_arch = "x86_64"))]
+    let vector = false;
+    let (mut s, mut c, outside) = if vector {
+        // SAFETY: `path()` is `Avx2` or `Avx512` only where the CPU has AVX2 (never off x86-64).
         #[allow(unsafe_code)]
-        return unsafe { avx2::sin_cos_x4(x) };
-    }
-    let (mut s, mut c) = ([0.0; 4], [0.0; 4]);
-    for k in 0..4 {
-        (s[k], c[k]) = sin_cos(x[k]);
+        unsafe {
+            avx2::sin_cos_x4(x)
+        }
+    } else {
+        let (mut s, mut c, mut outside) = ([0.0; 4], [0.0; 4], 0);
+        for k in 0..4 {
+            (s[k], c[k]) = sin_cos(x[k]);
+            outside |= i32::from(x[k].is_nan() || x[k].abs() > RANGE) << k;
+        }
+        (s, c, outside)
+    };
+    if outside != 0 {
+        for (k, v) in x.iter().enumerate() {
+            if outside >> k & 1 == 1 {
+                (s[k], c[k]) = v.sin_cos();
+            }
+        }
     }
     (s, c)
 }
@@ -97,7 +117,7 @@ pub fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
 mod avx2 {
     use std::arch::x86_64::*;
 
-    use super::{COS_P, PIO2, ROUND, SIGN, SIN_P};
+    use super::{COS_P, PIO2, RANGE, ROUND, SIGN, SIN_P};
 
     #[inline]
     #[target_feature(enable = "avx2")]
@@ -117,15 +137,17 @@ mod avx2 {
         add(mul(add(mul(splat(c[3]), z), splat(c[2])), z2), add(mul(high, z4), low))
     }
 
-    /// [`super::sin_cos`] in the four lanes of a 256-bit register, operation for operation.
+    /// [`super::sin_cos`] in the four lanes of a 256-bit register, operation for operation, and
+    /// the lanes beyond [`RANGE`] or NaN as bits of a mask.
     #[target_feature(enable = "avx2")]
-    pub(super) fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+    pub(super) fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4], i32) {
         let (mul, add, sub) = (_mm256_mul_pd, _mm256_add_pd, _mm256_sub_pd);
         // SAFETY: `x` holds four f64, which `loadu` reads unaligned.
         #[allow(unsafe_code)]
         let x = unsafe { _mm256_loadu_pd(x.as_ptr()) };
         let sign = _mm256_castsi256_pd(_mm256_set1_epi64x(SIGN as i64));
         let a = _mm256_andnot_pd(sign, x);
+        let outside = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_NLE_UQ>(a, splat(RANGE)));
         let round = splat(ROUND);
         let shifted = add(mul(a, splat(std::f64::consts::FRAC_2_PI)), round);
         let k = sub(shifted, round);
@@ -159,7 +181,7 @@ mod avx2 {
             _mm256_storeu_pd(sin.as_mut_ptr(), _mm256_xor_pd(s, sin_sign));
             _mm256_storeu_pd(cos.as_mut_ptr(), _mm256_xor_pd(c, _mm256_castsi256_pd(cos_sign)));
         }
-        (sin, cos)
+        (sin, cos, outside)
     }
 }
 
@@ -173,31 +195,34 @@ mod tests {
         a.next_up() - a
     }
 
-    fn angles(seed: u64) -> impl Iterator<Item = [f64; 4]> {
+    /// Four-lane angles: subnormal to tiny, small, a few turns, the stamps of long records, up to
+    /// the range's end.
+    fn angles(seed: u64) -> Vec<[f64; 4]> {
         use rand::{RngExt, SeedableRng};
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(seed);
-        // Subnormal to tiny, small, a few turns, the stamps of long records, up to the range's end.
-        [1e-310, 1e-6, 1.0, 10.0, 1e5, 134_217_728.0]
-            .into_iter()
-            .flat_map(move |scale| {
-                let mut draws = Vec::with_capacity(10_000);
-                for _ in 0..10_000 {
-                    draws.push(std::array::from_fn(|_| scale * (2.0 * rng.random::<f64>() - 1.0)));
-                }
-                draws
-            })
+        let mut draws = Vec::new();
+        for scale in [1e-310, 1e-6, 1.0, 10.0, 1e5, RANGE] {
+            for _ in 0..10_000 {
+                draws.push(std::array::from_fn(|_| scale * (2.0 * rng.random::<f64>() - 1.0)));
+            }
+        }
+        draws
     }
 
     #[test]
-    fn within_two_ulp_of_libm_up_to_two_to_the_27() {
+    fn within_two_ulp_of_libm_up_to_the_range() {
         let mut worst = 0.0_f64;
         for x in angles(7) {
-            for v in x {
-                let ((s, c), (rs, rc)) = (sin_cos(v), v.sin_cos());
-                worst = worst.max((s - rs).abs() / ulp(rs)).max((c - rc).abs() / ulp(rc));
+            let (s, c) = sin_cos_x4(x);
+            for k in 0..4 {
+                let (rs, rc) = x[k].sin_cos();
+                worst = worst.max((s[k] - rs).abs() / ulp(rs)).max((c[k] - rc).abs() / ulp(rc));
             }
         }
         assert!(worst <= 2.0, "{worst} ulp");
+        // Not libm bit for bit (else this test would not see the polynomials).
+        let x = [0.1, 1.0, 2.5, 1e3];
+        assert_ne!(sin_cos_x4(x).0, x.map(f64::sin));
         // Signed zeros and the quadrant edges, exactly.
         assert_eq!(sin_cos(0.0).0.to_bits(), 0.0_f64.to_bits());
         assert_eq!(sin_cos(-0.0).0.to_bits(), (-0.0_f64).to_bits());
@@ -207,18 +232,26 @@ mod tests {
     }
 
     #[test]
-    fn beyond_two_to_the_27_the_reduction_fails_which_is_why_callers_take_libm() {
+    fn beyond_the_range_the_polynomials_fail_and_libm_takes_the_lane_alone() {
         let worst = (0..1000)
             .map(|i| 1e9 + 7.3 * f64::from(i))
             .map(|x| (sin_cos(x).0 - x.sin()).abs() / ulp(x.sin()))
             .fold(0.0, f64::max);
         assert!(worst > 1e3, "{worst} ulp");
+        let big = 1e12;
+        let (s, c) = sin_cos_x4([0.5, big, f64::INFINITY, f64::NAN]);
+        assert_eq!((s[0], c[0]), sin_cos(0.5));
+        assert_eq!((s[1], c[1]), big.sin_cos());
+        assert!(s[2].is_nan() && c[2].is_nan() && s[3].is_nan() && c[3].is_nan());
+        let edge = [RANGE, -RANGE, RANGE.next_up(), -RANGE.next_up()];
+        let (s, _) = sin_cos_x4(edge);
+        assert_eq!([s[0], s[1]], [sin_cos(RANGE).0, sin_cos(-RANGE).0]);
+        assert_eq!([s[2], s[3]], [edge[2].sin(), edge[3].sin()]);
     }
 
     #[test]
     fn four_lanes_equal_four_scalar_calls_bit_for_bit_on_every_path() {
-        for x in angles(11) {
-            let (s, c) = sin_cos_x4(x);
+        let same = |x: [f64; 4], (s, c): ([f64; 4], [f64; 4])| {
             for k in 0..4 {
                 let (rs, rc) = sin_cos(x[k]);
                 assert_eq!(
@@ -228,22 +261,18 @@ mod tests {
                     x[k]
                 );
             }
+        };
+        for x in angles(11) {
+            same(x, sin_cos_x4(x));
         }
         #[cfg(target_arch = "x86_64")]
         if is_x86_feature_detected!("avx2") {
             for x in angles(13) {
                 // SAFETY: the CPU has AVX2 (checked above).
                 #[allow(unsafe_code)]
-                let (s, c) = unsafe { avx2::sin_cos_x4(x) };
-                for k in 0..4 {
-                    let (rs, rc) = sin_cos(x[k]);
-                    assert_eq!(
-                        (s[k].to_bits(), c[k].to_bits()),
-                        (rs.to_bits(), rc.to_bits()),
-                        "{}",
-                        x[k]
-                    );
-                }
+                let (s, c, outside) = unsafe { avx2::sin_cos_x4(x) };
+                assert_eq!(outside, 0);
+                same(x, (s, c));
             }
         }
     }

@@ -6,7 +6,7 @@
 mod motion;
 mod sensor;
 
-pub use motion::{sin_cos_lanes, Kinematics, Motion, MotionKind, LANES};
+pub use motion::{Kinematics, Motion, MotionKind, LANES};
 pub use sensor::{measure, measure_in_place, measure_in_place_cancellable, SensorModel, CHUNK};
 
 use nalgebra::{UnitQuaternion, Vector3};

@@ -131,26 +131,8 @@ crate::named_enum!(
 );
 
 /// Stamps evaluated together by [`Motion::at_lanes`]: the sines and cosines of their angles are
-/// taken four at a time ([`sin_cos_lanes`]).
+/// taken four at a time ([`sincos::sin_cos_x4`]).
 pub const LANES: usize = 4;
-
-/// Angles up to this magnitude [rad] take [`sincos::sin_cos_x4`]: its reduction by π/2 (three
-/// constants, Cody & Waite) stays within 2 ulp of libm to 3e8 rad and fails by 1e9 (measured;
-/// `sines_and_cosines_are_libms_within_two_ulp`).
-const VECTOR_ANGLE: f64 = 134_217_728.0; // 2^27
-
-/// `(sin x, cos x)` of four angles: [`sincos::sin_cos_x4`] (AVX2 on the AVX paths), within 2 ulp
-/// of libm; a lane beyond `VECTOR_ANGLE` (or not finite) is libm's own. Each lane depends on its
-/// angle alone, so a stamp's value does not depend on the stamps beside it.
-pub fn sin_cos_lanes(x: [f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
-    let (mut s, mut c) = sincos::sin_cos_x4(x);
-    for (k, &v) in x.iter().enumerate() {
-        if v.is_nan() || v.abs() > VECTOR_ANGLE {
-            (s[k], c[k]) = v.sin_cos();
-        }
-    }
-    (s, c)
-}
 
 impl Motion {
     /// The kinematic state at time `t` \[s\] (one lane of [`Motion::at_lanes`], so equal bit for
@@ -192,7 +174,7 @@ impl Motion {
                 angular_rate: w,
                 climb_rate,
             } => {
-                let (s, c) = sin_cos_lanes(t.map(|t| w * t));
+                let (s, c) = sincos::sin_cos_x4(t.map(|t| w * t));
                 // Yaw Ωt ± π/2: its sine ±cos Ωt and cosine ∓sin Ωt, with the sign of Ω.
                 let sign = w.signum();
                 from_fn(|k| {
@@ -216,10 +198,10 @@ impl Motion {
                 roll,
                 pitch,
             } => {
-                let (s1, c1) = sin_cos_lanes(t.map(|t| w * t));
+                let (s1, c1) = sincos::sin_cos_x4(t.map(|t| w * t));
                 let s2 = from_fn(|k| 2.0 * s1[k] * c1[k]);
-                let pitch_sc = sin_cos_lanes(s1.map(|s| pitch * s));
-                let roll_sc = sin_cos_lanes(s2.map(|s| roll * s));
+                let pitch_sc = sincos::sin_cos_x4(s1.map(|s| pitch * s));
+                let roll_sc = sincos::sin_cos_x4(s2.map(|s| roll * s));
                 from_fn(|k| {
                     let (s1, c1, s2) = (s1[k], c1[k], s2[k]);
                     let c2 = c1 * c1 - s1 * s1;
@@ -255,11 +237,11 @@ impl Motion {
                 pitch,
             } => {
                 let kz = k1 * k;
-                let (s, c) = sin_cos_lanes(t.map(|t| k * t));
-                let (sz, cz) = sin_cos_lanes(t.map(|t| kz * t));
-                let (st, ct) = sin_cos_lanes(t);
-                let pitch_sc = sin_cos_lanes(st.map(|s| pitch * s));
-                let roll_sc = sin_cos_lanes(ct.map(|c| roll * c));
+                let (s, c) = sincos::sin_cos_x4(t.map(|t| k * t));
+                let (sz, cz) = sincos::sin_cos_x4(t.map(|t| kz * t));
+                let (st, ct) = sincos::sin_cos_x4(t);
+                let pitch_sc = sincos::sin_cos_x4(st.map(|s| pitch * s));
+                let roll_sc = sincos::sin_cos_x4(ct.map(|c| roll * c));
                 from_fn(|i| {
                     let (s, c, sz, cz) = (s[i], c[i], sz[i], cz[i]);
                     // Euler angles χ = (Kt, θ₀ sin t, φ₀ cos t).
@@ -297,44 +279,6 @@ mod tests {
             "circle".parse::<MotionKind>(),
             Err(Error::Parameter { name: "trajectory", .. })
         ));
-    }
-
-    /// One unit in the last place of `x` (the spacing above `|x|`).
-    fn ulp(x: f64) -> f64 {
-        let a = x.abs();
-        a.next_up() - a
-    }
-
-    #[test]
-    fn sines_and_cosines_are_libms_within_two_ulp() {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(7);
-        let mut worst = 0.0_f64;
-        // Small angles, a few turns, the stamps of long records, and up to the vector path's end.
-        for scale in [1e-6, 1.0, 10.0, 1e5, VECTOR_ANGLE] {
-            for _ in 0..20_000 {
-                let x: [f64; LANES] = from_fn(|_| scale * (2.0 * rng.random::<f64>() - 1.0));
-                let (s, c) = sin_cos_lanes(x);
-                for k in 0..LANES {
-                    let (rs, rc) = x[k].sin_cos();
-                    worst = worst.max((s[k] - rs).abs() / ulp(rs)).max((c[k] - rc).abs() / ulp(rc));
-                }
-            }
-        }
-        assert!(worst <= 2.0, "{worst} ulp");
-        // Not the same function bit for bit (else this test would not see the vector path).
-        let x = [0.1, 1.0, 2.5, 1e3];
-        assert_ne!(sin_cos_lanes(x).0, x.map(f64::sin));
-    }
-
-    #[test]
-    fn a_lane_beyond_the_vector_range_is_libms_and_leaves_the_others_alone() {
-        let big = 1e12;
-        let (s, c) = sin_cos_lanes([0.5, big, f64::INFINITY, f64::NAN]);
-        let (s0, c0) = sin_cos_lanes([0.5; LANES]);
-        assert_eq!((s[0], c[0]), (s0[0], c0[0]));
-        assert_eq!((s[1], c[1]), big.sin_cos());
-        assert!(s[2].is_nan() && c[2].is_nan() && s[3].is_nan() && c[3].is_nan());
     }
 
     #[test]
