@@ -400,6 +400,25 @@ fn held_ends(samples: &Samples<'_>, k0: usize, hi: f64) -> Ends {
 /// it.
 pub(super) const BUNDLE: usize = 4;
 
+/// How many of `n` windows (sorted by length) go into the lanes: all but a last bundle too small to
+/// pay. A step of the lanes costs about the same whatever number of them carry a window: on AVX2,
+/// 1.7 (euler) and 2.4 (midpoint) steps of the per-window kernel (docs/performance.md, "Structure
+/// of arrays: windows in SIMD lanes": 69 against 165 and 129 against 215 ns a window-sample, four lanes). So
+/// one window runs faster alone in either scheme (one window over a whole record took 2.4–3.7×
+/// the per-window kernel's time), and two run faster alone in the midpoint scheme.
+pub(super) fn bundled(n: usize, scheme: Scheme) -> usize {
+    let fewest = match scheme {
+        Scheme::Euler => 2,
+        Scheme::Midpoint => 3,
+    };
+    let last = n % BUNDLE;
+    if last < fewest {
+        n - last
+    } else {
+        n
+    }
+}
+
 /// The windows between consecutive `edges`, in order, in parallel: windows without a clipped
 /// sample in SIMD lanes on the AVX paths (`lanes/`), the others on the per-window kernel.
 pub(super) fn run_block(
@@ -419,7 +438,8 @@ pub(super) fn run_block(
 }
 
 /// [`run_block`] with the lanes `k`: the unflagged windows bundled in order of length, so that a
-/// bundle's windows end together (the grouping does not depend on the thread count).
+/// bundle's windows end together (the grouping does not depend on the thread count); a last
+/// bundle too small to pay ([`bundled`]; the longest windows) runs window by window instead.
 #[cfg(target_arch = "x86_64")]
 fn run_block_in_lanes(
     samples: &Samples<'_>,
@@ -436,8 +456,9 @@ fn run_block_in_lanes(
         let end = (s.k0 + s.steps + reach).min(samples.t.len());
         clipped.is_some_and(|m| (s.k0..end).any(|j| m.gyro[j] || m.accel[j]))
     };
-    let (mut in_lanes, per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
+    let (mut in_lanes, mut per_window): (Vec<usize>, Vec<usize>) = (0..spans.len()).partition(|&i| !flagged(&spans[i]));
     in_lanes.sort_by_key(|&i| spans[i].steps);
+    per_window.extend(in_lanes.drain(bundled(in_lanes.len(), template.scheme)..));
     // Each result (3 kB) is moved as few times as possible: the indexed collects write in place,
     // then once into `done` and once into place.
     let bundles: Vec<Vec<Preintegrator>> = in_lanes

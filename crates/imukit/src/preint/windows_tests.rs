@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
-use super::{lanes, run_block, span, window, Span};
+use super::{bundled, lanes, run_block, span, window, Span};
 use crate::imu::{Noise, Samples};
 use crate::preint::{ClipMask, Covariance9, Preintegrator, Scheme};
 use crate::simd;
@@ -136,6 +136,14 @@ fn lanes_equal_the_per_window_kernel_on_windows_of_mixed_lengths() {
             assert_same(&lane, want);
         }
     }
+}
+
+#[test]
+fn a_last_bundle_of_one_window_or_of_two_midpoint_windows_runs_alone() {
+    let euler: Vec<usize> = (0..=9).map(|n| bundled(n, Scheme::Euler)).collect();
+    let midpoint: Vec<usize> = (0..=9).map(|n| bundled(n, Scheme::Midpoint)).collect();
+    assert_eq!(euler, [0, 0, 2, 3, 4, 4, 6, 7, 8, 8]);
+    assert_eq!(midpoint, [0, 0, 0, 3, 4, 4, 4, 7, 8, 8]);
 }
 
 #[test]
