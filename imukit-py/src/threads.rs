@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock, PoisonError};
 use std::time::Duration;
 
 use imukit::Cancel;
@@ -66,16 +66,22 @@ pub(crate) fn after_fork_in_child() {
     }
 }
 
+/// The CPUs this process may use, read once: `available_parallelism` reads the cgroup's quota
+/// files on every call (an open, reads and a close, ~40 µs on this project's VM: 2.6× a 200-sample
+/// Mahony run when each `run` asked).
+fn cores() -> usize {
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
+}
+
 /// Runs `f` (which may use rayon) on `threads` threads when given, else in the process-wide
 /// pool. Call it with the GIL released.
 pub(crate) fn run_in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
     // A statement of its own: the lock is released before the kernel runs, so that calls from
     // several Python threads run at once.
-    let size = threads.or(*lock(&PROCESS)).or_else(|| {
-        FORKED
-            .load(Ordering::SeqCst)
-            .then(|| std::thread::available_parallelism().map_or(1, usize::from))
-    });
+    let size = threads
+        .or(*lock(&PROCESS))
+        .or_else(|| FORKED.load(Ordering::SeqCst).then(cores));
     match size {
         Some(n) => Ok(pool(n)?.install(f)),
         None => Ok(f()),
@@ -211,8 +217,8 @@ impl Drop for SetOnDrop<'_> {
 /// process has one thread to give (`set_num_threads(1)`, one CPU): there the helper would only
 /// take turns with the kernel.
 pub(crate) fn prefaulting<R>(n: usize, fresh: &[Fresh], f: impl FnOnce() -> R) -> R {
-    let cores = std::thread::available_parallelism().map_or(1, usize::from);
-    if fresh.iter().map(|o| o.bytes).sum::<usize>() < PREFAULT_FROM_BYTES || cores < 2 || get_num_threads() < 2 {
+    // The size first: the other two tests cost more than a short kernel.
+    if fresh.iter().map(|o| o.bytes).sum::<usize>() < PREFAULT_FROM_BYTES || cores() < 2 || get_num_threads() < 2 {
         return f();
     }
     // Set when `f` returns or unwinds (an error, Ctrl-C, a panic): the rest would be cleared for
