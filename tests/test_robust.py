@@ -93,6 +93,21 @@ def test_ned_and_pickled_filter() -> None:
     assert np.degrees(((c * enu).inv() * ned).magnitude()).max() < 1e-7
 
 
+def test_a_state_copies_a_state_and_refuses_a_state_with_fields() -> None:
+    imu, mag, _ = _imu(5.0)
+    state = ik.filters.Robust().run(imu, mag=mag).state
+    copy = ik.filters.RobustState(state)
+    assert type(copy) is ik.filters.RobustState and copy == state
+    assert copy.fields() == state.fields()
+    # The same state from its fields by name (what pickling stores), and from the core's own class.
+    assert ik.filters.RobustState(**state.fields()) == state
+    assert ik.filters.RobustState(ik._core.RobustState(state)) == state
+    for make in (ik.filters.RobustState, ik._core.RobustState):
+        with pytest.raises(ParameterError) as e:
+            make(state, time=1.0)
+        assert e.value.argument == "state"
+
+
 def test_offline_is_deterministic_and_finite() -> None:
     imu, mag, _ = _imu()
     f = ik.filters.Robust()

@@ -46,7 +46,9 @@ class RobustState(_core.RobustState):
         if state is not None:
             if not isinstance(state, _core.RobustState):
                 raise ParameterError(f"expected a RobustState, got {type(state).__name__}", argument="state")
-            fields = dict(state.fields())
+            if fields:
+                raise ParameterError("expected a state or its fields, not both", argument="state")
+            return super().__new__(cls, state)
         return super().__new__(cls, **fields)
 
     def __repr__(self) -> str:
