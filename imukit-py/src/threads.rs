@@ -8,9 +8,9 @@
 //! within a few ms instead of when they return (11.6 s on a 25 M-sample `propagate`).
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
-use std::sync::{Arc, Mutex, MutexGuard, OnceLock, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
 use imukit::Cancel;
@@ -59,6 +59,7 @@ static FORKED: AtomicBool = AtomicBool::new(false);
 #[pyfunction]
 pub(crate) fn after_fork_in_child() {
     FORKED.store(true, Ordering::SeqCst);
+    CORES.store(0, Ordering::Relaxed);
     if let Ok(mut pools) = POOLS.try_lock() {
         if let Some(parents) = pools.take() {
             std::mem::forget(parents);
@@ -66,12 +67,23 @@ pub(crate) fn after_fork_in_child() {
     }
 }
 
-/// The CPUs this process may use, read once: `available_parallelism` reads the cgroup's quota
-/// files on every call (an open, reads and a close, ~40 µs on this project's VM: 2.6× a 200-sample
-/// Mahony run when each `run` asked).
+/// [`cores`], once read; 0 before. Not a `OnceLock`: a fork while another thread is reading
+/// would leave the child's copy "being initialised" for ever; two threads that race both read.
+static CORES: AtomicUsize = AtomicUsize::new(0);
+
+/// The CPUs this process may use, read once per process: `available_parallelism` reads the
+/// cgroup's quota files on every call (an open, reads and a close, ~40 µs on this project's VM:
+/// 2.6× a 200-sample Mahony run when each `run` asked). A forked child reads its own
+/// ([`after_fork_in_child`]): it may have been given fewer CPUs.
 fn cores() -> usize {
-    static CORES: OnceLock<usize> = OnceLock::new();
-    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
+    match CORES.load(Ordering::Relaxed) {
+        0 => {
+            let n = std::thread::available_parallelism().map_or(1, usize::from);
+            CORES.store(n, Ordering::Relaxed);
+            n
+        }
+        n => n,
+    }
 }
 
 /// Runs `f` (which may use rayon) on `threads` threads when given, else in the process-wide

@@ -403,9 +403,9 @@ pub(super) const BUNDLE: usize = 4;
 /// How many of `n` windows (sorted by length) go into the lanes: all but a last bundle too small to
 /// pay. A step of the lanes costs about the same whatever number of them carry a window: on AVX2,
 /// 1.7 (euler) and 2.4 (midpoint) steps of the per-window kernel (docs/performance.md, "Structure
-/// of arrays: windows in SIMD lanes": 69 against 165 and 129 against 215 ns a window-sample, four lanes). So
-/// one window runs faster alone in either scheme (one window over a whole record took 2.4–3.7×
-/// the per-window kernel's time), and two run faster alone in the midpoint scheme.
+/// of arrays: windows in SIMD lanes": 69 against 165 and 129 against 215 ns a window-sample, four
+/// lanes). So one window runs faster alone in either scheme, and two in the midpoint scheme (one
+/// window over a record ran 2–3× faster alone: "One or two windows do not pay for the lanes").
 pub(super) fn bundled(n: usize, scheme: Scheme) -> usize {
     let fewest = match scheme {
         Scheme::Euler => 2,
