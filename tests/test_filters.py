@@ -398,6 +398,18 @@ def test_bad_input_names_argument() -> None:
         f.update([0, 0, 0], [0, 0, 9.81], 0.0)
     with pytest.raises(ik.ShapeError, match=r"^gyro: "):
         f.update([0, 0], [0, 0, 9.81], 0.01)
+    # float64 (3,) arrays take a shorter path to the core: the same errors, the same values.
+    with pytest.raises(ik.NonFiniteError, match=r"^gyro: "):
+        f.update(np.array([0.0, -np.inf, 0.0]), np.array([0.0, 0.0, 9.81]), 0.01)
+    with pytest.raises(ik.NonFiniteError, match=r"^accel: "):
+        f.update(np.zeros(3), np.array([np.nan, 0.0, 9.81]), 0.01)
+    with pytest.raises(ik.ShapeError, match=r"^gyro: "):
+        f.update(np.zeros(2), np.array([0.0, 0.0, 9.81]), 0.01)
+    state = f.get_state()
+    by_list = f.update([0.01, -0.02, 0.03], [0.1, 0.2, 9.8], 0.01).as_quat()
+    f.set_state(state)
+    by_array = f.update(np.array([0.01, -0.02, 0.03]), np.array([0.1, 0.2, 9.8]), 0.01).as_quat()
+    assert np.array_equal(by_list, by_array)
     with pytest.raises(ik.ParameterError, match=r"^kp: "):
         Mahony(kp=-1.0)
     with pytest.raises(ik.ParameterError, match=r"^beta: "):

@@ -33,6 +33,7 @@ Equations, rejection rules, the gain ramp, the ``Law`` seam and measured test nu
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import Any, NamedTuple, TypeVar
 
@@ -187,6 +188,13 @@ def _check_mag_norms(mags: FloatArray) -> FloatArray:
 
 
 def _vec3(x: ArrayLike, name: str) -> list[float]:
+    # A streaming sample is most often a float64 (3,) array: its finite values as they are, without
+    # the general checks (8.6 µs against 1, a sixth of an update); anything else, or a non-finite
+    # value, takes them and their named errors.
+    if type(x) is np.ndarray and x.dtype == np.float64 and x.shape == (3,):
+        v: list[float] = x.tolist()
+        if all(map(math.isfinite, v)):
+            return v
     return [float(e) for e in vector3(x, name)]
 
 
