@@ -154,6 +154,24 @@ def test_option_type_errors_name_the_field() -> None:
         Mahony(gain_ramp="slow")  # type: ignore[arg-type]
 
 
+def test_a_state_copies_a_state_and_refuses_a_state_with_fields(moving: tuple[ik.ImuData, np.ndarray]) -> None:
+    imu, _ = moving
+    state = Madgwick().run(imu).state
+    copy = FilterState(state)
+    assert type(copy) is FilterState and copy == state and copy.fields() == state.fields()
+    assert FilterState(**state.fields()) == state
+    assert FilterState(ik._core.FilterState(state)) == state
+    for make in (FilterState, ik._core.FilterState):
+        with pytest.raises(ik.ParameterError, match=r"^state: expected a state or its fields") as e:
+            make(state, time=1.0)
+        assert e.value.argument == "state"
+    # Without a state, the fields up to mag_dip_cos are required.
+    fields = state.fields()
+    del fields["mag_norm"]
+    with pytest.raises(ik.ParameterError, match=r"^state: expected a state, or the fields"):
+        FilterState(**fields)
+
+
 def test_deprecated_flat_layout_still_works(moving: tuple[ik.ImuData, np.ndarray]) -> None:
     imu, _ = moving
     state = Mahony().run(imu).state

@@ -24,7 +24,7 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::convert::{empty, frozen_or_copy, Demand};
 use crate::convert::{real_number, Name};
 use crate::threads::Fresh;
-use crate::{contiguous, to_py};
+use crate::{contiguous, raise, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
 /// numbers: a `ParameterError` naming `name`.
@@ -265,23 +265,27 @@ impl PyFilterState {
 
 #[pymethods]
 impl PyFilterState {
-    /// A state from its fields by name (what pickling stores); checked and normalised by the core.
+    /// A state from its fields by name (what pickling stores), checked and normalised by the core;
+    /// or a copy of `state`, which the core has checked already (what `update` makes of each
+    /// sample's state: through its fields by name it took 6 µs). The fields up to `mag_dip_cos`
+    /// are required without `state`.
     #[new]
-    #[pyo3(signature = (*, quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin, mag_dip_cos, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], gyro_lp=[0.0; 3], rest_gyro_ms=0.0, rest_accel_lp=[0.0; 3], rest_accel_ms=0.0, accel_calm=0.0, accel_drift=false, extra=None))]
+    #[pyo3(signature = (state=None, /, *, quaternion=None, gyro_bias=None, initialized=None, time=None, ramp_elapsed=None, accel_rejected=None, mag_rejected=None, rest=None, mag_norm=None, mag_dip_sin=None, mag_dip_cos=None, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], gyro_lp=[0.0; 3], rest_gyro_ms=0.0, rest_accel_lp=[0.0; 3], rest_accel_ms=0.0, accel_calm=0.0, accel_drift=false, extra=None))]
     #[allow(clippy::too_many_arguments)] // one keyword per field of the state
     fn new(
         py: Python<'_>,
-        quaternion: [f64; 4],
-        gyro_bias: [f64; 3],
-        initialized: bool,
-        time: f64,
-        ramp_elapsed: f64,
-        accel_rejected: f64,
-        mag_rejected: f64,
-        rest: f64,
-        mag_norm: f64,
-        mag_dip_sin: f64,
-        mag_dip_cos: f64,
+        state: Option<PyRef<'_, PyFilterState>>,
+        quaternion: Option<[f64; 4]>,
+        gyro_bias: Option<[f64; 3]>,
+        initialized: Option<bool>,
+        time: Option<f64>,
+        ramp_elapsed: Option<f64>,
+        accel_rejected: Option<f64>,
+        mag_rejected: Option<f64>,
+        rest: Option<f64>,
+        mag_norm: Option<f64>,
+        mag_dip_sin: Option<f64>,
+        mag_dip_cos: Option<f64>,
         acc_lp1: [f64; 3],
         acc_lp2: [f64; 3],
         gyro_lp: [f64; 3],
@@ -292,6 +296,63 @@ impl PyFilterState {
         accel_drift: bool,
         extra: Option<Vec<(String, f64)>>,
     ) -> PyResult<Self> {
+        let required = [
+            quaternion.is_some(),
+            gyro_bias.is_some(),
+            initialized.is_some(),
+            time.is_some(),
+            ramp_elapsed.is_some(),
+            accel_rejected.is_some(),
+            mag_rejected.is_some(),
+            rest.is_some(),
+            mag_norm.is_some(),
+            mag_dip_sin.is_some(),
+            mag_dip_cos.is_some(),
+        ];
+        if let Some(state) = state {
+            if required.contains(&true) || extra.is_some() {
+                return Err(raise(
+                    py,
+                    "ParameterError",
+                    "state",
+                    "expected a state or its fields, not both",
+                ));
+            }
+            return Ok(state.clone());
+        }
+        let (
+            Some(quaternion),
+            Some(gyro_bias),
+            Some(initialized),
+            Some(time),
+            Some(ramp_elapsed),
+            Some(accel_rejected),
+            Some(mag_rejected),
+            Some(rest),
+            Some(mag_norm),
+            Some(mag_dip_sin),
+            Some(mag_dip_cos),
+        ) = (
+            quaternion,
+            gyro_bias,
+            initialized,
+            time,
+            ramp_elapsed,
+            accel_rejected,
+            mag_rejected,
+            rest,
+            mag_norm,
+            mag_dip_sin,
+            mag_dip_cos,
+        )
+        else {
+            return Err(raise(
+                py,
+                "ParameterError",
+                "state",
+                "expected a state, or the fields quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin and mag_dip_cos",
+            ));
+        };
         let common = CommonState {
             bias: Vector3::from(gyro_bias),
             initialized,
@@ -348,17 +409,18 @@ impl PyFilterState {
         let q = [x, y, z, w];
         Self::new(
             py,
-            q,
-            [bx, by, bz],
-            initialized != 0.0,
-            time,
-            ramp,
-            accel,
-            mag,
-            rest,
-            norm,
-            sin,
-            cos,
+            None,
+            Some(q),
+            Some([bx, by, bz]),
+            Some(initialized != 0.0),
+            Some(time),
+            Some(ramp),
+            Some(accel),
+            Some(mag),
+            Some(rest),
+            Some(norm),
+            Some(sin),
+            Some(cos),
             [0.0; 3],
             [0.0; 3],
             [0.0; 3],

@@ -93,7 +93,12 @@ impl PyRobustState {
     ) -> PyResult<Self> {
         if let Some(state) = state {
             if fields.is_some_and(|f| !f.is_empty()) {
-                return Err(raise(py, "ParameterError", "state", "a state or its fields, not both"));
+                return Err(raise(
+                    py,
+                    "ParameterError",
+                    "state",
+                    "expected a state or its fields, not both",
+                ));
             }
             return Ok(state.clone());
         }

@@ -94,7 +94,7 @@ class FilterState(_core.FilterState):
         if values is None and fields:
             return super().__new__(cls, **fields)
         if isinstance(values, _core.FilterState):
-            return super().__new__(cls, **values.fields())
+            return super().__new__(cls, values, **fields)  # a copy; with fields, the core refuses
         if values is None:
             raise ParameterError("expected the state's fields by name, or a FilterState", argument="state")
         deprecated("FilterState(values) from the flat (16,) layout is deprecated: keep or pickle the state")
