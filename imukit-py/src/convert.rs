@@ -6,7 +6,8 @@
 //!   [`contiguous`], [`rows`] (`(n, N)` as `&[[f64; N]]`), [`SampleCopies`];
 //! - values by field name: [`NoiseFields`] (`imukit.ImuNoise`), [`BiasFields`]
 //!   (`imukit.ImuBias`), [`NavStateFields`] (`imukit.NavState`);
-//! - enums by name: [`Name`], through the core's `FromStr` ([`imukit::names::Named`]).
+//! - enums by name: [`Name`], through the core's `FromStr` ([`imukit::names::Named`]);
+//! - a filter state copied ([`state_copy`]).
 
 use imukit::imu::{Bias, NavState, Noise, Samples};
 use imukit::names::Named;
@@ -348,4 +349,18 @@ impl From<NavStateFields> for NavState {
             rotation: unit_quaternion(s.rotation),
         }
     }
+}
+
+/// A copy of a filter's `state` object (the core checked it when it was made), for a constructor
+/// that takes a state or its fields: fields beside it are a `ParameterError` naming `state`.
+pub(crate) fn state_copy<T: Clone>(py: Python<'_>, state: &T, with_fields: bool) -> PyResult<T> {
+    if with_fields {
+        return Err(raise(
+            py,
+            "ParameterError",
+            "state",
+            "expected a state or its fields, not both",
+        ));
+    }
+    Ok(state.clone())
 }

@@ -24,7 +24,7 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::convert::{empty, frozen_or_copy, Demand};
 use crate::convert::{real_number, Name};
 use crate::threads::Fresh;
-use crate::{contiguous, raise, to_py};
+use crate::{contiguous, raise, state_copy, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
 /// numbers: a `ParameterError` naming `name`.
@@ -310,60 +310,27 @@ impl PyFilterState {
             mag_dip_cos.is_some(),
         ];
         if let Some(state) = state {
-            if required.contains(&true) || extra.is_some() {
-                return Err(raise(
-                    py,
-                    "ParameterError",
-                    "state",
-                    "expected a state or its fields, not both",
-                ));
-            }
-            return Ok(state.clone());
+            return state_copy(py, &*state, required.contains(&true) || extra.is_some());
         }
-        let (
-            Some(quaternion),
-            Some(gyro_bias),
-            Some(initialized),
-            Some(time),
-            Some(ramp_elapsed),
-            Some(accel_rejected),
-            Some(mag_rejected),
-            Some(rest),
-            Some(mag_norm),
-            Some(mag_dip_sin),
-            Some(mag_dip_cos),
-        ) = (
-            quaternion,
-            gyro_bias,
-            initialized,
-            time,
-            ramp_elapsed,
-            accel_rejected,
-            mag_rejected,
-            rest,
-            mag_norm,
-            mag_dip_sin,
-            mag_dip_cos,
-        )
-        else {
-            return Err(raise(
+        let missing = || {
+            raise(
                 py,
                 "ParameterError",
                 "state",
                 "expected a state, or the fields quaternion, gyro_bias, initialized, time, ramp_elapsed, accel_rejected, mag_rejected, rest, mag_norm, mag_dip_sin and mag_dip_cos",
-            ));
+            )
         };
         let common = CommonState {
-            bias: Vector3::from(gyro_bias),
-            initialized,
-            time,
-            ramp_elapsed,
-            accel_rejected,
-            mag_rejected,
-            rest,
-            mag_norm,
-            mag_dip_sin,
-            mag_dip_cos,
+            bias: Vector3::from(gyro_bias.ok_or_else(missing)?),
+            initialized: initialized.ok_or_else(missing)?,
+            time: time.ok_or_else(missing)?,
+            ramp_elapsed: ramp_elapsed.ok_or_else(missing)?,
+            accel_rejected: accel_rejected.ok_or_else(missing)?,
+            mag_rejected: mag_rejected.ok_or_else(missing)?,
+            rest: rest.ok_or_else(missing)?,
+            mag_norm: mag_norm.ok_or_else(missing)?,
+            mag_dip_sin: mag_dip_sin.ok_or_else(missing)?,
+            mag_dip_cos: mag_dip_cos.ok_or_else(missing)?,
             acc_lp1: Vector3::from(acc_lp1),
             acc_lp2: Vector3::from(acc_lp2),
             gyro_lp: Vector3::from(gyro_lp),
@@ -374,7 +341,7 @@ impl PyFilterState {
             accel_drift,
             ..CommonState::default()
         }
-        .restored(quaternion)
+        .restored(quaternion.ok_or_else(missing)?)
         .map_err(|e| to_py(py, "state", e))?;
         Ok(Self {
             common,

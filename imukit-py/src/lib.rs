@@ -21,7 +21,7 @@ mod text_glue;
 mod threads;
 
 // The helpers the domain files import from the crate root.
-pub(crate) use convert::{contiguous, private_copy, SampleCopies};
+pub(crate) use convert::{contiguous, private_copy, state_copy, SampleCopies};
 pub(crate) use errors::{class_name, raise, to_py};
 
 use imukit::{attitude, ffi, strapdown};

@@ -14,7 +14,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{contiguous, frozen_or_copy, real_number, rows, unit_quaternion, Name};
+use crate::convert::{contiguous, frozen_or_copy, real_number, rows, state_copy, unit_quaternion, Name};
 use crate::threads::{prefaulting, Fresh};
 use crate::{raise, to_py};
 
@@ -92,15 +92,7 @@ impl PyRobustState {
         fields: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         if let Some(state) = state {
-            if fields.is_some_and(|f| !f.is_empty()) {
-                return Err(raise(
-                    py,
-                    "ParameterError",
-                    "state",
-                    "expected a state or its fields, not both",
-                ));
-            }
-            return Ok(state.clone());
+            return state_copy(py, &*state, fields.is_some_and(|f| !f.is_empty()));
         }
         let values = from_fields(py, &RobustState::default(), fields)?;
         RobustState::restored(&values)
