@@ -46,9 +46,7 @@ class RobustState(_core.RobustState):
         if state is not None:
             if not isinstance(state, _core.RobustState):
                 raise ParameterError(f"expected a RobustState, got {type(state).__name__}", argument="state")
-            if fields:
-                raise ParameterError("expected a state or its fields, not both", argument="state")
-            return super().__new__(cls, state)
+            return super().__new__(cls, state, **fields)  # a copy; with fields, the core refuses
         return super().__new__(cls, **fields)
 
     def __repr__(self) -> str:
