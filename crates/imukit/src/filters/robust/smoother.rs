@@ -41,8 +41,8 @@ use std::ops::Range;
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{
-    compose, from_world, magnetometer, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap, yawed,
-    Coefs, CoefsCache,
+    compose, from_world, heading_error, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap, yawed,
+    Coefs, CoefsCache, Field,
 };
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
@@ -64,6 +64,9 @@ struct Reversed {
     accel: Vec<[f64; 3]>,
     mag: Option<Vec<[f64; 3]>>,
 }
+
+/// Samples per block of a heading pass's [`Field`]s (6 kB on the stack, in L1).
+const HEADING_BLOCK: usize = 256;
 
 /// Rows of the reversed record per part of the backward pass (9D: 1.3 MB of buffers).
 const REVERSED_PART: usize = 1 << 14;
@@ -326,7 +329,7 @@ crate::simd_dispatch! {
 
 crate::simd_dispatch! {
     /// 9D, stage 2: the heading loop of the online step alone (the field's gate, its reference
-    /// learning and the heading filter, [`magnetometer`]) on the zero-phase attitudes `base`
+    /// learning and the heading filter, [`super::step::magnetometer`]) on the zero-phase attitudes `base`
     /// (internal ENU) in place of each pass's own inclination: forward from `start`, or
     /// (`backward`) from the last sample on an uninitialised state, each interval with the gyro
     /// sample the online pass would integrate it with. The heading after each sample into `out`
@@ -343,26 +346,38 @@ crate::simd_dispatch! {
         let n = base.len();
         let mut s = *start;
         let mut cache = CoefsCache::new(Coefs::new(p, 0.0));
-        for i in 0..n {
-            // The interval reached: (t_k−1, t_k] forward, (t_k, t_k+1] backward, both with the
-            // later gyro sample (as `Reversed`).
-            let (k, other) = if backward {
+        // The interval reached by the pass's i-th sample, k: (t_k−1, t_k] forward, (t_k, t_k+1]
+        // backward, both with the later gyro sample (as `Reversed`), the other end `other`.
+        let reached = |i: usize| {
+            if backward {
                 (n - 1 - i, (n - i).min(n - 1))
             } else {
                 (i, i.saturating_sub(1))
-            };
-            let gyro = row(&inputs.gyro[k.max(other)]);
-            let m_e = quat(&base[k]) * row(&mags[k]);
-            if !s.initialized {
-                set_heading(&mut s, 0.0);
-                start_heading(&mut s, &m_e);
-                s.initialized = true;
             }
-            let coefs = cache.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
-            if let Some((gain, err)) = magnetometer(p, &coefs, &mut s, &m_e, &gyro) {
-                turn_heading(&mut s, gain * err);
+        };
+        // A block's fields first (independent samples: their roots, divisions and `atan2`
+        // overlap), then the gate and the heading in order; the same operations per sample as
+        // the online step's `magnetometer`, bit for bit.
+        let mut fields = [Field::default(); HEADING_BLOCK];
+        for first in (0..n).step_by(HEADING_BLOCK) {
+            let block = first..(first + HEADING_BLOCK).min(n);
+            for (i, f) in block.clone().zip(fields.iter_mut()) {
+                let (k, other) = reached(i);
+                *f = Field::new(p, &(quat(&base[k]) * row(&mags[k])), &row(&inputs.gyro[k.max(other)]));
             }
-            out[k] = [s.heading.x, s.heading.y, s.heading_angle];
+            for (i, f) in block.zip(fields.iter()) {
+                let (k, other) = reached(i);
+                if !s.initialized {
+                    set_heading(&mut s, 0.0);
+                    start_heading(&mut s, &(quat(&base[k]) * row(&mags[k])));
+                    s.initialized = true;
+                }
+                let coefs = cache.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
+                if let Some((gain, err)) = heading_error(p, &coefs, &mut s, f) {
+                    turn_heading(&mut s, gain * err);
+                }
+                out[k] = [s.heading.x, s.heading.y, s.heading_angle];
+            }
         }
     }
 }

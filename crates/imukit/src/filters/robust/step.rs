@@ -397,6 +397,42 @@ fn rest_detection(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vecto
     s.rest = s.rest_time >= p.rest_duration_s;
 }
 
+/// What the heading loop needs of one field sample `m_e` (frame E'), computed from the sample and
+/// the gyro alone: none of it depends on the filter's state, so a pass over a record
+/// ([`super::smoother`]'s heading passes) computes a block of them apart from the loop-carried
+/// gate and heading, where the square roots, divisions and `atan2` of successive samples overlap.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Field {
+    /// `‖m_e‖`; NaN or ≤ 0 for a sample with no field, which the gate skips.
+    norm: f64,
+    /// Dip δ below the horizontal (E' vertical being z) as (sin δ, cos δ).
+    dip: Vector2<f64>,
+    /// Whether the sensor turns faster than `mag_new_field_gyro_rad_s`.
+    turning: bool,
+    /// The field's angle φ from north (+y), `atan2(m_x, m_y)`; NaN without a horizontal part.
+    phi: f64,
+}
+
+impl Field {
+    #[inline(always)]
+    pub(super) fn new(p: &RobustParams, m_e: &Vector3<f64>, gyro: &Vector3<f64>) -> Self {
+        let norm = m_e.norm();
+        // With δ, δ₀ ∈ [−π/2, π/2], |δ − δ₀| ≤ θ exactly when cos(δ − δ₀) = cos δ cos δ₀ +
+        // sin δ sin δ₀ ≥ cos θ (cos decreases on [0, π]), which needs no asin.
+        let (dip_sin, dip_cos) = dip_z_up(m_e, norm);
+        // North is +y: the heading error is the angle from it of the horizontal field turned by
+        // the heading, `Rz(ψ) m`, i.e. the field's own angle φ less ψ, wrapped; φ depends on the
+        // field alone, so its `atan2` stays off the heading's loop-carried chain.
+        let horizontal = m_e.x != 0.0 || m_e.y != 0.0;
+        Self {
+            norm,
+            dip: Vector2::new(dip_sin, dip_cos),
+            turning: gyro.norm_squared() > p.mag_new_field_gyro_rad_s * p.mag_new_field_gyro_rad_s,
+            phi: if horizontal { atan2(m_e.x, m_e.y) } else { f64::NAN },
+        }
+    }
+}
+
 /// Disturbance detection and the heading error of field `m_e` (frame E'): `Some((gain, error))`
 /// when the field is used. The reference (norm, dip) is learned from the first sample; a field
 /// that stays homogeneous while the sensor turns for `mag_new_field_s` becomes the reference.
@@ -408,22 +444,23 @@ pub(super) fn magnetometer(
     m_e: &Vector3<f64>,
     gyro: &Vector3<f64>,
 ) -> Option<(f64, f64)> {
-    let norm = m_e.norm();
+    heading_error(p, c, s, &Field::new(p, m_e, gyro))
+}
+
+/// [`magnetometer`] for a field sample already reduced to its [`Field`].
+#[inline(always)]
+pub(super) fn heading_error(p: &RobustParams, c: &Coefs, s: &mut RobustState, f: &Field) -> Option<(f64, f64)> {
+    let (norm, dip) = (f.norm, f.dip);
     if norm.is_nan() || norm <= 0.0 {
         return None;
     }
-    // Dip δ below the horizontal (E' vertical being z) as (sin δ, cos δ): with δ, δ₀ ∈ [−π/2, π/2],
-    // |δ − δ₀| ≤ θ exactly when cos(δ − δ₀) = cos δ cos δ₀ + sin δ sin δ₀ ≥ cos θ (cos decreases
-    // on [0, π]), which needs no asin.
-    let (dip_sin, dip_cos) = dip_z_up(m_e, norm);
-    let dip = Vector2::new(dip_sin, dip_cos);
     let near = |n0: f64, d0: &Vector2<f64>| (norm - n0).abs() <= p.mag_norm_fraction * n0 && dip.dot(d0) >= c.cos_dip;
     if !s.mag_ready {
         (s.mag_norm, s.mag_dip, s.mag_ready) = (norm, dip, true);
         (s.cand_norm, s.cand_dip, s.cand_time) = (norm, dip, 0.0);
     }
     if near(s.cand_norm, &s.cand_dip) {
-        if gyro.norm_squared() > p.mag_new_field_gyro_rad_s * p.mag_new_field_gyro_rad_s {
+        if f.turning {
             s.cand_time += c.dt;
         }
     } else {
@@ -445,15 +482,10 @@ pub(super) fn magnetometer(
         }
         c.mag_slow
     };
-    if m_e.x == 0.0 && m_e.y == 0.0 {
+    if f.phi.is_nan() {
         return None;
     }
-    // North is +y: the error is the angle from it of the horizontal field turned by the heading,
-    // `Rz(ψ) m`, i.e. the field's own angle φ less ψ, wrapped. φ depends on the field alone: its
-    // `atan2` (two divisions and two polynomials) runs beside the heading's loop-carried chain
-    // instead of on it (it was `atan2` of the field turned by the pair).
-    let phi = atan2(m_e.x, m_e.y);
-    Some((gain, wrap(phi - s.heading_angle)))
+    Some((gain, wrap(f.phi - s.heading_angle)))
 }
 
 /// Accumulates one sample into the bias window and, when the window is full, makes one Kalman
