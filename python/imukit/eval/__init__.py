@@ -10,6 +10,7 @@
 :func:`rpe`              relative pose error over a travelled distance, a time or a frame count
 :func:`attitude_error`   total / heading / inclination split of orientation errors (BROAD)
 :func:`truth_at_imu`     a ground truth at an IMU's stamps (the ``filter`` / ``integrate`` commands')
+:func:`time_offset`      the clock offset between an IMU and a reference, from their angular speeds
 =======================  =========================================================================
 
 Definitions, the choice of alignment and the comparison with ``evo`` are in
@@ -35,6 +36,7 @@ from imukit.eval._at_imu import truth_at_imu
 from imukit.eval._attitude import AttitudeError, AttitudeRmse, attitude_error
 from imukit.eval._rpe import RelativeError, rpe
 from imukit.eval._stats import ErrorStats
+from imukit.eval._time_offset import TimeOffset, time_offset
 
 __all__ = [
     "AbsoluteError",
@@ -44,10 +46,12 @@ __all__ = [
     "AttitudeRmse",
     "ErrorStats",
     "RelativeError",
+    "TimeOffset",
     "align",
     "ape",
     "associate",
     "attitude_error",
     "rpe",
+    "time_offset",
     "truth_at_imu",
 ]
