@@ -307,6 +307,31 @@ def test_evaluate_known_offset(tmp_path: Path) -> None:
     assert_png(png)
 
 
+def test_evaluate_finds_the_clock_offset(tmp_path: Path) -> None:
+    """An estimate whose stamps are 37 ms late (EST time t is GT time t − 0.037): ``--offset auto``
+    prints −0.037 s from the angular speeds and pairs by it (ATE rotation near 0); without it
+    the poses are compared 37 ms apart."""
+    _, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=100.0, duration=40.0)
+    late = ik.Trajectory(truth.t + 0.037, truth.position, None, truth.rotation)
+    est, gt = tmp_path / "est.txt", tmp_path / "gt.txt"
+    late.write_tum(est)
+    truth.write_tum(gt)
+    auto = cli("evaluate", est, gt, "--align", "none", "--offset", "auto", "--max-offset", "0.2")
+    found = re.search(r"clock offset from the angular speeds: ([-+0-9.e]+) s", auto.stdout)
+    assert found is not None, auto.stdout
+    assert float(found.group(1)) == pytest.approx(-0.037, abs=2e-4)
+    plain = cli("evaluate", est, gt, "--align", "none")
+    assert rmse_in_row(auto.stdout, "ATE rotation") < 0.02 * rmse_in_row(plain.stdout, "ATE rotation")
+    bad = cli("evaluate", est, gt, "--offset", "soon", code=2)
+    assert "expected a number of seconds or 'auto'" in bad.stderr
+    wide = cli("evaluate", est, gt, "--offset", "auto", "--max-offset", "100", code=1)
+    assert_one_line_error(wide, "--max-offset: expected well below the shared span")
+    still = tmp_path / "still.txt"
+    ik.Trajectory(truth.t, truth.position, None, Rotation.identity(len(truth))).write_tum(still)
+    flat = cli("evaluate", still, gt, "--offset", "auto", code=1)
+    assert_one_line_error(flat, "EST: expected a change of angular speed")
+
+
 @pytest.mark.parametrize(
     ("args", "pieces"),
     [

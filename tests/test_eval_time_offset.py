@@ -65,6 +65,15 @@ def test_bias_gaps_and_frames_do_not_move_it() -> None:
     assert got.n_samples < 5800  # the gaps' grid points are left out (30 s at 200 Hz is 6000)
 
 
+def test_an_estimated_trajectory_in_place_of_the_imu() -> None:
+    # The same turn as an estimate at 100 Hz whose stamps run 12 ms late against the reference:
+    # its speeds come from its rotations, as the reference's do.
+    t = np.arange(0.0, 30.0, 0.01)
+    late = ik.Trajectory(t + 0.012, np.zeros((len(t), 3)), None, Rotation.from_rotvec(angle(t)[:, None] * AXIS))
+    got = ik.eval.time_offset(late, reference(np.arange(0.0, 31.0, 1.0 / 120.0)), max_offset=0.1)
+    assert got.offset == pytest.approx(-0.012, abs=5e-5)
+
+
 def test_result_is_data_that_pickles() -> None:
     got = ik.eval.time_offset(imu(0.0037), reference(np.arange(0.0, 31.0, 1.0 / 120.0)), max_offset=0.1)
     assert pickle.loads(pickle.dumps(got)) == got

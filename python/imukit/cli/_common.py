@@ -84,6 +84,7 @@ OPTION_OF = {
     "unit": "--delta-unit",
     "max_dt": "--max-dt",
     "offset": "--offset",
+    "max_offset": "--max-offset",
     "align": "--align",
     "window": "--window",
     "max_gap": "--max-gap",

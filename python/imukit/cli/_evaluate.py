@@ -8,6 +8,7 @@ from typing import Any
 
 from rich.table import Table
 
+from imukit._errors import ParameterError
 from imukit.cli._common import (
     add_groundtruth_options,
     add_max_dt_option,
@@ -20,7 +21,7 @@ from imukit.cli._common import (
     scored,
     wrote,
 )
-from imukit.eval import ErrorStats, ape, rpe
+from imukit.eval import ErrorStats, ape, rpe, time_offset
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
 
@@ -63,15 +64,37 @@ def add(commands: Any) -> argparse.ArgumentParser:
     add_max_dt_option(p)
     p.add_argument(
         "--offset",
-        type=float,
+        type=_offset,
         default=0.0,
         metavar="S",
-        help="clock offset [s] added to EST's stamps before pairing (EST time t is GT time t + S; default 0)",
+        help="clock offset [s] added to EST's stamps before pairing (EST time t is GT time t + S; default 0), "
+        "or 'auto': estimated from the two trajectories' angular speeds (imukit.eval.time_offset, within "
+        "--max-offset) and printed",
+    )
+    p.add_argument(
+        "--max-offset",
+        type=positive,
+        default=0.5,
+        metavar="S",
+        help="largest clock offset [s] --offset auto searches, either sign (default: %(default)s)",
     )
     add_plot_option(p, "a top view of the aligned estimate and the ground truth")
     add_groundtruth_options(p, file_option=False)
     p.set_defaults(run=run)
     return p
+
+
+def _offset(text: str) -> float | str:
+    """A number of seconds, or ``auto``."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds or 'auto', got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds or 'auto', got {text!r}")
+    return value
 
 
 def _row(table: Table, name: str, stats: ErrorStats, unit: str, scale: float) -> None:
@@ -83,6 +106,18 @@ def run(args: argparse.Namespace) -> int:
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot", args)
     estimate = read_trajectory(args.estimate, skip_bad_lines=args.skip_bad_lines)
     truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=groundtruth_csv(args))
+    if args.offset == "auto":
+        try:
+            found = time_offset(estimate, truth, max_offset=args.max_offset)
+        except ParameterError as exc:  # its first argument is EST here
+            argument = "estimate" if exc.argument == "imu" else exc.argument
+            raise ParameterError(exc.message, argument=argument) from exc
+        args.offset = found.offset
+        out.print(
+            f"clock offset from the angular speeds: {found.offset:+.6g} s (EST time t is GT time t + offset; "
+            f"correlation {found.correlation:.4f} over {found.n_samples} samples)",
+            markup=False,
+        )
     absolute = ape(estimate, truth, align=args.align, max_dt=args.max_dt, offset=args.offset)
     table = Table(title=f"{args.estimate} against {args.groundtruth} (alignment: {args.align})")
     for column in ("error", "unit", "RMSE", "mean", "median", "std", "min", "max", "samples"):
