@@ -111,6 +111,25 @@ def test_constant_speed_has_no_offset_to_find() -> None:
     assert info.value.argument == "imu"
 
 
+def test_the_simulators_imu_has_no_offset_against_its_truth() -> None:
+    # imukit.sim stamps each gyro sample with the time of the true rate it holds: 60 s of a noisy
+    # figure eight give 0.1 ms (1% of its 10 ms step).
+    noise = ik.ImuNoise(1.7e-4, 2.0e-3, 1.9e-5, 3.0e-3)
+    gyro, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=100.0, duration=60.0, noise=noise, seed=0)
+    assert abs(ik.eval.time_offset(gyro, truth, max_offset=0.05).offset) < 2e-4
+
+
+def test_a_motion_that_does_not_fix_the_offset_is_refused() -> None:
+    # 3 s of a figure eight (noisy gyro) against its own truth: its speed changes slowly and
+    # smoothly, and every lag within ±50 ms correlates within the peak's mismatch (1 − r = 1.5e-4);
+    # the peak's place (−38 ms) was noise.
+    noise = ik.ImuNoise(1.7e-4, 2.0e-3, 1.9e-5, 3.0e-3)
+    gyro, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=100.0, duration=3.0, noise=noise, seed=1)
+    with pytest.raises(ik.ParameterError, match="does not fix the offset") as info:
+        ik.eval.time_offset(gyro, truth, max_offset=0.05)
+    assert info.value.argument == "imu"
+
+
 def test_an_offset_beyond_the_window_is_refused_not_clipped() -> None:
     # 0.3 s of lag searched within ±0.1 s: the peak sits on the window's edge.
     with pytest.raises(ik.ParameterError, match="edge") as info:

@@ -1230,6 +1230,52 @@ if hasattr(ik.eval, "ape"):  # imukit.eval's trajectory metrics (issue 8)
         return values, call
 
 
+if hasattr(ik.eval, "time_offset"):
+
+    def _turn(t: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, Rotation]:
+        """A turn about ``axis`` at a varying rate: the rates and the rotations at ``t``."""
+        rate = 1.5 + np.sin(1.3 * t) + 0.5 * np.sin(3.7 * t + 0.4)
+        angle = 1.5 * t - np.cos(1.3 * t) / 1.3 - 0.5 * np.cos(3.7 * t + 0.4) / 3.7
+        return rate[:, None] * axis, Rotation.from_rotvec(angle[:, None] * axis)
+
+    # A corrupted speed (one huge sample) may put the correlation's peak on the window's edge,
+    # which is reported on max_offset; a broken IMU may also be reported as the motion ("imu").
+    @entry(
+        "eval.time_offset",
+        ("eval.time_offset",),
+        {
+            "t": Arg("times", names=("t", "gyro", "accel", "imu", "reference", "max_offset")),
+            "gyro": Arg("array", names=("gyro", "imu", "max_offset")),
+            "accel": Arg("array", names=("accel", "imu")),
+            "reference_t": Arg("times", names=("t", "reference", "position", "rotation", "imu", "max_offset")),
+            "reference_position": Arg("array", names=("position", "reference")),
+            "reference_rotation": Arg("rotations", names=("rotation", "reference")),
+            "max_offset": Arg("scalar", names=("max_offset", "imu")),
+        },
+    )
+    def _time_offset(rng: np.random.Generator) -> Any:
+        axis = Rotation.random(rng=rng).apply([0.0, 0.0, 1.0])
+        lag = float(rng.uniform(-0.02, 0.02))
+        t = 0.5 + np.arange(int(rng.integers(500, 700))) * 0.005
+        t_ref = np.arange(0.0, t[-1] + 0.5, 1.0 / 120.0)
+        values = {
+            "t": t,
+            "gyro": _turn(t - lag, axis)[0],
+            "accel": np.tile([0.0, 0.0, 9.81], (len(t), 1)),
+            "reference_t": t_ref,
+            "reference_position": np.zeros((len(t_ref), 3)),
+            "reference_rotation": _turn(t_ref, axis)[1],
+            "max_offset": 0.08,
+        }
+
+        def call(v: dict[str, Any]) -> Any:
+            imu = ik.ImuData(v["t"], v["gyro"], v["accel"])
+            ref = _traj_of(v, "reference_")
+            return ik.eval.time_offset(imu, ref, max_offset=v["max_offset"])
+
+        return values, call
+
+
 # ----------------------------------------------------------------------------- the tests
 
 

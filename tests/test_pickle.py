@@ -65,12 +65,12 @@ NOT_DATA: dict[str, str] = {
 NOISE = ik.ImuNoise(1.7e-4, 2.0e-3, 1.9e-5, 3.0e-3)
 
 
-def _sim() -> tuple[ik.ImuData, ik.Trajectory]:
+def _sim(duration: float = 3.0) -> tuple[ik.ImuData, ik.Trajectory]:
     errors = ik.sim.SensorErrors(turn_on_sigma=1e-3, range=30.0, resolution=1e-4)
     return ik.sim.simulate(
         ik.sim.FigureEight(),
         rate=100.0,
-        duration=3.0,
+        duration=duration,
         noise=NOISE,
         bias=ik.ImuBias([1e-3, -2e-3, 3e-3], [0.05, -0.02, 0.01]),
         gyro_errors=errors,
@@ -227,6 +227,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "ErrorStats": lambda: ik.eval.ape(*_estimate()).translation_stats,
     "AttitudeError": lambda: ik.eval.attitude_error(*(t.rotation for t in _estimate()), align_heading=True),
     "AttitudeRmse": lambda: ik.eval.attitude_error(*(t.rotation for t in _estimate())).rmse(),
+    "TimeOffset": lambda: ik.eval.time_offset(*_sim(duration=30.0), max_offset=0.05),
     # imukit.io
     "ReadReport": _report,
     "SkippedLine": lambda: _report().skipped[0],

@@ -21,7 +21,6 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import signal
 
 from imukit._arrays import FloatArray
 from imukit._errors import ParameterError
@@ -67,9 +66,11 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
         has no offset to find.
 
     Raises :class:`imukit.ParameterError` naming the argument: no overlap of the two spans, no
-    change of angular speed (nothing to correlate), a ``max_offset`` that is not a positive number
-    or not well below the shared span, or a correlation whose peak lies on the edge of the searched
-    window (the offset may be larger: widen ``max_offset``).
+    change of angular speed (nothing to correlate), a correlation that stays within the peak's own
+    mismatch ``1 − r`` of it out to the window's edge (``imu``: the motion does not fix the offset),
+    a ``max_offset`` that is not a positive number or not well below the shared span, or a
+    correlation whose peak lies on the edge of the searched window (the offset may be larger: widen
+    ``max_offset``).
     """
     if not isinstance(imu, (ImuData, Trajectory)):
         raise ParameterError(f"expected an imukit ImuData or Trajectory, got {type(imu).__name__}", argument="imu")
@@ -78,12 +79,15 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
     for name, x in (("imu", imu), ("reference", reference)):
         if len(x) < 3:
             raise ParameterError(f"expected at least 3 samples, got {len(x)}", argument=name)
+    from scipy import signal  # not at import: scipy.signal loads scipy.stats and more (test_import.py)
+
     if isinstance(imu, ImuData):
-        t_imu = np.asarray(imu.t, dtype=float)
-        speed_imu, in_imu = np.linalg.norm(imu.gyro, axis=1), np.ones(len(t_imu), dtype=bool)
+        t_imu, g = np.asarray(imu.t, dtype=float), imu.gyro
+        # hypot: a finite 1e300 rad/s keeps a finite speed (its square would not).
+        speed_imu, in_imu = np.hypot(np.hypot(g[:, 0], g[:, 1]), g[:, 2]), np.ones(len(t_imu), dtype=bool)
     else:
-        t_imu, speed_imu, in_imu = _speeds(imu)
-    t_ref, speed_ref, in_ref = _speeds(reference)
+        t_imu, speed_imu, in_imu = _speeds(imu, "imu")
+    t_ref, speed_ref, in_ref = _speeds(reference, "reference")
     step = float(np.median(np.diff(np.asarray(imu.t, dtype=float))))
     start, end = max(t_imu[0], t_ref[0]), min(t_imu[-1], t_ref[-1])
     if not end > start:
@@ -108,7 +112,8 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
             raise ParameterError(
                 "expected a change of angular speed over the shared span: nothing to correlate", argument=name
             )
-    a, b = a * ma, b * mb
+    # Pearson's correlation does not depend on the scale; at most 1 in size, no product overflows.
+    a, b = a * ma / np.max(np.abs(a)), b * mb / np.max(np.abs(b))
 
     def corr(x: FloatArray, y: FloatArray) -> FloatArray:
         return np.asarray(signal.correlate(x, y, mode="full", method="fft"), dtype=float)
@@ -129,18 +134,35 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
             f"be larger than {max_offset:g} s",
             argument="max_offset",
         )
+    # Lags whose correlation is within the peak's own mismatch (1 − r) of it are not told apart:
+    # when they reach the window's edge, the motion does not fix the offset (a slow, smooth change
+    # of speed correlates as well at any lag; a 3 s figure eight's did, off by 38 ms).
+    close = c >= c[i] - max(1.0 - c[i], 1e-12)
+    if close[: i + 1].all() or close[i:].all():
+        raise ParameterError(
+            f"the angular speeds correlate within their own mismatch (1 − r = {1.0 - c[i]:.2g}) out to the "
+            f"window's edge (±{max_offset:g} s): the motion does not fix the offset (a longer record, or one "
+            "whose rotation rate changes more within the window, does)",
+            argument="imu",
+        )
     y0, y1, y2 = c[i - 1], c[i], c[i + 1]
     curvature = y0 - 2.0 * y1 + y2
     frac = 0.5 * (y0 - y2) / curvature if curvature < 0.0 else 0.0
     return TimeOffset(float((lag[i] + frac) * step), float(y1), step, int((ma * mb).sum()))
 
 
-def _speeds(x: Trajectory) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+def _speeds(x: Trajectory, name: str) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     """A trajectory's angular speed ``‖Log(R_jᵀ R_j+1)‖ / Δt`` at each interval's midpoint, and
-    whether the interval is no gap (at most ``_GAP_STEPS`` median steps)."""
+    whether the interval is no gap (at most ``_GAP_STEPS`` median steps); ``name`` the argument."""
     t = np.asarray(x.t, dtype=float)
     dt = np.diff(t)
-    speed = (x.rotation[:-1].inv() * x.rotation[1:]).magnitude() / dt
+    with np.errstate(over="ignore"):
+        speed = (x.rotation[:-1].inv() * x.rotation[1:]).magnitude() / dt
+    if not np.isfinite(speed).all():
+        k = int(np.argmax(~np.isfinite(speed)))
+        raise ParameterError(
+            f"a turn over a step of {dt[k]:g} s at row {k} gives no finite angular speed", argument=name, index=k
+        )
     return t[:-1] + 0.5 * dt, speed, dt <= _GAP_STEPS * np.median(dt)
 
 
