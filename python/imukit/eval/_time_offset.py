@@ -4,12 +4,14 @@
 Both sensors see the same rotation, so the IMU's angular speed ``‖ω(t)‖`` and the reference's,
 ``‖Log(R_jᵀ R_j+1)‖ / (t_j+1 − t_j)`` at the interval's midpoint, are the same signal on two clocks.
 The magnitude does not depend on the frames, so neither the IMU-to-body rotation nor the
-reference's world needs to be known (the approach of hand-eye and camera–IMU calibration tools
-that start from rates: Furgale, Rehder & Siegwart, IROS 2013, estimate the offset in the full
-model; the correlation of rate magnitudes is its usual initial guess). Both speeds are
-interpolated onto one grid at the IMU's median step over the span they share, their means
-removed, and cross-correlated (``scipy.signal.correlate``) over lags within ``±max_offset``; the
-peak's position is refined by the parabola through it and its two neighbours.
+reference's world needs to be known (Kalibr, Furgale, Rehder & Siegwart, IROS 2013, estimates
+the offset within its full calibration model and starts it from such a correlation of rate norms).
+Both speeds are interpolated onto one grid at the IMU's median step over the span they share;
+each lag within ``±max_offset`` gets Pearson's correlation over the pairs that have both speeds
+(``scipy.signal.correlate`` of the signals, their squares and their masks; grid points in a gap
+of either record take no part); the peak's position is refined by the parabola through it and
+its two neighbours. A motion whose correlation stays within the peak's own mismatch ``1 − r`` out
+to the window's edge does not fix the offset and is refused rather than answered.
 
 Convention, as :func:`imukit.eval.associate`'s ``offset``: IMU time ``t`` is reference time
 ``t + offset``. An IMU whose samples lag the reference by 4 ms gives ``offset = −0.004``.
@@ -36,7 +38,7 @@ class TimeOffset(NamedTuple):
     """The result of :func:`time_offset`."""
 
     offset: float  # [s]: IMU time t is reference time t + offset
-    correlation: float  # normalised cross-correlation of the two angular speeds at the peak (≤ 1)
+    correlation: float  # Pearson's correlation of the two angular speeds at the peak (≤ 1)
     step: float  # [s]: the grid step, the IMU's median sample interval
     n_samples: int  # grid samples the correlation used
 
