@@ -326,6 +326,8 @@ def test_evaluate_finds_the_clock_offset(tmp_path: Path) -> None:
     assert "expected a number of seconds or 'auto'" in bad.stderr
     wide = cli("evaluate", est, gt, "--offset", "auto", "--max-offset", "100", code=1)
     assert_one_line_error(wide, "--max-offset: expected well below the shared span")
+    given = cli("evaluate", est, gt, "--offset", "0.01", "--max-offset", "0.2", code=1)
+    assert_one_line_error(given, "--max-offset: only with --offset auto")
     still = tmp_path / "still.txt"
     ik.Trajectory(truth.t, truth.position, None, Rotation.identity(len(truth))).write_tum(still)
     flat = cli("evaluate", still, gt, "--offset", "auto", code=1)

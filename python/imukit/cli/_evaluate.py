@@ -10,6 +10,7 @@ from rich.table import Table
 
 from imukit._errors import ParameterError
 from imukit.cli._common import (
+    CliError,
     add_groundtruth_options,
     add_max_dt_option,
     add_plot_option,
@@ -24,6 +25,7 @@ from imukit.cli._common import (
 from imukit.eval import ErrorStats, ape, rpe, time_offset
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
+MAX_OFFSET_S = 0.5  # --offset auto's window without --max-offset
 
 DESCRIPTION = """\
 Score the trajectory EST against the ground truth GT: the absolute trajectory error (ATE / evo's
@@ -74,9 +76,9 @@ def add(commands: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--max-offset",
         type=positive,
-        default=0.5,
+        default=None,
         metavar="S",
-        help="largest clock offset [s] --offset auto searches, either sign (default: %(default)s)",
+        help=f"largest clock offset [s] --offset auto searches, either sign (default: {MAX_OFFSET_S})",
     )
     add_plot_option(p, "a top view of the aligned estimate and the ground truth")
     add_groundtruth_options(p, file_option=False)
@@ -106,9 +108,11 @@ def run(args: argparse.Namespace) -> int:
     png = None if args.plot is None else output_path(args.plot, (".png",), "--plot", args)
     estimate = read_trajectory(args.estimate, skip_bad_lines=args.skip_bad_lines)
     truth = read_trajectory(args.groundtruth, skip_bad_lines=args.skip_bad_lines, csv=groundtruth_csv(args))
+    if args.max_offset is not None and args.offset != "auto":
+        raise CliError("only with --offset auto (a given offset is not searched)", argument="--max-offset")
     if args.offset == "auto":
         try:
-            found = time_offset(estimate, truth, max_offset=args.max_offset)
+            found = time_offset(estimate, truth, max_offset=args.max_offset or MAX_OFFSET_S)
         except ParameterError as exc:  # its first argument is EST here
             argument = "estimate" if exc.argument == "imu" else exc.argument
             raise ParameterError(exc.message, argument=argument) from exc

@@ -94,7 +94,7 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
     start, end = max(t_imu[0], t_ref[0]), min(t_imu[-1], t_ref[-1])
     if not end > start:
         raise ParameterError(
-            f"covers {reference.t[0]:g}–{reference.t[-1]:g} s, the IMU {imu.t[0]:g}–{imu.t[-1]:g} s: no shared span",
+            f"covers {reference.t[0]:g}–{reference.t[-1]:g} s, imu {imu.t[0]:g}–{imu.t[-1]:g} s: no shared span",
             argument="reference",
         )
     grid = np.arange(start, end, step)
