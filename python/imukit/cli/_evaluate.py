@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 from typing import Any
 
@@ -25,7 +26,8 @@ from imukit.cli._common import (
 from imukit.eval import ErrorStats, ape, rpe, time_offset
 
 ALIGNMENTS = ("se3", "sim3", "yaw", "position", "none")
-MAX_OFFSET_S = 0.5  # --offset auto's window without --max-offset
+# --offset auto's window without --max-offset: the library's default, read from it (one place).
+MAX_OFFSET_S = inspect.signature(time_offset).parameters["max_offset"].default
 
 DESCRIPTION = """\
 Score the trajectory EST against the ground truth GT: the absolute trajectory error (ATE / evo's
@@ -112,7 +114,9 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("only with --offset auto (a given offset is not searched)", argument="--max-offset")
     if args.offset == "auto":
         try:
-            found = time_offset(estimate, truth, max_offset=args.max_offset or MAX_OFFSET_S)
+            found = time_offset(
+                estimate, truth, max_offset=MAX_OFFSET_S if args.max_offset is None else args.max_offset
+            )
         except ParameterError as exc:  # its first argument is EST here
             argument = "estimate" if exc.argument == "imu" else exc.argument
             raise ParameterError(exc.message, argument=argument) from exc
