@@ -28,10 +28,8 @@ from imukit._arrays import FloatArray
 from imukit._errors import ParameterError
 from imukit.eval._checks import check_trajectory, finite_float
 from imukit.imu import ImuData
+from imukit.io._gaps import reference_max_dt
 from imukit.state import Trajectory
-
-# A reference interval longer than this many median steps is a gap: no speed is taken across it.
-_GAP_STEPS = 3.0
 
 
 class TimeOffset(NamedTuple):
@@ -155,7 +153,8 @@ def time_offset(imu: ImuData | Trajectory, reference: Trajectory, *, max_offset:
 
 def _speeds(x: Trajectory, name: str) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     """A trajectory's angular speed ``‖Log(R_jᵀ R_j+1)‖ / Δt`` at each interval's midpoint, and
-    whether the interval is no gap (at most ``_GAP_STEPS`` median steps); ``name`` the argument."""
+    whether the interval is no gap (not longer than :func:`imukit.io.reference_max_dt`, the step
+    ``associate`` interpolates across); ``name`` the argument."""
     t = np.asarray(x.t, dtype=float)
     dt = np.diff(t)
     with np.errstate(over="ignore"):
@@ -165,7 +164,7 @@ def _speeds(x: Trajectory, name: str) -> tuple[FloatArray, FloatArray, NDArray[n
         raise ParameterError(
             f"a turn over a step of {dt[k]:g} s at row {k} gives no finite angular speed", argument=name, index=k
         )
-    return t[:-1] + 0.5 * dt, speed, dt <= _GAP_STEPS * np.median(dt)
+    return t[:-1] + 0.5 * dt, speed, dt <= reference_max_dt(x)
 
 
 def _on_grid(
