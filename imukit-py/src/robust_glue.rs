@@ -377,7 +377,9 @@ impl<'a> Record<'a> {
                 mag_disturbed: &mut out.mag_disturbed[first..end],
             };
             let resumed = continued || first > 0;
-            py.detach(|| f.run_part(s, &inputs, first, resumed, &mut part_out))
+            // A 9D part runs its heading half on a second thread of the process's pool
+            // (`set_num_threads(1)`: on this one).
+            py.detach(|| crate::threads::run_in_pool(None, || f.run_part(s, &inputs, first, resumed, &mut part_out)))?
                 .map_err(|e| to_py(py, "imu / params", e))?;
             py.check_signals()?;
         }

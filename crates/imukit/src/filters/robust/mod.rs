@@ -26,6 +26,7 @@
 //! [`super::Inputs`], [`super::Fields`] and [`super::check`]).
 
 mod params;
+mod pipeline;
 mod smoother;
 mod state;
 mod step;
@@ -92,17 +93,6 @@ impl Outputs<'_> {
                 mag_disturbed: mag_disturbed_,
             },
         )
-    }
-
-    #[inline(always)]
-    fn write<const ATTITUDE: bool>(&mut self, k: usize, s: &RobustState, sigma: &mut Sigma) {
-        if ATTITUDE {
-            self.q[k] = s.q.coords.into();
-        }
-        self.bias[k] = s.bias.into();
-        self.bias_sigma[k] = sigma.of(&s.bias_cov);
-        self.rest[k] = s.rest;
-        self.mag_disturbed[k] = s.mag_disturbed;
     }
 }
 
@@ -304,25 +294,26 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
+        if attitude && n >= pipeline::FROM && rayon::current_num_threads() > 1 {
+            return pipeline::run(self, state, inputs, (first, continued), out);
+        }
         run_any(self, state, inputs, (first, continued), attitude, out)
     }
 
-    /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`, the attitude written
-    /// where `ATTITUDE`; `start` is `(first, continued)`.
+    /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`, each checked sample
+    /// given to `stepper`; `start` is `(first, continued)`.
     #[inline(always)]
-    fn run_loop<const NINE: bool, const ATTITUDE: bool>(
+    fn run_loop<const NINE: bool, S: Stepper>(
         &self,
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         mags: &[[f64; 3]],
         (first, continued): (usize, bool),
-        out: &mut Outputs<'_>,
+        stepper: &mut S,
     ) -> Result<()> {
         let p = &self.params;
         let mut cache = CoefsCache::new(Coefs::new(p, 0.0));
         let mut previous = state.time;
-        // Bits of 0.0: the cache starts valid for a zero diagonal, whose roots are 0.0.
-        let mut sigma = Sigma::default();
         for (k, &t) in inputs.t.iter().enumerate() {
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
@@ -342,15 +333,93 @@ impl Robust {
             };
             if dt > 0.0 || !state.initialized {
                 let coefs = cache.for_dt(p, dt);
-                step::step(p, self.world, &coefs, state, &gyro, &accel, mag.as_ref());
+                stepper.step(k, &coefs, state, &gyro, &accel, mag.as_ref());
                 check_overflow(state, first + k)?;
+            } else {
+                stepper.skip(k);
             }
             state.time = t;
             previous = t;
-            out.write::<ATTITUDE>(k, state, &mut sigma);
+            stepper.write(k, state);
         }
         Ok(())
     }
+}
+
+/// What a run does with each checked sample `k`: the whole step on this thread ([`Whole`]), or
+/// its attitude half with the heading half sent to another thread ([`pipeline`]).
+trait Stepper {
+    /// Steps `s` over sample `k` with coefficients `c` (the step is `c.dt`).
+    fn step(
+        &mut self,
+        k: usize,
+        c: &Coefs,
+        s: &mut RobustState,
+        gyro: &Vector3<f64>,
+        accel: &Vector3<f64>,
+        mag: Option<&Vector3<f64>>,
+    );
+    /// Sample `k` is a step of length 0 (the first of a run on an initialised state).
+    fn skip(&mut self, k: usize);
+    /// Writes row `k` of the outputs from `s`, after the sample.
+    fn write(&mut self, k: usize, s: &RobustState);
+}
+
+/// Every step whole, on the calling thread; the attitude written where `ATTITUDE`.
+struct Whole<'r, 'o, const ATTITUDE: bool> {
+    filter: &'r Robust,
+    out: &'r mut Outputs<'o>,
+    sigma: Sigma,
+}
+
+impl<'r, 'o, const ATTITUDE: bool> Whole<'r, 'o, ATTITUDE> {
+    fn new(filter: &'r Robust, out: &'r mut Outputs<'o>) -> Self {
+        // Bits of 0.0: the cache starts valid for a zero diagonal, whose roots are 0.0.
+        let sigma = Sigma::default();
+        Self { filter, out, sigma }
+    }
+}
+
+impl<const ATTITUDE: bool> Stepper for Whole<'_, '_, ATTITUDE> {
+    #[inline(always)]
+    fn step(
+        &mut self,
+        _: usize,
+        c: &Coefs,
+        s: &mut RobustState,
+        gyro: &Vector3<f64>,
+        accel: &Vector3<f64>,
+        mag: Option<&Vector3<f64>>,
+    ) {
+        step::step(&self.filter.params, self.filter.world, c, s, gyro, accel, mag);
+    }
+
+    #[inline(always)]
+    fn skip(&mut self, _: usize) {}
+
+    #[inline(always)]
+    fn write(&mut self, k: usize, s: &RobustState) {
+        if ATTITUDE {
+            self.out.q[k] = s.q.coords.into();
+        }
+        self.out.mag_disturbed[k] = s.mag_disturbed;
+        write_attitude_half(self.out.bias, self.out.bias_sigma, self.out.rest, &mut self.sigma, k, s);
+    }
+}
+
+/// Row `k` of the outputs the attitude half of a step sets: bias, its σ and rest.
+#[inline(always)]
+fn write_attitude_half(
+    bias: &mut [[f64; 3]],
+    bias_sigma: &mut [[f64; 3]],
+    rest: &mut [bool],
+    sigma: &mut Sigma,
+    k: usize,
+    s: &RobustState,
+) {
+    bias[k] = s.bias.into();
+    bias_sigma[k] = sigma.of(&s.bias_cov);
+    rest[k] = s.rest;
 }
 
 crate::simd_dispatch! {
@@ -365,10 +434,10 @@ crate::simd_dispatch! {
         out: &mut Outputs<'_>,
     ) -> Result<()> {
         match (inputs.mag, attitude) {
-            (Some(m), true) => f.run_loop::<true, true>(state, inputs, m, start, out),
-            (Some(m), false) => f.run_loop::<true, false>(state, inputs, m, start, out),
-            (None, true) => f.run_loop::<false, true>(state, inputs, &[], start, out),
-            (None, false) => f.run_loop::<false, false>(state, inputs, &[], start, out),
+            (Some(m), true) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<true>::new(f, out)),
+            (Some(m), false) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<false>::new(f, out)),
+            (None, true) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<true>::new(f, out)),
+            (None, false) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<false>::new(f, out)),
         }
     }
 }

@@ -20,7 +20,8 @@ use crate::quat::{exp_step, multiply};
 /// keys' ([`CoefsCache`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Coefs {
-    dt: f64,
+    /// The step \[s\], exactly (the others are computed from its key).
+    pub(super) dt: f64,
     key: f64,
     // Butterworth, direct form II transposed: y = b0 x + s1; s1 ← b1 x − a1 y + s2; s2 ← b2 x − a2 y.
     b0: f64,
@@ -277,6 +278,11 @@ pub(super) fn initialise(
 
 /// One sample on validated input with coefficients `c` for its step `c.dt` (0 on the first
 /// sample of an uninitialised state, which only initialises). Updates `s.q` (in `world`).
+///
+/// A step is an attitude half ([`attitude_half`], [`window_due`], [`update_bias`]) and a window
+/// half ([`window_half`]) that write disjoint fields of `s`; the attitude half reads the window
+/// half's sums only where a bias window ends. [`super::pipeline`] runs the halves on two threads
+/// on exactly these functions.
 #[inline(always)]
 pub(super) fn step(
     p: &RobustParams,
@@ -287,16 +293,32 @@ pub(super) fn step(
     accel: &Vector3<f64>,
     mag: Option<&Vector3<f64>>,
 ) {
-    let dt = c.dt;
     if !s.initialized {
         initialise(p, s, None, gyro, accel);
         if let Some(m) = mag {
             start_heading(s, &(s.q_gyro * m));
         }
     }
-    if dt > 0.0 {
+    let (corr, q6) = attitude_half(p, c, s, gyro, accel);
+    window_half(p, world, c, s, (&q6, &corr), mag, gyro);
+    if let Some(update) = window_due(p, c, s, gyro) {
+        update_bias(p, s, update);
+    }
+}
+
+/// Rest detection, the gyro strapdown and the inclination loop of one sample: returns the
+/// inclination correction (x, y \[rad\]) and the attitude up to heading `q6`.
+#[inline(always)]
+pub(super) fn attitude_half(
+    p: &RobustParams,
+    c: &Coefs,
+    s: &mut RobustState,
+    gyro: &Vector3<f64>,
+    accel: &Vector3<f64>,
+) -> (Vector2<f64>, UnitQuaternion<f64>) {
+    if c.dt > 0.0 {
         rest_detection(p, c, s, gyro, accel);
-        s.q_gyro = compose(&s.q_gyro, &exp_step(&((gyro - s.bias) * dt)));
+        s.q_gyro = compose(&s.q_gyro, &exp_step(&((gyro - s.bias) * c.dt)));
     }
     let a_i = s.q_gyro * accel;
     if !s.lp_ready {
@@ -305,38 +327,56 @@ pub(super) fn step(
         s.lp_s1 = a_i * (c.b1 - c.a1) + s.lp_s2;
         s.lp_ready = true;
     }
-    let mut corr = inclination(c, s, &a_i);
-    let q6 = compose(&s.q_incl, &s.q_gyro);
-    let r6 = *q6.to_rotation_matrix().matrix();
+    let corr = inclination(c, s, &a_i);
+    (corr, compose(&s.q_incl, &s.q_gyro))
+}
 
-    let mut heading_gain = None;
+/// The window half of a step, from the attitude half's `q6` and inclination correction `corr`:
+/// (9D) the field's gate and heading loop, the bias window's sums, and the output attitude `s.q`.
+/// It reads and writes only the fields [`super::pipeline`] gives its second thread, and the bias
+/// `s.bias`, which only [`update_bias`] changes.
+#[inline(always)]
+pub(super) fn window_half(
+    p: &RobustParams,
+    world: World,
+    c: &Coefs,
+    s: &mut RobustState,
+    (q6, corr): (&UnitQuaternion<f64>, &Vector2<f64>),
+    mag: Option<&Vector3<f64>>,
+    gyro: &Vector3<f64>,
+) {
+    let r6 = *q6.to_rotation_matrix().matrix();
+    let rb = r6 * s.bias;
+    let mut correction = None;
     if let Some(m) = mag {
         if let Some((gain, err)) = magnetometer(p, c, s, &(r6 * m), gyro) {
             turn_heading(s, gain * err);
-            corr.z = gain * err;
-            heading_gain = Some(gain);
+            correction = Some((gain, gain * err));
         }
     }
-    if dt > 0.0 {
-        bias_window(p, c, s, gyro, &corr, &r6, mag.is_some(), heading_gain);
+    if c.dt > 0.0 {
+        window_sums(c, s, corr, &r6, &rb);
+        if mag.is_some() {
+            heading_window(c, s, &r6, rb.z, correction);
+        }
     }
-    let q = if mag.is_some() { yawed(&s.heading, &q6) } else { q6 };
+    let q = if mag.is_some() { yawed(&s.heading, q6) } else { *q6 };
     s.q = to_world(world, &q);
 }
 
 /// Feeds `a_i` (specific force in `I`) to the low pass and rotates `E'` so that its output points
-/// up; returns the correction's x, y \[rad\] (z 0).
+/// up; returns the correction's x, y \[rad\].
 #[inline(always)]
-fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector3<f64> {
+fn inclination(c: &Coefs, s: &mut RobustState, a_i: &Vector3<f64>) -> Vector2<f64> {
     let a_f = c.butter(*a_i, &mut s.lp_s1, &mut s.lp_s2);
     // ‖a_f‖ rather than the rotated vector's (equal to rounding): the square root and the
     // division by it depend on the input alone and leave `q_incl`'s loop-carried chain.
     match to_up_norm(&(s.q_incl * a_f), a_f.norm()) {
         Some(qc) => {
             s.q_incl = compose(&qc, &s.q_incl);
-            Vector3::new(2.0 * qc.i, 2.0 * qc.j, 0.0)
+            Vector2::new(2.0 * qc.i, 2.0 * qc.j)
         }
-        None => Vector3::zeros(),
+        None => Vector2::zeros(),
     }
 }
 
@@ -513,53 +553,51 @@ pub(super) fn heading_error(p: &RobustParams, c: &Coefs, s: &mut RobustState, f:
     Some((gain, wrap(f.phi - s.heading_angle)))
 }
 
-/// Accumulates one sample into the bias window and, when the window is full, makes one Kalman
-/// update of the bias.
+/// The bias window's sums of one sample (the inclination loop's; [`heading_window`] adds the
+/// heading loop's), from which [`update_bias`] measures the bias in motion.
 ///
 /// In motion (derivation in `docs/filters_robust.md`): with `ε = b − b̂` the estimate turns at
 /// `R ε` in the world; the inclination loop answers with corrections `c = −L∗(R ε)` (`L` the
 /// Butterworth, for small angles, x and y) and the heading loop with `c_z = −F∗(R ε)_z` (`F` its
 /// first-order loop, while the field is used). Running the same loops on `R` and on `R b̂` gives
 /// `S = Σ L∗R dt` and `O = Σ L∗(R b̂) dt`, and `C = Σ c = −S b + O`: a measurement of `b` itself
-/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length).
-///
-/// At rest: the mean gyro over each rest segment (`H = I`), updated every `bias_rest_window_s` and
-/// when the rest ends, its variance `σ_rest² / T` (white noise averaged over `T` seconds);
-/// a rest update restarts the motion window (no sample counts twice).
+/// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length). `r6` is this
+/// sample's `R_E'b`, `rb = r6 b̂`.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)] // one sample's pieces, all needed
-fn bias_window(
-    p: &RobustParams,
-    c: &Coefs,
-    s: &mut RobustState,
-    gyro: &Vector3<f64>,
-    corr: &Vector3<f64>,
-    r6: &Matrix3<f64>,
-    nine: bool,
-    heading_gain: Option<f64>,
-) {
+fn window_sums(c: &Coefs, s: &mut RobustState, corr: &Vector2<f64>, r6: &Matrix3<f64>, rb: &Vector3<f64>) {
     let dt = c.dt;
-    let rb = r6 * s.bias;
     let rot_xy = r6.fixed_rows::<2>(0).into_owned();
     let lr = c.butter(rot_xy, &mut s.loop_rot1, &mut s.loop_rot2);
     let lb = c.butter(Vector2::new(rb.x, rb.y), &mut s.loop_bias1, &mut s.loop_bias2);
     s.win_rot.fixed_rows_mut::<2>(0).add_assign(lr * dt);
     s.win_off.x += lb.x * dt;
     s.win_off.y += lb.y * dt;
-    if nine {
-        s.loop_head_rot += r6.row(2).transpose() * dt;
-        s.loop_head_bias += rb.z * dt;
-        if let Some(k) = heading_gain {
-            let (out_r, out_b) = (s.loop_head_rot * k, s.loop_head_bias * k);
-            s.loop_head_rot -= out_r;
-            s.loop_head_bias -= out_b;
-            s.win_rot.row_mut(2).add_assign(out_r.transpose());
-            s.win_off.z += out_b;
-            s.win_mag_time += dt;
-        }
+    s.win_corr.x += corr.x;
+    s.win_corr.y += corr.y;
+}
+
+/// A bias update that is due ([`window_due`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Update {
+    /// The mean gyro of the rest segment so far.
+    Rest,
+    /// The motion window's mean correction rate.
+    Motion,
+}
+
+/// Counts one sample (step `c.dt` > 0) into the window and the rest segment and says whether a
+/// bias update is due.
+///
+/// At rest: the mean gyro over each rest segment (`H = I`), updated every `bias_rest_window_s` and
+/// when the rest ends, its variance `σ_rest² / T` (white noise averaged over `T` seconds);
+/// a rest update restarts the motion window (no sample counts twice).
+#[inline(always)]
+pub(super) fn window_due(p: &RobustParams, c: &Coefs, s: &mut RobustState, gyro: &Vector3<f64>) -> Option<Update> {
+    let dt = c.dt;
+    if dt <= 0.0 {
+        return None;
     }
     s.win_time += dt;
-    s.win_corr += corr;
     // The still samples before rest is declared are rest too: they count once it is.
     let still = s.rest_time > 0.0;
     if still {
@@ -569,30 +607,62 @@ fn bias_window(
         s.rest_sum = Vector3::zeros();
         s.rest_sum_time = 0.0;
     }
-    let t_rest = s.rest_sum_time;
-    let ended = !still && s.rest_segment && t_rest > 0.0;
+    let ended = !still && s.rest_segment && s.rest_sum_time > 0.0;
     s.rest_segment = s.rest || (still && s.rest_segment);
-    if (s.rest && t_rest >= p.bias_rest_window_s) || ended {
-        let r = p.bias_sigma_rest_rad_s.powi(2) / t_rest;
-        let innovation = s.rest_sum / t_rest - s.bias;
-        kalman(p, s, &Matrix3::identity(), &innovation, r, s.win_time);
-        s.rest_sum = Vector3::zeros();
-        s.rest_sum_time = 0.0;
-        restart_window(s);
-        return;
+    if (s.rest && s.rest_sum_time >= p.bias_rest_window_s) || ended {
+        Some(Update::Rest)
+    } else if s.win_time >= p.bias_window_s {
+        Some(Update::Motion)
+    } else {
+        None
     }
-    let t = s.win_time;
-    if t < p.bias_window_s {
-        return;
+}
+
+/// Makes the Kalman update `u` of the bias and restarts the window (a motion update reads the
+/// window's sums, which must then be in `s`).
+pub(super) fn update_bias(p: &RobustParams, s: &mut RobustState, u: Update) {
+    match u {
+        Update::Rest => {
+            let t_rest = s.rest_sum_time;
+            let r = p.bias_sigma_rest_rad_s.powi(2) / t_rest;
+            let innovation = s.rest_sum / t_rest - s.bias;
+            kalman(p, s, &Matrix3::identity(), &innovation, r, s.win_time);
+            s.rest_sum = Vector3::zeros();
+            s.rest_sum_time = 0.0;
+        }
+        Update::Motion => {
+            let t = s.win_time;
+            let mut h = -s.win_rot / t;
+            let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
+            if s.win_mag_time < 0.5 * t {
+                h.row_mut(2).fill(0.0);
+                innovation.z = 0.0;
+            }
+            kalman(p, s, &h, &innovation, p.bias_sigma_motion_rad_s.powi(2), t);
+        }
     }
-    let mut h = -s.win_rot / t;
-    let mut innovation = (s.win_corr - s.win_off) / t - h * s.bias;
-    if s.win_mag_time < 0.5 * t {
-        h.row_mut(2).fill(0.0);
-        innovation.z = 0.0;
-    }
-    kalman(p, s, &h, &innovation, p.bias_sigma_motion_rad_s.powi(2), t);
     restart_window(s);
+}
+
+/// The heading loop's share of the bias window (9D): its responses to row z of `r6` and to
+/// `(r6 b̂)_z` (`rb_z`), and, where the field is used, the loop's output and the correction
+/// `(gain, k e)` applied ([`bias_window`]).
+#[inline(always)]
+fn heading_window(c: &Coefs, s: &mut RobustState, r6: &Matrix3<f64>, rb_z: f64, correction: Option<(f64, f64)>) {
+    let dt = c.dt;
+    s.loop_head_rot += r6.row(2).transpose() * dt;
+    s.loop_head_bias += rb_z * dt;
+    let mut corr_z = 0.0;
+    if let Some((k, applied)) = correction {
+        let (out_r, out_b) = (s.loop_head_rot * k, s.loop_head_bias * k);
+        s.loop_head_rot -= out_r;
+        s.loop_head_bias -= out_b;
+        s.win_rot.row_mut(2).add_assign(out_r.transpose());
+        s.win_off.z += out_b;
+        s.win_mag_time += dt;
+        corr_z = applied;
+    }
+    s.win_corr.z += corr_z;
 }
 
 /// One Kalman update of the bias with measurement matrix `h`, innovation and noise variance `r`

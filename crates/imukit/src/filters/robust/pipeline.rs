@@ -1,0 +1,558 @@
+//! The online run on two threads, bit for bit the run on one.
+//!
+//! A step is an attitude half ([`step::attitude_half`], [`step::window_due`],
+//! [`step::update_bias`]: rest, gyro strapdown, inclination, the bias's Kalman update) and a window
+//! half ([`step::window_half`]: the bias window's sums, in 9D the field's gate and heading loop,
+//! the output attitude). The window half needs the attitude half's `q6` and inclination
+//! correction of the same sample and the bias; the attitude half needs the window half only where
+//! a bias window ends (its sums, once every `bias_window_s` in motion and every
+//! `bias_rest_window_s` at rest), which is also the only place the bias changes. So the calling
+//! thread runs the attitude halves and puts each sample's `q6`, correction and step in a ring of
+//! [`RING`] samples; a second thread (`rayon::join`) runs the window halves from the ring, behind
+//! it; where a window ends, the calling thread catches the window side up to that sample under
+//! its lock (doing what the second thread has not done yet itself), takes the sums, updates the
+//! bias and gives it back.
+//!
+//! Both sides run the sequential step's functions on their own fields in the same order, so the
+//! outputs and the final state are those of one thread, bit for bit (tested). Nothing waits for a
+//! thread that may never come: with no second thread free (a pool of one, or every thread busy)
+//! the calling thread runs the window halves itself when the ring is full, a block at a time.
+
+use std::hint;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError, TryLockError};
+use std::thread::{self, Thread};
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector2};
+
+use super::step::{self, Coefs, CoefsCache, Update};
+use super::{run_any, write_attitude_half, Outputs, Robust, RobustState, Sigma, Stepper};
+use crate::filters::{row, Inputs};
+use crate::{Error, Result};
+
+/// Runs of this many samples and more take two threads (rayon's `join` costs a few µs, a
+/// sample about 0.2 µs).
+pub(super) const FROM: usize = 1024;
+/// Samples the window side may lag behind (56 B each).
+const RING: usize = 1024;
+/// Samples made visible to the window side at a time.
+const BLOCK: usize = 16;
+/// Empty polls of the ring before the window thread sleeps (~0.1–1 ms; a block takes ~10 µs).
+const SPINS: u32 = 1 << 14;
+
+/// One sample's hand-off as bits: `q6` as x, y, z, w, the inclination correction x, y and the
+/// step (0: no step).
+type Slot = [AtomicU64; 7];
+
+/// The window side: its copy of the state (it writes only the window half's fields) and the
+/// rows it writes.
+struct WindowSide<'o> {
+    state: RobustState,
+    cache: CoefsCache,
+    /// Samples done.
+    done: usize,
+    /// The first sample whose window half overflowed (index in the whole record).
+    overflow: Option<usize>,
+    q: &'o mut [[f64; 4]],
+    mag_disturbed: &'o mut [bool],
+}
+
+/// What the two sides share.
+struct Shared<'a, 'o> {
+    filter: &'a Robust,
+    gyro: &'a [[f64; 3]],
+    mags: Option<&'a [[f64; 3]]>,
+    /// Index of the part's first row in the whole record (for errors).
+    first: usize,
+    ring: Box<[Slot]>,
+    /// Samples put in the ring and visible to the window thread.
+    published: AtomicUsize,
+    /// Samples the window side has done (mirrors `WindowSide::done`, read without the lock).
+    consumed: AtomicUsize,
+    /// Set when the attitude side has put its last sample: it then finishes the window side.
+    finished: AtomicBool,
+    /// The window thread sleeps (or is about to).
+    parked: AtomicBool,
+    worker: OnceLock<Thread>,
+    window: Mutex<WindowSide<'o>>,
+}
+
+impl<'o> Shared<'_, 'o> {
+    /// The window side, waited for by polling: the other side holds it only while it runs a
+    /// few dozen samples (a few µs), less than sleeping and being woken would cost (a futex wait
+    /// and wake per bias window was a tenth of a run). A panic elsewhere leaves it as consistent
+    /// as the panic left it; the panic itself reaches the caller through `join`.
+    fn lock(&self) -> MutexGuard<'_, WindowSide<'o>> {
+        loop {
+            match self.window.try_lock() {
+                Ok(h) => return h,
+                Err(TryLockError::Poisoned(h)) => return h.into_inner(),
+                Err(TryLockError::WouldBlock) => hint::spin_loop(),
+            }
+        }
+    }
+
+    /// Makes samples `..to` visible to the window thread, waking it if it sleeps.
+    fn publish(&self, to: usize) {
+        self.published.store(to, Ordering::SeqCst);
+        self.wake();
+    }
+
+    fn wake(&self) {
+        if self.parked.load(Ordering::SeqCst) {
+            if let Some(t) = self.worker.get() {
+                t.unpark();
+            }
+        }
+    }
+
+    /// Runs the window halves of samples `h.done..to` (all in the ring) and writes their rows.
+    #[inline(always)]
+    fn catch_up(&self, h: &mut WindowSide<'_>, to: usize) {
+        let p = &self.filter.params;
+        for j in h.done..to {
+            let [x, y, z, w, cx, cy, dt] = self.ring[j % RING]
+                .each_ref()
+                .map(|a| f64::from_bits(a.load(Ordering::Relaxed)));
+            if dt > 0.0 {
+                let c = h.cache.for_dt(p, dt);
+                let q6 = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
+                let mag = self.mags.map(|m| row(&m[j]));
+                let gyro = row(&self.gyro[j]);
+                let corr = Vector2::new(cx, cy);
+                step::window_half(
+                    p,
+                    self.filter.world,
+                    &c,
+                    &mut h.state,
+                    (&q6, &corr),
+                    mag.as_ref(),
+                    &gyro,
+                );
+                if h.overflow.is_none() && !(h.state.q.coords.sum() + h.state.heading.sum()).is_finite() {
+                    h.overflow = Some(self.first + j);
+                }
+            }
+            h.q[j] = h.state.q.coords.into();
+            h.mag_disturbed[j] = h.state.mag_disturbed;
+        }
+        h.done = h.done.max(to);
+        self.consumed.store(h.done, Ordering::Release);
+    }
+
+    /// A bias update `u` is due at sample `k`: the window side caught up to it, its sums moved
+    /// into `s`, the update made, and the new bias and the emptied sums given back.
+    fn window_ends(&self, k: usize, s: &mut RobustState, u: Update) {
+        self.publish(k + 1);
+        let mut h = self.lock();
+        self.catch_up(&mut h, k + 1);
+        take_window(s, &h.state);
+        step::update_bias(&self.filter.params, s, u);
+        take_window(&mut h.state, s);
+        h.state.bias = s.bias;
+    }
+
+    /// The window thread: runs what is published until the attitude side has finished (which
+    /// then does the rest itself); polls, then sleeps until woken.
+    #[inline(always)]
+    fn work(&self) {
+        // Set before `parked` can be: `wake` finds the handle whenever it reads `parked` true.
+        let _ = self.worker.set(thread::current());
+        let mut idle = 0;
+        loop {
+            let available = self.published.load(Ordering::SeqCst);
+            if available > self.consumed.load(Ordering::Acquire) {
+                let mut h = self.lock();
+                self.catch_up(&mut h, available);
+                idle = 0;
+            } else if self.finished.load(Ordering::SeqCst) {
+                return;
+            } else if idle < SPINS {
+                idle += 1;
+                hint::spin_loop();
+            } else {
+                self.parked.store(true, Ordering::SeqCst);
+                // Rechecked after `parked` is set: a publish or finish before it is seen here, one
+                // after it sees `parked` and unparks (a token `park` then returns on at once).
+                if self.published.load(Ordering::SeqCst) == available && !self.finished.load(Ordering::SeqCst) {
+                    thread::park();
+                }
+                self.parked.store(false, Ordering::SeqCst);
+                idle = 0;
+            }
+        }
+    }
+}
+
+/// The bias window's sums, from `h` into `s`.
+fn take_window(s: &mut RobustState, h: &RobustState) {
+    (s.win_rot, s.win_off, s.win_corr, s.win_mag_time) = (h.win_rot, h.win_off, h.win_corr, h.win_mag_time);
+}
+
+/// Every field the window half writes, from the window side's state `h` into `s`.
+fn take_window_half(s: &mut RobustState, h: &RobustState) {
+    take_window(s, h);
+    s.q = h.q;
+    (s.loop_rot1, s.loop_rot2, s.loop_bias1, s.loop_bias2) = (h.loop_rot1, h.loop_rot2, h.loop_bias1, h.loop_bias2);
+    (s.heading, s.heading_angle) = (h.heading, h.heading_angle);
+    (s.loop_head_rot, s.loop_head_bias) = (h.loop_head_rot, h.loop_head_bias);
+    (s.mag_ready, s.mag_norm, s.mag_dip) = (h.mag_ready, h.mag_norm, h.mag_dip);
+    (s.cand_norm, s.cand_dip, s.cand_time) = (h.cand_norm, h.cand_dip, h.cand_time);
+    (s.mag_rejected, s.mag_disturbed) = (h.mag_rejected, h.mag_disturbed);
+}
+
+/// The calling thread's side: attitude halves, their rows, and the ring's writing end.
+struct AttitudeSide<'s, 'a, 'o, 'w> {
+    shared: &'s Shared<'a, 'o>,
+    /// Samples put in the ring.
+    written: usize,
+    /// Samples below this index have a free slot (the window side has done the slot's last).
+    room: usize,
+    bias: &'w mut [[f64; 3]],
+    bias_sigma: &'w mut [[f64; 3]],
+    rest: &'w mut [bool],
+    sigma: Sigma,
+}
+
+impl AttitudeSide<'_, '_, '_, '_> {
+    #[inline(always)]
+    fn put(&mut self, k: usize, values: [f64; 7]) {
+        if k >= self.room {
+            self.make_room(k);
+        }
+        for (slot, x) in self.shared.ring[k % RING].iter().zip(values) {
+            slot.store(x.to_bits(), Ordering::Relaxed);
+        }
+        self.written = k + 1;
+        if self.written.is_multiple_of(BLOCK) {
+            self.shared.publish(self.written);
+        }
+    }
+
+    /// The ring is full up to sample `k`: the window side's oldest samples are done here if the
+    /// window thread has not done them.
+    #[cold]
+    fn make_room(&mut self, k: usize) {
+        let shared = self.shared;
+        if k >= shared.consumed.load(Ordering::Acquire) + RING {
+            shared.publish(k);
+            let mut h = shared.lock();
+            shared.catch_up(&mut h, k);
+        }
+        self.room = shared.consumed.load(Ordering::Acquire) + RING;
+    }
+}
+
+impl Stepper for AttitudeSide<'_, '_, '_, '_> {
+    #[inline(always)]
+    fn step(
+        &mut self,
+        k: usize,
+        c: &Coefs,
+        s: &mut RobustState,
+        gyro: &nalgebra::Vector3<f64>,
+        accel: &nalgebra::Vector3<f64>,
+        _: Option<&nalgebra::Vector3<f64>>,
+    ) {
+        let p = &self.shared.filter.params;
+        let (corr, q6) = step::attitude_half(p, c, s, gyro, accel);
+        self.put(k, [q6.i, q6.j, q6.k, q6.w, corr.x, corr.y, c.dt]);
+        if let Some(u) = step::window_due(p, c, s, gyro) {
+            self.shared.window_ends(k, s, u);
+        }
+    }
+
+    #[inline(always)]
+    fn skip(&mut self, k: usize) {
+        self.put(k, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    }
+
+    #[inline(always)]
+    fn write(&mut self, k: usize, s: &RobustState) {
+        write_attitude_half(self.bias, self.bias_sigma, self.rest, &mut self.sigma, k, s);
+    }
+}
+
+/// [`Robust::run_part`]'s run with the attitude written, on two threads where rayon's pool has
+/// them free; `start` is `(first, continued)`. An uninitialised state's first sample (it
+/// initialises the attitude, and the heading from the field) runs alone first.
+pub(super) fn run(
+    f: &Robust,
+    state: &mut RobustState,
+    inputs: &Inputs<'_>,
+    (first, continued): (usize, bool),
+    out: &mut Outputs<'_>,
+) -> Result<()> {
+    if state.initialized || inputs.t.is_empty() {
+        return run_split(f, state, inputs, (first, continued), out);
+    }
+    let (mut head, mut tail) = out.split_at(1);
+    let n = inputs.t.len();
+    let (one, rest) = (part(inputs, 0..1), part(inputs, 1..n));
+    run_any(f, state, &one, (first, continued), true, &mut head)?;
+    run_split(f, state, &rest, (first + 1, true), &mut tail)
+}
+
+/// Rows `rows` of `inputs`.
+fn part<'a>(inputs: &Inputs<'a>, rows: std::ops::Range<usize>) -> Inputs<'a> {
+    Inputs {
+        t: &inputs.t[rows.clone()],
+        gyro: &inputs.gyro[rows.clone()],
+        accel: &inputs.accel[rows.clone()],
+        mag: inputs.mag.map(|m| &m[rows]),
+    }
+}
+
+/// The two sides over a run on an initialised state.
+fn run_split(
+    f: &Robust,
+    state: &mut RobustState,
+    inputs: &Inputs<'_>,
+    start: (usize, bool),
+    out: &mut Outputs<'_>,
+) -> Result<()> {
+    let Outputs {
+        q,
+        bias,
+        bias_sigma,
+        rest,
+        mag_disturbed,
+    } = out;
+    let shared = Shared {
+        filter: f,
+        gyro: inputs.gyro,
+        mags: inputs.mag,
+        first: start.0,
+        ring: (0..RING).map(|_| Slot::default()).collect(),
+        published: AtomicUsize::new(0),
+        consumed: AtomicUsize::new(0),
+        finished: AtomicBool::new(false),
+        parked: AtomicBool::new(false),
+        worker: OnceLock::new(),
+        window: Mutex::new(WindowSide {
+            state: *state,
+            cache: CoefsCache::new(Coefs::new(&f.params, 0.0)),
+            done: 0,
+            overflow: None,
+            q,
+            mag_disturbed,
+        }),
+    };
+    let mut side = AttitudeSide {
+        shared: &shared,
+        written: 0,
+        room: RING,
+        bias,
+        bias_sigma,
+        rest,
+        sigma: Sigma::default(),
+    };
+    let (result, ()) = rayon::join(
+        || attitude_side(f, state, inputs, start, &mut side),
+        || window_side(&shared),
+    );
+    let h = shared.window.into_inner().unwrap_or_else(PoisonError::into_inner);
+    take_window_half(state, &h.state);
+    result?;
+    match h.overflow {
+        Some(index) => Err(Error::Overflow { index }),
+        None => Ok(()),
+    }
+}
+
+crate::simd_dispatch! {
+    /// The calling thread's loop, then the window side finished (its thread may have stopped
+    /// polling, or never started).
+    fn attitude_side(
+        f: &Robust,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        start: (usize, bool),
+        side: &mut AttitudeSide<'_, '_, '_, '_>
+    ) -> Result<()> {
+        // The field is the window side's: the loop reads it only to check it.
+        let result = match inputs.mag {
+            Some(m) => f.run_loop::<true, _>(state, inputs, m, start, side),
+            None => f.run_loop::<false, _>(state, inputs, &[], start, side),
+        };
+        let shared = side.shared;
+        shared.published.store(side.written, Ordering::SeqCst);
+        shared.finished.store(true, Ordering::SeqCst);
+        shared.wake();
+        let mut h = shared.lock();
+        shared.catch_up(&mut h, side.written);
+        result
+    }
+}
+
+crate::simd_dispatch! {
+    /// The window thread's loop.
+    fn window_side(shared: &Shared<'_, '_>) -> () {
+        shared.work();
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::filters::robust::{RobustParams, Track};
+    use crate::filters::{Fields, World};
+    use nalgebra::Vector3;
+    use std::sync::atomic::AtomicBool;
+
+    /// 9D record of `n` samples at 200 Hz: rests of 5 s in every 20 s (rest updates of the bias),
+    /// turning between (motion windows), the field 1.5 times as strong and turned from 30 s to
+    /// 50 s (rejected, then used slowly), with a little noise; the stamps in float seconds (their
+    /// steps differ in the last bits).
+    struct Record {
+        t: Vec<f64>,
+        gyro: Vec<[f64; 3]>,
+        accel: Vec<[f64; 3]>,
+        mag: Vec<[f64; 3]>,
+    }
+
+    fn record(n: usize) -> Record {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut noise = move |scale: f64| {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            scale * ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+        };
+        let mut q = UnitQuaternion::from_euler_angles(0.2, -0.1, 0.4);
+        let mut r = Record {
+            t: Vec::new(),
+            gyro: Vec::new(),
+            accel: Vec::new(),
+            mag: Vec::new(),
+        };
+        for k in 0..n {
+            let t = k as f64 / 200.0;
+            let w = if t % 20.0 < 5.0 {
+                Vector3::zeros()
+            } else {
+                Vector3::new(0.8 * (1.3 * t).sin(), 0.6 * (0.7 * t).cos(), 1.1 * (0.3 * t).sin())
+            };
+            q *= UnitQuaternion::from_scaled_axis(w / 200.0);
+            let field = if (30.0..50.0).contains(&t) {
+                Vector3::new(14.0, 28.0, -60.0)
+            } else {
+                Vector3::new(0.0, 20.0, -40.0)
+            };
+            let (a, m) = (q.inverse() * Vector3::new(0.0, 0.0, 9.81), q.inverse() * field);
+            let bias = Vector3::new(0.01, -0.02, 0.015);
+            r.t.push(t);
+            r.gyro.push((w + bias).map(|x| x + noise(0.01)).into());
+            r.accel.push(a.map(|x| x + noise(0.05)).into());
+            r.mag.push(m.map(|x| x + noise(0.3)).into());
+        }
+        r
+    }
+
+    fn inputs(r: &Record, rows: std::ops::Range<usize>, nine: bool) -> Inputs<'_> {
+        Inputs {
+            t: &r.t[rows.clone()],
+            gyro: &r.gyro[rows.clone()],
+            accel: &r.accel[rows.clone()],
+            mag: nine.then(|| &r.mag[rows]),
+        }
+    }
+
+    /// The run on one thread: rows and final state.
+    fn sequential(f: &Robust, s: &mut RobustState, i: &Inputs<'_>, continued: bool) -> (Track, Result<()>) {
+        let mut track = Track::new(i.t.len());
+        let result = run_any(f, s, i, (0, continued), true, &mut track.outputs());
+        (track, result)
+    }
+
+    fn piped(f: &Robust, s: &mut RobustState, i: &Inputs<'_>, continued: bool) -> (Track, Result<()>) {
+        let mut track = Track::new(i.t.len());
+        let result = run(f, s, i, (0, continued), &mut track.outputs());
+        (track, result)
+    }
+
+    fn bits(s: &RobustState) -> Vec<u64> {
+        s.values().iter().map(|x| x.to_bits()).collect()
+    }
+
+    fn pool() -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap()
+    }
+
+    /// Each start (an uninitialised state, an initialised one not continued, a continued one),
+    /// 9D and 6D, gives the rows and the final state of the run on one thread, bit for bit, on the
+    /// second thread of a pool of two, and with that thread busy, where the calling thread does the
+    /// window side itself whenever the ring fills. The record has rest and motion updates of the
+    /// bias and a disturbed field, so the window side's sums and gate are in the state.
+    #[test]
+    fn two_threads_give_the_run_on_one_bit_for_bit() {
+        let r = record(20_000);
+        let f = Robust::new(RobustParams::default(), World::Ned).unwrap();
+        let pool = pool();
+        for nine in [true, false] {
+            let mut warm = RobustState::default();
+            let (_, ok) = sequential(&f, &mut warm, &inputs(&r, 0..4_000, nine), false);
+            ok.unwrap();
+            let starts = [
+                (RobustState::default(), 0..20_000, false),
+                // Ends with the field disturbed: the gate's fields are mid-rejection.
+                (RobustState::default(), 0..8_000, false),
+                (warm, 4_000..20_000, false),
+                (warm, 4_000..20_000, true),
+            ];
+            for (start, rows, continued) in starts {
+                let i = inputs(&r, rows.clone(), nine);
+                let at = format!("9D {nine}, rows {rows:?}, continued {continued}");
+                let (mut s1, mut s2, mut s3) = (start, start, start);
+                let (one, ok) = sequential(&f, &mut s1, &i, continued);
+                ok.unwrap();
+                assert!(
+                    one.rest.iter().any(|&d| d) && one.mag_disturbed.iter().any(|&d| d) == nine,
+                    "{at}"
+                );
+                let (two, ok) = pool.install(|| piped(&f, &mut s2, &i, continued));
+                ok.unwrap();
+                assert_eq!(two, one, "{at}: two threads");
+                assert_eq!(bits(&s2), bits(&s1), "{at}: two threads' state");
+                let done = AtomicBool::new(false);
+                let (alone, ()) = pool.install(|| {
+                    rayon::join(
+                        || {
+                            let out = piped(&f, &mut s3, &i, continued);
+                            done.store(true, Ordering::SeqCst);
+                            out
+                        },
+                        || {
+                            while !done.load(Ordering::SeqCst) {
+                                hint::spin_loop();
+                            }
+                        },
+                    )
+                });
+                let (alone, ok) = alone;
+                ok.unwrap();
+                assert_eq!(alone, one, "{at}: the second thread busy");
+                assert_eq!(bits(&s3), bits(&s1), "{at}: its state");
+            }
+        }
+    }
+
+    /// A non-finite sample stops both runs with the same error at the same row, the rows before
+    /// it and the state after the last good sample equal.
+    #[test]
+    fn an_error_stops_both_at_the_same_row() {
+        let mut r = record(6_000);
+        r.gyro[4_321][1] = f64::NAN;
+        let f = Robust::new(RobustParams::default(), World::Enu).unwrap();
+        let i = inputs(&r, 0..6_000, true);
+        let (mut s1, mut s2) = (RobustState::default(), RobustState::default());
+        let (one, e1) = sequential(&f, &mut s1, &i, false);
+        let (two, e2) = pool().install(|| piped(&f, &mut s2, &i, false));
+        let (e1, e2) = (e1.unwrap_err().to_string(), e2.unwrap_err().to_string());
+        assert!(e1.contains("4321"), "{e1}");
+        assert_eq!(e2, e1);
+        assert_eq!(two, one);
+        assert_eq!(bits(&s2), bits(&s1));
+    }
+}
