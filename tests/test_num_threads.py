@@ -48,6 +48,34 @@ def test_kernels_run_on_the_threads_set() -> None:
     np.testing.assert_array_equal(ik.integrate_attitude(t, gyro).as_quat(), two)
 
 
+@pytest.mark.usefixtures("restore_threads")
+@pytest.mark.parametrize("nine", [False, True])
+def test_robust_online_runs_its_window_half_on_a_second_thread_with_the_same_result(nine: bool) -> None:
+    # An online run of 1024 samples and more puts each step's window half (bias-window sums, the
+    # heading loop, the output) on a second thread of the pool: 12,000 samples, three parts of the
+    # glue, rest and motion bias updates; every output and the final state equal bit for bit.
+    n = 12_000
+    rng = np.random.default_rng(5)
+    t = np.arange(n) / 200.0
+    turning = (t % 20.0) > 5.0
+    gyro = np.where(turning[:, None], np.sin(np.outer(t, [1.3, 0.7, 0.3])), 0.0) + rng.normal(0.0, 0.01, (n, 3))
+    q = ik.integrate_attitude(t, gyro)
+    accel = q.inv().apply([0.0, 0.0, 9.81]) + rng.normal(0.0, 0.05, (n, 3))
+    mag = q.inv().apply([0.0, 20.0, -40.0]) + rng.normal(0.0, 0.3, (n, 3)) if nine else None
+    imu = ik.ImuData(t, gyro, accel)
+    results = []
+    for threads in (1, 2, 3):
+        ik.set_num_threads(threads)
+        results.append(ik.filters.Robust().run(imu, mag=mag))
+    one = results[0]
+    assert one.rest.any() and not one.rest.all()
+    for other in results[1:]:
+        np.testing.assert_array_equal(other.rotation.as_quat(), one.rotation.as_quat())
+        for name in ("gyro_bias", "gyro_bias_sigma", "rest", "mag_disturbed"):
+            np.testing.assert_array_equal(getattr(other, name), getattr(one, name), err_msg=name)
+        assert other.state == one.state
+
+
 @pytest.mark.parametrize("bad", [0, -1, 1.5, True, "2", None, 10**30])
 def test_set_num_threads_refuses_what_is_not_a_positive_int(bad: object) -> None:
     before = ik.get_num_threads()
