@@ -142,8 +142,13 @@ def _client(client: Client | None, workers: int | None) -> Iterator[Client]:
     import dask
     from distributed import Client, LocalCluster
 
-    n = workers if workers is not None else os.cpu_count() or 1
-    with dask.config.set(_LOCAL_CONFIG):  # read as each nanny is made, for its worker and its restarts
+    cores = os.cpu_count() or 1
+    n = workers if workers is not None else cores
+    # imukit's kernels share the cores with the other workers: each worker's pool gets its share
+    # (rayon reads RAYON_NUM_THREADS), as Dask gives BLAS one thread. A pool of every core in each
+    # worker oversubscribed them: Robust's online run alone keeps two threads busy.
+    environ = {"distributed.nanny.pre-spawn-environ.RAYON_NUM_THREADS": str(max(1, cores // n))}
+    with dask.config.set({**_LOCAL_CONFIG, **environ}):  # read as each nanny is made, for its worker and its restarts
         with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:  # type: ignore[no-untyped-call]
             with Client(cluster) as local:  # type: ignore[no-untyped-call]
                 yield local
