@@ -67,6 +67,7 @@ def test_robust_online_runs_its_window_half_on_a_second_thread_with_the_same_res
     for threads in (1, 2, 3):
         ik.set_num_threads(threads)
         results.append(ik.filters.Robust().run(imu, mag=mag))
+    results.append(ik.filters.Robust().run(imu, mag=mag, threads=2))
     one = results[0]
     assert one.rest.any() and not one.rest.all()
     for other in results[1:]:
@@ -149,6 +150,8 @@ _ENTRIES: dict[str, Callable[..., Any]] = {
     "preintegrate_windows": lambda rows, **kw: _windows(rows, **kw),
     "reintegrate": lambda rows, **kw: _reintegrated(rows, **kw),
     "integrate": lambda rows, **kw: _strapdown(rows, **kw),
+    "filters.Robust.run": lambda rows, **kw: _robust(rows, **kw),
+    "filters.Robust.run offline": lambda rows, **kw: _robust(rows, offline=True, **kw),
 }
 _PARAMS = ik.PreintParams(noise=ik.ImuNoise(1.7e-4, 2e-3, 1.9e-5, 3e-3), scheme="lie_euler")
 
@@ -201,6 +204,14 @@ def _simulated(rows: int, **kw: Any) -> list[np.ndarray]:
     return [imu.gyro, imu.accel, truth.position, truth.velocity, truth.rotation.as_quat(), truth.gyro_bias]
 
 
+def _robust(rows: int, **kw: Any) -> list[np.ndarray]:
+    # 9D, the field turning with the gyro's noise: the online run's window half on a second thread.
+    imu = _imu(min(rows, 20_000))
+    mag = np.array([0.0, 20.0, -40.0]) + 0.1 * _data("vec3", len(imu.t))
+    r = ik.filters.Robust().run(imu, mag=mag, **kw)
+    return [r.rotation.as_quat(), r.gyro_bias, r.gyro_bias_sigma, r.rest, r.mag_disturbed]
+
+
 def _arrays(result: Any) -> list[np.ndarray]:
     return [np.asarray(a) for a in result] if isinstance(result, list) else [np.asarray(result)]
 
@@ -233,7 +244,8 @@ def test_a_bad_threads_is_a_parameter_error_naming_threads(name: str, bad: objec
 def test_every_parallel_entry_point_takes_threads_as_a_keyword_only_none() -> None:
     batch = [getattr(m, n) for m in (ik.so3, ik.quat, ik.euler) for n in m.__all__]
     others = (ik.integrate_attitude, ik.noise.allan_deviation, ik.sim.simulate, ik.preintegrate, ik.integrate)
-    for fn in (*batch, *others, ik.PreintegratedImu.integrate, ik.preintegrate_windows, ik.preint.reintegrate):
+    methods = (ik.PreintegratedImu.integrate, ik.preintegrate_windows, ik.preint.reintegrate, ik.filters.Robust.run)
+    for fn in (*batch, *others, *methods):
         threads = inspect.signature(fn).parameters["threads"]
         assert (threads.kind, threads.default) == (inspect.Parameter.KEYWORD_ONLY, None), fn.__qualname__
     assert len([n for n in _ENTRIES if n.startswith(("so3.", "quat.", "euler."))]) == len(batch)

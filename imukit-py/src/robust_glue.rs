@@ -207,7 +207,7 @@ impl PyRobustFilter {
     }
 
     /// Batch run (or the smoother with `offline`), GIL released.
-    #[pyo3(signature = (t, gyro, accel, mag, state, continued, offline))]
+    #[pyo3(signature = (t, gyro, accel, mag, state, continued, offline, threads))]
     #[allow(clippy::too_many_arguments)] // the arrays of a run, the start state and how to run
     fn run<'py>(
         &self,
@@ -219,6 +219,7 @@ impl PyRobustFilter {
         state: PyRef<'py, PyRobustState>,
         continued: bool,
         offline: bool,
+        threads: Option<usize>,
     ) -> PyResult<Outputs<'py>> {
         let mut s = state.0;
         let n = t.shape()[0];
@@ -238,7 +239,14 @@ impl PyRobustFilter {
                 mag_disturbed: gm.as_slice_mut()?,
             };
             if offline {
-                smooth(py, &self.inner, &mut s, (&t, &gyro, &accel, mag.as_ref()), &mut out)?;
+                smooth(
+                    py,
+                    &self.inner,
+                    &mut s,
+                    (&t, &gyro, &accel, mag.as_ref()),
+                    threads,
+                    &mut out,
+                )?;
             } else {
                 let record = Record::new(py, &t, &gyro, &accel, mag.as_ref())?;
                 let fresh = [
@@ -248,7 +256,9 @@ impl PyRobustFilter {
                     Fresh::of(out.rest),
                     Fresh::of(out.mag_disturbed),
                 ];
-                prefaulting(n, &fresh, || record.run(py, &self.inner, &mut s, continued, &mut out))?;
+                prefaulting(n, &fresh, || {
+                    record.run(py, &self.inner, &mut s, continued, threads, &mut out)
+                })?;
             }
         }
         Ok((out_q, out_b, out_s, out_rest, out_mag, PyRobustState(s)))
@@ -270,6 +280,7 @@ fn smooth(
     f: &Robust,
     s: &mut RobustState,
     (t, gyro, accel, mag): Arrays<'_, '_>,
+    threads: Option<usize>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
     let t = frozen_or_copy(py, t)?.readonly();
@@ -288,9 +299,9 @@ fn smooth(
             None => None,
         },
     };
-    // Its passes run side by side (`rayon::join`): on the process's pool (`set_num_threads`, or a
-    // fresh one in a forked child).
-    py.detach(|| crate::threads::run_in_pool(None, || f.smooth(s, &inputs, out)))?
+    // Its passes run side by side (`rayon::join`): on `threads`, else the process's pool
+    // (`set_num_threads`, or a fresh one in a forked child).
+    py.detach(|| crate::threads::run_in_pool(threads, || f.smooth(s, &inputs, out)))?
         .map_err(|e| to_py(py, "imu / params", e))
 }
 
@@ -341,6 +352,7 @@ impl<'a> Record<'a> {
         f: &Robust,
         s: &mut RobustState,
         continued: bool,
+        threads: Option<usize>,
         out: &mut RobustOutputs<'_>,
     ) -> PyResult<()> {
         let n = self.t.len();
@@ -377,10 +389,12 @@ impl<'a> Record<'a> {
                 mag_disturbed: &mut out.mag_disturbed[first..end],
             };
             let resumed = continued || first > 0;
-            // A 9D part runs its heading half on a second thread of the process's pool
-            // (`set_num_threads(1)`: on this one).
-            py.detach(|| crate::threads::run_in_pool(None, || f.run_part(s, &inputs, first, resumed, &mut part_out)))?
-                .map_err(|e| to_py(py, "imu / params", e))?;
+            // A part runs each step's window half on a second thread of `threads`, else of the
+            // process's pool (one thread: all on one).
+            py.detach(|| {
+                crate::threads::run_in_pool(threads, || f.run_part(s, &inputs, first, resumed, &mut part_out))
+            })?
+            .map_err(|e| to_py(py, "imu / params", e))?;
             py.check_signals()?;
         }
         Ok(())

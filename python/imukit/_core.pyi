@@ -708,6 +708,7 @@ class RobustFilter:
         state: RobustState,
         continued: bool,
         offline: bool,
+        threads: int | None,
     ) -> tuple[
         NDArray[np.float64],
         NDArray[np.float64],

@@ -29,6 +29,7 @@ from imukit._arrays import FloatArray, real_scalar, rotation_from_unit_quat
 from imukit._errors import ParameterError
 from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _run_mag, _vec3
 from imukit.imu import ImuData
+from imukit.threads import checked
 
 __all__ = ["Robust", "RobustResult", "RobustState"]
 
@@ -146,10 +147,16 @@ class Robust:
         mag: ArrayLike | bool | None = None,
         initial: Rotation | RobustState | None = None,
         offline: bool = False,
+        threads: int | None = None,
     ) -> RobustResult:
         """Filter (or, ``offline=True``, smooth) a whole recording natively with the GIL released
         (online: in parts of 4096 samples, between which Python runs and Ctrl-C stops the run);
         the streaming state is not touched.
+
+        ``threads``: the run takes two (online from 1024 samples: each step's bias-window sums,
+        heading loop and output on the second; offline: the passes side by side); None: the
+        process setting (:func:`imukit.set_num_threads`); 1 runs everything on one. The result is
+        the same on any number.
 
         ``mag``: as ``Mahony.run``'s: None → ``imu.mag`` when there is one (9D); ``False`` → 6D;
         ``True`` → ``imu.mag``, which must be there; an ``(N, 3)`` array → those samples.
@@ -161,6 +168,7 @@ class Robust:
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
         if not isinstance(offline, bool):
             raise ParameterError(f"expected a bool, got {offline!r}", argument="offline")
+        threads = checked(threads)
         mags = _run_mag(imu, mag)
         if mags is not None:
             _check_mag_norms(mags)
@@ -172,7 +180,7 @@ class Robust:
         else:
             start = self._core_filter.initial_state(_initial_quat(initial))
         q, bias, sigma, rest, disturbed, final = self._core_filter.run(
-            imu.seconds, imu.gyro, imu.accel, mags, start, continued, offline
+            imu.seconds, imu.gyro, imu.accel, mags, start, continued, offline, threads
         )
         state = RobustState(final._at_time(float(imu.t[-1])))
         return RobustResult(rotation_from_unit_quat(q), bias, state, sigma, rest, disturbed)
