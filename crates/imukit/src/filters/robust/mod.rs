@@ -331,16 +331,21 @@ impl Robust {
                 }
                 dt
             };
-            if dt > 0.0 || !state.initialized {
+            let stepped = dt > 0.0 || !state.initialized;
+            if stepped {
                 let coefs = cache.for_dt(p, dt);
                 stepper.step(k, &coefs, state, &gyro, &accel, mag.as_ref());
-                check_overflow(state, first + k)?;
             } else {
                 stepper.skip(k);
             }
+            // Row k is written before the overflow check: on two threads the second may have
+            // written its part of it already.
+            stepper.write(k, state);
+            if stepped && stepper.overflowed(state) {
+                return Err(Error::Overflow { index: first + k });
+            }
             state.time = t;
             previous = t;
-            stepper.write(k, state);
         }
         Ok(())
     }
@@ -363,6 +368,9 @@ trait Stepper {
     fn skip(&mut self, k: usize);
     /// Writes row `k` of the outputs from `s`, after the sample.
     fn write(&mut self, k: usize, s: &RobustState);
+    /// Whether the step overflowed the state (finite input so large that it did), as far as
+    /// this thread's fields tell.
+    fn overflowed(&self, s: &RobustState) -> bool;
 }
 
 /// Every step whole, on the calling thread; the attitude written where `ATTITUDE`.
@@ -405,6 +413,24 @@ impl<const ATTITUDE: bool> Stepper for Whole<'_, '_, ATTITUDE> {
         self.out.mag_disturbed[k] = s.mag_disturbed;
         write_attitude_half(self.out.bias, self.out.bias_sigma, self.out.rest, &mut self.sigma, k, s);
     }
+
+    #[inline(always)]
+    fn overflowed(&self, s: &RobustState) -> bool {
+        !(attitude_half_sum(s) + window_half_sum(s)).is_finite()
+    }
+}
+
+/// The attitude half's state, summed: non-finite once it overflowed.
+#[inline(always)]
+fn attitude_half_sum(s: &RobustState) -> f64 {
+    s.bias.sum() + s.lp_s1.sum()
+}
+
+/// The window half's state (the output attitude and the heading pair), summed: non-finite once
+/// it overflowed; both are unit, so the sum of the two halves overflows only with one of them.
+#[inline(always)]
+fn window_half_sum(s: &RobustState) -> f64 {
+    s.q.coords.sum() + s.heading.sum()
 }
 
 /// Row `k` of the outputs the attitude half of a step sets: bias, its σ and rest.
@@ -477,8 +503,7 @@ fn non_finite(k: usize, t: f64, gyro: &Vector3<f64>, accel: &Vector3<f64>, mag: 
 
 /// Finite input so large that the state overflowed.
 fn check_overflow(s: &RobustState, index: usize) -> Result<()> {
-    let sum = s.q.coords.sum() + s.bias.sum() + s.lp_s1.sum() + s.heading.sum();
-    if sum.is_finite() {
+    if (attitude_half_sum(s) + window_half_sum(s)).is_finite() {
         Ok(())
     } else {
         Err(Error::Overflow { index })

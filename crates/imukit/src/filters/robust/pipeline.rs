@@ -26,7 +26,9 @@ use std::thread::{self, Thread};
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{self, Coefs, CoefsCache, Update};
-use super::{run_any, write_attitude_half, Outputs, Robust, RobustState, Sigma, Stepper};
+use super::{
+    attitude_half_sum, run_any, window_half_sum, write_attitude_half, Outputs, Robust, RobustState, Sigma, Stepper,
+};
 use crate::filters::{row, Inputs};
 use crate::{Error, Result};
 
@@ -57,6 +59,19 @@ struct WindowSide<'o> {
     mag_disturbed: &'o mut [bool],
 }
 
+/// A value on cache lines of its own (128 B: the adjacent-line prefetcher pairs lines): the
+/// fields one thread writes and the other polls would otherwise move a line between the cores
+/// at every write, with the read-only fields beside them.
+#[repr(align(128))]
+struct Line<T>(T);
+
+impl<T> std::ops::Deref for Line<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.0
+    }
+}
+
 /// What the two sides share.
 struct Shared<'a, 'o> {
     filter: &'a Robust,
@@ -66,15 +81,15 @@ struct Shared<'a, 'o> {
     first: usize,
     ring: Box<[Slot]>,
     /// Samples put in the ring and visible to the window thread.
-    published: AtomicUsize,
+    published: Line<AtomicUsize>,
     /// Samples the window side has done (mirrors `WindowSide::done`, read without the lock).
-    consumed: AtomicUsize,
+    consumed: Line<AtomicUsize>,
     /// Set when the attitude side has put its last sample: it then finishes the window side.
-    finished: AtomicBool,
+    finished: Line<AtomicBool>,
     /// The window thread sleeps (or is about to).
-    parked: AtomicBool,
+    parked: Line<AtomicBool>,
     worker: OnceLock<Thread>,
-    window: Mutex<WindowSide<'o>>,
+    window: Line<Mutex<WindowSide<'o>>>,
 }
 
 impl<'o> Shared<'_, 'o> {
@@ -129,7 +144,7 @@ impl<'o> Shared<'_, 'o> {
                     mag.as_ref(),
                     &gyro,
                 );
-                if h.overflow.is_none() && !(h.state.q.coords.sum() + h.state.heading.sum()).is_finite() {
+                if h.overflow.is_none() && !window_half_sum(&h.state).is_finite() {
                     h.overflow = Some(self.first + j);
                 }
             }
@@ -142,6 +157,7 @@ impl<'o> Shared<'_, 'o> {
 
     /// A bias update `u` is due at sample `k`: the window side caught up to it, its sums moved
     /// into `s`, the update made, and the new bias and the emptied sums given back.
+    #[inline(always)]
     fn window_ends(&self, k: usize, s: &mut RobustState, u: Update) {
         self.publish(k + 1);
         let mut h = self.lock();
@@ -201,6 +217,16 @@ fn take_window_half(s: &mut RobustState, h: &RobustState) {
     (s.mag_rejected, s.mag_disturbed) = (h.mag_rejected, h.mag_disturbed);
 }
 
+/// Sets `finished` and wakes the window thread when dropped.
+struct Finish<'s, 'a, 'o>(&'s Shared<'a, 'o>);
+
+impl Drop for Finish<'_, '_, '_> {
+    fn drop(&mut self) {
+        self.0.finished.store(true, Ordering::SeqCst);
+        self.0.wake();
+    }
+}
+
 /// The calling thread's side: attitude halves, their rows, and the ring's writing end.
 struct AttitudeSide<'s, 'a, 'o, 'w> {
     shared: &'s Shared<'a, 'o>,
@@ -231,7 +257,7 @@ impl AttitudeSide<'_, '_, '_, '_> {
 
     /// The ring is full up to sample `k`: the window side's oldest samples are done here if the
     /// window thread has not done them.
-    #[cold]
+    #[inline(always)]
     fn make_room(&mut self, k: usize) {
         let shared = self.shared;
         if k >= shared.consumed.load(Ordering::Acquire) + RING {
@@ -270,6 +296,14 @@ impl Stepper for AttitudeSide<'_, '_, '_, '_> {
     #[inline(always)]
     fn write(&mut self, k: usize, s: &RobustState) {
         write_attitude_half(self.bias, self.bias_sigma, self.rest, &mut self.sigma, k, s);
+    }
+
+    /// The attitude half's fields only: this thread's copies of the window half's are stale
+    /// (the window side checks them, [`Shared::catch_up`]). The window half's state overflows
+    /// only from a non-finite `q6`, which the attitude half's shows first.
+    #[inline(always)]
+    fn overflowed(&self, s: &RobustState) -> bool {
+        !attitude_half_sum(s).is_finite()
     }
 }
 
@@ -324,19 +358,19 @@ fn run_split(
         mags: inputs.mag,
         first: start.0,
         ring: (0..RING).map(|_| Slot::default()).collect(),
-        published: AtomicUsize::new(0),
-        consumed: AtomicUsize::new(0),
-        finished: AtomicBool::new(false),
-        parked: AtomicBool::new(false),
+        published: Line(AtomicUsize::new(0)),
+        consumed: Line(AtomicUsize::new(0)),
+        finished: Line(AtomicBool::new(false)),
+        parked: Line(AtomicBool::new(false)),
         worker: OnceLock::new(),
-        window: Mutex::new(WindowSide {
+        window: Line(Mutex::new(WindowSide {
             state: *state,
             cache: CoefsCache::new(Coefs::new(&f.params, 0.0)),
             done: 0,
             overflow: None,
             q,
             mag_disturbed,
-        }),
+        })),
     };
     let mut side = AttitudeSide {
         shared: &shared,
@@ -351,7 +385,7 @@ fn run_split(
         || attitude_side(f, state, inputs, start, &mut side),
         || window_side(&shared),
     );
-    let h = shared.window.into_inner().unwrap_or_else(PoisonError::into_inner);
+    let h = shared.window.0.into_inner().unwrap_or_else(PoisonError::into_inner);
     take_window_half(state, &h.state);
     result?;
     match h.overflow {
@@ -370,6 +404,9 @@ crate::simd_dispatch! {
         start: (usize, bool),
         side: &mut AttitudeSide<'_, '_, '_, '_>
     ) -> Result<()> {
+        // Whatever ends the loop, a panic too, ends the window thread's wait: `join` waits for
+        // it before it passes the panic on.
+        let _finish = Finish(side.shared);
         // The field is the window side's: the loop reads it only to check it.
         let result = match inputs.mag {
             Some(m) => f.run_loop::<true, _>(state, inputs, m, start, side),
@@ -536,6 +573,66 @@ mod tests {
                 assert_eq!(bits(&s3), bits(&s1), "{at}: its state");
             }
         }
+    }
+
+    /// Every output row as bits (NaN rows compare too).
+    fn row_bits(t: &Track) -> Vec<u64> {
+        let flags = t.rest.iter().chain(&t.mag_disturbed).map(|&b| u64::from(b));
+        let numbers =
+            t.q.iter()
+                .flatten()
+                .chain(t.bias.iter().flatten())
+                .chain(t.bias_sigma.iter().flatten());
+        numbers.map(|x| x.to_bits()).chain(flags).collect()
+    }
+
+    /// Finite input so large that the state overflows at row 4321: both runs name that row, and
+    /// leave the same rows (row 4321 written, with the step's non-finite values) and state.
+    #[test]
+    fn an_overflow_stops_both_at_the_same_row_with_the_same_rows() {
+        let mut r = record(6_000);
+        r.gyro[4_321] = [1e300; 3];
+        let f = Robust::new(RobustParams::default(), World::Enu).unwrap();
+        for nine in [true, false] {
+            let i = inputs(&r, 0..6_000, nine);
+            let (mut s1, mut s2) = (RobustState::default(), RobustState::default());
+            let (one, e1) = sequential(&f, &mut s1, &i, false);
+            let (two, e2) = pool().install(|| piped(&f, &mut s2, &i, false));
+            let (e1, e2) = (e1.unwrap_err().to_string(), e2.unwrap_err().to_string());
+            assert!(e1.contains("4321") && e1.contains("overflow"), "{e1}");
+            assert_eq!(e2, e1);
+            assert_ne!(
+                one.q[4_321].map(f64::to_bits),
+                [0; 4],
+                "9D {nine}: row 4321 not written"
+            );
+            assert_eq!(one.q[4_322], [0.0; 4], "9D {nine}: a row after it written");
+            assert_eq!(row_bits(&two), row_bits(&one), "9D {nine}");
+            assert_eq!(bits(&s2), bits(&s1), "9D {nine}");
+        }
+    }
+
+    /// A panic on the calling thread (here an output shorter than the input, which the checked
+    /// entry points refuse before) reaches the caller instead of leaving the window thread
+    /// waiting for the end of the run, and `join` for it.
+    #[test]
+    fn a_panic_on_the_calling_thread_reaches_the_caller() {
+        let (sender, receiver) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let r = record(6_000);
+            let f = Robust::new(RobustParams::default(), World::Enu).unwrap();
+            let i = inputs(&r, 0..6_000, true);
+            let mut track = Track::new(6_000);
+            track.bias.truncate(3_000);
+            let mut s = RobustState::default();
+            let pool = pool();
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                pool.install(|| run(&f, &mut s, &i, (0, false), &mut track.outputs()))
+            }));
+            let _ = sender.send(outcome.is_err());
+        });
+        let got = receiver.recv_timeout(std::time::Duration::from_secs(60));
+        assert_eq!(got, Ok(true), "the run hung, or returned instead of panicking");
     }
 
     /// A non-finite sample stops both runs with the same error at the same row, the rows before
