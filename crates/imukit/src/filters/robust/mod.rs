@@ -336,7 +336,7 @@ impl Robust {
                 let coefs = cache.for_dt(p, dt);
                 stepper.step(k, &coefs, state, &gyro, &accel, mag.as_ref());
             } else {
-                stepper.skip(k);
+                stepper.skip(k, state);
             }
             // Row k is written before the overflow check: on two threads the second may have
             // written its part of it already.
@@ -364,8 +364,8 @@ trait Stepper {
         accel: &Vector3<f64>,
         mag: Option<&Vector3<f64>>,
     );
-    /// Sample `k` is a step of length 0 (the first of a run on an initialised state).
-    fn skip(&mut self, k: usize);
+    /// Sample `k` is a step of length 0 (the first of a run on an initialised state `s`).
+    fn skip(&mut self, k: usize, s: &RobustState);
     /// Writes row `k` of the outputs from `s`, after the sample.
     fn write(&mut self, k: usize, s: &RobustState);
     /// Whether the step overflowed the state (finite input so large that it did), as far as
@@ -403,7 +403,7 @@ impl<const ATTITUDE: bool> Stepper for Whole<'_, '_, ATTITUDE> {
     }
 
     #[inline(always)]
-    fn skip(&mut self, _: usize) {}
+    fn skip(&mut self, _: usize, _: &RobustState) {}
 
     #[inline(always)]
     fn write(&mut self, k: usize, s: &RobustState) {
@@ -411,7 +411,8 @@ impl<const ATTITUDE: bool> Stepper for Whole<'_, '_, ATTITUDE> {
             self.out.q[k] = s.q.coords.into();
         }
         self.out.mag_disturbed[k] = s.mag_disturbed;
-        write_attitude_half(self.out.bias, self.out.bias_sigma, self.out.rest, &mut self.sigma, k, s);
+        self.out.rest[k] = s.rest;
+        write_bias(self.out.bias, self.out.bias_sigma, &mut self.sigma, k, s);
     }
 
     #[inline(always)]
@@ -433,19 +434,11 @@ fn window_half_sum(s: &RobustState) -> f64 {
     s.q.coords.sum() + s.heading.sum()
 }
 
-/// Row `k` of the outputs the attitude half of a step sets: bias, its σ and rest.
+/// Row `k` of the bias and its σ from `s`.
 #[inline(always)]
-fn write_attitude_half(
-    bias: &mut [[f64; 3]],
-    bias_sigma: &mut [[f64; 3]],
-    rest: &mut [bool],
-    sigma: &mut Sigma,
-    k: usize,
-    s: &RobustState,
-) {
+fn write_bias(bias: &mut [[f64; 3]], bias_sigma: &mut [[f64; 3]], sigma: &mut Sigma, k: usize, s: &RobustState) {
     bias[k] = s.bias.into();
     bias_sigma[k] = sigma.of(&s.bias_cov);
-    rest[k] = s.rest;
 }
 
 crate::simd_dispatch! {

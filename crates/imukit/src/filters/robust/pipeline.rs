@@ -26,28 +26,27 @@ use std::thread::{self, Thread};
 use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 
 use super::step::{self, Coefs, CoefsCache, Update};
-use super::{
-    attitude_half_sum, run_any, window_half_sum, write_attitude_half, Outputs, Robust, RobustState, Sigma, Stepper,
-};
+use super::{attitude_half_sum, run_any, window_half_sum, write_bias, Outputs, Robust, RobustState, Sigma, Stepper};
 use crate::filters::{row, Inputs};
 use crate::{Error, Result};
 
 /// Runs of this many samples and more take two threads (rayon's `join` costs a few µs, a
 /// sample about 0.2 µs).
 pub(super) const FROM: usize = 1024;
-/// Samples the window side may lag behind (56 B each).
+/// Samples the window side may lag behind (64 B each).
 const RING: usize = 1024;
 /// Samples made visible to the window side at a time.
 const BLOCK: usize = 16;
 /// Empty polls of the ring before the window thread sleeps (~0.1–1 ms; a block takes ~10 µs).
 const SPINS: u32 = 1 << 14;
 
-/// One sample's hand-off as bits: `q6` as x, y, z, w, the inclination correction x, y and the
-/// step (0: no step).
-type Slot = [AtomicU64; 7];
+/// One sample's hand-off as bits: `q6` as x, y, z, w, the inclination correction x, y, the step
+/// (0: no step) and the rest flag (1 or 0).
+type Slot = [AtomicU64; 8];
 
-/// The window side: its copy of the state (it writes only the window half's fields) and the
-/// rows it writes.
+/// The window side: its copy of the state (it writes only the window half's fields; the bias
+/// and its covariance are handed to it at each update) and the output rows, all of them written
+/// here.
 struct WindowSide<'o> {
     state: RobustState,
     cache: CoefsCache,
@@ -55,8 +54,20 @@ struct WindowSide<'o> {
     done: usize,
     /// The first sample whose window half overflowed (index in the whole record).
     overflow: Option<usize>,
-    q: &'o mut [[f64; 4]],
-    mag_disturbed: &'o mut [bool],
+    out: Outputs<'o>,
+    sigma: Sigma,
+}
+
+impl WindowSide<'_> {
+    /// Row `j` from the state (`rest` is the attitude half's, carried by the ring).
+    #[inline(always)]
+    fn write(&mut self, j: usize, rest: bool) {
+        let s = &self.state;
+        self.out.q[j] = s.q.coords.into();
+        self.out.mag_disturbed[j] = s.mag_disturbed;
+        self.out.rest[j] = rest;
+        write_bias(self.out.bias, self.out.bias_sigma, &mut self.sigma, j, s);
+    }
 }
 
 /// A value on cache lines of its own (128 B: the adjacent-line prefetcher pairs lines): the
@@ -126,7 +137,7 @@ impl<'o> Shared<'_, 'o> {
     fn catch_up(&self, h: &mut WindowSide<'_>, to: usize) {
         let p = &self.filter.params;
         for j in h.done..to {
-            let [x, y, z, w, cx, cy, dt] = self.ring[j % RING]
+            let [x, y, z, w, cx, cy, dt, rest] = self.ring[j % RING]
                 .each_ref()
                 .map(|a| f64::from_bits(a.load(Ordering::Relaxed)));
             if dt > 0.0 {
@@ -148,8 +159,7 @@ impl<'o> Shared<'_, 'o> {
                     h.overflow = Some(self.first + j);
                 }
             }
-            h.q[j] = h.state.q.coords.into();
-            h.mag_disturbed[j] = h.state.mag_disturbed;
+            h.write(j, rest != 0.0);
         }
         h.done = h.done.max(to);
         self.consumed.store(h.done, Ordering::Release);
@@ -165,7 +175,9 @@ impl<'o> Shared<'_, 'o> {
         take_window(s, &h.state);
         step::update_bias(&self.filter.params, s, u);
         take_window(&mut h.state, s);
-        h.state.bias = s.bias;
+        (h.state.bias, h.state.bias_cov) = (s.bias, s.bias_cov);
+        // Row k holds the bias after the update.
+        h.write(k, s.rest);
     }
 
     /// The window thread: runs what is published until the attitude side has finished (which
@@ -228,21 +240,17 @@ impl Drop for Finish<'_, '_, '_> {
 }
 
 /// The calling thread's side: attitude halves, their rows, and the ring's writing end.
-struct AttitudeSide<'s, 'a, 'o, 'w> {
+struct AttitudeSide<'s, 'a, 'o> {
     shared: &'s Shared<'a, 'o>,
     /// Samples put in the ring.
     written: usize,
     /// Samples below this index have a free slot (the window side has done the slot's last).
     room: usize,
-    bias: &'w mut [[f64; 3]],
-    bias_sigma: &'w mut [[f64; 3]],
-    rest: &'w mut [bool],
-    sigma: Sigma,
 }
 
-impl AttitudeSide<'_, '_, '_, '_> {
+impl AttitudeSide<'_, '_, '_> {
     #[inline(always)]
-    fn put(&mut self, k: usize, values: [f64; 7]) {
+    fn put(&mut self, k: usize, values: [f64; 8]) {
         if k >= self.room {
             self.make_room(k);
         }
@@ -269,7 +277,7 @@ impl AttitudeSide<'_, '_, '_, '_> {
     }
 }
 
-impl Stepper for AttitudeSide<'_, '_, '_, '_> {
+impl Stepper for AttitudeSide<'_, '_, '_> {
     #[inline(always)]
     fn step(
         &mut self,
@@ -282,21 +290,21 @@ impl Stepper for AttitudeSide<'_, '_, '_, '_> {
     ) {
         let p = &self.shared.filter.params;
         let (corr, q6) = step::attitude_half(p, c, s, gyro, accel);
-        self.put(k, [q6.i, q6.j, q6.k, q6.w, corr.x, corr.y, c.dt]);
+        let rest = f64::from(u8::from(s.rest));
+        self.put(k, [q6.i, q6.j, q6.k, q6.w, corr.x, corr.y, c.dt, rest]);
         if let Some(u) = step::window_due(p, c, s, gyro) {
             self.shared.window_ends(k, s, u);
         }
     }
 
     #[inline(always)]
-    fn skip(&mut self, k: usize) {
-        self.put(k, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    fn skip(&mut self, k: usize, s: &RobustState) {
+        self.put(k, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, f64::from(u8::from(s.rest))]);
     }
 
+    /// The window side writes every row.
     #[inline(always)]
-    fn write(&mut self, k: usize, s: &RobustState) {
-        write_attitude_half(self.bias, self.bias_sigma, self.rest, &mut self.sigma, k, s);
-    }
+    fn write(&mut self, _: usize, _: &RobustState) {}
 
     /// The attitude half's fields only: this thread's copies of the window half's are stale
     /// (the window side checks them, [`Shared::catch_up`]). The window half's state overflows
@@ -345,13 +353,6 @@ fn run_split(
     start: (usize, bool),
     out: &mut Outputs<'_>,
 ) -> Result<()> {
-    let Outputs {
-        q,
-        bias,
-        bias_sigma,
-        rest,
-        mag_disturbed,
-    } = out;
     let shared = Shared {
         filter: f,
         gyro: inputs.gyro,
@@ -368,18 +369,14 @@ fn run_split(
             cache: CoefsCache::new(Coefs::new(&f.params, 0.0)),
             done: 0,
             overflow: None,
-            q,
-            mag_disturbed,
+            out: out.split_at(0).1, // every row
+            sigma: Sigma::default(),
         })),
     };
     let mut side = AttitudeSide {
         shared: &shared,
         written: 0,
         room: RING,
-        bias,
-        bias_sigma,
-        rest,
-        sigma: Sigma::default(),
     };
     let (result, ()) = rayon::join(
         || attitude_side(f, state, inputs, start, &mut side),
@@ -402,7 +399,7 @@ crate::simd_dispatch! {
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         start: (usize, bool),
-        side: &mut AttitudeSide<'_, '_, '_, '_>
+        side: &mut AttitudeSide<'_, '_, '_>
     ) -> Result<()> {
         // Whatever ends the loop, a panic too, ends the window thread's wait: `join` waits for
         // it before it passes the panic on.
@@ -612,7 +609,7 @@ mod tests {
         }
     }
 
-    /// A panic on the calling thread (here an output shorter than the input, which the checked
+    /// A panic on the calling thread (here a gyro shorter than the stamps, which the checked
     /// entry points refuse before) reaches the caller instead of leaving the window thread
     /// waiting for the end of the run, and `join` for it.
     #[test]
@@ -621,10 +618,13 @@ mod tests {
         std::thread::spawn(move || {
             let r = record(6_000);
             let f = Robust::new(RobustParams::default(), World::Enu).unwrap();
-            let i = inputs(&r, 0..6_000, true);
+            let i = Inputs {
+                gyro: &r.gyro[..3_000],
+                ..inputs(&r, 0..6_000, true)
+            };
             let mut track = Track::new(6_000);
-            track.bias.truncate(3_000);
-            let mut s = RobustState::default();
+            // Initialised: the run goes straight to the two threads.
+            let mut s = f.state_at(&UnitQuaternion::identity(), 0.0);
             let pool = pool();
             let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 pool.install(|| run(&f, &mut s, &i, (0, false), &mut track.outputs()))
