@@ -156,7 +156,8 @@ class Robust:
         ``threads``: the run takes two (online from 1024 samples: each step's bias-window sums,
         heading loop and output on the second; offline: the passes side by side); None: the
         process setting (:func:`imukit.set_num_threads`); 1 runs everything on one. The result is
-        the same on any number.
+        the same on any number. The second thread polls while it waits (an online run takes about
+        twice its wall time in CPU): with as many processes as cores, each running filters, pass 1.
 
         ``mag``: as ``Mahony.run``'s: None → ``imu.mag`` when there is one (9D); ``False`` → 6D;
         ``True`` → ``imu.mag``, which must be there; an ``(N, 3)`` array → those samples.
