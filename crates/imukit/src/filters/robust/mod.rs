@@ -18,6 +18,7 @@
 //! | rest | `‖ω̃ − ω̄‖ < rest_gyro_rad_s`, `‖ω̄ − b̂‖² < rest_gyro_rad_s² + 9 tr P` and `‖ã − ā‖ < rest_accel` for `rest_duration_s` (first-order low passes: `ω̄`, `ā` over `rest_tau_s`, `ω̃`, `ã` over `rest_noise_tau_s`, which takes noise and vibration off); a raw sample beyond 4× the rms deviation ends it at once |
 //! | first sample | initialises: tilt from the accelerometer, yaw 0 (6D) or heading from the field (9D), unless an initial attitude is given; output as is |
 //! | outputs per sample | `q_wb`, `b̂`, `σ_b = √diag P`, rest flag, magnetic-disturbance flag, after that sample |
+//! | batch run | from 1024 samples, where rayon's pool has a second thread: each step's window half (bias-window sums, 9D heading, output rows) on it, behind the attitude half ([`pipeline`]); bit for bit the run on one thread |
 //! | offline | [`Robust::smooth`]: forward and backward (time-reversed) passes' biases fused; the specific force in `I` filtered forward then backward (zero phase) for the inclination; 9D heading of both passes fused |
 //!
 //! Why not a [`super::Law`]: the law seam corrects one attitude with `ω_c dt`; this filter keeps
