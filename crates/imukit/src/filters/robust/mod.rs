@@ -353,7 +353,7 @@ impl Robust {
 }
 
 /// What a run does with each checked sample `k`: the whole step on this thread ([`Whole`]), or
-/// its attitude half with the heading half sent to another thread ([`pipeline`]).
+/// its attitude half with the window half sent to another thread ([`pipeline`]).
 trait Stepper {
     /// Steps `s` over sample `k` with coefficients `c` (the step is `c.dt`).
     fn step(

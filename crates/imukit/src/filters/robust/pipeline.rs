@@ -3,15 +3,15 @@
 //! A step is an attitude half ([`step::attitude_half`], [`step::window_due`],
 //! [`step::update_bias`]: rest, gyro strapdown, inclination, the bias's Kalman update) and a window
 //! half ([`step::window_half`]: the bias window's sums, in 9D the field's gate and heading loop,
-//! the output attitude). The window half needs the attitude half's `q6` and inclination
-//! correction of the same sample and the bias; the attitude half needs the window half only where
-//! a bias window ends (its sums, once every `bias_window_s` in motion and every
-//! `bias_rest_window_s` at rest), which is also the only place the bias changes. So the calling
-//! thread runs the attitude halves and puts each sample's `q6`, correction and step in a ring of
-//! [`RING`] samples; a second thread (`rayon::join`) runs the window halves from the ring, behind
-//! it; where a window ends, the calling thread catches the window side up to that sample under
-//! its lock (doing what the second thread has not done yet itself), takes the sums, updates the
-//! bias and gives it back.
+//! the output attitude; here also every output row). The window half needs the attitude half's
+//! `q6`, inclination correction and rest flag of the same sample and the bias; the attitude half
+//! needs the window half only where a bias window ends (its sums, once every `bias_window_s` in
+//! motion and every `bias_rest_window_s` at rest), which is also the only place the bias changes.
+//! So the calling thread runs the attitude halves and puts each sample's `q6`, correction, step
+//! and rest flag in a ring of [`RING`] samples; a second thread (`rayon::join`) runs the window
+//! halves from the ring, behind it; where a window ends, the calling thread catches the window
+//! side up to that sample under its lock (doing what the second thread has not done yet itself),
+//! takes the sums, updates the bias and gives it back.
 //!
 //! Both sides run the sequential step's functions on their own fields in the same order, so the
 //! outputs and the final state are those of one thread, bit for bit (tested). Nothing waits for a
@@ -35,9 +35,10 @@ use crate::{Error, Result};
 pub(super) const FROM: usize = 1024;
 /// Samples the window side may lag behind (64 B each).
 const RING: usize = 1024;
-/// Samples made visible to the window side at a time.
+/// Samples made visible to the window side at a time (~2 µs of the calling thread's work: the
+/// window side is that far behind when a window ends and the calling thread waits for it).
 const BLOCK: usize = 16;
-/// Empty polls of the ring before the window thread sleeps (~0.1–1 ms; a block takes ~10 µs).
+/// Empty polls of the ring before the window thread sleeps (~0.1–1 ms).
 const SPINS: u32 = 1 << 14;
 
 /// One sample's hand-off as bits: `q6` as x, y, z, w, the inclination correction x, y, the step

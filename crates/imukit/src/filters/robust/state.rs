@@ -124,7 +124,7 @@ state!(
     /// Seconds the rest thresholds have held.
     rest_time: f64 = ["rest_time"],
     /// Butterworth delay elements of the rows x, y of `R_E'b` (the correction loop's response to
-    /// a bias, see `step::bias_window`).
+    /// a bias, see `step::window_sums`).
     loop_rot1: Matrix2x3<f64> = ["lr1_00", "lr1_10", "lr1_01", "lr1_11", "lr1_02", "lr1_12"],
     /// Second delay elements of the same.
     loop_rot2: Matrix2x3<f64> = ["lr2_00", "lr2_10", "lr2_01", "lr2_11", "lr2_02", "lr2_12"],

@@ -646,7 +646,7 @@ pub(super) fn update_bias(p: &RobustParams, s: &mut RobustState, u: Update) {
 
 /// The heading loop's share of the bias window (9D): its responses to row z of `r6` and to
 /// `(r6 b̂)_z` (`rb_z`), and, where the field is used, the loop's output and the correction
-/// `(gain, k e)` applied ([`bias_window`]).
+/// `(gain, k e)` applied: the sums [`update_bias`] reads beside [`window_sums`]'.
 #[inline(always)]
 fn heading_window(c: &Coefs, s: &mut RobustState, r6: &Matrix3<f64>, rb_z: f64, correction: Option<(f64, f64)>) {
     let dt = c.dt;
