@@ -245,6 +245,10 @@ impl Robust {
     /// sample initialises an uninitialised `state` or, for an initialised one, is a step of
     /// length 0 (output as the state has it, time set); with `continued` true the first sample
     /// is a step over `t[0] − state.time`. `state` ends as the state after the last sample.
+    /// An error at row `k` leaves the rows before it written and `state` after row `k − 1`; an
+    /// overflow (finite input so large that the state overflowed) leaves row `k` written too and
+    /// `state` after the step that overflowed. From 1024 samples the run may take two threads of
+    /// rayon's pool (`pipeline`), with the same result.
     pub fn run(
         &self,
         state: &mut RobustState,
@@ -340,7 +344,7 @@ impl Robust {
                 stepper.skip(k, state);
             }
             // Row k is written before the overflow check: on two threads the second may have
-            // written its part of it already.
+            // written it already.
             stepper.write(k, state);
             if stepped && stepper.overflowed(state) {
                 return Err(Error::Overflow { index: first + k });

@@ -240,7 +240,7 @@ impl Drop for Finish<'_, '_, '_> {
     }
 }
 
-/// The calling thread's side: attitude halves, their rows, and the ring's writing end.
+/// The calling thread's side: the attitude halves and the ring's writing end.
 struct AttitudeSide<'s, 'a, 'o> {
     shared: &'s Shared<'a, 'o>,
     /// Samples put in the ring.
