@@ -404,7 +404,7 @@ crate::simd_dispatch! {
     ) -> Result<()> {
         // Whatever ends the loop, a panic too, ends the window thread's wait: `join` waits for
         // it before it passes the panic on.
-        let _finish = Finish(side.shared);
+        let finish = Finish(side.shared);
         // The field is the window side's: the loop reads it only to check it.
         let result = match inputs.mag {
             Some(m) => f.run_loop::<true, _>(state, inputs, m, start, side),
@@ -412,8 +412,8 @@ crate::simd_dispatch! {
         };
         let shared = side.shared;
         shared.published.store(side.written, Ordering::SeqCst);
-        shared.finished.store(true, Ordering::SeqCst);
-        shared.wake();
+        // Before the last catch-up, so that the window thread stops polling meanwhile.
+        drop(finish);
         let mut h = shared.lock();
         shared.catch_up(&mut h, side.written);
         result
