@@ -113,6 +113,12 @@ pub fn path() -> Path {
 /// `const FMA: bool` (`fn run<const FMA: bool>(…)`: the body sees `true` on the AVX paths, `false`
 /// on the baseline, and decides what to fuse), and `impl Trait` argument types are accepted.
 ///
+/// `widest = avx2;` before the function caps it at the AVX2 copy: the `avx512` path runs that one
+/// and no AVX-512 copy is compiled. For kernels whose AVX-512 copy measured slower than their AVX2
+/// one: a dependent scalar chain that LLVM's vectoriser packs into wider registers through
+/// cross-lane shuffles (`vpermt2pd`, `vpermpd`), each a few cycles on the chain
+/// (`docs/performance.md`, "The AVX-512 copy where it pays").
+///
 /// ```
 /// imukit::simd_dispatch! {
 ///     /// Sum of squares.
@@ -121,11 +127,24 @@ pub fn path() -> Path {
 ///     }
 /// }
 /// assert_eq!(sum_squares(&[3.0, 4.0]), 25.0);
+///
+/// imukit::simd_dispatch! {
+///     widest = avx2;
+///     /// A running sum, a chain of dependent adds: no AVX-512 copy.
+///     pub fn running_sum(x: &mut [f64]) -> () {
+///         for k in 1..x.len() {
+///             x[k] += x[k - 1];
+///         }
+///     }
+/// }
+/// let mut x = [1.0, 2.0, 3.0];
+/// running_sum(&mut x);
+/// assert_eq!(x, [1.0, 3.0, 6.0]);
 /// ```
 #[macro_export]
 macro_rules! simd_dispatch {
     (
-        @emit [$($generics:tt)*] [$($extra:tt)*] [$($fast:tt)*] [$($plain:tt)*]
+        @emit $widest:ident [$($generics:tt)*] [$($extra:tt)*] [$($fast:tt)*] [$($plain:tt)*]
         $(#[$meta:meta])*
         $vis:vis fn $name:ident ($($arg:ident : $ty:ty),*) -> $ret:ty $body:block
     ) => {
@@ -133,11 +152,7 @@ macro_rules! simd_dispatch {
         $vis fn $name<$($generics)*>($($arg: $ty),*) -> $ret {
             #[inline(always)]
             fn portable<$($generics)* $($extra)*>($($arg: $ty),*) -> $ret $body
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,fma,bmi1,bmi2")]
-            fn avx512<$($generics)*>($($arg: $ty),*) -> $ret {
-                portable$($fast)*($($arg),*)
-            }
+            $crate::simd_dispatch!(@copy $widest [$($generics)*] [$($fast)*] ($($arg: $ty),*) -> $ret);
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
             fn avx2<$($generics)*>($($arg: $ty),*) -> $ret {
@@ -145,9 +160,10 @@ macro_rules! simd_dispatch {
             }
             match $crate::simd::path() {
                 #[cfg(target_arch = "x86_64")]
-                // SAFETY: `path()` is `Avx512` only where the CPU has every feature `avx512` enables.
+                // SAFETY: `path()` is `Avx512` only where the CPU has every feature `avx512` enables,
+                // which include every feature `avx2` enables (`supported`).
                 #[allow(unsafe_code)]
-                $crate::simd::Path::Avx512 => unsafe { avx512($($arg),*) },
+                $crate::simd::Path::Avx512 => unsafe { $widest($($arg),*) },
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: `path()` is `Avx2` only where the CPU has every feature `avx2` enables.
                 #[allow(unsafe_code)]
@@ -156,23 +172,41 @@ macro_rules! simd_dispatch {
             }
         }
     };
+    // The AVX-512 copy, for a kernel not capped at AVX2.
+    (@copy avx512 [$($generics:tt)*] [$($fast:tt)*] ($($arg:ident : $ty:ty),*) -> $ret:ty) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,fma,bmi1,bmi2")]
+        fn avx512<$($generics)*>($($arg: $ty),*) -> $ret {
+            portable$($fast)*($($arg),*)
+        }
+    };
+    (@copy avx2 $($unused:tt)*) => {};
     (
+        @parse $widest:ident
         $(#[$meta:meta])*
         $vis:vis fn $name:ident <const $fma:ident : bool> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
-        $crate::simd_dispatch!(@emit [] [const $fma: bool] [::<true>] [::<false>] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+        $crate::simd_dispatch!(@emit $widest [] [const $fma: bool] [::<true>] [::<false>] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
     };
     (
+        @parse $widest:ident
         $(#[$meta:meta])*
         $vis:vis fn $name:ident $(<$($lt:lifetime),+>)? ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
-        $crate::simd_dispatch!(@emit [$($($lt),+)?] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+        $crate::simd_dispatch!(@emit $widest [$($($lt),+)?] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
     };
     (
+        @parse $widest:ident
         $(#[$meta:meta])*
         $vis:vis fn $name:ident <$t:ident : $bound:path> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
-        $crate::simd_dispatch!(@emit [$t: $bound] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+        $crate::simd_dispatch!(@emit $widest [$t: $bound] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+    };
+    (widest = avx2; $($function:tt)*) => {
+        $crate::simd_dispatch!(@parse avx2 $($function)*);
+    };
+    ($($function:tt)*) => {
+        $crate::simd_dispatch!(@parse avx512 $($function)*);
     };
 }
 

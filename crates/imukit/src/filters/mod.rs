@@ -530,6 +530,7 @@ impl<L: Law> Filter<L> {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// [`Filter::run_cancellable`] on checked inputs: the loop of its sensor set, per
     /// instruction-set path.
     fn run_batch<L: Law>(

@@ -447,6 +447,7 @@ fn write_bias(bias: &mut [[f64; 3]], bias_sigma: &mut [[f64; 3]], sigma: &mut Si
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// [`Robust::run_part`] on checked inputs: the loop of its sensor set, per instruction-set
     /// path.
     fn run_any(

@@ -393,6 +393,7 @@ fn run_split(
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The calling thread's loop, then the window side finished (its thread may have stopped
     /// polling, or never started).
     fn attitude_side(
@@ -421,6 +422,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The window thread's loop.
     fn window_side(shared: &Shared<'_, '_>) -> () {
         shared.work();

@@ -245,6 +245,7 @@ fn unposed(n: usize) -> Track {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// Stage 1's fusion of the forward pass, whose bias, σ and flags `out` holds, with `bwd` (in
     /// reversed time), in place; and in 9D (`weights` not empty) each sample's heading weight
     /// `v_f/(v_f + v_b)` of the backward pass (½ where both are 0); `out`'s and `weights`' rows are
@@ -389,6 +390,7 @@ fn step_dt(inputs: &Inputs<'_>, k: usize) -> f64 {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The forward pass: strapdown from `q` (sample k integrates (t_k−1, t_k] with bias k, as the
     /// online step) into `out`, and the specific force in `I` filtered forward into `a_i`. With
     /// `phi` empty, over the rows from the first on (`a_i.len()` of them) from the steady state of
@@ -457,6 +459,7 @@ fn tilted(a: &Vector3<f64>, out: &mut [f64; 4], world: Option<World>) {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The backward pass over the whole record from the steady state of its last input, tilting
     /// each attitude as it reaches it.
     fn backward<'a>(
@@ -477,6 +480,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The late half's backward pass (rows from `first` to the end), from the steady state of
     /// its last input, over its zero-state output `a_i` and the two entries of `Φ_k` in `phi`,
     /// each replaced by its filtered value.
@@ -504,6 +508,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// The early half's backward pass from a zero state (rows 0..a_i.len(), into `a_i`), and in
     /// `free` the first row of the map from the late half's end state to each sample's state.
     fn backward_zero_state<'a>(
@@ -525,6 +530,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// Early rows made whole: their zero-state backward output plus the free response of the
     /// late half's backward state `end`; the attitudes tilted.
     fn add_free_response(
@@ -541,6 +547,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// Late rows made whole: the attitude `q_m−1 ⊗ r_k` and the filtered specific force, the
     /// zero-state part turned by `q_m−1` plus the early half's end state through the filtered
     /// entries of `Φ_k`; the attitudes tilted.
@@ -559,6 +566,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// 9D, stage 2: the heading loop of the online step alone (the field's gate, its reference
     /// learning and the heading filter, [`super::step::magnetometer`]) on the zero-phase attitudes `base`
     /// (internal ENU) in place of each pass's own inclination: forward from `start`, or
@@ -614,6 +622,7 @@ crate::simd_dispatch! {
 }
 
 crate::simd_dispatch! {
+    widest = avx2;
     /// 9D: the heading `h = h_f + w_k wrap(h_b − h_f)` of the two heading passes (`fwd`, `bwd`,
     /// about the vertical of `out`'s zero-phase attitudes, internal ENU) put on `out` and written
     /// in `world`: `Rz(h) = Rz(w_k Δ) ⊗ Rz(h_f)` on the forward pass's half-angle pair, `Δ` the
