@@ -21,20 +21,17 @@ GRID = [-1.5, -1.0, -0.75, -0.6, -0.5, -0.4, -0.25, 0.0, 0.5]
 
 
 def truth_at(tr: Trial, s: float) -> np.ndarray:
-    """The reference quaternions (w first, NaN where missing) slerped at fractional sample k + s."""
+    """The reference quaternions (w first, NaN where missing) slerped at fractional sample k + s:
+    ``ik.eval.associate`` with the offset ``s`` samples, interpolating only between neighbouring
+    mocap samples (a dropout is not bridged)."""
     q = tr.truth
-    n = len(q)
+    t = np.arange(len(q)) / tr.rate
     ok = np.all(np.isfinite(q), axis=1)
+    reference = ik.Trajectory(t[ok], np.zeros((ok.sum(), 3)), None, Rotation.from_quat(q[ok], scalar_first=True))
+    samples = ik.Trajectory(t, np.zeros((len(q), 3)), None, Rotation.identity(len(q)))
+    pairs = ik.eval.associate(samples, reference, offset=s / tr.rate, max_dt=1.5 / tr.rate)
     out = np.full_like(q, np.nan)
-    k = np.arange(n)
-    lo = np.floor(k + s).astype(int)
-    f = (k + s) - lo
-    valid = (lo >= 0) & (lo + 1 < n)
-    valid[valid] &= ok[lo[valid]] & ok[np.minimum(lo[valid] + 1, n - 1)]
-    idx = np.nonzero(valid)[0]
-    r0 = Rotation.from_quat(q[lo[idx]], scalar_first=True)
-    r1 = Rotation.from_quat(q[lo[idx] + 1], scalar_first=True)
-    out[idx] = (r0 * Rotation.from_rotvec((r0.inv() * r1).as_rotvec() * f[idx, None])).as_quat(scalar_first=True)
+    out[pairs.mask] = pairs.reference.rotation.as_quat(scalar_first=True)
     return out
 
 
