@@ -58,6 +58,7 @@ def kernels(n: int) -> dict[str, Callable[[], object]]:
         "combined": lambda: ik.preintegrate(imu, noise=noise, scheme="lie_euler", combined=True, threads=1),
         "windows": lambda: ik.preintegrate_windows(imu, t[::200], euler, threads=1),
         "windows_midpoint": lambda: ik.preintegrate_windows(imu, t[::200], midpoint, threads=1),
+        "propagate": lambda: ik.propagate(imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise),
         "propagate_every1000": lambda: ik.propagate(
             imu, initial=initial, covariance=np.eye(15) * 1e-4, noise=noise, covariance_every=1000
         ),
