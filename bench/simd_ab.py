@@ -10,7 +10,9 @@ variant's time over the first's.
 
 Usage: ``python bench/simd_ab.py avx2 avx512 [--rounds 8] [--kernels mahony6 robust6 ...]``;
 a variant is a path name (``baseline``, ``avx2``, ``avx512``, ``auto``) or a folder holding another
-build's ``imukit`` package (``python bench/simd_ab.py /tmp/base auto``).
+build's ``imukit`` package (``python bench/simd_ab.py /tmp/base auto``); ``--simd PATH`` runs both
+builds of such a pair on that path (``python bench/simd_ab.py /tmp/base /tmp/new --simd baseline``;
+a path-name variant sets its own).
 """
 
 from __future__ import annotations
@@ -77,8 +79,8 @@ def child(n: int, repeats: int, names: list[str]) -> None:
     print(json.dumps({k: median_s(cases[k], repeats, time.perf_counter) / n * 1e9 for k in names}))
 
 
-def environment(variant: str) -> dict[str, str]:
-    env = dict(os.environ)
+def environment(variant: str, simd: str) -> dict[str, str]:
+    env = dict(os.environ, IMUKIT_SIMD=simd)
     if variant in PATHS:
         env["IMUKIT_SIMD"] = variant
     else:
@@ -93,6 +95,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--n", type=int, default=200_000)
     parser.add_argument("--kernels", nargs="+", default=None, help="short names (default: all)")
+    parser.add_argument("--simd", choices=PATHS, default="auto", help="the path of a build-folder variant")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     names = args.kernels or list(kernels(16))
@@ -107,10 +110,12 @@ def main() -> None:
     times: dict[str, list[dict[str, float]]] = {v: [] for v in args.variants}
     for r in range(args.rounds):
         for v in args.variants if r % 2 == 0 else args.variants[::-1]:
-            out = subprocess.run(command, env=environment(v), capture_output=True, text=True, check=True)
+            out = subprocess.run(command, env=environment(v, args.simd), capture_output=True, text=True, check=True)
             times[v].append(json.loads(out.stdout))
     a, b = args.variants
-    print(f"{args.rounds} alternated rounds, n = {args.n:,}, ns/sample (median over rounds)")
+    print(
+        f"{args.rounds} alternated rounds, n = {args.n:,}, builds on path {args.simd}, ns/sample (median over rounds)"
+    )
     print(f"| kernel | {a} | {b} | {b} / {a} per round: median (min–max) |")
     print("|---|---|---|---|")
     for k in names:

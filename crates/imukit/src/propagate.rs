@@ -312,8 +312,8 @@ fn block_step<L: Lanes>(l: L, p: &mut Blocks, run: &BlockRun<'_>, k: usize, x: &
 
 /// The default model's loop, `fn $name(run, x0, p, visit)`: the strapdown stepper with
 /// [`block_step`] as its visitor, the stepper's loop compiled into it ([`Stepper::run_here`], not
-/// dispatched again: 0.61× the time on the baseline path, 0.86× on AVX-512, the same on AVX2,
-/// results equal bit for bit). Written out for the baseline and the AVX2 paths of [`crate::simd`]
+/// dispatched again: on the AVX-512 path 0.90× the time with one covariance in 1000 kept, results
+/// equal bit for bit). Written out for the baseline and the AVX2 paths of [`crate::simd`]
 /// (the features as there) because a closure inherits the target features of the function it is
 /// written in: a closure written in a `simd_dispatch!` body would run on the baseline target
 /// whatever the path, unless inlined.
