@@ -9,7 +9,7 @@ the ratio peer / imukit (> 1: imukit faster). Peers that are not installed are s
 timed on ``--loop-n`` samples and reported per sample. Targets (issue 20): 6D ≤ 35 ns, 9D ≤ 50 ns
 per sample, and 9D ≥ 7× vqf 9D in the same run (the ratio is what counts on a loaded machine).
 ``imukit.filters.Robust`` online and offline against ``vqf.VQF.updateBatch`` and ``vqf.offlineVQF``
-(issue 15's targets: ≥ 3× faster than each).
+(issue 15's targets: ≥ 3× faster than each, but online 6D, which has none).
 """
 
 from __future__ import annotations
@@ -162,9 +162,13 @@ def robust_vs_vqf(imu: ik.ImuData, mag: np.ndarray, repeats: int, clock: Callabl
             ours = lambda m=m, o=offline: f.run(imu, mag=False if m is None else m, offline=o)  # noqa: E731
             pair = paired(ours, peer, repeats, clock)
             name = f"Robust {'offline' if offline else 'online'} {dim}"
-            flag = "ok" if pair.ratio >= 3.0 else "MISSED"
             times = f"{pair.a_s / n * 1e9:8.1f} ns/sample, vqf {pair.b_s / n * 1e9:8.1f}"
-            print(f"{name:<20} {times}: {pair.ratio_text()} per pair (target 3x) {flag}")
+            # Issue 15 sets ≥ 3× for offline (6D and 9D) and online 9D; none for online 6D.
+            if offline or dim == "9D":
+                target = f"(target 3x) {'ok' if pair.ratio >= 3.0 else 'MISSED'}"
+            else:
+                target = "(no target)"
+            print(f"{name:<20} {times}: {pair.ratio_text()} per pair {target}")
 
 
 if __name__ == "__main__":
