@@ -1,6 +1,7 @@
 //! Runtime CPU dispatch of the hot kernels: the one owner of which instruction set they run with.
 //!
-//! One build carries every kernel entry loop three times, compiled for
+//! One build carries every kernel entry loop three times (twice for a kernel capped at AVX2:
+//! [`simd_dispatch!`](crate::simd_dispatch)'s `widest = avx2;`), compiled for
 //!
 //! | [`Path`] | target features | chosen when |
 //! |---|---|---|
@@ -201,6 +202,12 @@ macro_rules! simd_dispatch {
         $vis:vis fn $name:ident <$t:ident : $bound:path> ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
         $crate::simd_dispatch!(@emit $widest [$t: $bound] [] [] [] $(#[$meta])* $vis fn $name ($($arg: $ty),*) -> $ret $body);
+    };
+    // An internal form no arm above accepts: a signature the macro does not support (two type
+    // parameters, no return type, `widest = …` after the doc comment). Without this arm it would
+    // reach the one below and recurse until the compiler's limit.
+    (@ $($unsupported:tt)*) => {
+        compile_error!("simd_dispatch!: unsupported form; see the macro's docs for the accepted signatures");
     };
     (widest = avx2; $($function:tt)*) => {
         $crate::simd_dispatch!(@parse avx2 $($function)*);
