@@ -153,9 +153,19 @@ fn preintegration_run(label: &str, mut p: Preintegrator) -> f64 {
     let steps = long_steps();
     let (mut ortho, mut cov9, mut cov15) = (0.0_f64, Worst::default(), Worst::default());
     let combined = p.covariance_combined().is_some();
+    // The chunk's stamps restart at 0; its own last sample equals its first, and the run's clock
+    // goes on: each batch continues the last on that clock (`integrate_samples_at`), as the
+    // continuity rule asks (`preint/continuity.rs`; fed with chunk-local stamps, the second chunk
+    // was refused as starting at t = 0 after an end at t = 100).
+    let mut done = 0;
     timed(label, steps, || {
         in_chunks(steps, |m| {
-            p.integrate_samples(&chunk.samples(m)).unwrap();
+            let clock = [
+                done as f64 * stability_common::H,
+                (done + m) as f64 * stability_common::H,
+            ];
+            p.integrate_samples_at(&chunk.samples(m), None, clock).unwrap();
+            done += m;
             ortho = ortho.max(orthonormality_error(&p.delta_rotation));
             cov9.add(psd_report(&p.covariance()));
             if let Some(c) = p.covariance_combined() {
