@@ -100,6 +100,56 @@ fn preintegration_overflow_is_an_error_and_adds_nothing() {
     }
 }
 
+/// fuzz/artifacts/preint/crash-7386d8e0… (found on the AVX-512 path; every path agrees): a
+/// midpoint window of two samples with an accelerometer bias of −2.0e265 m/s² and zero noise.
+/// The deltas (5e263 m/s) and the stored covariance blocks are finite, but the public
+/// `covariance()` adds the last sample's pending term, whose Gram products of the 1e262-sized
+/// cross blocks overflow and meet the zero noise as `0 · inf`: NaN behind an `Ok`. It is an
+/// overflow error now, with nothing added; every `Ok` of the case's neighbours is finite.
+#[test]
+fn preintegration_pending_term_overflow_is_an_error_not_a_nan_covariance() {
+    use imukit::imu::{Noise, Samples};
+    use imukit::preint::{Preintegrator, Scheme};
+    use nalgebra::Vector3;
+
+    let unit = 2f64.powi(-10);
+    let t0 = 1.8813709274036607e-183 - 0.1281;
+    let t = [t0, t0 + 0.0255];
+    let gyro = [
+        [-256.0 * unit, -unit, 0.0],
+        [23296.0 * unit, 1024.0 * unit, 10240.0 * unit],
+    ];
+    let accel = [[-256.0 * unit, -unit, -unit], [255.0 * unit, 0.0, 0.0]];
+    let samples = Samples::new(&t, &gyro, &accel).unwrap();
+    for (bias, overflows) in [(-2.0152837035555516e265, true), (-2.0e150, false)] {
+        for scheme in [Scheme::Midpoint, Scheme::Euler] {
+            let mut p = Preintegrator::new(Vector3::zeros(), Vector3::new(bias, 5e-324, 0.0), Noise::default())
+                .with_scheme(scheme);
+            let before = p.clone();
+            match p.integrate_samples(&samples) {
+                Err(Error::Overflow { index }) => {
+                    assert!(overflows, "{scheme:?}, bias {bias:e}: an overflow error");
+                    assert_eq!(index, 1);
+                    assert_eq!(p, before, "{scheme:?}: the failed call changed the preintegration");
+                }
+                Ok(()) => {
+                    assert!(
+                        !(overflows && scheme == Scheme::Midpoint),
+                        "{scheme:?}, bias {bias:e}: Ok"
+                    );
+                    let (cov, jac) = (p.covariance(), p.bias_jacobian());
+                    let values = [cov.as_slice(), jac.as_slice(), p.delta_velocity.as_slice()];
+                    assert!(
+                        values.iter().all(|v| v.iter().all(|x| x.is_finite())),
+                        "{scheme:?}: non-finite Ok"
+                    );
+                }
+                Err(e) => panic!("{scheme:?}: {e}"),
+            }
+        }
+    }
+}
+
 /// An overflow at sample 1 blamed on the gyro bias (the rate's term dominates).
 fn is_bias_overflow<T>(r: &Result<T, Error>) -> bool {
     matches!(r, Err(e) if e.argument() == Some("bias") && matches!(e.root(), Error::Overflow { index: 1 }))
