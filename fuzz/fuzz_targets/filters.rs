@@ -98,7 +98,15 @@ fuzz_target!(|input: Input| {
         }),
     };
     if input.madgwick {
-        drive(Madgwick { beta: input.gains[0] }, options, &input);
+        let [beta, full_rate_angle_rad] = input.gains;
+        drive(
+            Madgwick {
+                beta,
+                full_rate_angle_rad,
+            },
+            options,
+            &input,
+        );
     } else {
         let [kp, ki] = input.gains;
         drive(Mahony { kp, ki }, options, &input);
