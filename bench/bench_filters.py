@@ -159,7 +159,9 @@ def robust_vs_vqf(imu: ik.ImuData, mag: np.ndarray, repeats: int, clock: Callabl
             else:
                 args = (g, a) if m is None else (g, a, m)
                 peer = lambda args=args: vqf.VQF(dt).updateBatch(*args)  # noqa: E731
-            ours = lambda m=m, o=offline: f.run(imu, mag=False if m is None else m, offline=o)  # noqa: E731
+            # With --imu-mag the field is imu.mag (read in place), else the mag= array (copied).
+            use = False if m is None else (None if imu.mag is not None else m)
+            ours = lambda use=use, o=offline: f.run(imu, mag=use, offline=o)  # noqa: E731
             pair = paired(ours, peer, repeats, clock)
             name = f"Robust {'offline' if offline else 'online'} {dim}"
             times = f"{pair.a_s / n * 1e9:8.1f} ns/sample, vqf {pair.b_s / n * 1e9:8.1f}"

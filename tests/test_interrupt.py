@@ -1,6 +1,6 @@
 """Ctrl-C during a long kernel returns promptly (issue 17, item 15): ``propagate`` of 25 M samples
 deferred a KeyboardInterrupt for 11.6 s, until it returned. Long kernels (strapdown, propagation,
-preintegration, attitude integration, the filters' ``run``, the simulator) now run on a thread of
+preintegration, attitude integration, the filters' ``run`` (``Robust``'s online run too), the simulator) now run on a thread of
 their own while the calling thread runs the signal handlers every 20 ms; the kernel polls a cancel
 flag every 65,536 samples (the simulator: every chunk of rows; ``preintegrate_windows``: every block of
 at most 4096 windows and about 2^17 samples).
@@ -41,6 +41,7 @@ CHILD = textwrap.dedent(
             "integrate_attitude": lambda: ik.integrate_attitude(imu.t, imu.gyro, scheme="rk4",
                                                                 representation="euler"),
             "mahony": lambda: ik.filters.Mahony().run(imu),
+            "robust": lambda: ik.filters.Robust().run(imu),
             "simulate": lambda: ik.sim.simulate(ik.sim.FigureEight(), rate=1000.0, duration=n / 1000.0,
                                                 noise=noise)}[sys.argv[1]]
     # A shell's background job inherits SIGINT ignored, and Python then installs no handler: the
@@ -72,6 +73,7 @@ CHILD = textwrap.dedent(
         "preintegrate_windows(list)",
         "integrate_attitude",
         "mahony",
+        "robust",
         "simulate",
     ],
 )

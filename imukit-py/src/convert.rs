@@ -9,6 +9,7 @@
 //! - enums by name: [`Name`], through the core's `FromStr` ([`imukit::names::Named`]);
 //! - a filter state copied ([`state_copy`]).
 
+use imukit::filters::Inputs;
 use imukit::imu::{Bias, NavState, Noise, Samples};
 use imukit::names::Named;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -57,6 +58,45 @@ pub(crate) fn frozen_or_copy<'py, D: numpy::ndarray::Dimension>(
         return Ok(x.as_any().clone().cast_into::<PyArray<f64, D>>()?);
     }
     private_copy(py, x)
+}
+
+/// A filter's record (`t`, `gyro`, `accel` and the optional `mag`) that a kernel may read with
+/// the GIL released: each array in place where no Python code can write to it meanwhile, else a
+/// private copy ([`frozen_or_copy`]).
+pub(crate) struct FilterRecord<'py> {
+    t: PyReadonlyArray1<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    accel: PyReadonlyArray2<'py, f64>,
+    mag: Option<PyReadonlyArray2<'py, f64>>,
+}
+
+impl<'py> FilterRecord<'py> {
+    pub(crate) fn new(
+        py: Python<'py>,
+        t: &PyReadonlyArray1<'py, f64>,
+        gyro: &PyReadonlyArray2<'py, f64>,
+        accel: &PyReadonlyArray2<'py, f64>,
+        mag: Option<&PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            t: frozen_or_copy(py, t)?.readonly(),
+            gyro: frozen_or_copy(py, gyro)?.readonly(),
+            accel: frozen_or_copy(py, accel)?.readonly(),
+            mag: mag
+                .map(|m| Ok::<_, PyErr>(frozen_or_copy(py, m)?.readonly()))
+                .transpose()?,
+        })
+    }
+
+    /// The record as the core's inputs; an array of the wrong layout is a `ShapeError` naming it.
+    pub(crate) fn inputs(&self, py: Python<'py>) -> PyResult<Inputs<'_>> {
+        Ok(Inputs {
+            t: contiguous(py, "t", &self.t)?,
+            gyro: rows(py, "gyro", &self.gyro)?,
+            accel: rows(py, "accel", &self.accel)?,
+            mag: self.mag.as_ref().map(|m| rows(py, "mag", m)).transpose()?,
+        })
+    }
 }
 
 /// What a call's outputs need, for the message when they cannot be had: `count` items of `what`

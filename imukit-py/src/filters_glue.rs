@@ -13,18 +13,18 @@
 //! `ParameterError` here, where the conversion fails.
 
 use imukit::filters::{
-    AccelLowPass, AccelRejection, CommonState, Fields, Filter, GainRamp, Inputs, Law, Madgwick, MagRejection, Mahony,
-    Options, RestDetection, State, World,
+    AccelLowPass, AccelRejection, CommonState, Fields, Filter, GainRamp, Law, Madgwick, MagRejection, Mahony, Options,
+    RestDetection, State, World,
 };
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{empty, frozen_or_copy, Demand};
+use crate::convert::{empty, Demand, FilterRecord};
 use crate::convert::{real_number, Name};
 use crate::threads::Fresh;
-use crate::{contiguous, raise, state_copy, to_py};
+use crate::{raise, state_copy, to_py};
 
 /// `x` as a float; None (omitted) keeps `default`. Strings and arrays of several numbers are not
 /// numbers: a `ParameterError` naming `name`.
@@ -601,23 +601,8 @@ fn run<'py, L: Law>(
 ) -> PyResult<Outputs<'py>> {
     let mut s = state.typed::<L>();
     let n = t.shape()[0];
-    let t = frozen_or_copy(py, &t)?.readonly();
-    let gyro = frozen_or_copy(py, &gyro)?.readonly();
-    let accel = frozen_or_copy(py, &accel)?.readonly();
-    let mag = match mag {
-        Some(m) => Some(frozen_or_copy(py, &m)?.readonly()),
-        None => None,
-    };
-    let rows = |name, x| contiguous(py, name, x).map(|x| x.as_chunks::<3>().0);
-    let inputs = Inputs {
-        t: contiguous(py, "t", &t)?,
-        gyro: rows("gyro", &gyro)?,
-        accel: rows("accel", &accel)?,
-        mag: match &mag {
-            Some(m) => Some(rows("mag", m)?),
-            None => None,
-        },
-    };
+    let record = FilterRecord::new(py, &t, &gyro, &accel, mag.as_ref())?;
+    let inputs = record.inputs(py)?;
     // Every row is written (one per sample) or the call fails. The demand is both outputs': seven
     // values a sample.
     let demand = Demand::of("imu", "samples", &[n, 7]);

@@ -8,14 +8,14 @@
 //!
 //! Converts only: values are checked by the core, Python types by `imukit._robust`.
 
-use imukit::filters::{Fields, Inputs, Robust, RobustOutputs, RobustParams, RobustState, World};
+use imukit::filters::{Fields, Robust, RobustOutputs, RobustParams, RobustState, World};
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{contiguous, frozen_or_copy, real_number, rows, state_copy, unit_quaternion, Name};
-use crate::threads::{prefaulting, Fresh};
+use crate::convert::{real_number, state_copy, unit_quaternion, FilterRecord, Name};
+use crate::threads::{interruptible, prefaulting, run_in_pool, Fresh};
 use crate::{raise, to_py};
 
 /// `T`'s fields from a dict of name → float: unknown names are a `ParameterError`, missing ones
@@ -248,17 +248,15 @@ impl PyRobustFilter {
                     &mut out,
                 )?;
             } else {
-                let record = Record::new(py, &t, &gyro, &accel, mag.as_ref())?;
-                let fresh = [
-                    Fresh::of(out.q),
-                    Fresh::of(out.bias),
-                    Fresh::of(out.bias_sigma),
-                    Fresh::of(out.rest),
-                    Fresh::of(out.mag_disturbed),
-                ];
-                prefaulting(n, &fresh, || {
-                    record.run(py, &self.inner, &mut s, continued, threads, &mut out)
-                })?;
+                online(
+                    py,
+                    &self.inner,
+                    &mut s,
+                    (&t, &gyro, &accel, mag.as_ref()),
+                    continued,
+                    threads,
+                    &mut out,
+                )?;
             }
         }
         Ok((out_q, out_b, out_s, out_rest, out_mag, PyRobustState(s)))
@@ -273,8 +271,43 @@ type Arrays<'a, 'py> = (
     Option<&'a PyReadonlyArray2<'py, f64>>,
 );
 
+/// The online filter over the whole record in one run (its window halves on a second thread
+/// of `threads`, else of the process's pool), interruptible by Ctrl-C. The record is read in
+/// place where no Python code can write to it meanwhile, else copied ([`FilterRecord`]). It ran
+/// part by part (4096 rows copied with the GIL held, then filtered) until 2026-12-07: each part
+/// started the second thread anew, which woke too late for the part's first bias window, so the
+/// calling thread ran ~700 of each part's 4096 window halves itself (a 9D run 15 % slower).
+fn online(
+    py: Python<'_>,
+    f: &Robust,
+    s: &mut RobustState,
+    (t, gyro, accel, mag): Arrays<'_, '_>,
+    continued: bool,
+    threads: Option<usize>,
+    out: &mut RobustOutputs<'_>,
+) -> PyResult<()> {
+    let record = FilterRecord::new(py, t, gyro, accel, mag)?;
+    let inputs = record.inputs(py)?;
+    let n = inputs.t.len();
+    let fresh = [
+        Fresh::of(out.q),
+        Fresh::of(out.bias),
+        Fresh::of(out.bias_sigma),
+        Fresh::of(out.rest),
+        Fresh::of(out.mag_disturbed),
+    ];
+    prefaulting(n, &fresh, || {
+        interruptible(py, n, |cancel| {
+            run_in_pool(threads, || {
+                f.run_part_cancellable(s, &inputs, (0, continued), out, cancel)
+            })
+        })
+    })??
+    .map_err(|e| to_py(py, "imu / params", e))
+}
+
 /// The smoother over the whole record (it reads it forward and backward), read in place where no
-/// Python code can write to it meanwhile ([`frozen_or_copy`]), else over private copies.
+/// Python code can write to it meanwhile, else over private copies ([`FilterRecord`]).
 fn smooth(
     py: Python<'_>,
     f: &Robust,
@@ -283,122 +316,12 @@ fn smooth(
     threads: Option<usize>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
-    let t = frozen_or_copy(py, t)?.readonly();
-    let gyro = frozen_or_copy(py, gyro)?.readonly();
-    let accel = frozen_or_copy(py, accel)?.readonly();
-    let mag = match mag {
-        Some(m) => Some(frozen_or_copy(py, m)?.readonly()),
-        None => None,
-    };
-    let inputs = Inputs {
-        t: contiguous(py, "t", &t)?,
-        gyro: rows(py, "gyro", &gyro)?,
-        accel: rows(py, "accel", &accel)?,
-        mag: match &mag {
-            Some(m) => Some(rows(py, "mag", m)?),
-            None => None,
-        },
-    };
+    let record = FilterRecord::new(py, t, gyro, accel, mag)?;
+    let inputs = record.inputs(py)?;
     // Its passes run side by side (`rayon::join`): on `threads`, else the process's pool
     // (`set_num_threads`, or a fresh one in a forked child).
-    py.detach(|| crate::threads::run_in_pool(threads, || f.smooth(s, &inputs, out)))?
+    py.detach(|| run_in_pool(threads, || f.smooth(s, &inputs, out)))?
         .map_err(|e| to_py(py, "imu / params", e))
-}
-
-/// Rows per part of an online run: each part is copied (GIL held) into buffers that stay in the
-/// cache, then filtered with the GIL released. Copying the whole record instead, as a private
-/// copy for the GIL-free read (see [`crate::convert::private_copy`]), cost a quarter of a 9D run in fresh pages.
-const PART: usize = 4096;
-
-/// The caller's arrays, read part by part with the GIL held.
-struct Record<'a> {
-    t: &'a [f64],
-    gyro: &'a [[f64; 3]],
-    accel: &'a [[f64; 3]],
-    mag: Option<&'a [[f64; 3]]>,
-}
-
-impl<'a> Record<'a> {
-    fn new<'py>(
-        py: Python<'py>,
-        t: &'a PyReadonlyArray1<'py, f64>,
-        gyro: &'a PyReadonlyArray2<'py, f64>,
-        accel: &'a PyReadonlyArray2<'py, f64>,
-        mag: Option<&'a PyReadonlyArray2<'py, f64>>,
-    ) -> PyResult<Self> {
-        Ok(Self {
-            t: contiguous(py, "t", t)?,
-            gyro: rows(py, "gyro", gyro)?,
-            accel: rows(py, "accel", accel)?,
-            mag: mag.map(|m| rows(py, "mag", m)).transpose()?,
-        })
-    }
-
-    /// The whole record as the core's inputs (read only with the GIL held).
-    fn inputs(&self) -> Inputs<'a> {
-        Inputs {
-            t: self.t,
-            gyro: self.gyro,
-            accel: self.accel,
-            mag: self.mag,
-        }
-    }
-
-    /// The online filter over the record, part by part; between parts Python may run (its
-    /// signal handlers too: Ctrl-C stops a long run).
-    fn run(
-        &self,
-        py: Python<'_>,
-        f: &Robust,
-        s: &mut RobustState,
-        continued: bool,
-        threads: Option<usize>,
-        out: &mut RobustOutputs<'_>,
-    ) -> PyResult<()> {
-        let n = self.t.len();
-        let lengths = [Some(self.gyro.len()), Some(self.accel.len()), self.mag.map(<[_]>::len)];
-        if n == 0 || lengths.iter().flatten().any(|&l| l != n) {
-            // The core's answer (its error for unequal lengths, raised before it reads a sample).
-            return f
-                .run(s, &self.inputs(), continued, out)
-                .map_err(|e| to_py(py, "imu / params", e));
-        }
-        let part = PART.min(n);
-        let (mut t, mut gyro, mut accel) = (vec![0.0; part], vec![[0.0; 3]; part], vec![[0.0; 3]; part]);
-        let mut mag = self.mag.map(|_| vec![[0.0; 3]; part]);
-        for first in (0..n).step_by(PART) {
-            let end = (first + PART).min(n);
-            let m = end - first;
-            t[..m].copy_from_slice(&self.t[first..end]);
-            gyro[..m].copy_from_slice(&self.gyro[first..end]);
-            accel[..m].copy_from_slice(&self.accel[first..end]);
-            if let (Some(buf), Some(src)) = (mag.as_mut(), self.mag) {
-                buf[..m].copy_from_slice(&src[first..end]);
-            }
-            let inputs = Inputs {
-                t: &t[..m],
-                gyro: &gyro[..m],
-                accel: &accel[..m],
-                mag: mag.as_deref().map(|b| &b[..m]),
-            };
-            let mut part_out = RobustOutputs {
-                q: &mut out.q[first..end],
-                bias: &mut out.bias[first..end],
-                bias_sigma: &mut out.bias_sigma[first..end],
-                rest: &mut out.rest[first..end],
-                mag_disturbed: &mut out.mag_disturbed[first..end],
-            };
-            let resumed = continued || first > 0;
-            // A part runs each step's window half on a second thread of `threads`, else of the
-            // process's pool (one thread: all on one).
-            py.detach(|| {
-                crate::threads::run_in_pool(threads, || f.run_part(s, &inputs, first, resumed, &mut part_out))
-            })?
-            .map_err(|e| to_py(py, "imu / params", e))?;
-            py.check_signals()?;
-        }
-        Ok(())
-    }
 }
 
 /// Registers the classes.

@@ -38,7 +38,7 @@ pub use state::RobustState;
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{finite, row, Inputs, World};
-use crate::{Error, Result};
+use crate::{Cancel, Error, Result};
 use step::{Coefs, CoefsCache};
 
 /// Per-sample outputs of a run, one row per sample.
@@ -270,7 +270,22 @@ impl Robust {
         continued: bool,
         out: &mut Outputs<'_>,
     ) -> Result<()> {
-        self.run_checked(state, inputs, (first, continued), true, out)
+        self.run_part_cancellable(state, inputs, (first, continued), out, &Cancel::new())
+    }
+
+    /// [`Robust::run_part`] with `start = (first, continued)`, stopping with
+    /// [`Error::Interrupted`] (naming the row in the whole record) when `cancel` is set (polled
+    /// every [`Cancel::EVERY`] samples); the rows before it are written and `state` is part-way
+    /// through, as after an error.
+    pub fn run_part_cancellable(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        start: (usize, bool),
+        out: &mut Outputs<'_>,
+        cancel: &Cancel,
+    ) -> Result<()> {
+        self.run_checked(state, inputs, start, true, out, cancel)
     }
 
     /// [`Robust::run_part`] with `start = (first, continued)`, writing the attitude only where
@@ -283,6 +298,7 @@ impl Robust {
         (first, continued): (usize, bool),
         attitude: bool,
         out: &mut Outputs<'_>,
+        cancel: &Cancel,
     ) -> Result<()> {
         let n = inputs.t.len();
         check_lengths(inputs)?;
@@ -300,9 +316,9 @@ impl Robust {
             });
         }
         if attitude && n >= pipeline::FROM && rayon::current_num_threads() > 1 {
-            return pipeline::run(self, state, inputs, (first, continued), out);
+            return pipeline::run(self, state, inputs, (first, continued), out, cancel);
         }
-        run_any(self, state, inputs, (first, continued), attitude, out)
+        run_any(self, state, inputs, (first, continued), attitude, out, cancel)
     }
 
     /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`, each checked sample
@@ -315,11 +331,13 @@ impl Robust {
         mags: &[[f64; 3]],
         (first, continued): (usize, bool),
         stepper: &mut S,
+        cancel: &Cancel,
     ) -> Result<()> {
         let p = &self.params;
         let mut cache = CoefsCache::new(Coefs::new(p, 0.0));
         let mut previous = state.time;
         for (k, &t) in inputs.t.iter().enumerate() {
+            cancel.check(k).map_err(|_| Error::Interrupted { index: first + k })?;
             let gyro = row(&inputs.gyro[k]);
             let accel = row(&inputs.accel[k]);
             let mag = if NINE { Some(row(&mags[k])) } else { None };
@@ -457,12 +475,13 @@ crate::simd_dispatch! {
         start: (usize, bool),
         attitude: bool,
         out: &mut Outputs<'_>,
+        cancel: &Cancel
     ) -> Result<()> {
         match (inputs.mag, attitude) {
-            (Some(m), true) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<true>::new(f, out)),
-            (Some(m), false) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<false>::new(f, out)),
-            (None, true) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<true>::new(f, out)),
-            (None, false) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<false>::new(f, out)),
+            (Some(m), true) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<true>::new(f, out), cancel),
+            (Some(m), false) => f.run_loop::<true, _>(state, inputs, m, start, &mut Whole::<false>::new(f, out), cancel),
+            (None, true) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<true>::new(f, out), cancel),
+            (None, false) => f.run_loop::<false, _>(state, inputs, &[], start, &mut Whole::<false>::new(f, out), cancel),
         }
     }
 }

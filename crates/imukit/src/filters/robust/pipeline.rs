@@ -28,7 +28,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector2};
 use super::step::{self, Coefs, CoefsCache, Update};
 use super::{attitude_half_sum, run_any, window_half_sum, write_bias, Outputs, Robust, RobustState, Sigma, Stepper};
 use crate::filters::{row, Inputs};
-use crate::{Error, Result};
+use crate::{Cancel, Error, Result};
 
 /// Runs of this many samples and more take two threads (rayon's `join` costs a few µs, a
 /// sample about 0.2 µs).
@@ -325,15 +325,16 @@ pub(super) fn run(
     inputs: &Inputs<'_>,
     (first, continued): (usize, bool),
     out: &mut Outputs<'_>,
+    cancel: &Cancel,
 ) -> Result<()> {
     if state.initialized || inputs.t.is_empty() {
-        return run_split(f, state, inputs, (first, continued), out);
+        return run_split(f, state, inputs, (first, continued), out, cancel);
     }
     let (mut head, mut tail) = out.split_at(1);
     let n = inputs.t.len();
     let (one, rest) = (part(inputs, 0..1), part(inputs, 1..n));
-    run_any(f, state, &one, (first, continued), true, &mut head)?;
-    run_split(f, state, &rest, (first + 1, true), &mut tail)
+    run_any(f, state, &one, (first, continued), true, &mut head, cancel)?;
+    run_split(f, state, &rest, (first + 1, true), &mut tail, cancel)
 }
 
 /// Rows `rows` of `inputs`.
@@ -353,6 +354,7 @@ fn run_split(
     inputs: &Inputs<'_>,
     start: (usize, bool),
     out: &mut Outputs<'_>,
+    cancel: &Cancel,
 ) -> Result<()> {
     let shared = Shared {
         filter: f,
@@ -380,7 +382,7 @@ fn run_split(
         room: RING,
     };
     let (result, ()) = rayon::join(
-        || attitude_side(f, state, inputs, start, &mut side),
+        || attitude_side(f, state, inputs, start, &mut side, cancel),
         || window_side(&shared),
     );
     let h = shared.window.0.into_inner().unwrap_or_else(PoisonError::into_inner);
@@ -401,15 +403,16 @@ crate::simd_dispatch! {
         state: &mut RobustState,
         inputs: &Inputs<'_>,
         start: (usize, bool),
-        side: &mut AttitudeSide<'_, '_, '_>
+        side: &mut AttitudeSide<'_, '_, '_>,
+        cancel: &Cancel
     ) -> Result<()> {
         // Whatever ends the loop, a panic too, ends the window thread's wait: `join` waits for
         // it before it passes the panic on.
         let finish = Finish(side.shared);
         // The field is the window side's: the loop reads it only to check it.
         let result = match inputs.mag {
-            Some(m) => f.run_loop::<true, _>(state, inputs, m, start, side),
-            None => f.run_loop::<false, _>(state, inputs, &[], start, side),
+            Some(m) => f.run_loop::<true, _>(state, inputs, m, start, side, cancel),
+            None => f.run_loop::<false, _>(state, inputs, &[], start, side, cancel),
         };
         let shared = side.shared;
         shared.published.store(side.written, Ordering::SeqCst);
@@ -499,13 +502,13 @@ mod tests {
     /// The run on one thread: rows and final state.
     fn sequential(f: &Robust, s: &mut RobustState, i: &Inputs<'_>, continued: bool) -> (Track, Result<()>) {
         let mut track = Track::new(i.t.len());
-        let result = run_any(f, s, i, (0, continued), true, &mut track.outputs());
+        let result = run_any(f, s, i, (0, continued), true, &mut track.outputs(), &Cancel::new());
         (track, result)
     }
 
     fn piped(f: &Robust, s: &mut RobustState, i: &Inputs<'_>, continued: bool) -> (Track, Result<()>) {
         let mut track = Track::new(i.t.len());
-        let result = run(f, s, i, (0, continued), &mut track.outputs());
+        let result = run(f, s, i, (0, continued), &mut track.outputs(), &Cancel::new());
         (track, result)
     }
 
@@ -630,7 +633,7 @@ mod tests {
             let mut s = f.state_at(&UnitQuaternion::identity(), 0.0);
             let pool = pool();
             let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                pool.install(|| run(&f, &mut s, &i, (0, false), &mut track.outputs()))
+                pool.install(|| run(&f, &mut s, &i, (0, false), &mut track.outputs(), &Cancel::new()))
             }));
             let _ = sender.send(outcome.is_err());
         });
@@ -654,5 +657,37 @@ mod tests {
         assert_eq!(e2, e1);
         assert_eq!(two, one);
         assert_eq!(bits(&s2), bits(&s1));
+    }
+
+    /// A cancelled run stops at its first polled row on one thread and on two (the window thread
+    /// is released, not left waiting), naming the row in the whole record; an uncancelled flag
+    /// changes nothing.
+    #[test]
+    fn a_cancelled_run_stops_on_both_paths() {
+        let r = record(3_000);
+        let f = Robust::new(RobustParams::default(), World::Enu).unwrap();
+        let i = inputs(&r, 0..3_000, true);
+        let cancel = Cancel::new();
+        cancel.cancel();
+        for threads in [1, 2] {
+            let mut track = Track::new(3_000);
+            // Initialised: on two threads the run goes straight to the split.
+            let mut s = f.state_at(&UnitQuaternion::identity(), 0.0);
+            let e = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| f.run_part_cancellable(&mut s, &i, (500, false), &mut track.outputs(), &cancel))
+                .unwrap_err();
+            assert!(matches!(e, Error::Interrupted { index: 500 }), "{threads} threads: {e}");
+        }
+        let mut s = RobustState::default();
+        let (one, _) = sequential(&f, &mut s, &i, false);
+        let mut track = Track::new(3_000);
+        let mut s2 = RobustState::default();
+        pool()
+            .install(|| f.run_part_cancellable(&mut s2, &i, (0, false), &mut track.outputs(), &Cancel::new()))
+            .unwrap();
+        assert_eq!(track, one);
     }
 }

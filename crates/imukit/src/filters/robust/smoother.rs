@@ -48,7 +48,7 @@ use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
 use crate::pages;
 use crate::quat::exp_step;
-use crate::Result;
+use crate::{Cancel, Result};
 
 fn quat(x: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(x[3], x[0], x[1], x[2]))
@@ -131,7 +131,7 @@ impl Robust {
         // only the backward pass has a track of its own.
         let mut bwd = unposed(n);
         let (forward, backward) = rayon::join(
-            || self.run_checked(state, inputs, (0, false), false, &mut out.unposed()),
+            || self.run_checked(state, inputs, (0, false), false, &mut out.unposed(), &Cancel::new()),
             || self.run_reversed(inputs, &mut bwd),
         );
         forward?;
@@ -214,7 +214,14 @@ impl Robust {
                 rest: &mut track.rest[rows.clone()],
                 mag_disturbed: &mut track.mag_disturbed[rows],
             };
-            self.run_checked(&mut state, &part.inputs(), (first, first > 0), false, &mut out)?;
+            self.run_checked(
+                &mut state,
+                &part.inputs(),
+                (first, first > 0),
+                false,
+                &mut out,
+                &Cancel::new(),
+            )?;
         }
         Ok(())
     }
@@ -742,6 +749,7 @@ mod tests {
                 (0, false),
                 false,
                 &mut out,
+                &Cancel::new(),
             )?;
             assert!(parts == one, "9D: {}", mag.is_some());
             assert!(one.bias.iter().any(|b| *b != [0.0; 3]), "the pass ran");
