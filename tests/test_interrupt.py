@@ -1,9 +1,9 @@
 """Ctrl-C during a long kernel returns promptly (issue 17, item 15): ``propagate`` of 25 M samples
 deferred a KeyboardInterrupt for 11.6 s, until it returned. Long kernels (strapdown, propagation,
-preintegration, attitude integration, the filters' ``run`` (``Robust``'s online run too), the simulator) now run on a thread of
-their own while the calling thread runs the signal handlers every 20 ms; the kernel polls a cancel
-flag every 65,536 samples (the simulator: every chunk of rows; ``preintegrate_windows``: every block of
-at most 4096 windows and about 2^17 samples).
+preintegration, attitude integration, the filters' ``run`` (``Robust``'s online run too), the
+simulator) now run on a thread of their own while the calling thread runs the signal handlers
+every 20 ms; the kernel polls a cancel flag every 65,536 samples (the simulator: every chunk of
+rows; ``preintegrate_windows``: every block of at most 4096 windows and about 2^17 samples).
 """
 
 from __future__ import annotations

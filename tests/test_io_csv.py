@@ -145,7 +145,7 @@ def test_malformed_files_name_file_and_line(tmp_path: Path, text: str, options: 
     ("options", "message"),
     [
         ({"gyro_unit": "dps"}, r"^gyro_unit: expected one of \('rad/s', 'deg/s'\), got 'dps'$"),
-        ({"accel_unit": "m/s2"}, r"^accel_unit: expected one of \('m/s\^2', 'g'\), got 'm/s2'$"),
+        ({"accel_unit": "m/s2"}, r"^accel_unit: expected one of \('m/s\^2', 'g', 'mg'\), got 'm/s2'$"),
         ({"time_unit": "sec"}, r"^time_unit: expected one of \('s', 'ms', 'us', 'ns'\), got 'sec'$"),
         ({"delimiter": "|"}, r"^delimiter: expected one of \(',', ';', '\\t', ' '\), got '\|'$"),
         ({"standard_gravity": 0.0}, r"^standard_gravity: expected a positive, finite number of m/s\^2 per g, got 0\.0"),

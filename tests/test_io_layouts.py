@@ -44,11 +44,12 @@ def test_column_roles_name_every_role_mag_included() -> None:
     roles = column_roles(ROS_NAMES)
     assert roles is not None
     assert roles.columns == {"time": [0], "gyro": [1, 2, 3], "accel": [4, 5, 6], "mag": [7, 8, 9]}
-    assert (roles.time_unit, roles.gyro_unit, roles.accel_unit) == (None, "rad/s", "m/s^2")
+    assert roles.time_unit is None  # the names' units are read_imu_csv's to read
     xio = ["Time (s)", *(f"Gyroscope {a} (deg/s)" for a in "XYZ"), *(f"Accelerometer {a} (g)" for a in "XYZ")]
     roles = column_roles(xio)
-    assert roles is not None and (roles.time_unit, roles.gyro_unit, roles.accel_unit) == ("s", "deg/s", "g")
-    assert "mag" not in roles.columns
+    assert roles is not None and roles.columns == {"time": [0], "gyro": [1, 2, 3], "accel": [4, 5, 6]}
+    roles = column_roles(["time_ns", "gx", "gy", "gz", "ax", "ay", "az"])  # a time name with its unit word
+    assert roles is not None and roles.columns["time"] == [0]
     rostopic = ["%time", "field.header.stamp", *ROS_NAMES[1:7]]  # rostopic echo -p: header.stamp wins, in ns
     roles = column_roles([f"field.{n}" if "." in n and not n.startswith("field") else n for n in rostopic])
     assert roles is not None and roles.columns["time"] == [1] and roles.time_unit == "ns"
@@ -190,3 +191,103 @@ def test_read_trajectory_csv_units_errors_and_bad_lines(tmp_path: Path) -> None:
         ik.io.read_trajectory_csv(path, time_column=0, position_columns=[1, 2, 3], quaternion_columns=[4, 5, 6])
     with pytest.raises(ik.ParameterError, match=r"^position_columns: no column named 'px' in the header"):
         ik.io.read_trajectory_csv(path, time_column=0, position_columns=["px", 2, 3], quaternion_columns=[4, 5, 6, 7])
+
+
+XIO_HEADER = "Time (s),Gyroscope X (deg/s),Gyroscope Y (deg/s),Gyroscope Z (deg/s),Accelerometer X (g),"
+XIO_HEADER += "Accelerometer Y (g),Accelerometer Z (g)"
+
+
+def test_units_the_names_state_are_read_when_the_columns_are_given(tmp_path: Path) -> None:
+    """x-io's names with no unit options read 1 g as 1.0 m/s² and deg/s as rad/s before 2026-12-07."""
+    path = tmp_path / "sensor_data.csv"
+    path.write_text(XIO_HEADER + "\n0.0,57.29577951308232,0,0,0,0,1\n0.01,0,0,0,0,0,1\n")
+    columns = [f"Gyroscope {a} (deg/s)" for a in "XYZ"], [f"Accelerometer {a} (g)" for a in "XYZ"]
+    for given in (
+        {"gyro_columns": columns[0], "accel_columns": columns[1]},
+        {"gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]},
+    ):
+        imu = ik.io.read_imu_csv(path, time_column=0, **given)  # type: ignore[arg-type]
+        np.testing.assert_allclose(imu.gyro[0], [1.0, 0.0, 0.0], rtol=1e-15)
+        np.testing.assert_array_equal(imu.accel[0], [0.0, 0.0, 9.80665])
+    with pytest.warns(UserWarning, match=r"gyro_unit='rad/s' overrides the header .*'Gyroscope X \(deg/s\)' \(deg/s\)"):
+        imu = ik.io.read_imu_csv(
+            path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6], gyro_unit="rad/s"
+        )
+    assert imu.gyro[0, 0] == 57.29577951308232  # as told
+
+
+@pytest.mark.parametrize(
+    ("header", "expected"),
+    [
+        ("t,gx [dps],gy [dps],gz [dps],ax [m/s²],ay [m/s²],az [m/s²]", ([np.pi / 180, 0, 0], [0, 0, 1.0])),
+        ("time_ms,gx (rad/sec),gy,gz,ax [mg],ay [mg],az [mg]", ([1.0, 0, 0], [0, 0, 9.80665e-3])),
+        (
+            "timestamp [us],gyro_x [deg/sec],gyro_y [deg/sec],gyro_z [deg/sec],acc_x,acc_y,acc_z",
+            ([np.pi / 180, 0, 0], [0, 0, 1.0]),
+        ),
+    ],
+)
+def test_header_units_by_their_common_spellings(
+    tmp_path: Path, header: str, expected: tuple[list[float], list[float]]
+) -> None:
+    path = tmp_path / "imu.csv"
+    path.write_text(header + "\n1000,1,0,0,0,0,1\n2000,1,0,0,0,0,1\n")
+    if header.startswith("t,"):  # 1000 s apart: read as seconds, which the size of the step questions
+        with pytest.warns(UserWarning, match=r"median step is 1000 s \(0.001 Hz\); if they are milliseconds"):
+            imu, _ = ik.io.read_imu(path)
+    else:
+        imu, _ = ik.io.read_imu(path)
+    np.testing.assert_allclose(imu.gyro[0], expected[0], rtol=1e-15)
+    np.testing.assert_allclose(imu.accel[0], expected[1], rtol=1e-15)
+    step = {"t,": 1000.0, "time_ms": 1.0, "timestamp [us]": 1e-3}[
+        next(k for k in ("t,", "time_ms", "timestamp [us]") if header.startswith(k))
+    ]
+    assert imu.t[1] - imu.t[0] == pytest.approx(step, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("header", "argument", "message"),
+    [
+        (
+            "t,gx [deg/h],gy [deg/h],gz [deg/h],ax,ay,az",
+            "gyro_unit",
+            r"'gx \[deg/h\]', whose unit imukit does not read",
+        ),
+        ("time [min],gx,gy,gz,ax,ay,az", "time_unit", r"'time \[min\]', whose unit imukit does not read"),
+        (
+            "t,gx (deg/s),gy (rad/s),gz,ax,ay,az",
+            "gyro_unit",
+            r"states different units .*'gx \(deg/s\)' \(deg/s\), 'gy \(rad/s\)'",
+        ),
+    ],
+)
+def test_header_units_it_cannot_read_are_refused(tmp_path: Path, header: str, argument: str, message: str) -> None:
+    """Before 2026-12-07 an unknown unit silently meant rad/s, m/s² or s, and only x's was looked at."""
+    path = tmp_path / "imu.csv"
+    path.write_text(header + "\n0,1,0,0,0,0,1\n1,1,0,0,0,0,1\n")
+    for read in (
+        lambda: ik.io.read_imu(path),
+        lambda: ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6]),
+    ):
+        with pytest.raises(ik.ParameterError, match=message) as info:
+            read()
+        assert info.value.argument == argument
+    if "different" not in message:  # a unit given says what the column holds
+        ik.io.read_imu_csv(
+            path,
+            time_column=0,
+            gyro_columns=[1, 2, 3],
+            accel_columns=[4, 5, 6],
+            **{argument: "s" if argument == "time_unit" else "rad/s"},
+        )  # type: ignore[arg-type]
+
+
+def test_integer_stamps_named_by_index_follow_the_name_or_their_size(tmp_path: Path) -> None:
+    """``time_column=0`` of ``time_ns`` integers read them as seconds (1.4e9 Hz…) before 2026-12-07."""
+    path = tmp_path / "imu.csv"
+    path.write_text("time_ns,gx,gy,gz,ax,ay,az\n1403715523912140000,0,0,0,0,0,9.8\n1403715523917140000,0,0,0,0,0,9.8\n")
+    imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6])
+    assert imu.t_ns is not None and int(imu.t_ns[1] - imu.t_ns[0]) == 5_000_000
+    path.write_text("t,gx,gy,gz,ax,ay,az\n1403715523912140000,0,0,0,0,0,9.8\n1403715523917140000,0,0,0,0,0,9.8\n")
+    imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6])
+    assert imu.t_ns is not None and int(imu.t_ns[1] - imu.t_ns[0]) == 5_000_000

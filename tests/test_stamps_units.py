@@ -49,7 +49,25 @@ def test_readers_refuse_microsecond_epochs_naming_the_file(tmp_path: Path) -> No
     ):
         with pytest.raises(ik.FileFormatError, match=rf"^path: {path}: t: integer stamps are nanoseconds"):
             read(path)
-    imu = io.read_imu_csv(path, **columns, time_unit="us")  # the right unit reads
+    with pytest.warns(UserWarning, match=r"time_unit='us' overrides the header of .*'timestamp \[ns\]' \(ns\)"):
+        imu = io.read_imu_csv(path, **columns, time_unit="us")  # the right unit reads, the header's is named
     assert imu.t_ns is not None and imu.t_ns[1] - imu.t_ns[0] == 5_000_000
     with pytest.warns(UserWarning, match="median step is 5000 ns"):
         io.read_euroc_imu(_euroc_csv(tmp_path / "relative.csv", US_EPOCH - US_EPOCH[0] + 1))
+
+
+@pytest.mark.parametrize(
+    ("first", "unit", "divisor"),
+    [(1.7e12, "milliseconds", 1000), (1.7e15, "microseconds", 1000000), (1.7e18, "nanoseconds", 1000000000)],
+)
+def test_float_stamps_beyond_the_year_5138_name_their_likely_unit(first: float, unit: str, divisor: int) -> None:
+    """Float epoch milliseconds were accepted as a 0.2 Hz recording before 2026-12-07."""
+    t = first + np.arange(4) * 5.0 * divisor / 1000.0
+    with pytest.raises(
+        ik.TimestampError, match=rf"^t: float stamps are seconds, .*look like {unit} \(2023-11-1.*t / {divisor},"
+    ) as info:
+        ik.ImuData(t, np.zeros((4, 3)), np.zeros((4, 3)))
+    assert info.value.argument == "t"
+    ik.ImuData(t / divisor, np.zeros((4, 3)), np.zeros((4, 3)))  # in seconds it is an epoch of 2023
+    with pytest.warns(UserWarning, match=r"^t: float stamps are seconds, but their median step is 5 s \(0.2 Hz\)"):
+        ik.ImuData(np.arange(4) * 5.0, np.zeros((4, 3)), np.zeros((4, 3)))

@@ -69,6 +69,45 @@ def _plausible_ns(t_ns: NDArray[np.int64] | None) -> None:
     )
 
 
+# Float stamps are seconds. Beyond 1e11 s (the year 5138) they are another unit: float64 there resolves
+# only 15 µs, and the epochs of 1973-2100 in ms, µs or ns land there. A median step over 1 s (an IMU
+# below 1 Hz) is more likely milliseconds than a slow sensor: a warning.
+_SECONDS_LIMIT = 1e11
+_SLOW_STEP_S = 1.0
+_EPOCH_S = (1e8, 4.2e9)  # 1973 to 2103
+
+
+def _plausible_seconds(seconds: FloatArray, t_ns: NDArray[np.int64] | None) -> None:
+    """Refuse float stamps beyond 1e11 s, naming the unit that would make them an epoch of 1973-2103;
+    warn about a median step over 1 s."""
+    if t_ns is not None or len(seconds) == 0:
+        return
+    first = float(seconds[0])
+    if abs(first) >= _SECONDS_LIMIT:
+        units = [(u, d) for u, d in (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))]
+        guess = next(((u, d) for u, d in units if _EPOCH_S[0] <= abs(first) / d < _EPOCH_S[1]), None)
+        hint = (
+            "pass them in seconds or as integer nanoseconds"
+            if guess is None
+            else f"they look like {guess[0]} ({np.datetime64(int(first / guess[1]), 's')}): pass t / {int(guess[1])}, "
+            "or integer nanoseconds (a reader: its time_unit)"
+        )
+        raise TimestampError(
+            f"float stamps are seconds, but these start at {first:.6g} s, beyond {_SECONDS_LIMIT:.0e} s (the year "
+            f"5138): {hint}",
+            argument="t",
+        )
+    if len(seconds) >= 2:
+        step = float(np.median(np.diff(seconds)))
+        if step > _SLOW_STEP_S:
+            warnings.warn(
+                f"t: float stamps are seconds, but their median step is {step:g} s ({1.0 / step:.3g} Hz); if they "
+                "are milliseconds, pass t / 1000 (a reader: time_unit='ms')",
+                UserWarning,
+                stacklevel=3,
+            )
+
+
 class ImuData(Frozen):
     """Validated, immutable IMU samples: ``t`` (N,), ``gyro`` (N, 3) [rad/s], ``accel`` (N, 3) [m/s²],
     and optionally ``mag`` (N, 3) [µT].
@@ -78,7 +117,9 @@ class ImuData(Frozen):
     t
         ``(N,)`` sample times, strictly increasing, N ≥ 1: float **seconds**, or integer
         **nanoseconds** (the dtype decides, as in :func:`imukit.integrate_attitude`; integer stamps
-        whose median step is under 1 µs are refused with :class:`imukit.ParameterError`).
+        whose median step is under 1 µs are refused with :class:`imukit.ParameterError`, float
+        stamps beyond 1e11 s (the year 5138: milliseconds or finer) with
+        :class:`imukit.TimestampError`, and float stamps whose median step exceeds 1 s warn).
     gyro
         ``(N, 3)`` body angular rates ω_b [rad/s]; row k taken at ``t[k]``.
     accel
@@ -146,6 +187,7 @@ class ImuData(Frozen):
         stamps = as_stamps(t)
         _plausible_ns(stamps.t_ns)
         seconds = relative_seconds(stamps.seconds, "t")
+        _plausible_seconds(stamps.seconds, stamps.t_ns)
         n = len(seconds)
         gyro_arr = readonly_array(gyro, "gyro", (n, 3), f"(N, 3) with N = len(t) = {n}")
         accel_arr = readonly_array(accel, "accel", (n, 3), f"(N, 3) with N = len(t) = {n}")

@@ -148,16 +148,19 @@ def add_input_options(parser: argparse.ArgumentParser) -> None:
         "--csv-time-unit",
         dest="time_unit",
         choices=("s", "ms", "us", "ns"),
-        help="unit of the time column (default: s)",
+        help="unit of the time column (default: the unit its header name states, else s)",
     )
     csv.add_argument(
-        "--gyro-unit", dest="gyro_unit", choices=("rad/s", "deg/s"), help="unit of the gyro columns (default: rad/s)"
+        "--gyro-unit",
+        dest="gyro_unit",
+        choices=("rad/s", "deg/s"),
+        help="unit of the gyro columns (default: the unit their header names state, else rad/s)",
     )
     csv.add_argument(
         "--accel-unit",
         dest="accel_unit",
-        choices=("m/s^2", "g"),
-        help="unit of the accelerometer columns (default: m/s^2)",
+        choices=("m/s^2", "g", "mg"),
+        help="unit of the accelerometer columns (default: the unit their header names state, else m/s^2)",
     )
     csv.add_argument(
         "--csv-delimiter",

@@ -14,7 +14,17 @@ from imukit._arrays import FloatArray, choice, real_scalar
 from imukit.imu import ImuData
 from imukit.io._lines import Problem, as_file_error, public_reader
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_columns, check_header_lines, read_stamped, read_table
+from imukit.io._table import (
+    TIME_UNITS,
+    Column,
+    TimeUnit,
+    check_columns,
+    check_header_lines,
+    read_stamped,
+    read_table,
+    stamp_unit,
+)
+from imukit.io._units import resolve
 
 __all__ = ["read_imu_csv"]
 
@@ -26,18 +36,22 @@ def imu_csv(
     time_column: Column,
     gyro_columns: Sequence[Column],
     accel_columns: Sequence[Column],
-    time_unit: TimeUnit,
-    gyro_unit: str,
-    accel_unit: str,
+    time_unit: TimeUnit | None,
+    gyro_unit: str | None,
+    accel_unit: str | None,
     standard_gravity: float,
     delimiter: str | None,
     header_lines: int | None,
     mag_columns: Sequence[Column] | None = None,
 ) -> ImuData:
     """:func:`read_imu_csv` reporting to ``bad``."""
-    choice(time_unit, "time_unit", TIME_UNITS)
-    choice(gyro_unit, "gyro_unit", ("rad/s", "deg/s"))
-    choice(accel_unit, "accel_unit", ("m/s^2", "g"))
+    for value, name, domain in (
+        (time_unit, "time_unit", TIME_UNITS),
+        (gyro_unit, "gyro_unit", ("rad/s", "deg/s")),
+        (accel_unit, "accel_unit", ("m/s^2", "g", "mg")),
+    ):
+        if value is not None:
+            choice(value, name, domain)
     gravity = _gravity(standard_gravity)
     header_lines = check_header_lines(header_lines)
     wanted = {"time_column": [time_column], "gyro_columns": gyro_columns, "accel_columns": accel_columns}
@@ -45,8 +59,8 @@ def imu_csv(
         wanted["mag_columns"] = mag_columns
     for name, columns in wanted.items():
         check_columns(columns, name, 1 if name == "time_column" else 3)
-    scale = gravity if accel_unit == "g" else None
-    return _read(path, bad, wanted, time_unit, gyro_unit == "deg/s", scale, delimiter, header_lines)
+    given = {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit}
+    return _read(path, bad, wanted, given, gravity, delimiter, header_lines)
 
 
 @public_reader(imu_csv)
@@ -56,9 +70,9 @@ def read_imu_csv(  # type: ignore[empty-body]
     time_column: Column,
     gyro_columns: Sequence[Column],
     accel_columns: Sequence[Column],
-    time_unit: TimeUnit = "s",
-    gyro_unit: Literal["rad/s", "deg/s"] = "rad/s",
-    accel_unit: Literal["m/s^2", "g"] = "m/s^2",
+    time_unit: TimeUnit | None = None,
+    gyro_unit: Literal["rad/s", "deg/s"] | None = None,
+    accel_unit: Literal["m/s^2", "g", "mg"] | None = None,
     standard_gravity: float = 9.80665,
     delimiter: str | None = None,
     header_lines: int | None = None,
@@ -90,12 +104,24 @@ def read_imu_csv(  # type: ignore[empty-body]
         ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. With ``"ns"`` every stamp must be an integer and
         becomes exact int64 ``t_ns``; with ``"ms"`` or ``"us"``, integer stamps also become exact
         ``t_ns`` (× 10⁶ or × 10³) and otherwise, like ``"s"``, float seconds
-        ``t = value / 1000`` (or / 10⁶), one correctly rounded division.
+        ``t = value / 1000`` (or / 10⁶), one correctly rounded division. None (default): the unit
+        the time column's header name states (``time [ms]``, ``Time (s)``, ``time_ns``), else
+        ``"ns"`` for an integer first stamp above 10¹⁴ (as seconds: three million years), else
+        ``"s"``.
     gyro_unit
-        ``"rad/s"`` or ``"deg/s"`` (converted as ``value * (π / 180)``).
+        ``"rad/s"`` or ``"deg/s"`` (converted as ``value * (π / 180)``). None (default): the unit the
+        gyro columns' header names state (``Gyroscope X (deg/s)``; ``dps``, ``°/s``, ``rad/sec`` and
+        other spellings in ``docs/io.md``), else ``"rad/s"``.
     accel_unit
-        ``"m/s^2"`` or ``"g"`` (converted as ``value * standard_gravity``). The reading must be the
+        ``"m/s^2"``, ``"g"`` (converted as ``value * standard_gravity``) or ``"mg"`` (milli-g:
+        ``value * (standard_gravity / 1000)``); None (default): the unit
+        the accelerometer columns' names state, else ``"m/s^2"``. The reading must be the
         specific force (+1 g on the up axis at rest), as imukit's accelerometer convention.
+
+        A unit given here wins over the one the columns' header names state, with a UserWarning
+        naming both when they differ; without one, a name must state a unit imukit reads, else a
+        ParameterError naming the argument (a column read in the wrong unit would be a wrong
+        answer). Names of the x, y, z columns that state different units are refused too.
     standard_gravity
         [m/s²] per g, default the standard 9.80665 (used only with ``accel_unit="g"``).
     delimiter
@@ -121,7 +147,8 @@ def read_imu_csv(  # type: ignore[empty-body]
     Raises
     ------
     ParameterError
-        A unit, delimiter or ``standard_gravity`` outside its domain; a column name not in the header
+        A unit, delimiter or ``standard_gravity`` outside its domain; a unit the header states that
+        imukit does not read, or different ones for x, y, z; a column name not in the header
         (the message lists the header's names), an index beyond the last column, names without a
         header line. Messages start with the argument's name.
     FileFormatError
@@ -133,16 +160,22 @@ def _read(
     path: str | os.PathLike[str],
     bad: BadLines,
     wanted: dict[str, Sequence[Column]],
-    time_unit: str,
-    degrees: bool,
-    gravity: float | None,
+    given: dict[str, str | None],
+    standard_gravity: float,
     delimiter: str | None,
     header_lines: int | None,
 ) -> ImuData:
-    """:func:`imu_csv` with checked arguments."""
+    """:func:`imu_csv` with checked arguments; ``given`` the units passed (None: the header's)."""
     table = read_table(path, bad, delimiter, header_lines)
     index = {name: [table.column(c, name) for c in columns] for name, columns in wanted.items()}
     columns = [c for name in wanted for c in index[name]]  # time, gyro, accel, then mag if wanted
+    units = {
+        kind: resolve(kind, given[kind], table.headers, index[f"{kind}_{group}"], f"{kind}_unit", table.where)
+        for kind, group in (("time", "column"), ("gyro", "columns"), ("accel", "columns"))
+    }
+    time_unit = stamp_unit(table, index["time_column"][0], units["time"])
+    degrees = units["gyro"] == "deg/s"
+    gravity = {"g": standard_gravity, "mg": standard_gravity / 1000.0}.get(units["accel"] or "")
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
         if gravity is not None and not all(math.isfinite(a * gravity) for a in row[4:7]):

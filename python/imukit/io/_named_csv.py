@@ -17,17 +17,16 @@ role       names (then an axis ``x``, ``y``, ``z``; each axis exactly once)
 ``mag``    ``magnetic field``, ``magnetometer``, ``mag``, ``m`` (``mx``); optional
 =========  ==================================================================================
 
-Units from the bracket: time ``ns`` / ``ms`` / ``us`` (else seconds; ROS's ``header.stamp`` and
-``%time`` columns of ``rostopic echo -p`` are nanoseconds, and so is an unlabelled integer stamp
-above 10¹⁴, which as seconds would be three million years), gyro ``deg/s`` (``°/s``, ``dps``; else
-rad/s), accel ``g`` (else m/s²). The magnetometer's columns, when named, are read into
-``ImuData.mag`` as they are (µT by convention).
+Units: those the names state (a bracket, ``time_ns``), read by :func:`imukit.io.read_imu_csv`
+(``imukit.io._units``; it refuses a unit it does not know and x, y, z that disagree); ROS's
+``header.stamp`` and ``%time`` columns of ``rostopic echo -p`` are nanoseconds, and so is an
+unlabelled integer stamp above 10¹⁴ (as seconds: three million years). The magnetometer's
+columns, when named, are read into ``ImuData.mag`` as they are (µT by convention).
 """
 
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
@@ -39,6 +38,7 @@ from imukit.io._format import Format, Head, is_number
 from imukit.io._lines import read_into
 from imukit.io._report import BadLines
 from imukit.io._table import Table, read_table
+from imukit.io._units import time_suffix, words_and_unit
 
 __all__ = ["ColumnRoles", "column_roles"]
 
@@ -49,29 +49,17 @@ _VECTORS = {
     "accel": ("linear acceleration", "field linear acceleration", "accelerometer", "acceleration", "accel", "acc", "a"),
     "mag": ("magnetic field", "field magnetic field", "magnetometer", "mag", "m"),
 }
-_TIME_UNITS = {"ns": "ns", "nsec": "ns", "ms": "ms", "us": "us", "µs": "us", "s": "s", "sec": "s"}
-_DEGREES = ("deg/s", "°/s", "dps", "deg s^-1")
-_UNIT = re.compile(r"\s*[\[(]([^\])]*)[\])]\s*$")
 _T = TypeVar("_T")
-_NS_STAMP = 1e14  # an unlabelled integer stamp above this is nanoseconds (as seconds: 3 million years)
 
 
 class ColumnRoles(NamedTuple):
     """What :func:`column_roles` found: 0-based ``columns`` per role (``"time"`` one, ``"gyro"``,
-    ``"accel"`` and when present ``"mag"`` three, x y z) and the units the names state."""
+    ``"accel"`` and when present ``"mag"`` three, x y z), and ``"ns"`` for ROS's ``header.stamp``
+    and ``%time`` columns, whose names state no unit (the units names state are
+    :func:`imukit.io.read_imu_csv`'s to read)."""
 
     columns: dict[str, list[int]]
-    time_unit: str | None  # "ns", "ms", "us", "s", or None when the name does not say
-    gyro_unit: str  # "rad/s" or "deg/s"
-    accel_unit: str  # "m/s^2" or "g"
-
-
-def words_and_unit(name: str) -> tuple[str, str]:
-    """``name`` as (its words, its bracketed unit): ``"Gyroscope X (deg/s)"`` → ``("gyroscope x", "deg/s")``."""
-    unit = _UNIT.search(name)
-    bare = name[: unit.start()] if unit else name
-    words = re.sub(r"[._\-/\s]+", " ", bare.strip().lstrip("#").lower()).strip()
-    return words, (unit[1].strip().lower() if unit else "")
+    time_unit: str | None
 
 
 def axis_of(words: str, axes: str = "xyz") -> tuple[str, str] | None:
@@ -84,15 +72,16 @@ def axis_of(words: str, axes: str = "xyz") -> tuple[str, str] | None:
 
 
 def time_column(split: list[tuple[str, str]]) -> tuple[int, str | None] | None:
-    """The time column among names split by :func:`words_and_unit`, and its unit when the name says
-    it; None when there is none, or two of the best rank."""
-    times = [(_TIME.index(words), k) for k, (words, _) in enumerate(split) if words in _TIME]
+    """The time column among names split by :func:`words_and_unit` (``time_ns`` is ``time`` with its
+    unit), and ``"ns"`` for ROS's stamps (their names state no unit), else None; None when there is
+    none, or two of the best rank."""
+    bare = [suffix[0] if (suffix := time_suffix(words)) else words for words, _ in split]
+    times = [(_TIME.index(words), k) for k, words in enumerate(bare) if words in _TIME]
     ranks = [rank for rank, _ in times]
     if not times or ranks.count(min(ranks)) > 1:
         return None
     k = min(times)[1]
-    words, unit = split[k]
-    return k, _TIME_UNITS.get(unit, "ns" if words in _ROS_NS else None)
+    return k, "ns" if bare[k] in _ROS_NS else None
 
 
 def column_roles(names: list[str]) -> ColumnRoles | None:
@@ -115,10 +104,7 @@ def column_roles(names: list[str]) -> ColumnRoles | None:
     time = time_column(split)
     if time is None:
         return None
-    columns = {"time": [time[0]], **columns}
-    gyro = "deg/s" if split[columns["gyro"][0]][1] in _DEGREES else "rad/s"
-    accel = "g" if split[columns["accel"][0]][1] == "g" else "m/s^2"
-    return ColumnRoles(columns, time[1], gyro, accel)
+    return ColumnRoles({"time": [time[0]], **columns}, time[1])
 
 
 def header_names(head: Head) -> list[str] | None:
@@ -128,14 +114,6 @@ def header_names(head: Head) -> list[str] | None:
     first = head.lines[0][1]
     fields = first.split(";" if ";" in first else "," if "," in first else None)
     return None if is_number(fields[0]) else fields
-
-
-def stamp_unit(table: Table, column: int, unit: str | None) -> str:
-    """``unit``, or when the name did not say: ``"ns"`` for an integer first stamp above 10¹⁴, else ``"s"``."""
-    if unit is not None:
-        return unit
-    first = table.split(table.lines[0][1])[column].strip()
-    return "ns" if first.isdigit() and float(first) > _NS_STAMP else "s"
 
 
 def names_sniff(detect: Callable[[list[str]], object | None]) -> Callable[[Path, Head], bool]:
@@ -161,15 +139,13 @@ def detected(path: str | os.PathLike[str], detect: Callable[[list[str]], _T | No
 
 def named_csv(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
     """A CSV file read by the columns its header names (module doc), through ``read_imu_csv``."""
-    table, roles = detected(path, column_roles, "time, gyro and accelerometer")
-    time_unit = stamp_unit(table, roles.columns["time"][0], roles.time_unit)
+    _, roles = detected(path, column_roles, "time, gyro and accelerometer")
+    # Units: those the names state, read by read_imu_csv, which refuses one it does not know.
     options: dict[str, Any] = {
         "time_column": roles.columns["time"][0],
         "gyro_columns": roles.columns["gyro"],
         "accel_columns": roles.columns["accel"],
-        "time_unit": time_unit,
-        "gyro_unit": roles.gyro_unit,
-        "accel_unit": roles.accel_unit,
+        "time_unit": roles.time_unit,
         "mag_columns": roles.columns.get("mag"),
     }
     return read_into(bad, read_imu_csv, path, header_lines=1, **options)

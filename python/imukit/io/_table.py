@@ -53,6 +53,7 @@ __all__ = [
     "check_header_lines",
     "read_stamped",
     "read_table",
+    "stamp_unit",
 ]
 
 Column = Union[int, str]
@@ -307,3 +308,15 @@ def _drop_trailing(fields: list[str], d: str, text: str) -> list[str]:
 
 def _detect(first: str) -> str:
     return ";" if ";" in first else "," if "," in first else " "
+
+
+_NS_STAMP = 1e14  # an unlabelled integer stamp above this is nanoseconds (as seconds: 3 million years)
+
+
+def stamp_unit(table: Table, column: int, unit: str | None) -> str:
+    """``unit``, or when it is None (neither given nor stated by the header): ``"ns"`` for an integer
+    first stamp above 10¹⁴, else ``"s"``."""
+    if unit is not None:
+        return unit
+    first = table.split(table.lines[0][1])[column].strip()
+    return "ns" if first.isdigit() and float(first) > _NS_STAMP else "s"

@@ -21,9 +21,19 @@ from imukit._arrays import choice
 from imukit.io._blocks import zero_quaternions
 from imukit.io._format import Format
 from imukit.io._lines import Problem, as_file_error, public_reader, read_into, rotations_from_rows, zero_quaternion
-from imukit.io._named_csv import axis_of, detected, names_sniff, stamp_unit, time_column, words_and_unit
+from imukit.io._named_csv import axis_of, detected, names_sniff, time_column
 from imukit.io._report import BadLines, OnBadLine, ReadReport
-from imukit.io._table import TIME_UNITS, Column, TimeUnit, check_columns, check_header_lines, read_stamped, read_table
+from imukit.io._table import (
+    TIME_UNITS,
+    Column,
+    TimeUnit,
+    check_columns,
+    check_header_lines,
+    read_stamped,
+    read_table,
+    stamp_unit,
+)
+from imukit.io._units import resolve, words_and_unit
 from imukit.state import Trajectory
 
 __all__ = ["read_trajectory_csv", "trajectory_columns"]
@@ -41,13 +51,14 @@ def trajectory_csv(
     position_columns: Sequence[Column],
     quaternion_columns: Sequence[Column],
     quaternion_order: str,
-    time_unit: str,
+    time_unit: str | None,
     delimiter: str | None,
     header_lines: int | None,
 ) -> Trajectory:
     """:func:`read_trajectory_csv` reporting to ``bad``."""
     choice(quaternion_order, "quaternion_order", QUATERNION_ORDERS)
-    choice(time_unit, "time_unit", TIME_UNITS)
+    if time_unit is not None:
+        choice(time_unit, "time_unit", TIME_UNITS)
     header_lines = check_header_lines(header_lines)
     wanted = {"time_column": [time_column], "position_columns": position_columns}
     wanted["quaternion_columns"] = quaternion_columns
@@ -55,6 +66,8 @@ def trajectory_csv(
         check_columns(given, name, {"time_column": 1, "position_columns": 3, "quaternion_columns": 4}[name])
     table = read_table(path, bad, delimiter, header_lines)
     columns = [table.column(c, name) for name, names in wanted.items() for c in names]
+    stated = resolve("time", time_unit, table.headers, columns[:1], "time_unit", table.where)
+    time_unit = stamp_unit(table, columns[0], stated)
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
         return zero_quaternion(row[4:8])
@@ -73,7 +86,7 @@ def read_trajectory_csv(  # type: ignore[empty-body]
     position_columns: Sequence[Column],
     quaternion_columns: Sequence[Column],
     quaternion_order: Literal["xyzw", "wxyz"] = "xyzw",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit | None = None,
     delimiter: str | None = None,
     header_lines: int | None = None,
     on_bad_line: OnBadLine = "raise",
@@ -96,7 +109,8 @@ def read_trajectory_csv(  # type: ignore[empty-body]
         normalised.
     time_unit, delimiter, header_lines
         As in :func:`imukit.io.read_imu_csv` (``"ns"``, and integer ``"ms"`` / ``"us"``: exact
-        ``t_ns``).
+        ``t_ns``; None (default): the unit the time column's name states, else ``"ns"`` for an
+        integer stamp above 10¹⁴, else ``"s"``; a given unit that contradicts the name's warns).
     on_bad_line, report
         As in :func:`imukit.io.read_euroc_imu`; a zero quaternion is a bad line too.
 
@@ -118,8 +132,9 @@ def read_trajectory_csv(  # type: ignore[empty-body]
 
 def trajectory_columns(names: list[str]) -> dict[str, Any] | None:
     """:func:`read_trajectory_csv`'s column keywords (``time_column``, ``position_columns``,
-    ``quaternion_columns`` as indices, ``quaternion_order="xyzw"``, ``time_unit``: the name's, else
-    None) from a header line's ``names`` (module doc), or None unless each is named exactly once."""
+    ``quaternion_columns`` as indices, ``quaternion_order="xyzw"``, ``time_unit``: ``"ns"`` for ROS's
+    stamps, else None: the unit the name states, read by the reader) from a header line's ``names``
+    (module doc), or None unless each is named exactly once."""
     split = [words_and_unit(name) for name in names]
     found: dict[str, dict[str, list[int]]] = {"position": {}, "quaternion": {}}
     for k, (words, _) in enumerate(split):
@@ -147,8 +162,7 @@ def trajectory_columns(names: list[str]) -> dict[str, Any] | None:
 
 def named_trajectory_csv(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     """A CSV file read by the pose columns its header names (module doc), through ``read_trajectory_csv``."""
-    table, options = detected(path, trajectory_columns, "time, position and quaternion")
-    options["time_unit"] = stamp_unit(table, options["time_column"], options["time_unit"])
+    _, options = detected(path, trajectory_columns, "time, position and quaternion")
     return read_into(bad, read_trajectory_csv, path, header_lines=1, **options)
 
 
