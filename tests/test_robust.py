@@ -249,3 +249,23 @@ def test_accuracy_regression_on_euroc() -> None:
         what = "offline" if offline else "online"
         assert rmse.heading < 1.15 * heading, f"{what} heading {rmse.heading:.3f}°"
         assert rmse.inclination < 1.15 * inclination, f"{what} inclination {rmse.inclination:.3f}°"
+
+
+@pytest.mark.parametrize(
+    ("options", "argument"),
+    [
+        ({"bias_sigma_init_rad_s": 1e160}, "bias_sigma_init_rad_s"),
+        ({"bias_sigma_motion_rad_s": 1e200}, "bias_sigma_motion_rad_s"),
+        ({"bias_sigma_rest_rad_s": 1e151}, "bias_sigma_rest_rad_s"),
+        ({"bias_sigma_init_rad_s": 1e6, "bias_forgetting_s": 1e-300}, "bias_forgetting_s"),
+    ],
+)
+def test_sigmas_whose_squares_overflow_are_refused(options: dict[str, float], argument: str) -> None:
+    """``bias_sigma_init_rad_s=1e160`` returned an infinite σ for every sample (and NaN in the
+    state's covariance) before 2026-12-07."""
+    with pytest.raises(ParameterError, match=rf"^{argument}: ") as e:
+        ik.filters.Robust(**options)
+    assert e.value.argument == argument
+    imu, _, _ = _imu(5.0)
+    result = ik.filters.Robust(bias_sigma_init_rad_s=1e6, bias_sigma_motion_rad_s=1e6).run(imu)  # at the bound
+    assert np.isfinite(result.gyro_bias_sigma).all() and np.isfinite(result.gyro_bias).all()

@@ -107,10 +107,27 @@ macro_rules! named {
         }
 
         impl RobustParams {
-            /// Checks every parameter: finite and > 0 (errors name it).
+            /// Checks every parameter: finite and > 0; the bias σ at most 1e6 rad/s (far past any
+            /// gyro's bias, which is clipped at `bias_clip_rad_s`: an uninformative prior or an
+            /// ignored measurement; above ~1e50 the filter's covariance algebra overflows) and the
+            /// bias's random walk `σ_init²/T` finite (errors name it).
             pub fn validate(&self) -> crate::Result<()> {
                 $(check(stringify!($field), self.$field, "finite and > 0", |x| x > 0.0)?;)+
-                check("mag_slow_factor", self.mag_slow_factor, "finite and ≥ 1", |x| x >= 1.0)
+                check("mag_slow_factor", self.mag_slow_factor, "finite and ≥ 1", |x| x >= 1.0)?;
+                for (name, sigma) in [
+                    ("bias_sigma_init_rad_s", self.bias_sigma_init_rad_s),
+                    ("bias_sigma_motion_rad_s", self.bias_sigma_motion_rad_s),
+                    ("bias_sigma_rest_rad_s", self.bias_sigma_rest_rad_s),
+                ] {
+                    check(name, sigma, "> 0 and at most 1e6 rad/s", |x| x <= 1e6)?;
+                }
+                let walk = self.bias_sigma_init_rad_s.powi(2) / self.bias_forgetting_s;
+                check(
+                    "bias_forgetting_s",
+                    self.bias_forgetting_s,
+                    "> 0 and large enough that bias_sigma_init_rad_s² / bias_forgetting_s is finite",
+                    |_| walk.is_finite(),
+                )
             }
         }
     };
