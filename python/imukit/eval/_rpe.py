@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imukit._arrays import FloatArray, choice, row_norms
-from imukit._errors import ParameterError
+from imukit._errors import NonFiniteError, ParameterError
 from imukit.eval._align import Alignment
 from imukit.eval._checks import finite_float
 from imukit.eval._prepare import prepare
@@ -126,8 +126,13 @@ def _separation_axis(ref: Trajectory, unit: str) -> NDArray[np.float64] | NDArra
         return np.arange(len(ref), dtype=np.int64)
     if unit == "s":
         return ref.t if ref.t_ns is None else ref.t_ns
-    steps = np.linalg.norm(np.diff(ref.position, axis=0), axis=1)
-    return np.concatenate([[0.0], np.cumsum(steps)])
+    # Scale-safe steps: squares of 1e160 m overflow and of 1e-170 m underflow (pairs and
+    # separations were inf, NaN or none at those scales before 2026-12-07).
+    with np.errstate(over="ignore"):
+        path = np.concatenate([[0.0], np.cumsum(row_norms(np.diff(ref.position, axis=0), "reference"))])
+    if not np.isfinite(path[-1]):
+        raise NonFiniteError("its path length overflows float64", argument="reference")
+    return path
 
 
 def _pairs(axis: NDArray[np.float64] | NDArray[np.int64], delta: float, all_pairs: bool) -> NDArray[np.int64]:
