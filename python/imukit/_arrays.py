@@ -126,9 +126,17 @@ def batched(
     return out.reshape(batch + out_tail)
 
 
+def flag(value: object, name: str) -> bool:
+    """``value`` as a bool, else :class:`ParameterError` naming ``name``: ``"no"`` is truthy and 1 may
+    be a count, so only ``bool`` and numpy's are taken (the one rule of every flag option)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"expected a bool, got {value!r}", argument=name)
+    return bool(value)
+
+
 def to_xyzw(q: ArrayLike, name: str, scalar_first: bool) -> ArrayLike:
     """Reorder ``wxyz`` input to the core's ``xyzw`` when ``scalar_first``."""
-    if not scalar_first:
+    if not flag(scalar_first, "scalar_first"):
         return q
     arr = as_float_array(q, name)
     check_tail(arr, name, (4,))
@@ -137,12 +145,12 @@ def to_xyzw(q: ArrayLike, name: str, scalar_first: bool) -> ArrayLike:
 
 def quat_out(q: FloatArray, scalar_first: bool) -> FloatArray:
     """Reorder core ``xyzw`` output to ``wxyz`` when ``scalar_first``."""
-    return np.ascontiguousarray(q[..., _TO_WXYZ]) if scalar_first else q
+    return np.ascontiguousarray(q[..., _TO_WXYZ]) if flag(scalar_first, "scalar_first") else q
 
 
 def matrix4_out(m: FloatArray, scalar_first: bool) -> FloatArray:
     """Re-express a 4x4 operator on ``xyzw`` vectors as one on ``wxyz`` vectors when ``scalar_first``."""
-    return np.ascontiguousarray(m[..., _TO_WXYZ, :][..., :, _TO_WXYZ]) if scalar_first else m
+    return np.ascontiguousarray(m[..., _TO_WXYZ, :][..., :, _TO_WXYZ]) if flag(scalar_first, "scalar_first") else m
 
 
 def choice(value: str, name: str, allowed: tuple[str, ...]) -> str:

@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imukit import so3
-from imukit._arrays import FloatArray, as_float_array
+from imukit._arrays import FloatArray, as_float_array, flag
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 
 __all__ = ["Coriolis", "apparent_j", "coriolis", "implied_deltas", "lift", "predict"]
@@ -56,9 +56,7 @@ class Coriolis(NamedTuple):
 
 def coriolis(omega_coriolis: ArrayLike | None, second_order: bool, exact: bool) -> Coriolis | None:
     """The model the keywords name, None without ``omega_coriolis``."""
-    for flag, name in ((second_order, "second_order_coriolis"), (exact, "exact_coriolis")):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise ParameterError(f"expected a bool, got {type(flag).__name__}", argument=name)
+    second_order, exact = flag(second_order, "second_order_coriolis"), flag(exact, "exact_coriolis")
     if omega_coriolis is None:
         if second_order or exact:
             raise ParameterError(

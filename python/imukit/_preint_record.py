@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imukit import _core
-from imukit._arrays import FloatArray, choice, real_scalar, vector3
+from imukit._arrays import FloatArray, choice, flag, real_scalar, vector3
 from imukit._errors import ParameterError, ShapeError
 from imukit._extrinsics import Pose, has_lever_arm, sensor_pose
 from imukit._names import canonical
@@ -45,13 +45,6 @@ def scheme_name(scheme: str) -> str:
     if isinstance(scheme, str) and scheme in SCHEME_ALIASES:
         return canonical(scheme, "scheme", SCHEMES, SCHEME_ALIASES)
     return choice(scheme, "scheme", SCHEMES)
-
-
-def _flag(value: object, name: str) -> bool:
-    """``value`` as a bool, else :class:`ParameterError` naming ``name`` (1 or "yes" are mistakes)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"expected a bool, got {value!r}", argument=name)
-    return bool(value)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -93,7 +86,7 @@ class PreintParams:
             "bias": bias,
             "gravity": (float(g[0]), float(g[1]), float(g[2])),
             "scheme": scheme_name(self.scheme),
-            "combined": bool(self.combined),
+            "combined": flag(self.combined, "combined"),
             "saturation_noise_factor": factor,
             "body_from_sensor": pose,
         }

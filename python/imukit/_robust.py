@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, real_scalar, rotation_from_unit_quat
+from imukit._arrays import FloatArray, flag, real_scalar, rotation_from_unit_quat
 from imukit._errors import ParameterError
 from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _run_mag, _vec3
 from imukit.imu import ImuData
@@ -169,8 +169,7 @@ class Robust:
         """
         if not isinstance(imu, ImuData):
             raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
-        if not isinstance(offline, bool):
-            raise ParameterError(f"expected a bool, got {offline!r}", argument="offline")
+        offline = flag(offline, "offline")
         threads = checked(threads)
         mags = _run_mag(imu, mag)
         if mags is not None:

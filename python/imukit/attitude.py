@@ -16,6 +16,7 @@ from imukit._arrays import (
     as_float_array,
     as_stamps,
     check_tail,
+    flag,
     real_scalar,
     rotation_from_unit_quat,
 )
@@ -105,7 +106,8 @@ def integrate_attitude(
         accept=lambda x: 0.0 <= x < np.pi / 2,
     )
     count = checked(threads)
+    final = flag(final_only, "final_only")
     out = _core.attitude_integrate(
-        seconds, np.ascontiguousarray(rates), start, scheme, representation, tolerance, bool(final_only), count
+        seconds, np.ascontiguousarray(rates), start, scheme, representation, tolerance, final, count
     )
-    return rotation_from_unit_quat(out[0] if final_only else out)
+    return rotation_from_unit_quat(out[0] if final else out)

@@ -32,7 +32,7 @@ import types
 import numpy as np
 
 from imukit import _core
-from imukit._arrays import FloatArray, readonly_copy, real_scalar
+from imukit._arrays import FloatArray, flag, readonly_copy, real_scalar
 from imukit._errors import ParameterError
 from imukit._frozen import Frozen
 from imukit._names import canonical
@@ -65,9 +65,8 @@ class LocalLevel(Frozen):
         degrees: bool = False,
         transport: bool = False,
     ) -> None:
-        for flag, value in (("degrees", degrees), ("transport", transport)):
-            if not isinstance(value, bool):
-                raise ParameterError(f"expected a bool, got {type(value).__name__}", argument=flag)
+        for name, value in (("degrees", degrees), ("transport", transport)):
+            flag(value, name)
         lat = real_scalar(latitude, "latitude", what="a latitude", accept=lambda x: True)
         h = real_scalar(height, "height", what="a height in metres", accept=lambda x: True)
         name = canonical(axes, "axes", AXES)

@@ -20,13 +20,13 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, batched, real_scalar
+from imukit._arrays import FloatArray, as_float_array, batched, flag, real_scalar
 
 __all__ = ["from_rotation", "rate_matrix", "rate_matrix_inv", "to_rotation"]
 
 
 def _radians(angles: ArrayLike, degrees: bool) -> ArrayLike:
-    return np.deg2rad(as_float_array(angles, "angles")) if degrees else angles
+    return np.deg2rad(as_float_array(angles, "angles")) if flag(degrees, "degrees") else angles
 
 
 def to_rotation(angles: ArrayLike, *, degrees: bool = False, threads: int | None = None) -> Rotation:
@@ -45,7 +45,7 @@ def from_rotation(rotation: Rotation | ArrayLike, *, degrees: bool = False, thre
     """
     matrices = rotation.as_matrix() if isinstance(rotation, Rotation) else rotation
     angles = batched(_core.euler_from_matrix, [(matrices, "rotation", (3, 3))], (3,), threads=threads)
-    return np.rad2deg(angles) if degrees else angles
+    return np.rad2deg(angles) if flag(degrees, "degrees") else angles
 
 
 def rate_matrix(

@@ -44,14 +44,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from imukit import _core, _preint_math
-from imukit._arrays import FloatArray, as_float_array, plain_array, real_scalar, seconds_from_ns
+from imukit._arrays import FloatArray, as_float_array, flag, plain_array, real_scalar, seconds_from_ns
 from imukit._deprecation import deprecated
 from imukit._engines import ENGINES, Windows
 from imukit._engines._windows import lever_windows
 from imukit._errors import DTypeError, ParameterError, ShapeError
 from imukit._extrinsics import has_lever_arm, in_body, lever_columns, lever_jacobian, lever_noise, origin_readings
 from imukit._preint_math import Deltas, ResidualJacobians, States
-from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams, _flag
+from imukit._preint_record import SCHEME_ALIASES, SCHEMES, Preintegration, PreintParams
 from imukit.imu import ImuBias, ImuData, ImuNoise
 from imukit.state import NavState
 from imukit.threads import checked
@@ -260,7 +260,7 @@ class PreintegratedImu:
             if v.shape != (3,):
                 raise ShapeError(f"expected shape (3,), got {v.shape}", argument=name)
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
-        flags = (_flag(gyro_saturated, "gyro_saturated"), _flag(accel_saturated, "accel_saturated"))
+        flags = (flag(gyro_saturated, "gyro_saturated"), flag(accel_saturated, "accel_saturated"))
         with self._lock:
             self._core.integrate_measurement([*a], [*w], step, *flags)
             self._inputs.append(_Measurement(a, w, step, *flags))

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from imukit._arrays import FloatArray, as_float_array, choice
+from imukit._arrays import FloatArray, as_float_array, choice, flag
 from imukit._errors import DTypeError, InvalidQuaternionError, NonFiniteError, ParameterError, ShapeError
 
 __all__ = ["AttitudeError", "AttitudeRmse", "attitude_error"]
@@ -74,7 +74,7 @@ class AttitudeError(NamedTuple):
         count = int(use.sum())
         if count == 0:
             raise ParameterError("no sample with a reference is selected; the RMSE is undefined", argument="mask")
-        scale = np.degrees(1.0) if degrees else 1.0
+        scale = np.degrees(1.0) if flag(degrees, "degrees") else 1.0
 
         def rms(e: FloatArray) -> float:
             return float(np.sqrt(np.mean(e[use] ** 2)) * scale)
@@ -101,7 +101,7 @@ def _quats(q: Rotation | ArrayLike, name: str, scalar_first: bool) -> FloatArray
     arr = as_float_array(q, name)
     if arr.ndim not in (1, 2) or arr.shape[-1] != 4:
         raise ShapeError(f"expected shape (N, 4) or (4,), got {arr.shape}", argument=name)
-    if scalar_first:
+    if flag(scalar_first, "scalar_first"):
         arr = arr[..., [1, 2, 3, 0]]
     if np.isinf(arr).any():
         raise NonFiniteError("holds ±inf", argument=name)
@@ -192,8 +192,7 @@ def attitude_error(
     identity ``cos(total/2) = cos(heading/2) cos(inclination/2)``) are in this module's docstring.
     """
     choice(world, "world", _WORLDS)
-    if not isinstance(align_heading, (bool, np.bool_)):
-        raise ParameterError(f"expected a bool, got {align_heading!r}", argument="align_heading")
+    flag(align_heading, "align_heading")
     q_est = _quats(estimate, "estimate", scalar_first)
     q_true = _quats(truth, "truth", scalar_first)
     if np.isnan(q_est).any():

@@ -7,7 +7,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from imukit._arrays import FloatArray, choice, row_norms
+from imukit._arrays import FloatArray, choice, flag, row_norms
 from imukit._errors import NonFiniteError, ParameterError
 from imukit.eval._align import Alignment
 from imukit.eval._checks import finite_float
@@ -92,8 +92,7 @@ def rpe(
     delta = finite_float(delta, "delta", positive=True)
     if unit == "frames" and not delta.is_integer():
         raise ParameterError(f"expected a whole number of frames for unit='frames', got {delta!r}", argument="delta")
-    if not isinstance(all_pairs, (bool, np.bool_)):
-        raise ParameterError(f"expected a bool, got {all_pairs!r}", argument="all_pairs")
+    flag(all_pairs, "all_pairs")
     prepared = prepare(estimate, reference, method=align, max_dt=max_dt, offset=offset)
     est, ref = prepared.estimate, prepared.reference
 

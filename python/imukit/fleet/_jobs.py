@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from imukit._arrays import flag
 from imukit._errors import ParameterError
 from imukit.eval import attitude_error, truth_at_imu
 from imukit.filters import Madgwick, Mahony, Robust
@@ -130,7 +131,7 @@ def dead_reckoning(
     first = int(np.argmax(paired.mask))  # the first IMU sample the truth covers
     start = paired.reference.state(0)
     bias = None
-    if bias_from_truth:
+    if flag(bias_from_truth, "bias_from_truth"):
         if paired.reference.gyro_bias is None or paired.reference.accel_bias is None:
             raise ParameterError(f"{os.fspath(path)}: the ground truth has no biases", argument="bias_from_truth")
         bias = ImuBias(paired.reference.gyro_bias[0], paired.reference.accel_bias[0])

@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from imukit._arrays import flag
 from imukit._core import __version__
 from imukit._errors import ParameterError
 from imukit.fleet._inputs import PATH_COLUMNS, Input, find_inputs, stamp
@@ -83,7 +84,7 @@ def run(
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     todo = [(item, _stamp(item)) for item in find_inputs(inputs)]
-    kept = _previous(folder, job, retry_failed)
+    kept = _previous(folder, job, flag(retry_failed, "retry_failed"))
     rows: dict[str, dict[str, Scalar]] = {}
     pending = []
     for item, key in todo:

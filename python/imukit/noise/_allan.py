@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array
+from imukit._arrays import FloatArray, as_float_array, flag
 from imukit._errors import ParameterError, ShapeError
 from imukit.imu import ImuData, _number
 from imukit.threads import checked
@@ -134,7 +134,8 @@ def allan_deviation(
     f = _rate(rate)
     m = _cluster_sizes(taus, f, n)
     count = checked(threads)
-    variance, terms = _core.allan_variance(data, "x", f, m, bool(overlapping), count)
+    overlapping = flag(overlapping, "overlapping")
+    variance, terms = _core.allan_variance(data, "x", f, m, overlapping, count)
     deviation = np.sqrt(variance)
     return AllanDeviation(
         taus=np.asarray(m, dtype=np.float64) / f,
@@ -142,7 +143,7 @@ def allan_deviation(
         clusters=terms,
         rate=f,
         samples=n,
-        overlapping=bool(overlapping),
+        overlapping=overlapping,
     )
 
 

@@ -44,6 +44,7 @@ except ImportError as exc:  # pragma: no cover - torch is installed wherever the
     raise MissingDependencyError("imukit.torch needs torch: pip install imukit[torch]") from exc
 
 from imukit import _core
+from imukit._arrays import flag
 from imukit._errors import ParameterError
 from imukit.preint import PreintParams
 from imukit.torch import _native, _scan, _steps
@@ -121,6 +122,14 @@ def preintegrate(
     """Preintegrated ``ΔR``, ``Δv``, ``Δp``, ``Δt`` of each window (module docs for the shapes);
     ``return_covariance`` needs ``noise``, ``gyro_cov`` or ``accel_cov``."""
     scheme = choice(scheme, "scheme", _PREINT_SCHEMES)
+    return_covariance, return_jacobian, per_step = (
+        flag(value, name)
+        for value, name in (
+            (return_covariance, "return_covariance"),
+            (return_jacobian, "return_jacobian"),
+            (per_step, "per_step"),
+        )
+    )
     noisy = noise is not None or gyro_cov is not None or accel_cov is not None
     if return_covariance and not noisy:
         raise ParameterError("needs noise, gyro_cov or accel_cov", argument="return_covariance")
