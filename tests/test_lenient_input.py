@@ -67,6 +67,29 @@ def test_waypoints_whose_splines_overflow_name_times(times: list[float]) -> None
     ik.sim.Waypoints([0.0, 1.0, 2.0], positions, rotations)  # an ordinary spacing fits
 
 
+@pytest.mark.parametrize(
+    ("times", "options", "error", "argument", "message"),
+    [
+        ([0, 10**9, 2 * 10**9], {}, ik.DTypeError, "times", "integer times are nanoseconds elsewhere"),
+        ([0.0, 1.0, 2.0], {"bc_type": "foo"}, ik.ParameterError, "bc_type", "expected one of"),
+        ([0.0, 1.0, 2.0], {"bc_type": 3}, ik.ParameterError, "bc_type", "expected one of"),
+        ([0.0, 1.0, 2.0], {"bc_type": "periodic"}, ik.ParameterError, "bc_type", "'periodic' needs the last position"),
+    ],
+)
+def test_waypoints_name_the_argument_at_fault(
+    times: list[float], options: dict[str, object], error: type[Exception], argument: str, message: str
+) -> None:
+    """Integer times were taken as seconds (3e9 s of spline for 3 s of nanoseconds), and a bad
+    ``bc_type`` was reported as ``times`` whose spline overflows (before 2026-12-07)."""
+    positions = [[0.0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    rotations = Rotation.from_rotvec([[0.0, 0, 0], [0, 0, 0.5], [0, 0.2, 1]])
+    with pytest.raises(error, match=message) as info:
+        ik.sim.Waypoints(times, positions, rotations, **options)  # type: ignore[arg-type]
+    assert getattr(info.value, "argument", None) == argument
+    closed = [[0.0, 0, 0], [1, 0, 0], [0, 0, 0]]
+    ik.sim.Waypoints([0.0, 1.0, 2.0], closed, rotations, bc_type="periodic")  # a closed path is periodic
+
+
 def test_bools_are_not_numbers() -> None:
     pim = ik.PreintegratedImu(noise=NOISE)
     with pytest.raises(ik.ParameterError, match="dt: expected a step in seconds, got True"):

@@ -34,8 +34,16 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imukit import _core
-from imukit._arrays import FloatArray, as_float_array, check_finite_rows, real_scalar, rotation_from_unit_quat, vector3
-from imukit._errors import NonFiniteError, ParameterError, ShapeError
+from imukit._arrays import (
+    FloatArray,
+    as_float_array,
+    check_finite_rows,
+    choice,
+    real_scalar,
+    rotation_from_unit_quat,
+    vector3,
+)
+from imukit._errors import DTypeError, NonFiniteError, ParameterError, ShapeError
 from imukit._extrinsics import sensor_pose
 from imukit.earth import LocalLevel, world_of
 from imukit.imu import GRAVITY, ImuBias, ImuData, ImuNoise
@@ -168,6 +176,13 @@ class Waypoints:
         *,
         bc_type: Literal["not-a-knot", "clamped", "natural", "periodic"] = "clamped",
     ) -> None:
+        if np.issubdtype(np.asarray(times).dtype, np.integer):
+            raise DTypeError(
+                "integer times are nanoseconds elsewhere in imukit (ImuData, Trajectory), but a spline "
+                "runs in seconds: pass float seconds (times_ns / 1e9)",
+                argument="times",
+            )
+        choice(bc_type, "bc_type", ("not-a-knot", "clamped", "natural", "periodic"))
         t = as_float_array(times, "times")
         if t.ndim != 1 or len(t) < 2 or not np.all(np.diff(t) > 0):
             raise ParameterError(f"expected (M,) strictly increasing seconds, M ≥ 2, got {t!r}", argument="times")
@@ -178,6 +193,11 @@ class Waypoints:
                 f"expected shape (M, 3) with M = len(times) = {len(t)}, got {p.shape}", argument="positions"
             )
         check_finite_rows(p, "positions")
+        if bc_type == "periodic" and not np.array_equal(p[0], p[-1]):
+            raise ParameterError(
+                f"'periodic' needs the last position equal to the first, got {p[0].tolist()} and {p[-1].tolist()}",
+                argument="bc_type",
+            )
         if not isinstance(rotations, Rotation) or rotations.single or len(rotations) != len(t):
             raise ShapeError(f"expected a scipy Rotation of length M = len(times) = {len(t)}", argument="rotations")
         self.times = t
