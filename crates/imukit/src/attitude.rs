@@ -352,11 +352,13 @@ pub fn integrate_rotation_matrix(
 /// The scheme is supported by the representation and the gimbal tolerance is an angle in [0, π/2).
 fn check_options(options: &Options) -> Result<()> {
     if !options.representation.schemes().contains(&options.scheme) {
+        // The scheme is the one at fault: the representation supports others.
         return Err(Error::Unsupported {
             scheme: options.scheme.name(),
             representation: options.representation.name(),
             supported: options.representation.schemes().iter().map(|s| s.name()).collect(),
-        });
+        }
+        .in_argument("scheme"));
     }
     let tol = options.gimbal_tolerance;
     if !(tol.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&tol)) {

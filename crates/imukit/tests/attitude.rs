@@ -133,7 +133,11 @@ fn euler_angles_refuse_group_schemes_and_stop_at_gimbal_lock() {
         None,
     )
     .unwrap_err();
-    assert!(matches!(err, Error::Unsupported { supported, .. } if supported == ["euler", "rk2", "rk4"]));
+    assert_eq!(err.argument(), Some("scheme"));
+    let Error::Argument { source, .. } = err else {
+        panic!("not named: {err}")
+    };
+    assert!(matches!(*source, Error::Unsupported { supported, .. } if supported == ["euler", "rk2", "rk4"]));
     let o = Options {
         gimbal_tolerance: 1e-3,
         ..options(Scheme::Rk4, Representation::Euler)
