@@ -45,3 +45,24 @@ def test_a_flag_that_is_not_a_bool_is_refused_naming_the_option(name: str, value
     assert e.value.argument == option
     call(False)
     call(np.bool_(True))  # numpy's bool is a bool
+
+
+OPTION_FIELDS = {
+    "gain_ramp": ("duration_s", "factor"),
+    "acc_lowpass": ("tau_s",),
+    "acc_rejection": ("norm", "angle_rad", "recovery_s", "filtered_norm", "drift_s"),
+    "mag_rejection": ("norm_fraction", "dip_rad", "recovery_s"),
+    "rest_detection": ("gyro", "accel", "duration_s", "tau_s", "max_bias"),
+}
+
+
+@pytest.mark.parametrize(("option", "field"), [(o, f) for o, fields in OPTION_FIELDS.items() for f in fields])
+def test_an_option_out_of_its_domain_is_named_by_its_field(option: str, field: str) -> None:
+    """``gain_ramp.duration`` was named for the field ``duration_s`` (and four others alike) before
+    2026-12-07: the name in an error is the one a user passes."""
+    default = getattr(ik._core.FilterOptions.default(), option)
+    values = {name: getattr(default, name) for name in OPTION_FIELDS[option]}
+    bad = type(default)(**{**values, field: -1.0})
+    with pytest.raises(ik.ParameterError, match=rf"^{option}\.{field}: ") as e:
+        ik.filters.Mahony(**{option: bad})
+    assert e.value.argument == f"{option}.{field}"

@@ -114,7 +114,7 @@ def test_bools_are_not_numbers() -> None:
         (lambda: ik.filters.Madgwick(gravity=True), "gravity"),
         (lambda: ik.filters.Mahony(gain_ramp=(True, 10.0)), "gain_ramp"),
         # the core's value classes themselves, built directly
-        (lambda: ik.filters.GainRamp(True, 10.0), "gain_ramp.duration"),
+        (lambda: ik.filters.GainRamp(True, 10.0), "gain_ramp.duration_s"),
         (lambda: ik.filters.AccelRejection(np.bool_(True)), "acc_rejection.norm"),
         (lambda: ik._core.RobustParams(tau_acc_s=True), "tau_acc_s"),
     ],

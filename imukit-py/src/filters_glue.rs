@@ -35,7 +35,7 @@ fn real(py: Python<'_>, name: &str, x: Option<&Bound<'_, PyAny>>, default: f64) 
 /// A frozen value class mirroring a Rust option struct field for field: keyword (or positional)
 /// construction with the Rust `Default` for what is omitted, equality, hash, repr, pickling.
 macro_rules! value_class {
-    ($(#[$doc:meta])* $py:ident = $rust:ident as $name:literal, errors $prefix:literal { $($field:ident: $label:literal),+ $(,)? }) => {
+    ($(#[$doc:meta])* $py:ident = $rust:ident as $name:literal, errors $prefix:literal { $($field:ident),+ $(,)? }) => {
         $(#[$doc])*
         #[pyclass(name = $name, module = "imukit._core", frozen, get_all, eq, from_py_object)]
         #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,7 +49,7 @@ macro_rules! value_class {
             #[pyo3(signature = ($($field = None),+))]
             fn new(py: Python<'_>, $($field: Option<&Bound<'_, PyAny>>),+) -> PyResult<Self> {
                 let default = $rust::default();
-                Ok(Self { $($field: real(py, concat!($prefix, $label), $field, default.$field)?),+ })
+                Ok(Self { $($field: real(py, concat!($prefix, stringify!($field)), $field, default.$field)?),+ })
             }
 
             fn __repr__(&self) -> String {
@@ -82,37 +82,37 @@ macro_rules! value_class {
 
 value_class!(
     /// Start-up gain ramp (`imukit::filters::GainRamp`).
-    PyGainRamp = GainRamp as "GainRamp", errors "gain_ramp." { duration_s: "duration", factor: "factor" }
+    PyGainRamp = GainRamp as "GainRamp", errors "gain_ramp." { duration_s, factor }
 );
 value_class!(
     /// Accelerometer low pass in the gyro frame (`imukit::filters::AccelLowPass`).
-    PyAccelLowPass = AccelLowPass as "AccelLowPass", errors "acc_lowpass." { tau_s: "tau" }
+    PyAccelLowPass = AccelLowPass as "AccelLowPass", errors "acc_lowpass." { tau_s }
 );
 value_class!(
     /// Acceleration rejection (`imukit::filters::AccelRejection`).
     PyAccelRejection = AccelRejection as "AccelRejection", errors "acc_rejection." {
-        norm: "norm", angle_rad: "angle", recovery_s: "recovery", filtered_norm: "filtered_norm", drift_s: "drift"
+        norm, angle_rad, recovery_s, filtered_norm, drift_s
     }
 );
 value_class!(
     /// Magnetic rejection (`imukit::filters::MagRejection`).
     PyMagRejection = MagRejection as "MagRejection", errors "mag_rejection." {
-        norm_fraction: "norm", dip_rad: "dip", recovery_s: "recovery"
+        norm_fraction, dip_rad, recovery_s
     }
 );
 value_class!(
     /// Rest detection (`imukit::filters::RestDetection`).
     PyRestDetection = RestDetection as "RestDetection", errors "rest_detection." {
-        gyro: "gyro", accel: "accel", duration_s: "duration", tau_s: "tau", max_bias: "max_bias"
+        gyro, accel, duration_s, tau_s, max_bias
     }
 );
 value_class!(
     /// Mahony's gains (`imukit::filters::Mahony`).
-    PyMahonyGains = Mahony as "MahonyGains", errors "" { kp: "kp", ki: "ki" }
+    PyMahonyGains = Mahony as "MahonyGains", errors "" { kp, ki }
 );
 value_class!(
     /// Madgwick's gain (`imukit::filters::Madgwick`).
-    PyMadgwickGains = Madgwick as "MadgwickGains", errors "" { beta: "beta", full_rate_angle_rad: "full_rate_angle_rad" }
+    PyMadgwickGains = Madgwick as "MadgwickGains", errors "" { beta, full_rate_angle_rad }
 );
 
 /// The shared options (`imukit::filters::Options`); `None` switches an option off.

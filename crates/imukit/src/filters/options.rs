@@ -202,34 +202,38 @@ impl Options {
     pub fn validate(&self) -> crate::Result<()> {
         check("gravity", self.gravity, "a positive finite number", |x| x > 0.0)?;
         let ramp = &self.gain_ramp;
-        check("gain_ramp.duration", ramp.duration_s, "finite and ≥ 0", |x| x >= 0.0)?;
+        check("gain_ramp.duration_s", ramp.duration_s, "finite and ≥ 0", |x| {
+            x >= 0.0
+        })?;
         check("gain_ramp.factor", ramp.factor, "finite and ≥ 1", |x| x >= 1.0)?;
         if let Some(f) = self.acc_lowpass {
-            check("acc_lowpass.tau", f.tau_s, "finite and > 0", |x| x > 0.0)?;
+            check("acc_lowpass.tau_s", f.tau_s, "finite and > 0", |x| x > 0.0)?;
         }
         if let Some(r) = self.acc_rejection {
             check("acc_rejection.norm", r.norm, "finite and > 0", |x| x > 0.0)?;
-            check("acc_rejection.angle", r.angle_rad, "in (0, π]", |x| {
+            check("acc_rejection.angle_rad", r.angle_rad, "in (0, π]", |x| {
                 x > 0.0 && x <= std::f64::consts::PI
             })?;
-            check("acc_rejection.recovery", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
+            check("acc_rejection.recovery_s", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
             check("acc_rejection.filtered_norm", r.filtered_norm, "finite and > 0", |x| {
                 x > 0.0
             })?;
-            check("acc_rejection.drift", r.drift_s, "finite and > 0", |x| x > 0.0)?;
+            check("acc_rejection.drift_s", r.drift_s, "finite and > 0", |x| x > 0.0)?;
         }
         if let Some(r) = self.mag_rejection {
-            check("mag_rejection.norm", r.norm_fraction, "finite and > 0", |x| x > 0.0)?;
-            check("mag_rejection.dip", r.dip_rad, "finite and > 0", |x| x > 0.0)?;
-            check("mag_rejection.recovery", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
+            check("mag_rejection.norm_fraction", r.norm_fraction, "finite and > 0", |x| {
+                x > 0.0
+            })?;
+            check("mag_rejection.dip_rad", r.dip_rad, "finite and > 0", |x| x > 0.0)?;
+            check("mag_rejection.recovery_s", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
         }
         if let Some(r) = self.rest_detection {
             check("rest_detection.gyro", r.gyro, "finite and > 0", |x| x > 0.0)?;
             check("rest_detection.accel", r.accel, "finite and > 0", |x| x > 0.0)?;
-            check("rest_detection.duration", r.duration_s, "finite and ≥ 0", |x| {
+            check("rest_detection.duration_s", r.duration_s, "finite and ≥ 0", |x| {
                 x >= 0.0
             })?;
-            check("rest_detection.tau", r.tau_s, "finite and > 0", |x| x > 0.0)?;
+            check("rest_detection.tau_s", r.tau_s, "finite and > 0", |x| x > 0.0)?;
             check("rest_detection.max_bias", r.max_bias, "finite and > 0", |x| x > 0.0)?;
         }
         Ok(())
