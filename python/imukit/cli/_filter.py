@@ -1,9 +1,9 @@
-"""``imukit filter``: Mahony or Madgwick attitude estimation, scored against the reference when there is one."""
+"""``imukit filter``: Mahony, Madgwick or Robust attitude estimation, scored against the reference when there is one."""
 
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -24,18 +24,28 @@ from imukit.cli._common import (
     wrote,
 )
 from imukit.eval import AttitudeError, attitude_error
-from imukit.filters import WORLDS, FilterResult, FilterState, Madgwick, Mahony
+from imukit.filters import WORLDS, FilterState, Madgwick, Mahony, Robust, RobustState
 from imukit.io import write_tum
 from imukit.state import Trajectory
 
-METHODS: dict[str, type[Mahony | Madgwick]] = {"mahony": Mahony, "madgwick": Madgwick}
+METHODS: dict[str, type[Mahony | Madgwick | Robust]] = {"mahony": Mahony, "madgwick": Madgwick, "robust": Robust}
 _DEFAULTS = _core.FilterOptions.default()  # the core's Options::default(), as the filters use
 CHUNK = 50_000  # samples per native call: a progress step, state carried across (FilterState)
+
+
+class Estimate(NamedTuple):
+    """A filter's attitudes (``R_wb``), gyro biases and its state after the last sample."""
+
+    rotation: Rotation
+    gyro_bias: FloatArray
+    state: FilterState | RobustState
+
 
 DESCRIPTION = """\
 Estimate the attitude R_wb of each IMU sample with an attitude filter (docs/filters.md): gyro and
 accelerometer (6D: heading free, starts at yaw 0), or with --mag also the magnetometer (9D: heading
-from magnetic north).
+from magnetic north). --method robust is the most accurate on BROAD (docs/filters_robust.md);
+with --offline it smooths the whole record (forward and backward passes fused: post-processing).
 
 Reads: PATH in any format imukit detects, or a BROAD trial (.mat, or a .npz with its keys). A
 magnetometer comes from BROAD trials, CSV files (--csv-mag-columns), EuRoC folders written with one
@@ -55,18 +65,20 @@ Writes: --out, .txt/.tum: a TUM file with zero positions and the attitude quater
 --plot: the attitude errors over time, or without reference attitudes the roll, pitch and yaw.
 
 Example:
-  imukit filter 06_undisturbed_fast_rotation_A.mat --method madgwick --mag --plot error.png"""
+  imukit filter 06_undisturbed_fast_rotation_A.mat --method madgwick --mag --plot error.png
+  imukit filter 06_undisturbed_fast_rotation_A.mat --method robust --offline --mag"""
 
 
 def add(commands: Any) -> argparse.ArgumentParser:
     p: argparse.ArgumentParser = commands.add_parser(
         "filter",
-        help="run the Mahony or Madgwick attitude filter (errors, quaternion file, error plot)",
+        help="run the Mahony, Madgwick or Robust attitude filter (errors, quaternion file, error plot)",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, bag, BROAD .mat, ...)")
     p.add_argument("--method", choices=sorted(METHODS), default="mahony", help="the filter (default: %(default)s)")
+    p.add_argument("--offline", action="store_true", help="--method robust only: smooth the whole record (acausal)")
     p.add_argument("--mag", action="store_true", help="use the magnetometer (9D); the input must have one")
     p.add_argument("--world", choices=WORLDS, default=_DEFAULTS.world, help="world frame (default: %(default)s)")
     add_max_dt_option(p)
@@ -77,23 +89,31 @@ def add(commands: Any) -> argparse.ArgumentParser:
     return p
 
 
-def run_chunked(filt: Mahony | Madgwick, data: AttitudeInput, *, use_mag: bool, chunk: int = CHUNK) -> FilterResult:
+def run_chunked(
+    filt: Mahony | Madgwick | Robust, data: AttitudeInput, *, use_mag: bool, chunk: int = CHUNK, offline: bool = False
+) -> Estimate:
     """``filt.run`` over ``chunk``-sample pieces, each continuing from the previous one's state, with
     a progress bar. Equal to one call but for the first step of each piece, whose dt is taken from
-    absolute stamps (rounding: below 1e-12 in the quaternions)."""
+    absolute stamps (rounding: below 1e-12 in the quaternions). ``offline`` (``Robust``'s smoother)
+    reads the whole record at once: one piece."""
     imu, n = data.imu, len(data.imu)
     rotations: list[FloatArray] = []
     biases: list[FloatArray] = []
-    state: FilterState | None = None
-    with progress(f"{type(filt).__name__} filter", n) as advance:
-        for a, b in chunks(n, chunk):
-            piece = filt.run(imu[a:b], mag=use_mag, initial=state)
+    state: FilterState | RobustState | None = None
+    with progress(f"{type(filt).__name__} {'smoother' if offline else 'filter'}", n) as advance:
+        for a, b in chunks(n, n if offline else chunk):
+            if isinstance(filt, Robust):
+                assert not isinstance(state, FilterState)
+                piece: Any = filt.run(imu[a:b], mag=use_mag, initial=state, offline=offline)
+            else:
+                assert not isinstance(state, RobustState)
+                piece = filt.run(imu[a:b], mag=use_mag, initial=state)
             state = piece.state
             rotations.append(piece.rotation.as_quat())
             biases.append(piece.gyro_bias)
             advance(b - a)
     assert state is not None  # an ImuData has at least one sample
-    return FilterResult(Rotation.from_quat(np.concatenate(rotations)), np.concatenate(biases), state)
+    return Estimate(Rotation.from_quat(np.concatenate(rotations)), np.concatenate(biases), state)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -106,9 +126,11 @@ def run(args: argparse.Namespace) -> int:
             "--csv-mag-columns, EuRoC folders with mag0/ and bags with a MagneticField topic have one); "
             "run without --mag for 6D"
         )
+    if args.offline and args.method != "robust":
+        raise CliError(f"--offline: only --method robust has a smoother, not {args.method}")
     filt = METHODS[args.method](world=args.world)
-    result = run_chunked(filt, data, use_mag=args.mag)
-    name = f"{type(filt).__name__} {'9D' if args.mag else '6D'}"
+    result = run_chunked(filt, data, use_mag=args.mag, offline=args.offline)
+    name = f"{type(filt).__name__}{' offline' if args.offline else ''} {'9D' if args.mag else '6D'}"
     out.print(f"{name}: {len(data.imu)} samples over {data.imu.duration:.3f} s", markup=False)
     if target is not None:  # before the plot, which may fail for want of matplotlib
         _write(target, data, result)
@@ -132,9 +154,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plot(
-    png: Any, data: AttitudeInput, name: str, result: FilterResult, error: AttitudeError | None, path: str
-) -> None:
+def _plot(png: Any, data: AttitudeInput, name: str, result: Estimate, error: AttitudeError | None, path: str) -> None:
     """The attitude errors when there is a reference (``error``), else the attitudes themselves."""
     from imukit.plot import attitude_error_plot, attitude_plot
 
@@ -147,7 +167,7 @@ def _plot(
         wrote("attitude plot", png)
 
 
-def _write(target: Any, data: AttitudeInput, result: FilterResult) -> None:
+def _write(target: Any, data: AttitudeInput, result: Estimate) -> None:
     imu = data.imu
     if target.suffix.lower() == ".csv":
         rows = np.column_stack([imu.t, result.rotation.as_quat(), result.gyro_bias])
