@@ -419,7 +419,7 @@ def test_bad_input_names_argument() -> None:
             Madgwick(full_rate_angle_rad=bad)
     with pytest.raises(ik.ParameterError, match=r"^world: "):
         Mahony(world="NWU")
-    with pytest.raises(ik.ParameterError, match=r"^acc_rejection.angle: "):
+    with pytest.raises(ik.ParameterError, match=r"^acc_rejection.angle_rad: "):
         Mahony(acc_rejection=ik.filters.AccelRejection(angle_rad=-1.0))
     with pytest.raises(ik.ParameterError, match=r"^initial: "):
         Mahony().run(imu, initial=Rotation.random(2, rng=1))

@@ -146,7 +146,7 @@ def test_filter_keyword_defaults_come_from_the_core() -> None:
 
 
 def test_option_type_errors_name_the_field() -> None:
-    with pytest.raises(ik.ParameterError, match=r"^acc_rejection\.angle: expected a real number"):
+    with pytest.raises(ik.ParameterError, match=r"^acc_rejection\.angle_rad: expected a real number"):
         AccelRejection(angle_rad="wide")  # type: ignore[arg-type]
     with pytest.raises(ik.ParameterError, match=r"^kp: "):
         Mahony(kp="fast")  # type: ignore[arg-type]

@@ -108,7 +108,7 @@ def test_mahony_bias_does_not_wind_up_on_handheld_motion() -> None:
 
 
 def test_low_pass_option_is_checked() -> None:
-    with pytest.raises(ik.ParameterError, match=r"^acc_lowpass\.tau: "):
+    with pytest.raises(ik.ParameterError, match=r"^acc_lowpass\.tau_s: "):
         Mahony(acc_lowpass=AccelLowPass(tau_s=0.0))
     with pytest.raises(ik.ParameterError, match=r"^acc_lowpass: expected a AccelLowPass"):
         Madgwick(acc_lowpass="1 s")  # type: ignore[arg-type]

@@ -291,3 +291,16 @@ def test_integer_stamps_named_by_index_follow_the_name_or_their_size(tmp_path: P
     path.write_text("t,gx,gy,gz,ax,ay,az\n1403715523912140000,0,0,0,0,0,9.8\n1403715523917140000,0,0,0,0,0,9.8\n")
     imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6])
     assert imu.t_ns is not None and int(imu.t_ns[1] - imu.t_ns[0]) == 5_000_000
+
+
+def test_tab_separated_names_with_spaces(tmp_path: Path) -> None:
+    """x-io's export with tabs was "not an IMU format" (split at the spaces in its names) before
+    2026-12-07; it reads as the comma file does."""
+    rows = "0.0,57.29577951308232,0,0,0,0,1\n0.01,0,0,0,0,0,1\n"
+    comma, tab = tmp_path / "x.csv", tmp_path / "x.tsv"
+    comma.write_text(XIO_HEADER + "\n" + rows)
+    tab.write_text((XIO_HEADER + "\n" + rows).replace(",", "\t"))
+    a, b = ik.io.read_imu(comma)[0], ik.io.read_imu(tab)[0]
+    np.testing.assert_array_equal(b.gyro, a.gyro)
+    np.testing.assert_array_equal(b.accel, a.accel)
+    np.testing.assert_array_equal(b.accel[0], [0.0, 0.0, 9.80665])

@@ -126,8 +126,8 @@ def read_imu_csv(  # type: ignore[empty-body]
         [m/s²] per g, default the standard 9.80665 (used only with ``accel_unit="g"``).
     delimiter
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs); None (default): ``";"`` if
-        the first non-blank line has one, else ``","`` if it has one, else white space. Decimal
-        commas are not read.
+        the first non-blank line has one, else a tab if it has at least as many tabs as commas, else
+        ``","`` if it has one, else white space. Decimal commas are not read.
     header_lines
         How many non-blank lines the header has (0: none); None (default): detected as above.
     mag_columns

@@ -2,8 +2,8 @@
 :func:`imukit.io.read_trajectory_csv` share (``docs/io.md``, "Any CSV").
 
 =================  ================================================================================
-delimiter          given, or detected from the first non-blank line: ``;`` if it has one, else ``,``
-                   if it has one, else white space
+delimiter          given, or detected from the first non-blank line: ``;`` if it has one, else a tab
+                   if it has as many tabs as commas, else ``,`` if it has one, else white space
 header lines       ``header_lines=N``: the first N non-blank lines; None: the leading lines that are
                    ``#`` lines or whose first field is not a number (an exporter's two-line header,
                    a group line over a names line). The names are the last of them; a later ``#``
@@ -51,6 +51,7 @@ __all__ = [
     "TimeUnit",
     "check_columns",
     "check_header_lines",
+    "detect_delimiter",
     "read_stamped",
     "read_table",
     "stamp_unit",
@@ -211,7 +212,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
         choice(delimiter, "delimiter", DELIMITERS)
     where = os.fspath(path)
     numbered = _head(path, delimiter, header_lines)
-    d = delimiter if delimiter is not None else _detect(numbered[0][1] if numbered else "")
+    d = delimiter if delimiter is not None else detect_delimiter(numbered[0][1] if numbered else "")
     plain = str.split if d == " " else (lambda text: text.split(d))
     count = header_lines if header_lines is not None else _leading_header(numbered, plain, where, bad)
     head, body = numbered[:count], numbered[count:]
@@ -259,7 +260,7 @@ def _head(path: str | os.PathLike[str], delimiter: str | None, header_lines: int
             if not text:
                 continue
             numbered.append((n, text))
-            d = delimiter if delimiter is not None else _detect(numbered[0][1])
+            d = delimiter if delimiter is not None else detect_delimiter(numbered[0][1])
             if not text.startswith("#"):
                 data += 1
                 fields = text.split() if d == " " else text.split(d)
@@ -306,8 +307,14 @@ def _drop_trailing(fields: list[str], d: str, text: str) -> list[str]:
     return fields[:-1] if text.endswith(d) else fields
 
 
-def _detect(first: str) -> str:
-    return ";" if ";" in first else "," if "," in first else " "
+def detect_delimiter(first: str) -> str:
+    """The delimiter of a file whose first non-blank line is ``first`` (module doc): ``;``, else a tab
+    when there are at least as many tabs as commas (names with spaces stay whole: x-io's
+    ``Time (s)<TAB>Gyroscope X (deg/s)``), else ``,``, else runs of white space."""
+    if ";" in first:
+        return ";"
+    tabs, commas = first.count("\t"), first.count(",")
+    return "\t" if tabs and tabs >= commas else "," if commas else " "
 
 
 _NS_STAMP = 1e14  # an unlabelled integer stamp above this is nanoseconds (as seconds: 3 million years)
