@@ -304,3 +304,19 @@ def test_tab_separated_names_with_spaces(tmp_path: Path) -> None:
     np.testing.assert_array_equal(b.gyro, a.gyro)
     np.testing.assert_array_equal(b.accel, a.accel)
     np.testing.assert_array_equal(b.accel[0], [0.0, 0.0, 9.80665])
+
+
+def test_quoted_header_names(tmp_path: Path) -> None:
+    """R's ``write.csv`` quotes the names: ``"timestamp"`` was neither detected nor found by name
+    (only as ``'"timestamp"'``) before 2026-12-07."""
+    path = tmp_path / "r.csv"
+    path.write_text(
+        '"timestamp","gyro_x","gyro_y","gyro_z","accel_x","accel_y","accel_z"\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n'
+    )
+    detected = ik.io.read_imu(path)[0]
+    named = ik.io.read_imu_csv(
+        path, time_column="timestamp", gyro_columns=["gyro_x", "gyro_y", "gyro_z"], accel_columns=[4, 5, 6]
+    )
+    for imu in (detected, named):
+        np.testing.assert_array_equal(imu.gyro[0], [1, 2, 3])
+        np.testing.assert_array_equal(imu.accel[0], [4, 5, 6])

@@ -12,7 +12,8 @@ header lines       ``header_lines=N``: the first N non-blank lines; None: the le
                    line's is data (a text column, no header); a first line of integers only above a
                    line with decimals is pandas' ``0,1,2,…`` (or ``1,2,…``) header, taken and
                    reported as ``header``, or else refused as ambiguous
-names              by exact text after stripping white space, looked up in the names line, then in
+names              by exact text after stripping white space and double quotes around it
+                   (``"time"``), looked up in the names line, then in
                    the other header lines (``"Time [s]"`` on a group line above ``";w;x;y;z"``)
 trailing delimiter a names line or data lines ending in the delimiter (``a;b;c;``) have one empty
                    field too many: it is dropped where that makes the two agree
@@ -55,6 +56,7 @@ __all__ = [
     "read_stamped",
     "read_table",
     "stamp_unit",
+    "unquoted",
 ]
 
 Column = Union[int, str]
@@ -220,7 +222,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
     if not data:
         raise FileFormatError(f"{where}: no data lines", argument="path")
     named = [(n, text) for k, (n, text) in enumerate(head) if k == 0 or not text.startswith("#")]
-    headers = [(n, [name.strip() for name in plain(text.lstrip("#"))]) for n, text in named]
+    headers = [(n, [unquoted(name.strip()) for name in plain(text.lstrip("#"))]) for n, text in named]
     widths = Counter(len(plain(text)) for _, text in data[:_SAMPLE])
     start = head[-1][0] + 1 if head else 1
 
@@ -294,6 +296,11 @@ def _leading_header(numbered: list[tuple[int, str]], split: Split, where: str, b
         if not text.startswith("#") and is_number(split(text)[0] if split(text) else ""):
             return k
     return min(len(numbered), 1)
+
+
+def unquoted(name: str) -> str:
+    """A header name without the double quotes around it (R's ``write.csv``, spreadsheet exports)."""
+    return name[1:-1].strip() if len(name) >= 2 and name[0] == name[-1] == '"' else name
 
 
 def _kind(field: str) -> str:
