@@ -320,3 +320,13 @@ def test_quoted_header_names(tmp_path: Path) -> None:
     for imu in (detected, named):
         np.testing.assert_array_equal(imu.gyro[0], [1, 2, 3])
         np.testing.assert_array_equal(imu.accel[0], [4, 5, 6])
+
+
+def test_a_latin1_file_is_named_as_such(tmp_path: Path) -> None:
+    """A Windows exporter's ``°/s`` in Latin-1 was "not a text file" before 2026-12-07."""
+    path = tmp_path / "imu.csv"
+    path.write_bytes("t,gx (°/s),gy (°/s),gz (°/s),ax,ay,az\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n".encode("latin-1"))
+    with pytest.raises(ik.FileFormatError, match=r"not UTF-8 text: byte 0xb0 on line 1 \(Latin-1"):
+        ik.io.read_imu(path)
+    imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6], gyro_unit="deg/s")
+    np.testing.assert_allclose(imu.gyro[0], np.radians([1, 2, 3]), rtol=1e-15)

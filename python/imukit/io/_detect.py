@@ -196,6 +196,23 @@ def _first(source: Path, head: Head, kind: Literal["imu", "trajectory"]) -> Form
     return next((fmt for fmt in formats(kind) if fmt.sniff(source, head)), None)
 
 
+def _not_utf8(source: Path) -> str:
+    """What is wrong with a file that is not UTF-8 text: the first byte that is not, or binary data."""
+    with open(source, "rb") as f:
+        data = f.read(1 << 20)
+    if b"\0" in data:
+        return "not a text file"  # NUL bytes: binary data
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        byte, line = data[e.start], data[: e.start].count(b"\n") + 1
+        return (
+            f"not UTF-8 text: byte 0x{byte:02x} on line {line} (Latin-1 or Windows-1252, such as '°' from an "
+            "exporter?); save it as UTF-8, or read it with read_imu_csv, which reads such a byte as text"
+        )
+    return "not a text file"
+
+
 def _refuse(path: str | os.PathLike[str], head: Head, kind: Literal["imu", "trajectory"], expected: str) -> None:
     """The FileFormatError for a path no format accepts, when it is a folder, missing, not text, empty, or
     without data lines (a header only)."""
@@ -207,7 +224,7 @@ def _refuse(path: str | os.PathLike[str], head: Head, kind: Literal["imu", "traj
         raise FileFormatError(f"{where}: a folder of no known layout; tried {listing(kind)}", argument="path")
     first = head.lines
     if first is None:
-        raise FileFormatError(f"{where}: not a text file; tried {listing(kind)}", argument="path")
+        raise FileFormatError(f"{where}: {_not_utf8(source)}; tried {listing(kind)}", argument="path")
     if not first:
         raise FileFormatError(f"{where}: empty file, expected {expected}", argument="path")
     if all(text.startswith("#") for _, text in first):
