@@ -66,3 +66,21 @@ def test_an_option_out_of_its_domain_is_named_by_its_field(option: str, field: s
     with pytest.raises(ik.ParameterError, match=rf"^{option}\.{field}: ") as e:
         ik.filters.Mahony(**{option: bad})
     assert e.value.argument == f"{option}.{field}"
+
+
+def test_window_boundaries_off_the_samples_clock_are_named_on_it() -> None:
+    """Boundaries 1 to 3 s on an epoch clock were reported as ``[-1403715522.9, …] outside the
+    samples' [0, 39.99]``, and int64 ones near -2^63 wrapped in the message (before 2026-12-07)."""
+    t_ns = 1_403_715_523_912_140_000 + np.arange(401) * 5_000_000
+    imu = ik.ImuData(t_ns, np.zeros((401, 3)), np.tile([0.0, 0.0, 9.81], (401, 1)))
+    params = ik.PreintParams(NOISE)
+    with pytest.raises(
+        ik.ParameterError, match=r"got 0\.5 to 1\.5: they fit the span counted from the first sample"
+    ) as e:
+        ik.preintegrate_windows(imu, [0.5, 1.0, 1.5], params)
+    assert e.value.argument == "boundaries"
+    with pytest.raises(ik.ParameterError, match=r"\(integer ns\) .* got -9223372036854775808 to 0$"):
+        ik.preintegrate_windows(imu, np.array([-(2**63), 0]), params)
+    with pytest.raises(ik.ParameterError, match=r"got 18446744073709551615 to 18446744073709551615$"):
+        ik.preintegrate_windows(imu, np.array([2**64 - 1], dtype=np.uint64), params)
+    assert len(ik.preintegrate_windows(imu, imu.t[0] + np.array([0.5, 1.0, 1.5]), params)) == 2

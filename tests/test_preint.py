@@ -274,7 +274,9 @@ def test_reintegrate_replays_merged_windows(scheme: str) -> None:
 
 def test_windows_refuse_bad_boundaries_and_threads() -> None:
     imu, _ = window()
-    with pytest.raises(ik.ParameterError, match="boundaries must be times within the samples' span"):
+    span = r"^boundaries: expected times on imu.t's clock \(seconds\) within the samples' span \[0.0, 1.0\], "
+    span += "got 0.5 to 1.5$"
+    with pytest.raises(ik.ParameterError, match=span):
         ik.preintegrate_windows(imu, [0.5, 1.5], noise=NOISE)
     with pytest.raises(ik.ParameterError, match="boundaries must be strictly increasing"):
         ik.preintegrate_windows(imu, [0.5, 0.2], noise=NOISE)

@@ -654,10 +654,15 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
     if raw.ndim != 1:
         raise ShapeError(f"expected shape (M,), got {raw.shape}", argument="boundaries")
     if raw.dtype.kind in "iu" and imu.t_ns is not None:
+        if raw.size:  # exact Python ints: int64 differences near ±2^63 wrap, uint64 above 2^63 too
+            _within_span(int(raw.min()), int(raw.max()), int(imu.t_ns[0]), int(imu.t_ns[-1]), "integer ns")
         ns = raw.astype(np.int64)
         return Windows(seconds_from_ns(ns - imu.t_ns[0]), ns / 1e9, ns)
     t = as_float_array(raw, "boundaries")
     offsets = t - imu.t[0]
+    finite = t[np.isfinite(t)]  # NaN and inf are the core's to name
+    if finite.size and (finite.min() < imu.t[0] or (finite - imu.t[0]).max() > imu.seconds[-1]):
+        _within_span(float(finite.min()), float(finite.max()), float(imu.t[0]), float(imu.t[-1]), "seconds")
     if imu.t_ns is not None:
         # Float boundaries taken from an ns recording's imu.t (epoch seconds, 0.24 µs apart): a
         # sample's own time is that sample exactly, so the last one stays inside the span and
@@ -669,6 +674,21 @@ def _windows(imu: ImuData, boundaries: ArrayLike) -> Windows:
             ns = imu.t_ns[k]
             return Windows(offsets, t, ns)
     return Windows(offsets, t, None)
+
+
+def _within_span(low: float, high: float, first: float, last: float, unit: str) -> None:
+    """A ParameterError unless boundaries from ``low`` to ``high`` lie within the samples' span
+    ``[first, last]`` on ``imu.t``'s clock; boundaries that fit the span from 0 are named as such."""
+    if first <= low and high <= last:
+        return
+    hint = ""
+    if 0 <= low and high <= last - first:
+        hint = ": they fit the span counted from the first sample; pass imu.t[0] + boundaries"
+    raise ParameterError(
+        f"expected times on imu.t's clock ({unit}) within the samples' span [{first!r}, {last!r}], got {low!r} to "
+        f"{high!r}{hint}",
+        argument="boundaries",
+    )
 
 
 def _core_windows(
