@@ -84,3 +84,14 @@ def test_window_boundaries_off_the_samples_clock_are_named_on_it() -> None:
     with pytest.raises(ik.ParameterError, match=r"got 18446744073709551615 to 18446744073709551615$"):
         ik.preintegrate_windows(imu, np.array([2**64 - 1], dtype=np.uint64), params)
     assert len(ik.preintegrate_windows(imu, imu.t[0] + np.array([0.5, 1.0, 1.5]), params)) == 2
+
+
+def test_a_trajectory_given_as_attitudes_says_how_to_pass_them() -> None:
+    """``attitude_error(estimate, trajectory)`` was "expected real numbers, got dtype object" before
+    2026-12-07."""
+    _, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=100.0, duration=2.0)
+    for args, name in (((truth.rotation, truth), "truth"), ((truth, truth.rotation), "estimate")):
+        with pytest.raises(ik.ParameterError, match=r"a Trajectory: pass its attitudes .*truth_at_imu") as e:
+            ik.eval.attitude_error(*args)
+        assert e.value.argument == name
+    assert ik.eval.attitude_error(truth.rotation, truth.rotation).rmse().total < 1e-15

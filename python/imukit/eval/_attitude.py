@@ -32,6 +32,7 @@ from scipy.spatial.transform import Rotation
 
 from imukit._arrays import FloatArray, as_float_array, choice, flag
 from imukit._errors import DTypeError, InvalidQuaternionError, NonFiniteError, ParameterError, ShapeError
+from imukit.state import Trajectory
 
 __all__ = ["AttitudeError", "AttitudeRmse", "attitude_error"]
 
@@ -98,6 +99,13 @@ def _quats(q: Rotation | ArrayLike, name: str, scalar_first: bool) -> FloatArray
     """(N, 4) or (4,) xyzw float64 quaternions, normalised; NaN rows kept (zero-norm ones refused)."""
     if isinstance(q, Rotation):
         return np.asarray(q.as_quat(), dtype=np.float64)
+    if isinstance(q, Trajectory):  # its own stamps, not the other argument's
+        raise ParameterError(
+            "a Trajectory: pass its attitudes at the other argument's samples, e.g. "
+            "imukit.eval.truth_at_imu(trajectory, imu) for a ground truth (its .reference.rotation and "
+            ".mask), or trajectory.rotation when the stamps are the same",
+            argument=name,
+        )
     arr = as_float_array(q, name)
     if arr.ndim not in (1, 2) or arr.shape[-1] != 4:
         raise ShapeError(f"expected shape (N, 4) or (4,), got {arr.shape}", argument=name)
