@@ -95,3 +95,21 @@ def test_a_trajectory_given_as_attitudes_says_how_to_pass_them() -> None:
             ik.eval.attitude_error(*args)
         assert e.value.argument == name
     assert ik.eval.attitude_error(truth.rotation, truth.rotation).rmse().total < 1e-15
+
+
+@pytest.mark.parametrize(
+    ("options", "argument"),
+    [
+        ({"longer_than": "1"}, "longer_than"),
+        ({"longer_than": 0}, "longer_than"),
+        ({"factor": float("nan")}, "factor"),
+        ({"factor": -2.0}, "factor"),
+    ],
+)
+def test_find_gaps_checks_its_thresholds(options: dict[str, object], argument: str) -> None:
+    """``factor=nan`` returned no gap at all, ``longer_than="1"`` a numpy UFuncTypeError (before 2026-12-07)."""
+    imu = ik.ImuData([0.0, 0.01, 0.02, 0.5, 0.51], np.zeros((5, 3)), np.tile([0.0, 0.0, 9.81], (5, 1)))
+    with pytest.raises(ik.ParameterError, match=rf"^{argument}: expected a positive") as e:
+        ik.io.find_gaps(imu, **options)  # type: ignore[arg-type]
+    assert e.value.argument == argument
+    assert [g.sample for g in ik.io.find_gaps(imu)] == [3]

@@ -197,7 +197,10 @@ def _first(source: Path, head: Head, kind: Literal["imu", "trajectory"]) -> Form
 
 
 def _not_utf8(source: Path) -> str:
-    """What is wrong with a file that is not UTF-8 text: the first byte that is not, or binary data."""
+    """What is wrong with a file that is not UTF-8 text: the first byte that is not, or binary data
+    (only a regular file is opened: a FIFO would block, a symlink loop raise)."""
+    if not source.is_file():
+        return "not a text file"
     with open(source, "rb") as f:
         data = f.read(1 << 20)
     if b"\0" in data:

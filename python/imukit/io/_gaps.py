@@ -8,11 +8,12 @@ so a 20 Hz truth and a 200 Hz one are each judged by their own rate.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
-from imukit._arrays import FloatArray
+from imukit._arrays import FloatArray, real_scalar
 from imukit.imu import ImuData
 from imukit.state import Trajectory
 
@@ -75,6 +76,15 @@ def find_gaps(imu: ImuData | Trajectory, *, longer_than: float | None = None, fa
     >>> str(ik.io.find_gaps(imu, longer_than=0.1)[0])
     'the step into sample 3 (t = 0.5 s) is 0.48 s'
     """
+
+    def positive(x: float) -> bool:
+        return math.isfinite(x) and x > 0.0
+
+    if longer_than is not None:
+        longer_than = real_scalar(
+            longer_than, "longer_than", what="a positive number of seconds or None", accept=positive
+        )
+    factor = real_scalar(factor, "factor", what="a positive multiple of the median step", accept=positive)
     if len(imu) < 2:
         return []
     steps = _steps(imu)
