@@ -330,15 +330,3 @@ def test_a_latin1_file_is_named_as_such(tmp_path: Path) -> None:
         ik.io.read_imu(path)
     imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6], gyro_unit="deg/s")
     np.testing.assert_allclose(imu.gyro[0], np.radians([1, 2, 3]), rtol=1e-15)
-
-
-def test_a_pose_csv_with_bare_position_names(tmp_path: Path) -> None:
-    """``t,x,y,z,qx,qy,qz,qw`` was refused by detection ("write the file as TUM") before 2026-12-07."""
-    path = tmp_path / "poses.csv"
-    path.write_text("t,x,y,z,qx,qy,qz,qw\n0.0,1,2,3,0,0,0,1\n0.1,4,5,6,0,0,0.6,0.8\n")
-    traj = ik.io.read_trajectory(path)
-    np.testing.assert_array_equal(traj.position, [[1, 2, 3], [4, 5, 6]])
-    np.testing.assert_allclose(traj.rotation.as_quat(), [[0, 0, 0, 1], [0, 0, 0.6, 0.8]], atol=1e-15)
-    path.write_text("t,x,y,z,a,b,c,d\n0.0,1,2,3,0,0,0,1\n")  # no named quaternion: not guessed
-    with pytest.raises(ik.FileFormatError, match="does not name the quaternion order"):
-        ik.io.read_trajectory(path)

@@ -3,8 +3,7 @@ for one whose header names them (``docs/io.md``, "Any trajectory CSV").
 
 Names are compared as in :mod:`imukit.io._named_csv` (a bracketed unit dropped, lower case,
 ``. _ - /`` as spaces). Detected: a time column (as there), the x, y, z of a position
-(``transform.translation``, ``translation``, ``pose.position``, ``position``, ``pos``, ``p``, or
-a bare ``x``, ``y``, ``z``) and
+(``transform.translation``, ``translation``, ``pose.position``, ``position``, ``pos``, ``p``) and
 the x, y, z, w of a quaternion (``transform.rotation``, ``rotation``, ``pose.orientation``,
 ``orientation``, ``quaternion``, ``quat``, ``q``), each component named once, so the quaternion
 order is read from the names, never guessed.
@@ -139,9 +138,7 @@ def trajectory_columns(names: list[str]) -> dict[str, Any] | None:
     split = [words_and_unit(name) for name in names]
     found: dict[str, dict[str, list[int]]] = {"position": {}, "quaternion": {}}
     for k, (words, _) in enumerate(split):
-        # A bare x, y, z is a position beside a named quaternion (`t,x,y,z,qx,qy,qz,qw`); the
-        # quaternion must still be named whole below, so the order is never guessed.
-        axis = ("p", words) if words in ("x", "y", "z") else axis_of(words, "xyzw")
+        axis = axis_of(words, "xyzw")
         if axis is not None:
             for role, prefixes in (("position", _POSITION), ("quaternion", _QUATERNION)):
                 if axis[0] in prefixes:
