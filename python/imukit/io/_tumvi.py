@@ -94,7 +94,9 @@ def _mocap_like(path: Path, head: Head) -> bool:
     if len(names) == 8 and names[4] in _W_LAST:
         raise FileFormatError(
             f"{path}: the header puts the quaternion w last ({shorten(header)}); imukit reads 8 comma-separated "
-            "fields as TUM-VI mocap, w first: write the file as TUM (t x y z qx qy qz qw, space-separated)",
+            "fields as TUM-VI mocap, w first: read it with imukit.io.read_trajectory_csv(path, time_column=0, "
+            "position_columns=[1, 2, 3], quaternion_columns=[4, 5, 6, 7], quaternion_order='xyzw') (the CLI: "
+            "--gt-* options), or write it as TUM (t x y z qx qy qz qw, space-separated)",
             argument="path",
         )
     raise FileFormatError(
