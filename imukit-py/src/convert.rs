@@ -60,45 +60,6 @@ pub(crate) fn frozen_or_copy<'py, D: numpy::ndarray::Dimension>(
     private_copy(py, x)
 }
 
-/// A filter's record (`t`, `gyro`, `accel` and the optional `mag`) that a kernel may read with
-/// the GIL released: each array in place where no Python code can write to it meanwhile, else a
-/// private copy ([`frozen_or_copy`]).
-pub(crate) struct FilterRecord<'py> {
-    t: PyReadonlyArray1<'py, f64>,
-    gyro: PyReadonlyArray2<'py, f64>,
-    accel: PyReadonlyArray2<'py, f64>,
-    mag: Option<PyReadonlyArray2<'py, f64>>,
-}
-
-impl<'py> FilterRecord<'py> {
-    pub(crate) fn new(
-        py: Python<'py>,
-        t: &PyReadonlyArray1<'py, f64>,
-        gyro: &PyReadonlyArray2<'py, f64>,
-        accel: &PyReadonlyArray2<'py, f64>,
-        mag: Option<&PyReadonlyArray2<'py, f64>>,
-    ) -> PyResult<Self> {
-        Ok(Self {
-            t: frozen_or_copy(py, t)?.readonly(),
-            gyro: frozen_or_copy(py, gyro)?.readonly(),
-            accel: frozen_or_copy(py, accel)?.readonly(),
-            mag: mag
-                .map(|m| Ok::<_, PyErr>(frozen_or_copy(py, m)?.readonly()))
-                .transpose()?,
-        })
-    }
-
-    /// The record as the core's inputs; an array of the wrong layout is a `ShapeError` naming it.
-    pub(crate) fn inputs(&self, py: Python<'py>) -> PyResult<Inputs<'_>> {
-        Ok(Inputs {
-            t: contiguous(py, "t", &self.t)?,
-            gyro: rows(py, "gyro", &self.gyro)?,
-            accel: rows(py, "accel", &self.accel)?,
-            mag: self.mag.as_ref().map(|m| rows(py, "mag", m)).transpose()?,
-        })
-    }
-}
-
 /// What a call's outputs need, for the message when they cannot be had: `count` items of `what`
 /// taking `bytes` in all, asked for through `argument`.
 pub(crate) struct Demand<'a> {
@@ -251,6 +212,38 @@ impl<'py> SampleCopies<'py> {
         let t = contiguous(py, "t", &self.t)?;
         let (gyro, accel) = (rows(py, "gyro", &self.gyro)?, rows(py, "accel", &self.accel)?);
         Samples::new(t, gyro, accel).map_err(|e| to_py(py, "imu", e))
+    }
+}
+
+/// A filter's record: [`SampleCopies`] and the optional field `mag`, each array in place where no
+/// Python code can write to it meanwhile, else a private copy.
+pub(crate) struct FilterRecord<'py> {
+    samples: SampleCopies<'py>,
+    mag: Option<PyReadonlyArray2<'py, f64>>,
+}
+
+impl<'py> FilterRecord<'py> {
+    /// `samples` with the field `mag` beside them.
+    pub(crate) fn new(
+        py: Python<'py>,
+        samples: SampleCopies<'py>,
+        mag: Option<&PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Self> {
+        let mag = mag
+            .map(|m| Ok::<_, PyErr>(frozen_or_copy(py, m)?.readonly()))
+            .transpose()?;
+        Ok(Self { samples, mag })
+    }
+
+    /// The record as the filters' inputs; an array of the wrong layout is a `ShapeError` naming it.
+    pub(crate) fn inputs(&self, py: Python<'py>) -> PyResult<Inputs<'_>> {
+        let s = &self.samples;
+        Ok(Inputs {
+            t: contiguous(py, "t", &s.t)?,
+            gyro: rows(py, "gyro", &s.gyro)?,
+            accel: rows(py, "accel", &s.accel)?,
+            mag: self.mag.as_ref().map(|m| rows(py, "mag", m)).transpose()?,
+        })
     }
 }
 

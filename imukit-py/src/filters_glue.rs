@@ -21,7 +21,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{empty, Demand, FilterRecord};
+use crate::convert::{empty, Demand, FilterRecord, SampleCopies};
 use crate::convert::{real_number, Name};
 use crate::threads::Fresh;
 use crate::{raise, state_copy, to_py};
@@ -601,7 +601,7 @@ fn run<'py, L: Law>(
 ) -> PyResult<Outputs<'py>> {
     let mut s = state.typed::<L>();
     let n = t.shape()[0];
-    let record = FilterRecord::new(py, &t, &gyro, &accel, mag.as_ref())?;
+    let record = FilterRecord::new(py, SampleCopies::new(py, &t, &gyro, &accel)?, mag.as_ref())?;
     let inputs = record.inputs(py)?;
     // Every row is written (one per sample) or the call fails. The demand is both outputs': seven
     // values a sample.

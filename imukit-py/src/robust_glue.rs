@@ -14,7 +14,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{real_number, state_copy, unit_quaternion, FilterRecord, Name};
+use crate::convert::{real_number, state_copy, unit_quaternion, FilterRecord, Name, SampleCopies};
 use crate::threads::{interruptible, prefaulting, run_in_pool, Fresh};
 use crate::{raise, to_py};
 
@@ -286,7 +286,7 @@ fn online(
     threads: Option<usize>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
-    let record = FilterRecord::new(py, t, gyro, accel, mag)?;
+    let record = FilterRecord::new(py, SampleCopies::new(py, t, gyro, accel)?, mag)?;
     let inputs = record.inputs(py)?;
     let n = inputs.t.len();
     let fresh = [
@@ -316,7 +316,7 @@ fn smooth(
     threads: Option<usize>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
-    let record = FilterRecord::new(py, t, gyro, accel, mag)?;
+    let record = FilterRecord::new(py, SampleCopies::new(py, t, gyro, accel)?, mag)?;
     let inputs = record.inputs(py)?;
     // Its passes run side by side (`rayon::join`): on `threads`, else the process's pool
     // (`set_num_threads`, or a fresh one in a forked child).
