@@ -113,3 +113,13 @@ def test_find_gaps_checks_its_thresholds(options: dict[str, object], argument: s
         ik.io.find_gaps(imu, **options)  # type: ignore[arg-type]
     assert e.value.argument == argument
     assert [g.sample for g in ik.io.find_gaps(imu)] == [3]
+
+
+@pytest.mark.parametrize("cls", [ik.filters.Mahony, ik.filters.Madgwick])
+def test_an_unknown_filter_option_is_named(cls: type) -> None:
+    """``Mahony(bogus=1)`` was a TypeError naming ``_Filter.__init__()`` (Robust already said "unknown
+    field") before 2026-12-07; ``Madgwick(kp=...)`` is a gain of the other law."""
+    for name in ("bogus", "kp" if cls is ik.filters.Madgwick else "beta"):
+        with pytest.raises(ik.ParameterError, match=rf"^{name}: unknown option of {cls.__name__}; it takes ") as e:
+            cls(**{name: 1.0})
+        assert e.value.argument == name

@@ -33,6 +33,7 @@ Equations, rejection rules, the gain ramp, the ``Law`` seam and measured test nu
 
 from __future__ import annotations
 
+import inspect
 import math
 import threading
 from typing import Any, NamedTuple, TypeVar
@@ -215,7 +216,14 @@ class _Filter:
         acc_rejection: AccelRejection | None = _OPTIONS.acc_rejection,
         mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
         rest_detection: RestDetection | None = _OPTIONS.rest_detection,
+        **unknown: Any,
     ) -> None:
+        if unknown:  # as Robust refuses an unknown parameter (a TypeError named _Filter.__init__ before)
+            signatures = (inspect.signature(f).parameters for f in (type(self).__init__, _Filter.__init__))
+            known = ", ".join(n for names in signatures for n in names if n not in ("self", "options", "unknown"))
+            raise ParameterError(
+                f"unknown option of {type(self).__name__}; it takes {known}", argument=next(iter(unknown))
+            )
         # update() reads, steps and replaces the state: from several threads at once, unlocked,
         # updates were lost (issue 17); with it they run one after another.
         self._lock = threading.Lock()
