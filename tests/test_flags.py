@@ -123,3 +123,23 @@ def test_an_unknown_filter_option_is_named(cls: type) -> None:
         with pytest.raises(ik.ParameterError, match=rf"^{name}: unknown option of {cls.__name__}; it takes ") as e:
             cls(**{name: 1.0})
         assert e.value.argument == name
+
+
+def test_imu_data_takes_a_boolean_mask_and_refuses_a_zero_step() -> None:
+    """``imu[mask]`` was refused and ``imu[::0]`` raised Python's own ValueError (before 2026-12-07)."""
+    t_ns = np.arange(5, dtype=np.int64) * 5_000_000
+    gyro, mag = np.arange(15.0).reshape(5, 3), np.arange(15.0).reshape(5, 3) + 100
+    imu = ik.ImuData(t_ns, gyro, np.zeros((5, 3)), mag=mag)
+    mask = np.array([True, False, True, True, False])
+    picked = imu[mask]
+    assert picked.t_ns is not None and picked.t_ns.tolist() == [0, 10_000_000, 15_000_000]
+    np.testing.assert_array_equal(picked.gyro, gyro[mask])
+    np.testing.assert_array_equal(picked.mag, mag[mask])
+    for index, message in (
+        (slice(None, None, 0), "positive step"),
+        (np.zeros(5, bool), "selects no sample"),
+        (np.ones(4, bool), r"shape \(5,\)"),
+    ):
+        with pytest.raises(ik.ShapeError, match=message) as e:
+            imu[index]  # type: ignore[index]
+        assert e.value.argument == "index"

@@ -265,12 +265,32 @@ class ImuData(Frozen):
     def __len__(self) -> int:
         return len(self.t)
 
-    def __getitem__(self, index: slice) -> ImuData:
+    def __getitem__(self, index: slice | NDArray[np.bool_]) -> ImuData:
         """A slice of the samples as a new ``ImuData`` (negative indices count from the end, as in
-        Python); the step must be positive and the slice non-empty."""
-        if not isinstance(index, slice):
-            raise TypeError(f"ImuData indices must be slices (imu[k:k + 1] for sample k), got {type(index).__name__}")
+        Python; the step must be positive and the slice non-empty), or the samples where a boolean
+        mask of length N is True (at least one)."""
         n = len(self)
+        if isinstance(index, np.ndarray) and index.dtype == np.bool_:
+            if index.shape != (n,):
+                raise ShapeError(f"a boolean mask must have shape ({n},), got {index.shape}", argument="index")
+            if not index.any():
+                raise ShapeError(f"the mask selects no sample of {n}; an ImuData has at least one", argument="index")
+        elif not isinstance(index, slice):
+            raise TypeError(
+                "ImuData indices must be slices (imu[k:k + 1] for sample k) or a boolean mask of length N, got "
+                f"{type(index).__name__}"
+            )
+        elif index.step == 0:
+            raise ShapeError(f"ImuData slices need a positive step, got {index}", argument="index")
+        else:
+            self._check_slice(index, n)
+        t = self.t if self.t_ns is None else self.t_ns
+        ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}
+        mag = None if self.mag is None else self.mag[index]
+        return ImuData(t[index], self.gyro[index], self.accel[index], **ranges, mag=mag)
+
+    @staticmethod
+    def _check_slice(index: slice, n: int) -> None:
         start, stop, step = index.indices(n)
         if step <= 0:
             raise ShapeError(f"ImuData slices need a positive step, got {index}", argument="index")
@@ -279,10 +299,6 @@ class ImuData(Frozen):
                 f"{index} selects no sample of {n} (it runs from {start} to {stop}); an ImuData has at least one",
                 argument="index",
             )
-        t = self.t if self.t_ns is None else self.t_ns
-        ranges = {"gyro_range": self.gyro_range, "accel_range": self.accel_range}
-        mag = None if self.mag is None else self.mag[index]
-        return ImuData(t[index], self.gyro[index], self.accel[index], **ranges, mag=mag)
 
     def __eq__(self, other: object) -> bool:
         """Equal samples: the same stamps (and stamp type), readings, ranges and magnetometer, bit for bit."""
