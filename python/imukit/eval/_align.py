@@ -91,8 +91,9 @@ def align(estimate: Trajectory, reference: Trajectory, *, method: str = "se3") -
     ref = check_trajectory(reference, "reference")
     if len(est) != len(ref):
         raise ShapeError(
-            f"estimate / reference: expected equally long trajectories paired by index, got {len(est)} and "
-            f"{len(ref)} samples (associate them first: imukit.eval.associate)"
+            f"expected equally long trajectories paired by index, got {len(est)} and {len(ref)} samples "
+            "(associate them first: imukit.eval.associate)",
+            argument="estimate / reference",
         )
     if method == "none":
         return identity()
@@ -129,9 +130,10 @@ def _umeyama(xc: FloatArray, yc: FloatArray, mean_x: FloatArray, mean_y: FloatAr
     u, d, vt = np.linalg.svd(yc.T @ xc / n)
     if not d[1] > _DEGENERATE * d[0]:
         raise ParameterError(
-            f"estimate / reference: {method} alignment needs at least 3 non-collinear positions; the "
+            f"{method} alignment needs at least 3 non-collinear positions; the "
             f"cross-covariance has singular values {d.tolist()} (collinear or coincident points leave "
-            "the rotation about their line undetermined)"
+            "the rotation about their line undetermined)",
+            argument="estimate / reference",
         )
     s = np.array([1.0, 1.0, np.sign(np.linalg.det(u) * np.linalg.det(vt))])
     r = (u * s) @ vt
@@ -156,7 +158,8 @@ def _yaw(xc: FloatArray, yc: FloatArray) -> Rotation:
     spread = float(np.sqrt(np.sum(xc[:, :2] ** 2) * np.sum(yc[:, :2] ** 2)))
     if not np.hypot(a, b) > _DEGENERATE * spread:  # also when spread = 0
         raise ParameterError(
-            "estimate / reference: yaw alignment needs positions with a horizontal spread that "
-            "determines the heading (all points on one vertical line, or uncorrelated horizontally)"
+            "yaw alignment needs positions with a horizontal spread that determines the heading (all points "
+            "on one vertical line, or uncorrelated horizontally)",
+            argument="estimate / reference",
         )
     return Rotation.from_rotvec([0.0, 0.0, np.arctan2(b, a)])
