@@ -143,3 +143,15 @@ def test_imu_data_takes_a_boolean_mask_and_refuses_a_zero_step() -> None:
         with pytest.raises(ik.ShapeError, match=message) as e:
             imu[index]  # type: ignore[index]
         assert e.value.argument == "index"
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-120, 1e154, 1e250])
+def test_allan_deviation_scales_with_its_data(scale: float) -> None:
+    """``x * 1e-300`` gave deviations of exactly 0 (squares underflowed) and ``x * 1e154`` a
+    NonFiniteError (before 2026-12-07); the deviation is linear in the data."""
+    x = np.random.default_rng(0).normal(size=(4000, 2))
+    base = ik.noise.allan_deviation(x, 100.0)
+    scaled = ik.noise.allan_deviation(x * scale, 100.0)
+    np.testing.assert_allclose(scaled.deviation, base.deviation * scale, rtol=1e-12)
+    with pytest.raises(ik.NonFiniteError):
+        ik.noise.allan_deviation(np.where(np.arange(4000)[:, None] == 7, np.nan, x * scale), 100.0)

@@ -135,8 +135,15 @@ def allan_deviation(
     m = _cluster_sizes(taus, f, n)
     count = checked(threads)
     overlapping = flag(overlapping, "overlapping")
+    # Columns far from 1 in magnitude are scaled by a power of two first (exact): the sums of
+    # squares underflowed to a deviation of 0 at 1e-300 and overflowed at 1e154 (before 2026-12-07).
+    largest = np.max(np.abs(data), axis=0)
+    far = np.isfinite(largest) & (largest > 0) & ((largest < 1e-100) | (largest > 1e100))  # NaN: the core names it
+    scale = np.where(far, np.exp2(np.floor(np.log2(np.where(far, largest, 1.0)))), 1.0)
+    if far.any():
+        data = np.ascontiguousarray(data / scale)
     variance, terms = _core.allan_variance(data, "x", f, m, overlapping, count)
-    deviation = np.sqrt(variance)
+    deviation = np.sqrt(variance) * scale
     return AllanDeviation(
         taus=np.asarray(m, dtype=np.float64) / f,
         deviation=deviation if arr.ndim == 2 else deviation[:, 0],
