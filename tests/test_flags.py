@@ -9,6 +9,7 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import imukit as ik
 
@@ -155,3 +156,14 @@ def test_allan_deviation_scales_with_its_data(scale: float) -> None:
     np.testing.assert_allclose(scaled.deviation, base.deviation * scale, rtol=1e-12)
     with pytest.raises(ik.NonFiniteError):
         ik.noise.allan_deviation(np.where(np.arange(4000)[:, None] == 7, np.nan, x * scale), 100.0)
+
+
+def test_a_preintegration_given_no_state_names_it() -> None:
+    """``pim.predict(None)`` was an AttributeError (before 2026-12-07)."""
+    imu = ik.ImuData(np.arange(5) * 0.01, np.zeros((5, 3)), np.tile([0.0, 0.0, 9.81], (5, 1)))
+    pim = ik.preintegrate(imu, noise=NOISE)
+    state = ik.NavState(np.zeros(3), np.zeros(3), Rotation.identity())
+    for call, name in ((lambda: pim.predict(None), "state_i"), (lambda: pim.residual(state, None), "state_j")):
+        with pytest.raises(ik.ParameterError, match=rf"^{name}: expected an imukit.NavState, got NoneType") as e:
+            call()  # type: ignore[no-untyped-call]
+        assert e.value.argument == name

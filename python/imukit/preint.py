@@ -481,7 +481,7 @@ class PreintegratedImu:
         the closed form of GTSAM 4.3 (``docs/navigation.md``)."""
         p, v, r = predict(
             self.snapshot(),
-            _states(state_i),
+            _states(state_i, "state_i"),
             bias,
             omega_coriolis=omega_coriolis,
             second_order_coriolis=second_order_coriolis,
@@ -505,8 +505,8 @@ class PreintegratedImu:
         ones, so :attr:`covariance` stays the residual's."""
         out: FloatArray = residual(
             self.snapshot(),
-            _states(state_i),
-            _states(state_j),
+            _states(state_i, "state_i"),
+            _states(state_j, "state_j"),
             bias,
             omega_coriolis=omega_coriolis,
             second_order_coriolis=second_order_coriolis,
@@ -530,8 +530,8 @@ class PreintegratedImu:
         model (first order, ``second_order_coriolis``, ``exact_coriolis``)."""
         jac = residual_jacobians(
             self.snapshot(),
-            _states(state_i),
-            _states(state_j),
+            _states(state_i, "state_i"),
+            _states(state_j, "state_j"),
             bias,
             omega_coriolis=omega_coriolis,
             second_order_coriolis=second_order_coriolis,
@@ -595,7 +595,9 @@ def _feed(
     core.integrate(t, gyro, accel, gyro_clipped, accel_clipped, clock, threads)
 
 
-def _states(state: NavState) -> States:
+def _states(state: NavState, name: str) -> States:
+    if not isinstance(state, NavState):  # None had no .position: an AttributeError
+        raise ParameterError(f"expected an imukit.NavState, got {type(state).__name__}", argument=name)
     return States(state.position[None], state.velocity[None], state.rotation.as_matrix()[None])
 
 
