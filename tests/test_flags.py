@@ -167,3 +167,11 @@ def test_a_preintegration_given_no_state_names_it() -> None:
         with pytest.raises(ik.ParameterError, match=rf"^{name}: expected an imukit.NavState, got NoneType") as e:
             call()  # type: ignore[no-untyped-call]
         assert e.value.argument == name
+
+
+def test_batches_that_do_not_broadcast_name_both_inputs() -> None:
+    with pytest.raises(
+        ik.ShapeError, match=r"^q / p: leading dimensions do not broadcast: q \(3, 4\), p \(2, 4\)"
+    ) as e:
+        ik.quat.multiply(np.tile([0, 0, 0, 1.0], (3, 1)), np.tile([0, 0, 0, 1.0], (2, 1)))
+    assert e.value.argument == "q / p"  # None before 2026-12-07

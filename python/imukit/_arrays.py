@@ -118,7 +118,8 @@ def batched(
         batch = np.broadcast_shapes(*(a.shape[: a.ndim - len(t)] for a, (_, _, t) in zip(arrays, inputs)))
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for a, (_, n, _) in zip(arrays, inputs))
-        raise ShapeError(f"leading dimensions do not broadcast: {shapes}") from None
+        names = " / ".join(n for _, n, _ in inputs)
+        raise ShapeError(f"leading dimensions do not broadcast: {shapes}", argument=names) from None
     rows = [np.broadcast_to(a, batch + t).reshape(-1, int(np.prod(t))) for a, (_, _, t) in zip(arrays, inputs)]
     flat = np.ascontiguousarray(rows[0] if len(rows) == 1 else np.concatenate(rows, axis=1))
     name = " / ".join(n for _, n, _ in inputs)
