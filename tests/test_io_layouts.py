@@ -330,3 +330,14 @@ def test_a_latin1_file_is_named_as_such(tmp_path: Path) -> None:
         ik.io.read_imu(path)
     imu = ik.io.read_imu_csv(path, time_column=0, gyro_columns=[1, 2, 3], accel_columns=[4, 5, 6], gyro_unit="deg/s")
     np.testing.assert_allclose(imu.gyro[0], np.radians([1, 2, 3]), rtol=1e-15)
+
+
+def test_delimiters_by_name(tmp_path: Path) -> None:
+    """``delimiter="tab"`` was refused though the CLI spells it so (before 2026-12-07)."""
+    path = tmp_path / "imu.tsv"
+    path.write_text("t\tgx\tgy\tgz\tax\tay\taz\n0\t1\t2\t3\t4\t5\t6\n0.01\t1\t2\t3\t4\t5\t6\n")
+    columns = {"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]}
+    by_name = ik.io.read_imu_csv(path, delimiter="tab", **columns)  # type: ignore[arg-type]
+    assert by_name == ik.io.read_imu_csv(path, delimiter="\t", **columns)  # type: ignore[arg-type]
+    with pytest.raises(ik.ParameterError, match=r"^delimiter: expected one of"):
+        ik.io.read_imu_csv(path, delimiter="tabs", **columns)  # type: ignore[arg-type]

@@ -18,6 +18,7 @@ from imukit import io
 from imukit._errors import FileFormatError, ImukitError, ParameterError
 from imukit.imu import ImuData
 from imukit.io import ReadReport
+from imukit.io._table import DELIMITER_NAMES
 from imukit.state import Trajectory
 
 # Results go to stdout, progress and notes to stderr, so `imukit ... > file` keeps only results.
@@ -101,7 +102,7 @@ CSV_OPTIONS = (
     "delimiter",
 )
 OTHER_LAYOUTS = "other layouts: the --csv-* options"
-DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t", "space": " "}  # --csv-delimiter: read_imu_csv's
+DELIMITERS = DELIMITER_NAMES  # --csv-delimiter's names of read_imu_csv's delimiters
 
 
 def error_line(exc: Exception) -> str:

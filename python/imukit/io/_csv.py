@@ -125,7 +125,8 @@ def read_imu_csv(  # type: ignore[empty-body]
     standard_gravity
         [m/s²] per g, default the standard 9.80665 (used only with ``accel_unit="g"``).
     delimiter
-        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs); None (default): ``";"`` if
+        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs), or by name ``"comma"``,
+        ``"semicolon"``, ``"tab"``, ``"space"``; None (default): ``";"`` if
         the first non-blank line has one, else a tab if it has at least as many tabs as commas, else
         ``","`` if it has one, else white space. Decimal commas are not read.
     header_lines

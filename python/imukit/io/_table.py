@@ -45,6 +45,7 @@ from imukit.io._report import BadLines
 
 __all__ = [
     "DELIMITERS",
+    "DELIMITER_NAMES",
     "TIME_UNITS",
     "Column",
     "Stamped",
@@ -62,6 +63,7 @@ __all__ = [
 Column = Union[int, str]
 TimeUnit = Literal["s", "ms", "us", "ns"]
 DELIMITERS = (",", ";", "\t", " ")
+DELIMITER_NAMES = {"comma": ",", "semicolon": ";", "tab": "\t", "space": " "}  # as the CLI spells them
 TIME_UNITS = ("s", "ms", "us", "ns")
 # Nanoseconds per unit, for integer stamps; float stamps are divided by the unit's count per second.
 _NS_PER = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}
@@ -211,6 +213,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
     ``bad``. FileFormatError: no data lines, an ambiguous first line, or a header whose field count
     differs from the data lines'."""
     if delimiter is not None:
+        delimiter = DELIMITER_NAMES.get(delimiter, delimiter) if isinstance(delimiter, str) else delimiter
         choice(delimiter, "delimiter", DELIMITERS)
     where = os.fspath(path)
     numbered = _head(path, delimiter, header_lines)
