@@ -341,3 +341,14 @@ def test_delimiters_by_name(tmp_path: Path) -> None:
     assert by_name == ik.io.read_imu_csv(path, delimiter="\t", **columns)  # type: ignore[arg-type]
     with pytest.raises(ik.ParameterError, match=r"^delimiter: expected one of"):
         ik.io.read_imu_csv(path, delimiter="tabs", **columns)  # type: ignore[arg-type]
+
+
+def test_read_imu_csv_options_are_checked_by_name(tmp_path: Path) -> None:
+    """``read_imu(path, csv={"time_col": 0})`` was a bare TypeError (before 2026-12-07)."""
+    path = tmp_path / "imu.csv"
+    path.write_text("t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n")
+    with pytest.raises(ik.ParameterError, match=r"^csv: 'time_col' is no keyword of read_imu_csv \(accel_columns") as e:
+        ik.io.read_imu(path, csv={"time_col": 0})
+    assert e.value.argument == "csv"
+    imu, _ = ik.io.read_imu(path, csv={"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]})
+    np.testing.assert_array_equal(imu.gyro[0], [1, 2, 3])

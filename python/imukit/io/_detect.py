@@ -6,6 +6,7 @@ path with the first whose sniff accepts it; the "tried …" text of an unknown p
 
 from __future__ import annotations
 
+import inspect
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -44,6 +45,12 @@ def detect_imu(
     if csv is not None:
         for name, value in given.items():
             raise ParameterError(f"{value!r} is for ROS bags, not for a CSV file read by its columns", argument=name)
+        known = set(inspect.signature(read_imu_csv).parameters) - {"path", "on_bad_line", "report"}
+        for name in csv:  # a bare TypeError from the call would name neither csv= nor the keyword
+            if name not in known:
+                raise ParameterError(
+                    f"{name!r} is no keyword of read_imu_csv ({', '.join(sorted(known))})", argument="csv"
+                )
         return read_into(bad, read_imu_csv, path, **csv), None
     fmt = _first(source, head, "imu")
     if fmt is None and not os.path.lexists(source):
