@@ -175,3 +175,17 @@ def test_batches_that_do_not_broadcast_name_both_inputs() -> None:
     ) as e:
         ik.quat.multiply(np.tile([0, 0, 0, 1.0], (3, 1)), np.tile([0, 0, 0, 1.0], (2, 1)))
     assert e.value.argument == "q / p"  # None before 2026-12-07
+
+
+def test_allan_fit_bounds_and_a_discrete_overflow_name_their_arguments() -> None:
+    """``fit_allan(tau_min=1, tau_max=0.5)`` named ``allan``, and ``ImuNoise.discrete``'s overflow had
+    no argument (before 2026-12-07)."""
+    allan = ik.noise.allan_deviation(np.random.default_rng(0).normal(size=4000), 100.0)
+    with pytest.raises(ik.ParameterError, match=r"^tau_min / tau_max: expected tau_min ≤ tau_max") as e:
+        ik.noise.fit_allan(allan, tau_min=1.0, tau_max=0.5)
+    assert e.value.argument == "tau_min / tau_max"
+    with pytest.raises(ik.ParameterError, match=r"^tau_min / tau_max: fitting 3 parameters needs at least 4"):
+        ik.noise.fit_allan(allan, tau_min=0.5, tau_max=0.6)
+    with pytest.raises(ik.NonFiniteError, match=r"^gyro_density / dt: 1e\+300 with dt = 1e-300 s") as e:
+        ik.ImuNoise(1e300, 0.0, 0.0, 0.0).discrete(1e-300)
+    assert e.value.argument == "gyro_density / dt"

@@ -524,7 +524,9 @@ class ImuNoise:
             # Multiplied, not **2: a float power that overflows raises OverflowError.
             v = sigma * sigma / step if white else sigma * sigma * step
             if not math.isfinite(v):
-                raise NonFiniteError(f"{name} / dt: {sigma!r} with dt = {step!r} s gives a variance beyond float64")
+                raise NonFiniteError(
+                    f"{sigma!r} with dt = {step!r} s gives a variance beyond float64", argument=f"{name} / dt"
+                )
             return v
 
         return DiscreteNoise(

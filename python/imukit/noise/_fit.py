@@ -216,12 +216,14 @@ def fit_allan(
         columns = columns[:, [int(axis)]]
     lo = 0.0 if tau_min is None else _bound(tau_min, "tau_min")
     hi = math.inf if tau_max is None else _bound(tau_max, "tau_max")
+    if lo > hi:
+        raise ParameterError(f"expected tau_min ≤ tau_max, got {lo} > {hi} s", argument="tau_min / tau_max")
     keep = (allan.taus >= lo) & (allan.taus <= hi)
     if np.count_nonzero(keep) < 4:
         raise ParameterError(
             f"fitting 3 parameters needs at least 4 τ values, got {np.count_nonzero(keep)} "
             f"in [tau_min, tau_max] = [{lo}, {hi}] s",
-            argument="allan",
+            argument="allan" if tau_min is None and tau_max is None else "tau_min / tau_max",
         )
     sub = allan._replace(taus=allan.taus[keep], deviation=columns[keep], clusters=np.asarray(allan.clusters)[keep])
     taus = sub.taus
