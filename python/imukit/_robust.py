@@ -152,7 +152,7 @@ class Robust:
         """Filter (or, ``offline=True``, smooth) a whole recording natively with the GIL released
         (Ctrl-C stops an online run within ~65,536 samples; the offline smoother runs to its end);
         the streaming state is not touched. ``imu``'s arrays are read in place; a ``mag=`` array
-        that Python code could write to meanwhile is copied first (~10 ns/sample at 10^6 samples:
+        that Python code could write to meanwhile is copied first (5–12 ns/sample at 10^6 samples:
         pass the field as ``ImuData(..., mag=...)`` to save it).
 
         ``threads``: the run takes two (online from 1024 samples: each step's bias-window sums,
