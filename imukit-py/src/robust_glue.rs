@@ -319,9 +319,12 @@ fn smooth(
     let record = FilterRecord::new(py, SampleCopies::new(py, t, gyro, accel)?, mag)?;
     let inputs = record.inputs(py)?;
     // Its passes run side by side (`rayon::join`): on `threads`, else the process's pool
-    // (`set_num_threads`, or a fresh one in a forked child).
-    py.detach(|| run_in_pool(threads, || f.smooth(s, &inputs, out)))?
-        .map_err(|e| to_py(py, "imu / params", e))
+    // (`set_num_threads`, or a fresh one in a forked child); Ctrl-C stops the first stage.
+    let n = inputs.t.len();
+    interruptible(py, n, |cancel| {
+        run_in_pool(threads, || f.smooth_cancellable(s, &inputs, out, cancel))
+    })??
+    .map_err(|e| to_py(py, "imu / params", e))
 }
 
 /// Registers the classes.

@@ -150,7 +150,8 @@ class Robust:
         threads: int | None = None,
     ) -> RobustResult:
         """Filter (or, ``offline=True``, smooth) a whole recording natively with the GIL released
-        (Ctrl-C stops an online run within ~65,536 samples; the offline smoother runs to its end);
+        (Ctrl-C stops an online run within ~65,536 samples, the smoother in its first stage or after
+        its second);
         the streaming state is not touched. ``imu``'s arrays are read in place; a ``mag=`` array
         that Python code could write to meanwhile is copied first (5–12 ns/sample at 10^6 samples:
         pass the field as ``ImuData(..., mag=...)`` to save it).

@@ -113,6 +113,20 @@ impl Robust {
     /// the zero-phase filtered specific force with that bias, and in 9D the heading loop run
     /// forward and backward on that attitude, fused.
     pub fn smooth(&self, state: &mut RobustState, inputs: &Inputs<'_>, out: &mut Outputs<'_>) -> Result<()> {
+        self.smooth_cancellable(state, inputs, out, &Cancel::new())
+    }
+
+    /// [`Robust::smooth`], stopping with [`Error::Interrupted`](crate::Error::Interrupted) when
+    /// `cancel` is set: polled by both first-stage passes (every [`Cancel::EVERY`] samples, and
+    /// at each part of the backward pass) and before the second stage, which then runs to its
+    /// end (about half the work).
+    pub fn smooth_cancellable(
+        &self,
+        state: &mut RobustState,
+        inputs: &Inputs<'_>,
+        out: &mut Outputs<'_>,
+        cancel: &Cancel,
+    ) -> Result<()> {
         let n = inputs.t.len();
         if !out.len_ok(n, true) {
             return Err(crate::Error::RowCount {
@@ -131,11 +145,12 @@ impl Robust {
         // only the backward pass has a track of its own.
         let mut bwd = unposed(n);
         let (forward, backward) = rayon::join(
-            || self.run_checked(state, inputs, (0, false), false, &mut out.unposed(), &Cancel::new()),
-            || self.run_reversed(inputs, &mut bwd),
+            || self.run_checked(state, inputs, (0, false), false, &mut out.unposed(), cancel),
+            || self.run_reversed(inputs, &mut bwd, cancel),
         );
         forward?;
         backward?;
+        cancel.check(0).map_err(|_| crate::Error::Interrupted { index: n })?;
 
         // The backward track is in reversed time: sample k is its row n − 1 − k (indexed so, not
         // reversed in place). The fusions are per sample: the record's halves on two threads,
@@ -200,7 +215,7 @@ impl Robust {
 
     /// Stage 1's backward pass into `track`: the record reversed in time, fed a part at a time
     /// ([`Reversed`]); errors name rows of the reversed record.
-    fn run_reversed(&self, inputs: &Inputs<'_>, track: &mut Track) -> Result<()> {
+    fn run_reversed(&self, inputs: &Inputs<'_>, track: &mut Track, cancel: &Cancel) -> Result<()> {
         let n = inputs.t.len();
         let mut state = RobustState::default();
         let mut part = Reversed::default();
@@ -214,14 +229,7 @@ impl Robust {
                 rest: &mut track.rest[rows.clone()],
                 mag_disturbed: &mut track.mag_disturbed[rows],
             };
-            self.run_checked(
-                &mut state,
-                &part.inputs(),
-                (first, first > 0),
-                false,
-                &mut out,
-                &Cancel::new(),
-            )?;
+            self.run_checked(&mut state, &part.inputs(), (first, first > 0), false, &mut out, cancel)?;
         }
         Ok(())
     }
@@ -732,7 +740,7 @@ mod tests {
                 mag,
             };
             let mut parts = unposed(n);
-            f.run_reversed(&inputs, &mut parts)?;
+            f.run_reversed(&inputs, &mut parts, &Cancel::new())?;
             let mut whole = Reversed::default();
             whole.fill(&inputs, 0..n);
             let mut one = unposed(n);
@@ -754,6 +762,42 @@ mod tests {
             assert!(parts == one, "9D: {}", mag.is_some());
             assert!(one.bias.iter().any(|b| *b != [0.0; 3]), "the pass ran");
         }
+        Ok(())
+    }
+
+    /// A cancelled smoother stops in its first stage (both passes poll), on one thread and on
+    /// two; an uncancelled flag gives `smooth`'s result.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn a_cancelled_smoother_stops() -> Result<()> {
+        let n = 3_000;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 / 200.0).collect();
+        let gyro: Vec<[f64; 3]> = t.iter().map(|&s| [0.3 * (1.1 * s).sin(), 0.2, 0.1]).collect();
+        let accel: Vec<[f64; 3]> = t.iter().map(|&s| [0.5 * (0.9 * s).sin(), 0.0, 9.81]).collect();
+        let inputs = Inputs {
+            t: &t,
+            gyro: &gyro,
+            accel: &accel,
+            mag: None,
+        };
+        let f = Robust::new(RobustParams::default(), World::Enu)?;
+        let cancel = Cancel::new();
+        cancel.cancel();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut track = Track::new(n);
+            let e = pool
+                .install(|| f.smooth_cancellable(&mut RobustState::default(), &inputs, &mut track.outputs(), &cancel))
+                .unwrap_err();
+            assert!(
+                matches!(e, crate::Error::Interrupted { index: 0 }),
+                "{threads} threads: {e}"
+            );
+        }
+        let (mut a, mut b) = (Track::new(n), Track::new(n));
+        f.smooth(&mut RobustState::default(), &inputs, &mut a.outputs())?;
+        f.smooth_cancellable(&mut RobustState::default(), &inputs, &mut b.outputs(), &Cancel::new())?;
+        assert_eq!(a, b);
         Ok(())
     }
 }
