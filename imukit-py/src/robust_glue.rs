@@ -238,26 +238,8 @@ impl PyRobustFilter {
                 rest: gr.as_slice_mut()?,
                 mag_disturbed: gm.as_slice_mut()?,
             };
-            if offline {
-                smooth(
-                    py,
-                    &self.inner,
-                    &mut s,
-                    (&t, &gyro, &accel, mag.as_ref()),
-                    threads,
-                    &mut out,
-                )?;
-            } else {
-                online(
-                    py,
-                    &self.inner,
-                    &mut s,
-                    (&t, &gyro, &accel, mag.as_ref()),
-                    continued,
-                    threads,
-                    &mut out,
-                )?;
-            }
+            let arrays = (&t, &gyro, &accel, mag.as_ref());
+            run_whole(py, &self.inner, &mut s, arrays, (continued, offline), threads, &mut out)?;
         }
         Ok((out_q, out_b, out_s, out_rest, out_mag, PyRobustState(s)))
     }
@@ -271,24 +253,28 @@ type Arrays<'a, 'py> = (
     Option<&'a PyReadonlyArray2<'py, f64>>,
 );
 
-/// The online filter over the whole record in one run (its window halves on a second thread
-/// of `threads`, else of the process's pool), interruptible by Ctrl-C. The record is read in
-/// place where no Python code can write to it meanwhile, else copied ([`FilterRecord`]). It ran
-/// part by part (4096 rows copied with the GIL held, then filtered) until 2026-12-07: each part
-/// started the second thread anew, which woke too late for the part's first bias window, so the
-/// calling thread ran ~700 of each part's 4096 window halves itself (a 9D run 15 % slower).
-fn online(
+/// The online filter (its window halves on a second thread) or, `offline`, the smoother (its
+/// passes side by side) over the whole record in one core call, on `threads`, else the process's
+/// pool (`set_num_threads`, or a fresh one in a forked child), interruptible by Ctrl-C. The record
+/// is read in place where no Python code can write to it meanwhile, else copied
+/// ([`FilterRecord`]). The online run went part by part (4096 rows copied with the GIL held, then
+/// filtered) until 2026-12-07: each part started the second thread anew, which woke too late for
+/// the part's first bias window, so the calling thread ran ~700 of each part's 4096 window halves
+/// itself (a 9D run 15 % slower).
+fn run_whole(
     py: Python<'_>,
     f: &Robust,
     s: &mut RobustState,
     (t, gyro, accel, mag): Arrays<'_, '_>,
-    continued: bool,
+    (continued, offline): (bool, bool),
     threads: Option<usize>,
     out: &mut RobustOutputs<'_>,
 ) -> PyResult<()> {
     let record = FilterRecord::new(py, SampleCopies::new(py, t, gyro, accel)?, mag)?;
     let inputs = record.inputs(py)?;
     let n = inputs.t.len();
+    // The smoother writes its outputs last, after its tracks: a helper faulting them in ahead
+    // would run while nothing writes them.
     let fresh = [
         Fresh::of(out.q),
         Fresh::of(out.bias),
@@ -296,35 +282,16 @@ fn online(
         Fresh::of(out.rest),
         Fresh::of(out.mag_disturbed),
     ];
-    prefaulting(n, &fresh, || {
+    let mut run = move || {
         interruptible(py, n, |cancel| {
-            run_in_pool(threads, || {
-                f.run_part_cancellable(s, &inputs, (0, continued), out, cancel)
+            run_in_pool(threads, || match offline {
+                true => f.smooth_cancellable(s, &inputs, out, cancel),
+                false => f.run_part_cancellable(s, &inputs, (0, continued), out, cancel),
             })
         })
-    })??
-    .map_err(|e| to_py(py, "imu / params", e))
-}
-
-/// The smoother over the whole record (it reads it forward and backward), read in place where no
-/// Python code can write to it meanwhile, else over private copies ([`FilterRecord`]).
-fn smooth(
-    py: Python<'_>,
-    f: &Robust,
-    s: &mut RobustState,
-    (t, gyro, accel, mag): Arrays<'_, '_>,
-    threads: Option<usize>,
-    out: &mut RobustOutputs<'_>,
-) -> PyResult<()> {
-    let record = FilterRecord::new(py, SampleCopies::new(py, t, gyro, accel)?, mag)?;
-    let inputs = record.inputs(py)?;
-    // Its passes run side by side (`rayon::join`): on `threads`, else the process's pool
-    // (`set_num_threads`, or a fresh one in a forked child); Ctrl-C stops the first stage.
-    let n = inputs.t.len();
-    interruptible(py, n, |cancel| {
-        run_in_pool(threads, || f.smooth_cancellable(s, &inputs, out, cancel))
-    })??
-    .map_err(|e| to_py(py, "imu / params", e))
+    };
+    let result = if offline { run() } else { prefaulting(n, &fresh, run) };
+    result??.map_err(|e| to_py(py, "imu / params", e))
 }
 
 /// Registers the classes.
