@@ -84,7 +84,7 @@ def _plausible_seconds(seconds: FloatArray, t_ns: NDArray[np.int64] | None) -> N
         return
     first = float(seconds[0])
     if abs(first) >= _SECONDS_LIMIT:
-        units = [(u, d) for u, d in (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))]
+        units = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
         guess = next(((u, d) for u, d in units if _EPOCH_S[0] <= abs(first) / d < _EPOCH_S[1]), None)
         hint = (
             "pass them in seconds or as integer nanoseconds"

@@ -123,7 +123,8 @@ def read_imu_csv(  # type: ignore[empty-body]
         ParameterError naming the argument (a column read in the wrong unit would be a wrong
         answer). Names of the x, y, z columns that state different units are refused too.
     standard_gravity
-        [m/s²] per g, default the standard 9.80665 (used only with ``accel_unit="g"``).
+        [m/s²] per g, default the standard 9.80665 (used only for an accelerometer in ``"g"`` or
+        ``"mg"``, given or stated by the header).
     delimiter
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces and tabs), or by name ``"comma"``,
         ``"semicolon"``, ``"tab"``, ``"space"``; None (default): ``";"`` if

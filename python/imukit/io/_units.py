@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from imukit._errors import ParameterError
 
-__all__ = ["KINDS", "canonical", "resolve", "time_suffix", "unit_in_name", "words_and_unit"]
+__all__ = ["canonical", "resolve", "time_suffix", "unit_in_name", "words_and_unit"]
 
 _SPELLINGS = {
     "time": {
@@ -33,7 +33,6 @@ _SPELLINGS = {
         "mg": ("mg", "millig", "milli-g"),
     },
 }
-KINDS = tuple(_SPELLINGS)
 _CANONICAL = {kind: {s: unit for unit, names in units.items() for s in names} for kind, units in _SPELLINGS.items()}
 _BRACKET = re.compile(r"\s*[\[(]([^\])]*)[\])]\s*$")
 _TIME_WORDS = ("time", "t", "timestamp", "stamp")
