@@ -37,7 +37,7 @@ from imukit.io._csv import read_imu_csv
 from imukit.io._format import Format, Head, is_number
 from imukit.io._lines import read_into
 from imukit.io._report import BadLines
-from imukit.io._table import Table, detect_delimiter, read_table, unquoted
+from imukit.io._table import Table, detect_delimiter, header_fields, read_table
 from imukit.io._units import time_suffix, words_and_unit
 
 __all__ = ["ColumnRoles", "column_roles"]
@@ -112,8 +112,7 @@ def header_names(head: Head) -> list[str] | None:
     if not head.lines:
         return None
     first = head.lines[0][1]
-    d = detect_delimiter(first)
-    fields = [unquoted(f.strip()) for f in first.split(None if d == " " else d)]
+    fields = header_fields(first, detect_delimiter(first))
     return None if is_number(fields[0]) else fields
 
 

@@ -54,10 +54,10 @@ __all__ = [
     "check_columns",
     "check_header_lines",
     "detect_delimiter",
+    "header_fields",
     "read_stamped",
     "read_table",
     "stamp_unit",
-    "unquoted",
 ]
 
 Column = Union[int, str]
@@ -225,7 +225,7 @@ def read_table(path: str | os.PathLike[str], bad: BadLines, delimiter: str | Non
     if not data:
         raise FileFormatError(f"{where}: no data lines", argument="path")
     named = [(n, text) for k, (n, text) in enumerate(head) if k == 0 or not text.startswith("#")]
-    headers = [(n, [unquoted(name.strip()) for name in plain(text.lstrip("#"))]) for n, text in named]
+    headers = [(n, header_fields(text.lstrip("#"), d)) for n, text in named]
     widths = Counter(len(plain(text)) for _, text in data[:_SAMPLE])
     start = head[-1][0] + 1 if head else 1
 
@@ -301,7 +301,13 @@ def _leading_header(numbered: list[tuple[int, str]], split: Split, where: str, b
     return min(len(numbered), 1)
 
 
-def unquoted(name: str) -> str:
+def header_fields(text: str, d: str) -> list[str]:
+    """The names of a header line split at the delimiter ``d`` (``" "``: runs of white space), each
+    stripped and unquoted: the one rule of every reader that looks at header names."""
+    return [_unquoted(name.strip()) for name in (text.split() if d == " " else text.split(d))]
+
+
+def _unquoted(name: str) -> str:
     """A header name without the double quotes around it (R's ``write.csv``, spreadsheet exports)."""
     return name[1:-1].strip() if len(name) >= 2 and name[0] == name[-1] == '"' else name
 
