@@ -4,6 +4,8 @@ and NED, gyro-bias estimation, acceleration rejection, streaming = batch, save/r
 from __future__ import annotations
 
 import itertools
+import re
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -428,6 +430,29 @@ def test_bad_input_names_argument() -> None:
     later = Mahony().run(imu).state
     with pytest.raises(ik.TimestampError, match=r"^t: "):
         Mahony().run(imu, initial=later)  # continuing into the past
+
+
+@pytest.mark.parametrize(
+    ("build", "argument"),
+    [
+        (lambda: ik.filters.GainRamp(duration_s=-1.0), "gain_ramp.duration_s"),
+        (lambda: ik.filters.GainRamp(factor=0.5), "gain_ramp.factor"),
+        (lambda: ik.filters.AccelLowPass(tau_s=0.0), "acc_lowpass.tau_s"),
+        (lambda: ik.filters.AccelRejection(angle_rad=4.0), "acc_rejection.angle_rad"),
+        (lambda: ik.filters.MagRejection(recovery_s=float("inf")), "mag_rejection.recovery_s"),
+        (lambda: ik.filters.RestDetection(max_bias=-0.1), "rest_detection.max_bias"),
+        (lambda: ik._core.MahonyGains(kp=-1.0), "kp"),
+        (lambda: ik._core.MadgwickGains(full_rate_angle_rad=2.0), "full_rate_angle_rad"),
+        (lambda: ik._core.RobustParams(tau_acc_s=-1.0), "tau_acc_s"),
+    ],
+)
+def test_an_option_value_out_of_its_domain_is_refused_where_it_is_written(
+    build: Callable[[], object], argument: str
+) -> None:
+    """Not later, at the filter that uses it: the value's own line is in the traceback."""
+    with pytest.raises(ik.ParameterError, match=rf"^{re.escape(argument)}: ") as raised:
+        build()
+    assert raised.value.argument == argument
 
 
 def test_zero_and_huge_accel_do_not_break() -> None:

@@ -51,6 +51,13 @@ def test_local_level_values_are_checked_by_the_core() -> None:
         ik.LocalLevel(0.5, axes="nwu")
     with pytest.raises(ik.ParameterError, match="frame"):
         ik.integrate(ik.ImuData(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3))), initial=_rest(), frame="enu")
+    # At a pole a fixed frame is fine, one that follows the vehicle has no north: refused when built.
+    assert ik.LocalLevel(90.0, degrees=True).latitude == pytest.approx(np.pi / 2)
+    for pole in (90.0, -90.0):
+        with pytest.raises(ik.ParameterError, match=r"^latitude: .*poles") as raised:
+            ik.LocalLevel(pole, degrees=True, transport=True)
+        assert raised.value.argument == "latitude"
+    assert ik.LocalLevel(89.9, degrees=True, transport=True).transport
 
 
 def _rest() -> ik.NavState:

@@ -22,13 +22,18 @@ pub(crate) struct LocalLevelFields {
     height: f64,
     // A name, parsed below: a failed parse inside the derive would surface as a TypeError.
     axes: String,
+    transport: bool,
 }
 
 impl LocalLevelFields {
     /// The core's frame, its values checked there.
     pub(crate) fn frame(&self, py: Python<'_>) -> PyResult<LocalLevel> {
         let axes = self.axes.parse::<Axes>().map_err(|e| to_py(py, "axes", e))?;
-        LocalLevel::new(self.latitude, self.height, axes).map_err(|e| to_py(py, "frame", e))
+        let frame = LocalLevel::new(self.latitude, self.height, axes).map_err(|e| to_py(py, "frame", e))?;
+        if self.transport {
+            ellipsoid::check_origin(self.latitude).map_err(|e| to_py(py, "frame", e))?;
+        }
+        Ok(frame)
     }
 }
 

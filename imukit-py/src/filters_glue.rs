@@ -8,9 +8,9 @@
 //! | `FilterState` (named getters, pickles by name) | `CommonState` + the law's `Extra` by `Fields` names |
 //! | `MahonyFilter`, `MadgwickFilter` (one [`filter_class!`] line per law) | `Filter<Mahony>`, `Filter<Madgwick>` |
 //!
-//! The glue converts only: values are checked by the core (errors name the option as
-//! `<option>.<quantity>`), Python types by `imukit.filters`; a number that is not one is a
-//! `ParameterError` here, where the conversion fails.
+//! The glue converts only: values are checked by the core when a value class is built (errors
+//! name the option as `<option>.<quantity>`), Python types by `imukit.filters`; a number that is
+//! not one is a `ParameterError` here, where the conversion fails.
 
 use imukit::filters::{
     AccelLowPass, AccelRejection, CommonState, Fields, Filter, GainRamp, Law, Madgwick, MagRejection, Mahony, Options,
@@ -49,7 +49,10 @@ macro_rules! value_class {
             #[pyo3(signature = ($($field = None),+))]
             fn new(py: Python<'_>, $($field: Option<&Bound<'_, PyAny>>),+) -> PyResult<Self> {
                 let default = $rust::default();
-                Ok(Self { $($field: real(py, concat!($prefix, stringify!($field)), $field, default.$field)?),+ })
+                let value = Self { $($field: real(py, concat!($prefix, stringify!($field)), $field, default.$field)?),+ };
+                // Out of its domain a value is refused where it is written, not at the filter's build.
+                $rust::from(value).validate().map_err(|e| to_py(py, $name, e))?;
+                Ok(value)
             }
 
             fn __repr__(&self) -> String {

@@ -52,6 +52,7 @@ impl PyRobustParams {
     fn new(py: Python<'_>, fields: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let values = from_fields(py, &RobustParams::default(), fields)?;
         let params = RobustParams::from_values(&values).ok_or_else(|| raise(py, "ParameterError", "params", "?"))?;
+        params.validate().map_err(|e| to_py(py, "params", e))?;
         Ok(Self(params))
     }
 

@@ -71,8 +71,10 @@ class LocalLevel(Frozen):
         h = real_scalar(height, "height", what="a height in metres", accept=lambda x: True)
         name = canonical(axes, "axes", AXES)
         lat = math.radians(lat) if degrees else lat
-        # The core checks the values (latitude within ±π/2, finite height), read by field name.
-        earth_rate, gravity = _core.local_level(types.SimpleNamespace(latitude=lat, height=h, axes=name))
+        # The core checks the values (latitude within ±π/2, and off the poles for a frame that
+        # follows the vehicle; finite height), read by field name.
+        fields = types.SimpleNamespace(latitude=lat, height=h, axes=name, transport=bool(transport))
+        earth_rate, gravity = _core.local_level(fields)
         self._set(lat, h, name, readonly_copy(np.array(earth_rate)), readonly_copy(np.array(gravity)), transport)
 
     def __repr__(self) -> str:

@@ -28,6 +28,21 @@ use crate::{quat, Cancel, Error, Result};
 /// First eccentricity squared `e² = f (2 − f)`.
 pub(crate) const E2: f64 = FLATTENING * (2.0 - FLATTENING);
 
+/// Checks that a frame at `latitude` \[rad\] can follow the vehicle: strictly inside ±π/2, as
+/// north and east (and `tan φ`, `1/cos φ` in the rates) are undefined at the poles.
+pub fn check_origin(latitude: f64) -> Result<()> {
+    if latitude.abs() < std::f64::consts::FRAC_PI_2 {
+        Ok(())
+    } else {
+        Err(Error::Parameter {
+            name: "latitude",
+            expected:
+                "inside ±π/2 for a frame that follows the vehicle (the local-level axes are undefined at the poles)",
+            got: format!("{latitude}"),
+        })
+    }
+}
+
 /// Meridian and transverse radii of curvature `(R_N, R_E)` at latitude φ \[m\] (module docs).
 pub fn radii(latitude: f64) -> (f64, f64) {
     let d = 1.0 - E2 * latitude.sin().powi(2);
@@ -159,13 +174,7 @@ pub(crate) fn run(
             ),
         });
     }
-    if lat.abs() >= std::f64::consts::FRAC_PI_2 {
-        return Err(Error::Parameter {
-            name: "frame",
-            expected: "a latitude inside ±π/2 (the local-level axes are undefined at the poles)",
-            got: format!("{lat}"),
-        });
-    }
+    check_origin(lat).map_err(|e| e.in_argument("frame"))?;
     if !samples.first_ok() {
         return Err(samples.value_error());
     }
@@ -290,7 +299,9 @@ pub fn sensor_readings(
             return Err(Error::RowCount { input: n, output: len }.in_argument(name));
         }
     }
-    LocalLevel::new(start.x, start.z, axes).map_err(|e| e.in_argument("frame"))?;
+    LocalLevel::new(start.x, start.z, axes)
+        .and_then(|_| check_origin(start.x))
+        .map_err(|e| e.in_argument("frame"))?;
     let up0 = north_east_up(axes, &Vector3::from(track.position[0])).2;
     let height = |p: &[f64; 3]| start.z + north_east_up(axes, &Vector3::from(*p)).2 - up0;
     let rates = |lat_lon: &Vector3<f64>, p: &[f64; 3], v: &[f64; 3]| {

@@ -162,6 +162,72 @@ impl Default for RestDetection {
     }
 }
 
+impl GainRamp {
+    /// Checks the fields for their domain (errors name `gain_ramp.<field>`).
+    pub fn validate(&self) -> crate::Result<()> {
+        check("gain_ramp.duration_s", self.duration_s, "finite and ≥ 0", |x| {
+            x >= 0.0
+        })?;
+        check("gain_ramp.factor", self.factor, "finite and ≥ 1", |x| x >= 1.0)
+    }
+}
+
+impl AccelLowPass {
+    /// Checks the time constant for its domain.
+    pub fn validate(&self) -> crate::Result<()> {
+        check("acc_lowpass.tau_s", self.tau_s, "finite and > 0", |x| x > 0.0)
+    }
+}
+
+impl AccelRejection {
+    /// Checks the fields for their domain (errors name `acc_rejection.<field>`).
+    pub fn validate(&self) -> crate::Result<()> {
+        check("acc_rejection.norm", self.norm, "finite and > 0", |x| x > 0.0)?;
+        check("acc_rejection.angle_rad", self.angle_rad, "in (0, π]", |x| {
+            x > 0.0 && x <= std::f64::consts::PI
+        })?;
+        check("acc_rejection.recovery_s", self.recovery_s, "finite and > 0", |x| {
+            x > 0.0
+        })?;
+        check(
+            "acc_rejection.filtered_norm",
+            self.filtered_norm,
+            "finite and > 0",
+            |x| x > 0.0,
+        )?;
+        check("acc_rejection.drift_s", self.drift_s, "finite and > 0", |x| x > 0.0)
+    }
+}
+
+impl MagRejection {
+    /// Checks the fields for their domain (errors name `mag_rejection.<field>`).
+    pub fn validate(&self) -> crate::Result<()> {
+        check(
+            "mag_rejection.norm_fraction",
+            self.norm_fraction,
+            "finite and > 0",
+            |x| x > 0.0,
+        )?;
+        check("mag_rejection.dip_rad", self.dip_rad, "finite and > 0", |x| x > 0.0)?;
+        check("mag_rejection.recovery_s", self.recovery_s, "finite and > 0", |x| {
+            x > 0.0
+        })
+    }
+}
+
+impl RestDetection {
+    /// Checks the fields for their domain (errors name `rest_detection.<field>`).
+    pub fn validate(&self) -> crate::Result<()> {
+        check("rest_detection.gyro", self.gyro, "finite and > 0", |x| x > 0.0)?;
+        check("rest_detection.accel", self.accel, "finite and > 0", |x| x > 0.0)?;
+        check("rest_detection.duration_s", self.duration_s, "finite and ≥ 0", |x| {
+            x >= 0.0
+        })?;
+        check("rest_detection.tau_s", self.tau_s, "finite and > 0", |x| x > 0.0)?;
+        check("rest_detection.max_bias", self.max_bias, "finite and > 0", |x| x > 0.0)
+    }
+}
+
 /// Options shared by every law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
@@ -201,42 +267,11 @@ impl Options {
     /// Checks every option for its domain.
     pub fn validate(&self) -> crate::Result<()> {
         check("gravity", self.gravity, "a positive finite number", |x| x > 0.0)?;
-        let ramp = &self.gain_ramp;
-        check("gain_ramp.duration_s", ramp.duration_s, "finite and ≥ 0", |x| {
-            x >= 0.0
-        })?;
-        check("gain_ramp.factor", ramp.factor, "finite and ≥ 1", |x| x >= 1.0)?;
-        if let Some(f) = self.acc_lowpass {
-            check("acc_lowpass.tau_s", f.tau_s, "finite and > 0", |x| x > 0.0)?;
-        }
-        if let Some(r) = self.acc_rejection {
-            check("acc_rejection.norm", r.norm, "finite and > 0", |x| x > 0.0)?;
-            check("acc_rejection.angle_rad", r.angle_rad, "in (0, π]", |x| {
-                x > 0.0 && x <= std::f64::consts::PI
-            })?;
-            check("acc_rejection.recovery_s", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
-            check("acc_rejection.filtered_norm", r.filtered_norm, "finite and > 0", |x| {
-                x > 0.0
-            })?;
-            check("acc_rejection.drift_s", r.drift_s, "finite and > 0", |x| x > 0.0)?;
-        }
-        if let Some(r) = self.mag_rejection {
-            check("mag_rejection.norm_fraction", r.norm_fraction, "finite and > 0", |x| {
-                x > 0.0
-            })?;
-            check("mag_rejection.dip_rad", r.dip_rad, "finite and > 0", |x| x > 0.0)?;
-            check("mag_rejection.recovery_s", r.recovery_s, "finite and > 0", |x| x > 0.0)?;
-        }
-        if let Some(r) = self.rest_detection {
-            check("rest_detection.gyro", r.gyro, "finite and > 0", |x| x > 0.0)?;
-            check("rest_detection.accel", r.accel, "finite and > 0", |x| x > 0.0)?;
-            check("rest_detection.duration_s", r.duration_s, "finite and ≥ 0", |x| {
-                x >= 0.0
-            })?;
-            check("rest_detection.tau_s", r.tau_s, "finite and > 0", |x| x > 0.0)?;
-            check("rest_detection.max_bias", r.max_bias, "finite and > 0", |x| x > 0.0)?;
-        }
-        Ok(())
+        self.gain_ramp.validate()?;
+        self.acc_lowpass.as_ref().map_or(Ok(()), AccelLowPass::validate)?;
+        self.acc_rejection.as_ref().map_or(Ok(()), AccelRejection::validate)?;
+        self.mag_rejection.as_ref().map_or(Ok(()), MagRejection::validate)?;
+        self.rest_detection.as_ref().map_or(Ok(()), RestDetection::validate)
     }
 
     /// The ramp multiplier at `elapsed` seconds since start (or recovery).
