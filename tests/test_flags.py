@@ -60,13 +60,14 @@ OPTION_FIELDS = {
 @pytest.mark.parametrize(("option", "field"), [(o, f) for o, fields in OPTION_FIELDS.items() for f in fields])
 def test_an_option_out_of_its_domain_is_named_by_its_field(option: str, field: str) -> None:
     """``gain_ramp.duration`` was named for the field ``duration_s`` (and four others alike) before
-    2026-12-07: the name in an error is the one a user passes."""
+    2026-12-07: the name in an error is the one a user passes; and it is raised where the value is
+    written, not at the filter that uses it (since the eighth session of 2026-12-07)."""
     default = getattr(ik._core.FilterOptions.default(), option)
     values = {name: getattr(default, name) for name in OPTION_FIELDS[option]}
-    bad = type(default)(**{**values, field: -1.0})
     with pytest.raises(ik.ParameterError, match=rf"^{option}\.{field}: ") as e:
-        ik.filters.Mahony(**{option: bad})
+        type(default)(**{**values, field: -1.0})
     assert e.value.argument == f"{option}.{field}"
+    assert isinstance(ik.filters.Mahony(**{option: type(default)(**values)}), ik.filters.Mahony)
 
 
 def test_window_boundaries_off_the_samples_clock_are_named_on_it() -> None:

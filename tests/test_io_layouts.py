@@ -352,3 +352,73 @@ def test_read_imu_csv_options_are_checked_by_name(tmp_path: Path) -> None:
     assert e.value.argument == "csv"
     imu, _ = ik.io.read_imu(path, csv={"time_column": 0, "gyro_columns": [1, 2, 3], "accel_columns": [4, 5, 6]})
     np.testing.assert_array_equal(imu.gyro[0], [1, 2, 3])
+
+
+def _stamped(path: Path, header: str, stamps: np.ndarray, values: np.ndarray) -> Path:
+    rows = [",".join([str(int(s)), *map(repr, row.tolist())]) for s, row in zip(stamps, values)]
+    path.write_text("\n".join([header, *rows]) + "\n")
+    return path
+
+
+EUROC_STAMPS = 1403715523000000000 + np.arange(20) * 5_000_000
+
+
+@pytest.mark.parametrize(
+    ("header", "scale"),
+    [
+        # accelerometer first: read by position, gyro and accel were swapped
+        (
+            "#timestamp [ns],accel_x [m/s^2],accel_y [m/s^2],accel_z [m/s^2],"
+            "gyro_x [rad/s],gyro_y [rad/s],gyro_z [rad/s]",
+            None,
+        ),
+        # EuRoC's order in other units: read by position, deg/s as rad/s and g as m/s²
+        (
+            "#timestamp [ns],gyro_x [deg/s],gyro_y [deg/s],gyro_z [deg/s],acc_x [g],acc_y [g],acc_z [g]",
+            (np.pi / 180, 9.80665),
+        ),
+    ],
+)
+def test_a_hash_header_naming_other_columns_is_read_by_its_names(
+    tmp_path: Path, header: str, scale: tuple | None
+) -> None:
+    """A 7-field file with integer stamps is EuRoC's layout only when its header does not say otherwise."""
+    values = _values(20, 7)[:, :6] + [0, 0, 0, 0, 0, 9.81]
+    gyro, accel = values[:, :3], values[:, 3:]
+    written = np.hstack([accel, gyro]) if scale is None else np.hstack([gyro / scale[0], accel / scale[1]])
+    path = _stamped(tmp_path / "imu.csv", header, EUROC_STAMPS, written)
+    imu, _ = ik.io.read_imu(path)
+    np.testing.assert_array_equal(imu.t_ns, EUROC_STAMPS)
+    np.testing.assert_allclose(imu.gyro, gyro, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(imu.accel, accel, rtol=1e-14, atol=1e-14)
+    # Asked for EuRoC's layout by name, the file's own header is not overruled.
+    with pytest.raises(ik.FileFormatError, match=r"^path: .*its header (puts|states).*read_imu") as raised:
+        ik.io.read_euroc_imu(path)
+    assert raised.value.argument == "path"
+
+
+def test_a_header_naming_euroc_columns_is_still_read_by_position(tmp_path: Path) -> None:
+    values = _values(20, 8)[:, :6]
+    for header in (
+        "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+        "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]",  # EuRoC's own: no role names the rules read
+        "#timestamp [ns],gx [rad/s],gy,gz,ax,ay,az [m/s^2]",  # EuRoC's order and units, by name
+    ):
+        path = _stamped(tmp_path / "imu.csv", header, EUROC_STAMPS, values)
+        by_position = ik.io.read_euroc_imu(path)
+        np.testing.assert_array_equal(by_position.gyro, values[:, :3])
+        np.testing.assert_array_equal(ik.io.read_imu(path)[0].accel, values[:, 3:])
+
+
+def test_a_ground_truth_header_with_the_quaternion_first_is_read_by_its_names(tmp_path: Path) -> None:
+    rotation = Rotation.random(20, rng=3)
+    position, rest = _values(20, 9)[:, :3], np.zeros((20, 9))
+    header = "#timestamp,q_w,q_x,q_y,q_z,p_x,p_y,p_z," + ",".join(f"{v}_{a}" for v in ("v", "bw", "ba") for a in "xyz")
+    path = _stamped(
+        tmp_path / "gt.csv", header, EUROC_STAMPS, np.hstack([rotation.as_quat(scalar_first=True), position, rest])
+    )
+    truth = ik.io.read_trajectory(path)
+    np.testing.assert_array_equal(truth.position, position)
+    assert (truth.rotation.inv() * rotation).magnitude().max() < 1e-15
+    with pytest.raises(ik.FileFormatError, match=r"^path: .*puts position in columns 6, 7, 8.*read_trajectory"):
+        ik.io.read_euroc_groundtruth(path)

@@ -34,7 +34,9 @@ from imukit.io._lines import (
     zero_quaternion,
 )
 from imukit.io._mag import with_mag
+from imukit.io._named_csv import FixedLayout, departure, header_names, imu_roles
 from imukit.io._report import BadLines, OnBadLine, ReadReport
+from imukit.io._trajectory_csv import trajectory_columns
 from imukit.state import Trajectory
 
 __all__ = ["read_euroc", "read_euroc_groundtruth", "read_euroc_imu", "read_euroc_sensor", "write_euroc"]
@@ -50,6 +52,35 @@ GROUNDTRUTH_HEADER = (
     "b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], "
     "b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]"
 )
+
+
+def _pose_roles(names: list[str]) -> dict[str, list[int]] | None:
+    """``trajectory_columns``' time, position and quaternion (x, y, z, w) columns, or None."""
+    found = trajectory_columns(names)
+    if found is None:
+        return None
+    return {
+        "time": [found["time_column"]],
+        "position": found["position_columns"],
+        "quaternion": found["quaternion_columns"],
+    }
+
+
+# The layouts as headers naming their columns would say them: a file whose header names others (its
+# own account of its columns: `#timestamp,acc_x,…` or `[deg/s]`) is not read by position.
+IMU_NAMES = FixedLayout(
+    imu_roles,
+    {"time": [0], "gyro": [1, 2, 3], "accel": [4, 5, 6]},
+    {"time": "ns", "gyro": "rad/s", "accel": "m/s^2"},
+    "imukit.io.read_imu (or read_imu_csv)",
+)
+POSE_NAMES = FixedLayout(
+    _pose_roles,
+    {"time": [0], "position": [1, 2, 3], "quaternion": [5, 6, 7, 4]},
+    {"time": "ns"},
+    "imukit.io.read_trajectory (or read_trajectory_csv)",
+)
+
 # imukit's magnetometer file (EuRoC has none): one row per IMU row, same stamps, body frame S.
 MAG_HEADER = "#timestamp [ns],m_S_x [uT],m_S_y [uT],m_S_z [uT]"
 IMU_CSV = Path("imu0", "data.csv")
@@ -378,7 +409,7 @@ def mav0_root(folder: str | os.PathLike[str]) -> Path:
 
 def euroc_imu(path: str | os.PathLike[str], bad: BadLines) -> ImuData:
     """:func:`read_euroc_imu` reporting to ``bad``."""
-    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}")
+    t_ns, values, _ = read_stamped_csv(path, bad, IMU_HEADER, f"EuRoC {IMU_CSV.as_posix()}", names=IMU_NAMES)
     return as_file_error(path, lambda: ImuData(t_ns, values[:, 0:3], values[:, 3:6]))
 
 
@@ -416,7 +447,7 @@ def read_euroc_imu(  # type: ignore[empty-body]
 def euroc_groundtruth(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     """:func:`read_euroc_groundtruth` reporting to ``bad``."""
     t_ns, values, lines = read_stamped_csv(
-        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3
+        path, bad, GROUNDTRUTH_HEADER, f"EuRoC {GROUNDTRUTH_CSV.as_posix()}", quaternion=3, names=POSE_NAMES
     )
     rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
     return as_file_error(
@@ -455,15 +486,29 @@ def read_euroc_groundtruth(  # type: ignore[empty-body]
 
 
 def read_stamped_csv(
-    path: str | os.PathLike[str], bad: BadLines, header: str, what: str, *, quaternion: int | None = None
+    path: str | os.PathLike[str],
+    bad: BadLines,
+    header: str,
+    what: str,
+    *,
+    quaternion: int | None = None,
+    names: FixedLayout | None = None,
 ) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.int64]]:
     """Integer stamps, ``(N, columns - 1)`` floats and line numbers of an EuRoC-style CSV file with
     ``header``'s columns.
 
     ``what`` names the file in messages; ``quaternion``: the first of four value columns (after the
-    stamp) holding a quaternion, which must not be zero.
+    stamp) holding a quaternion, which must not be zero; ``names``: the layout as a header would name
+    it, a FileFormatError when the file's header names another (:func:`departure`).
     """
     width = header.count(",") + 1
+    if names is not None and (why := departure(header_names(Head(Path(path))), names)) is not None:
+        raise FileFormatError(
+            f"{os.fspath(path)}: its header {why}, not the {what} layout, read by position "
+            f"({header.split(',')[0]},{header.split(',')[1]},…): read it with {names.by_names}, which reads "
+            "the columns by their names",
+            argument="path",
+        )
 
     def check(fields: list[str], row: list[float]) -> Problem | None:
         stamp = fields[0].strip()
@@ -512,8 +557,18 @@ def dataset_file(name: str, file: Path, read: Callable[..., Any], description: s
 
 
 def _imu_csv_like(path: Path, head: Head) -> bool:
+    """7 fields, an integer stamp, and no header naming other columns (the named CSV's then)."""
     fields = head.fields(",")
-    return len(fields) == 7 and integer_stamp(fields[0].strip()) is not None
+    return (
+        len(fields) == 7
+        and integer_stamp(fields[0].strip()) is not None
+        and departure(header_names(head), IMU_NAMES) is None
+    )
+
+
+def _groundtruth_like(path: Path, head: Head) -> bool:
+    """17 fields and no header naming other columns."""
+    return len(head.fields(",")) == 17 and departure(header_names(head), POSE_NAMES) is None
 
 
 # The descriptions of the formats (folders and files share one: listed once).
@@ -522,6 +577,4 @@ GROUNDTRUTH = "EuRoC ground truth"
 EUROC_FOLDER = Format("euroc-folder", "imu", lambda path, head: dataset_root(path) is not None, euroc_folder, DATASET)
 EUROC_IMU_CSV = Format("euroc-imu-csv", "imu", _imu_csv_like, euroc_imu, DATASET)
 EUROC_GROUNDTRUTH_FOLDER = dataset_file("euroc-groundtruth-folder", GROUNDTRUTH_CSV, euroc_groundtruth, GROUNDTRUTH)
-EUROC_GROUNDTRUTH = Format(
-    "euroc-groundtruth", "trajectory", lambda path, head: len(head.fields(",")) == 17, euroc_groundtruth, GROUNDTRUTH
-)
+EUROC_GROUNDTRUTH = Format("euroc-groundtruth", "trajectory", _groundtruth_like, euroc_groundtruth, GROUNDTRUTH)

@@ -38,9 +38,9 @@ from imukit.io._format import Format, Head, is_number
 from imukit.io._lines import read_into
 from imukit.io._report import BadLines
 from imukit.io._table import Table, detect_delimiter, header_fields, read_table
-from imukit.io._units import time_suffix, words_and_unit
+from imukit.io._units import canonical, time_suffix, unit_in_name, words_and_unit
 
-__all__ = ["ColumnRoles", "column_roles"]
+__all__ = ["ColumnRoles", "FixedLayout", "column_roles", "departure"]
 
 _TIME = ("time", "t", "timestamp", "stamp", "header stamp", "field header stamp", "%time")
 _ROS_NS = ("header stamp", "field header stamp", "%time")  # rostopic echo -p: integer nanoseconds
@@ -105,6 +105,43 @@ def column_roles(names: list[str]) -> ColumnRoles | None:
     if time is None:
         return None
     return ColumnRoles({"time": [time[0]], **columns}, time[1])
+
+
+class FixedLayout(NamedTuple):
+    """A format that reads its columns by position (EuRoC's), as a header naming them would say it:
+    ``roles`` reads a header's names (``column_roles``' or ``trajectory_columns``' rules, role →
+    0-based columns), ``columns`` are the format's, ``units`` the format's unit per role that
+    :mod:`imukit.io._units` knows, ``by_names`` the reader that reads such a file by its names."""
+
+    roles: Callable[[list[str]], dict[str, list[int]] | None]
+    columns: dict[str, list[int]]
+    units: dict[str, str]
+    by_names: str
+
+
+def imu_roles(names: list[str]) -> dict[str, list[int]] | None:
+    """:func:`column_roles`' columns by role, or None."""
+    roles = column_roles(names)
+    return None if roles is None else roles.columns
+
+
+def departure(names: list[str] | None, layout: FixedLayout) -> str | None:
+    """How a header whose names say what its columns hold departs from ``layout``: other columns, or a
+    unit other than the layout's; None when its names say nothing the rules read, or say the layout.
+    A format read by position must not read such a file: the names are the file's own account."""
+    found = None if names is None else layout.roles(names)
+    if names is None or found is None:
+        return None
+    if found != layout.columns:
+        moved = [role for role in found if found[role] != layout.columns.get(role)]
+        said = ", ".join(f"{role} in columns {', '.join(str(k + 1) for k in found[role])}" for role in moved)
+        return f"puts {said} ({', '.join(repr(names[found[role][0]]) for role in moved)})"
+    for role, unit in layout.units.items():
+        for k in found[role]:
+            text = unit_in_name(role, names[k])
+            if text and canonical(role, text) != unit:
+                return f"states {names[k]!r}, where this layout holds {unit}"
+    return None
 
 
 def header_names(head: Head) -> list[str] | None:

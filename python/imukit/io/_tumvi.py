@@ -13,7 +13,7 @@ import numpy as np
 
 from imukit._errors import FileFormatError
 from imukit.imu import ImuData
-from imukit.io._euroc import DATASET, IMU_CSV, dataset_file, euroc_imu, mav0_root, read_stamped_csv
+from imukit.io._euroc import DATASET, IMU_CSV, POSE_NAMES, dataset_file, euroc_imu, mav0_root, read_stamped_csv
 from imukit.io._format import Format, Head, is_number, shorten
 from imukit.io._lines import as_file_error, public_reader, rotations_from_rows
 from imukit.io._report import BadLines, OnBadLine, ReadReport
@@ -70,7 +70,9 @@ def read_tumvi(  # type: ignore[empty-body]
 
 def tumvi_mocap(path: str | os.PathLike[str], bad: BadLines) -> Trajectory:
     """A TUM-VI ``mocap0/data.csv`` as a :class:`Trajectory` without velocity, reporting to ``bad``."""
-    t_ns, values, lines = read_stamped_csv(path, bad, MOCAP_HEADER, f"TUM-VI {MOCAP_CSV.as_posix()}", quaternion=3)
+    t_ns, values, lines = read_stamped_csv(
+        path, bad, MOCAP_HEADER, f"TUM-VI {MOCAP_CSV.as_posix()}", quaternion=3, names=POSE_NAMES
+    )
     rotation = rotations_from_rows(np.ascontiguousarray(values[:, [4, 5, 6, 3]]), lines, os.fspath(path))
     return as_file_error(path, lambda: Trajectory(None, values[:, 0:3], None, rotation, t_ns=t_ns))
 
