@@ -85,6 +85,24 @@ def test_nanosecond_stamps_pair_exactly() -> None:
     np.testing.assert_allclose(err.separation, 0.05000192, rtol=1e-15)
 
 
+def test_float_separations_within_rounding_of_delta_count_as_delta() -> None:
+    # 30 Hz float stamps from np.arange: 30 frames are 0.9999999999999964 s apart at frame 930;
+    # read strictly, that pair took 31 frames (1.033 s) and 28 of the 59 pairs moved by a frame.
+    t = np.arange(0.013, 59.9, 1 / 30.0)
+    assert t[960] - t[930] < 1.0
+    ref = along_x(1.0, t=t)
+    err = ik.eval.rpe(ref, ref, delta=1.0, unit="s", max_dt=0.1)
+    assert len(err.pairs) == 59
+    np.testing.assert_array_equal(np.diff(err.pairs, axis=1).ravel(), 30)
+    np.testing.assert_allclose(err.separation, 1.0, rtol=1e-13)
+    # a real difference of one part in 1e12 is not rounding: the next frame
+    late = ik.eval.rpe(ref, ref, delta=1.0 + 1e-12, unit="s", max_dt=0.1)
+    np.testing.assert_array_equal(np.diff(late.pairs, axis=1).ravel(), 31)
+    # the same over distance: 0.1 m steps summed, 1 m apart to rounding
+    by_metre = ik.eval.rpe(ref, along_x(3.0, t=t), delta=1.0, unit="m", max_dt=0.1)
+    np.testing.assert_array_equal(np.diff(by_metre.pairs, axis=1).ravel(), 10)
+
+
 def test_no_pair_and_bad_arguments() -> None:
     ref = along_x(1.0)
     with pytest.raises(ik.ParameterError, match=r"^delta: no pair of associated samples is 100 m apart; .* 10 m"):

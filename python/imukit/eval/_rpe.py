@@ -80,8 +80,9 @@ def rpe(
     This is evo's ``RPE`` with ``pairs_from_reference=True`` (evo chooses pairs on the estimate by
     default) for consecutive pairs, and for ``all_pairs`` over frames; evo's ``all_pairs`` over
     metres takes from each i the j whose distance is *closest* to delta (within 10 %) instead.
-    evo sums the distance step by step from each start, imukit differences the cumulative sum:
-    a pair can differ only where ``d(i, j)`` equals ``delta`` to rounding.
+    evo sums the distance step by step from each start, imukit differences the cumulative sum, and
+    takes a float ``d(i, j)`` within rounding of ``delta`` (8 ulps of the axis' largest value) as
+    ``delta``: a pair can differ only there.
 
     Raises
     ------
@@ -135,8 +136,13 @@ def _separation_axis(ref: Trajectory, unit: str) -> NDArray[np.float64] | NDArra
 
 
 def _pairs(axis: NDArray[np.float64] | NDArray[np.int64], delta: float, all_pairs: bool) -> NDArray[np.int64]:
-    """(M, 2) pairs (i, j): j the first index with ``axis[j] − axis[i] ≥ delta`` (j > i always)."""
+    """(M, 2) pairs (i, j): j the first index with ``axis[j] − axis[i] ≥ delta`` (j > i always), a
+    float separation within rounding of ``delta`` counting as ``delta``."""
     n = len(axis)
+    if axis.dtype.kind == "f":
+        # 30 Hz stamps from np.arange put 30 frames 0.9999999999999964 s apart: without the slack
+        # the pair took 31 frames (1.033 s), and every later pair shifted (before 2026-12-07).
+        delta -= 8.0 * np.finfo(float).eps * max(abs(float(axis[0])), abs(float(axis[-1])), delta)
     # first j with axis[j] ≥ axis[i] + delta; at least i + 1 (a stationary stretch repeats values)
     first = np.maximum(np.searchsorted(axis, axis + delta, side="left"), np.arange(1, n + 1))
     if all_pairs:
