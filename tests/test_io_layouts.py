@@ -422,3 +422,25 @@ def test_a_ground_truth_header_with_the_quaternion_first_is_read_by_its_names(tm
     assert (truth.rotation.inv() * rotation).magnitude().max() < 1e-15
     with pytest.raises(ik.FileFormatError, match=r"^path: .*puts position in columns 6, 7, 8.*read_trajectory"):
         ik.io.read_euroc_groundtruth(path)
+
+
+@pytest.mark.parametrize("delimiter", [",", ";", "\t"])
+def test_a_spreadsheets_empty_rows_are_blank_lines(tmp_path: Path, delimiter: str) -> None:
+    """Excel writes the empty rows of a sheet as delimiters alone (``,,,,,,``): no value, no sample,
+    as a blank line (a bad line before 2026-12-07, which refused the file); a row with one value
+    left is still a bad line, not dropped."""
+    values = _values(4, 11)[:, :6]
+    rows = [delimiter.join(map(repr, [0.01 * k, *values[k].tolist()])) for k in range(4)]
+    empty = delimiter * 6
+    header = delimiter.join(["t", "gx", "gy", "gz", "ax", "ay", "az"])
+    path = tmp_path / "sheet.csv"
+    path.write_text("\n".join([header, rows[0], rows[1], empty, rows[2], rows[3], empty, empty[:3]]) + "\n")
+    imu, _ = ik.io.read_imu(path)
+    np.testing.assert_array_equal(imu.t, [0.0, 0.01, 0.02, 0.03])
+    np.testing.assert_array_equal(imu.gyro, values[:, :3])
+    stamped = _stamped(tmp_path / "imu0.csv", "#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z", EUROC_STAMPS[:4], values)
+    stamped.write_text(stamped.read_text() + ",,,,,,\n")
+    np.testing.assert_array_equal(ik.io.read_euroc_imu(stamped).t_ns, EUROC_STAMPS[:4])
+    path.write_text("\n".join([header, rows[0], rows[1], "0.015" + empty]) + "\n")
+    with pytest.raises(ik.FileFormatError, match="line 4"):
+        ik.io.read_imu(path)

@@ -125,6 +125,9 @@ def regular_file(path: str | os.PathLike[str]) -> int:
     return fd
 
 
+_DELIMITERS_AND_SPACE = ",;\t "
+
+
 def parse_rows(
     numbered: Iterable[tuple[int, str]],
     path: str | os.PathLike[str],
@@ -139,7 +142,8 @@ def parse_rows(
     """The lines with ``width`` fields whose ``columns`` (at least one) are finite numbers and that pass
     ``check``.
 
-    Other lines go to ``bad``: ``expected {width} {expected}, got n`` (wrong column count),
+    A line of delimiters alone (``,,,,,,``: a spreadsheet's empty row) holds no value and is passed
+    over as a blank line is. Other lines go to ``bad``: ``expected {width} {expected}, got n`` (wrong column count),
     ``not a number in '…'`` (malformed: ``float()`` refuses a field, or it has more than ASCII or an
     ``_``, :func:`plain_digits`), ``non-finite value in '…'`` (non-finite), or ``check``'s
     ``(kind, detail)``.
@@ -168,6 +172,8 @@ def parse_rows(
                     problem = "non-finite", f"non-finite value in {text!r}"
                 elif check is not None:
                     problem = check(fields, row)
+        if problem is not None and not text.strip(_DELIMITERS_AND_SPACE):
+            continue
         if problem is None:
             rows.lines.append(number)
             rows.texts.append(text)
