@@ -237,6 +237,16 @@ def test_filter_broad_excerpt_9d(tmp_path: Path) -> None:
     assert_png(png)
 
 
+def test_filter_scores_a_ned_estimate_against_the_z_up_truth_in_ned() -> None:
+    """BROAD's motion capture is z up: `--world NED` printed 175° (before 2026-12-07); the same
+    physical attitudes score the same in either world."""
+    path = broad_excerpt_path()
+    enu, ned = (cli("filter", path, "--mag", "--world", w).stdout for w in ("ENU", "NED"))
+    assert number_after(enu, "total") < 10.0
+    for name in ("total", "heading", "inclination"):
+        assert number_after(ned, name) == pytest.approx(number_after(enu, name), abs=1e-3), name
+
+
 def test_filter_tum_output_has_zero_positions(simulated: Path, tmp_path: Path) -> None:
     out = tmp_path / "att.txt"
     run = cli("filter", simulated, "--out", out)

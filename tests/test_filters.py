@@ -95,6 +95,13 @@ def test_ned_is_enu_relabelled() -> None:
     n = Mahony(world="NED").run(imu_n, mag=mag_n).rotation[-1].as_matrix()
     np.testing.assert_allclose(e, r_enu, atol=1e-9)
     np.testing.assert_allclose(n, r_ned, atol=1e-9)
+    # in_world: the frame change a z-up truth needs to be scored against a NED estimate
+    np.testing.assert_allclose(ik.filters.in_world(Rotation.from_matrix(r_enu), "NED").as_matrix(), r_ned, atol=1e-15)
+    rows = np.stack([Rotation.from_matrix(r_enu).as_quat(), np.full(4, np.nan)])
+    turned = ik.filters.in_world(rows, "NED")
+    np.testing.assert_allclose(Rotation.from_quat(turned[0]).as_matrix(), r_ned, atol=1e-15)
+    assert np.isnan(turned[1]).all()  # no truth there stays none
+    np.testing.assert_array_equal(ik.filters.in_world(rows, "ENU"), rows)
 
 
 BIAS = np.array([0.02, -0.03, 0.015])

@@ -41,6 +41,15 @@ def test_filter_job_scores_against_the_truth(method: str, moving: tuple[Path, ik
     np.testing.assert_allclose(output.rows["q_xyzw"], result.rotation.as_quat(), rtol=0, atol=1e-12)
 
 
+def test_filter_job_scores_a_ned_estimate_in_ned(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
+    """The log's truth is z up: a NED estimate was scored against it unturned, 175° (before 2026-12-07)."""
+    folder = moving[0]
+    enu, ned = (JOBS["filter"](folder, method="madgwick", world=w).scalars for w in ("ENU", "NED"))
+    assert 0.5 < float(enu["rmse_inclination_deg"]) < 10.0
+    for key in ("rmse_inclination_deg", "rmse_total_deg"):
+        assert ned[key] == pytest.approx(enu[key], rel=1e-6), key
+
+
 def test_filter_job_refuses_an_unknown_method(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
     with pytest.raises(ik.ParameterError, match="method: expected one of mahony, madgwick, robust"):
         JOBS["filter"](moving[0], method="kalman")

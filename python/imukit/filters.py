@@ -42,11 +42,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
-from imukit import _core
+from imukit import _core, quat
 from imukit._arrays import FloatArray, as_float_array, real_scalar, rotation_from_unit_quat, vector3
 from imukit._deprecation import deprecated
 from imukit._errors import NonFiniteError, ParameterError, ShapeError
 from imukit._extrinsics import sensor_pose
+from imukit._names import canonical
 from imukit.imu import ImuBias, ImuData
 
 __all__ = [
@@ -62,6 +63,7 @@ __all__ = [
     "Robust",
     "RobustResult",
     "RobustState",
+    "in_world",
 ]
 
 GainRamp = _core.GainRamp
@@ -72,6 +74,28 @@ RestDetection = _core.RestDetection
 
 _OPTIONS = _core.FilterOptions.default()
 WORLDS: tuple[str, ...] = _core.FILTER_WORLDS
+# ENU (x east, y north, z up) to NED (x north, y east, z down): x and y swapped, z flipped, a half turn
+# about (1, 1, 0)/√2 (xyzw), its own inverse.
+_NED_FROM_ENU = np.array([math.sqrt(0.5), math.sqrt(0.5), 0.0, 0.0])
+
+
+def in_world(attitude: Rotation | ArrayLike, world: str) -> Rotation | FloatArray:
+    """An attitude ``R_wb`` with a z-up (ENU) world, as a filter run with ``world`` estimates it: itself
+    for ``"ENU"``, ``C R_wb`` for ``"NED"`` (``C`` swaps x and y and flips z; the body axes stay). A
+    ground truth (motion capture, EuRoC, BROAD: z up) is scored against a NED filter's estimate so.
+    ``attitude``: a scipy ``Rotation`` (one back) or ``(..., 4)`` ``xyzw`` rows (rows back; a NaN row,
+    no truth there, stays NaN)."""
+    world = canonical(world, "world", WORLDS)
+    if isinstance(attitude, Rotation):
+        return attitude if world == "ENU" else Rotation.from_quat(_NED_FROM_ENU) * attitude
+    q = as_float_array(attitude, "attitude")
+    if q.shape[-1:] != (4,):
+        raise ShapeError(f"expected (..., 4) xyzw quaternions, got shape {q.shape}", argument="attitude")
+    if world == "ENU":
+        return q.copy()
+    out, known = np.full_like(q, np.nan), np.isfinite(q).all(axis=-1)
+    out[known] = quat.multiply(_NED_FROM_ENU, q[known])
+    return out
 
 
 class FilterState(_core.FilterState):

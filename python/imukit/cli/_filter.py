@@ -24,7 +24,7 @@ from imukit.cli._common import (
     wrote,
 )
 from imukit.eval import AttitudeError, attitude_error
-from imukit.filters import WORLDS, FilterState, Madgwick, Mahony, Robust, RobustState
+from imukit.filters import WORLDS, FilterState, Madgwick, Mahony, Robust, RobustState, in_world
 from imukit.io import write_tum
 from imukit.state import Trajectory
 
@@ -137,9 +137,8 @@ def run(args: argparse.Namespace) -> int:
         wrote("attitudes", target)
     error = None
     if data.truth_xyzw is not None:
-        error = attitude_error(
-            result.rotation, data.truth_xyzw, world=args.world, align_heading=not args.mag, mask=data.mask
-        )
+        truth = in_world(data.truth_xyzw, args.world)  # the readers' ground truths are z up
+        error = attitude_error(result.rotation, truth, world=args.world, align_heading=not args.mag, mask=data.mask)
         rmse = error.rmse(degrees=True)
         out.print(
             f"attitude error RMSE over {rmse.n_samples} samples: total {rmse.total:.3f} deg, heading "

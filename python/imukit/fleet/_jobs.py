@@ -28,7 +28,7 @@ import numpy as np
 from imukit._arrays import flag
 from imukit._errors import ParameterError
 from imukit.eval import attitude_error, truth_at_imu
-from imukit.filters import Madgwick, Mahony, Robust
+from imukit.filters import Madgwick, Mahony, Robust, in_world
 from imukit.fleet._load import JobOutput, Scalar, load, per_axis
 from imukit.fleet._report import report
 from imukit.fleet._score import evaluate, scores
@@ -98,7 +98,7 @@ def attitude(
         paired = truth_at_imu(truth, imu, max_dt=max_dt)
         reference = np.full((len(imu), 4), np.nan)  # NaN: no truth there, not scored
         reference[paired.mask] = paired.reference.rotation.as_quat()
-        error = attitude_error(result.rotation, reference, world=world, align_heading=True)
+        error = attitude_error(result.rotation, in_world(reference, world), world=world, align_heading=True)
         rmse = error.rmse(degrees=True)
         scalars |= {
             "rmse_total_deg": rmse.total,
