@@ -132,6 +132,40 @@ def test_resume_processes_only_new_logs(client: Client, fleet_logs: Any, tmp_pat
     assert len(calls) == 1
 
 
+def test_a_rerun_with_other_options_recomputes_every_log(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
+    """Kept rows answer the options they were run with: a re-run with others kept them all and
+    labelled them with the new options (before 2026-12-07); so did a changed manifest column."""
+    _, logs, _ = fleet_logs
+    out, inputs = tmp_path / "out", [str(p) for p in logs[:2]]
+    mahony = fleet.run("filter", inputs, out=out, client=client, method="mahony")
+    madgwick = fleet.run("filter", inputs, out=out, client=client, method="madgwick")
+    alone = fleet.run("filter", inputs, out=tmp_path / "alone", client=client, method="madgwick")
+    assert madgwick.column("rmse_total_deg").to_pylist() == alone.column("rmse_total_deg").to_pylist()
+    assert madgwick.column("rmse_total_deg").to_pylist() != mahony.column("rmse_total_deg").to_pylist()
+    # The same log with another per-log option in its manifest row is run again.
+    manifest = tmp_path / "manifest.csv"
+    calls: list[Any] = []
+    for value in (0.01, 100.0, 100.0):
+        manifest.write_text(f"path,gyro_range\n{logs[0]},{value}\n")
+        table = fleet.run(
+            "report", manifest, out=tmp_path / "ranges", client=client, progress=lambda *a: calls.append(a)
+        )
+        assert table.column("gyro_range").to_pylist() == [value]
+    assert len(calls) == 2  # the third run kept the second's row
+
+
+def test_files_a_folder_search_leaves_out_are_named(client: Client, tmp_path: Path) -> None:
+    folder = tmp_path / "logs"
+    folder.mkdir()
+    write_logs(folder, 2)
+    (folder / "headerless.csv").write_text("0,1,2\n3,4,5\n")
+    with pytest.warns(fleet.LeftOutWarning, match=r"left out 1 files .*headerless\.csv"):
+        table = fleet.run("report", folder, out=tmp_path / "out", client=client)
+    assert len(table) == 2
+    meta = json.loads(pyarrow.parquet.read_schema(tmp_path / "out" / "summary.parquet").metadata[b"imukit"])
+    assert meta["left_out"] == [str(folder / "headerless.csv")]
+
+
 def test_preintegrate_rows_partitioned_by_log(client: Client, fleet_logs: Any, tmp_path: Path) -> None:
     _, logs, _ = fleet_logs
     table = fleet.run("preintegrate", [str(p) for p in logs[:4:2]], out=tmp_path, client=client, window_s=0.5)

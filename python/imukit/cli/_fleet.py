@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import warnings
 from pathlib import Path
 from typing import Any
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from imukit.cli._common import CliError, err, out, positive, wrote
+from imukit.cli._common import CliError, err, note, out, positive, wrote
 from imukit.cli._evaluate import ALIGNMENTS
-from imukit.fleet import JOBS
+from imukit.fleet import JOBS, LeftOutWarning
 from imukit.fleet import run as run_fleet
 from imukit.fleet._jobs import FILTERS
 
@@ -121,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
     def progress(done: int, total: int, failed: int) -> None:
         bar.update(task, completed=done, total=total, failed=failed)
 
-    with bar:
+    with bar, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LeftOutWarning)
         if args.scheduler is None:
             table = run_fleet(
                 args.job,
@@ -145,6 +147,11 @@ def run(args: argparse.Namespace) -> int:
                     progress=progress,
                     **options,
                 )
+    for w in caught:
+        if issubclass(w.category, LeftOutWarning):
+            note(str(w.message))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     rows = table.select(["path", "status", "error"]).to_pylist()
     failed = [row for row in rows if row["status"] == "failed"]
     out.print(f"{len(rows)} recordings: {len(rows) - len(failed)} ok, {len(failed)} failed", markup=False)

@@ -9,8 +9,13 @@ worker it lands on). ``summary.parquet`` has each input exactly once.
 
 Resume: rows of a previous ``summary.parquet`` in ``out`` whose ``path``, ``size_bytes`` and
 ``mtime_ns`` (:func:`imukit.fleet._inputs.stamp`, over the recording and the manifest's
-``reference``) still match are kept, failed ones too unless ``retry_failed``; only the other inputs
-are processed.
+``reference``) and manifest columns still match are kept, failed ones too unless ``retry_failed``;
+only the other inputs are processed. A previous run with other job options (or another imukit
+version) keeps none: its numbers answer another question (before 2026-12-07 they were kept, and
+labelled with the new options).
+
+Files a folder search leaves out (no format reads them as an IMU recording) are named in the
+summary's metadata (``left_out``) and by a :class:`LeftOutWarning`.
 
 Per-log options: a manifest column named as one of the job's keyword options is that log's value of
 it (over ``job_options``): ``reference`` for ``evaluate``, ``gyro_range`` per unit type for ``report``.
@@ -25,6 +30,7 @@ import json
 import os
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -32,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 from imukit._arrays import flag
 from imukit._core import __version__
 from imukit._errors import ParameterError
-from imukit.fleet._inputs import PATH_COLUMNS, Input, find_inputs, stamp
+from imukit.fleet._inputs import PATH_COLUMNS, Input, scan, stamp
 from imukit.fleet._jobs import JOBS
 from imukit.fleet._load import Scalar
 
@@ -40,7 +46,7 @@ if TYPE_CHECKING:
     import pyarrow
     from distributed import Client
 
-__all__ = ["SUMMARY", "log_id", "run"]
+__all__ = ["SUMMARY", "LeftOutWarning", "log_id", "run"]
 
 SUMMARY = "summary.parquet"
 Progress = Callable[[int, int, int], None]
@@ -83,13 +89,15 @@ def run(
         raise ParameterError(f"expected one of {', '.join(JOBS)}, got {job!r}", argument="job")
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    todo = [(item, _stamp(item)) for item in find_inputs(inputs)]
-    kept = _previous(folder, job, flag(retry_failed, "retry_failed"))
+    found = scan(inputs)
+    todo = [(item, _stamp(item)) for item in found.found]
+    kept = _previous(folder, job, flag(retry_failed, "retry_failed"), job_options)
     rows: dict[str, dict[str, Scalar]] = {}
     pending = []
     for item, key in todo:
         old = kept.get(item.path)
-        if old is not None and (old["size_bytes"], old["mtime_ns"]) == key:
+        same = old is not None and all(old.get(k) == v for k, v in item.metadata.items())
+        if old is not None and same and (old["size_bytes"], old["mtime_ns"]) == key:
             rows[item.path] = old
         else:
             pending.append((item, key))
@@ -98,9 +106,23 @@ def run(
             for row in _compute(dask, job, pending, folder, job_options, progress, len(todo) - len(pending), len(todo)):
                 rows[str(row["path"])] = row
     ordered = [rows[item.path] for item, _ in todo]
-    table = _table(ordered, job, job_options)
+    table = _table(ordered, job, job_options, found.left_out)
     _write_atomically(table, folder / SUMMARY)
+    if found.left_out:
+        shown = ", ".join(found.left_out[:3]) + (
+            f" and {len(found.left_out) - 3} more" if len(found.left_out) > 3 else ""
+        )
+        warnings.warn(
+            f"left out {len(found.left_out)} files under the folders given that no format reads as an IMU recording: "
+            f"{shown} (named alone as an input, one is a failed row saying why; listed in the summary's metadata)",
+            LeftOutWarning,
+            stacklevel=2,
+        )
     return table
+
+
+class LeftOutWarning(UserWarning):
+    """Files under an input folder that :func:`run` left out: no format reads them as a recording."""
 
 
 def _stamp(item: Input) -> tuple[int, int]:
@@ -111,17 +133,22 @@ def _stamp(item: Input) -> tuple[int, int]:
         return -1, -1  # the task's read fails and says why
 
 
-def _previous(folder: Path, job: str, retry_failed: bool) -> dict[str, dict[str, Scalar]]:
-    """Rows of ``folder``'s summary that a re-run may keep, by path."""
+def _previous(folder: Path, job: str, retry_failed: bool, options: dict[str, Any]) -> dict[str, dict[str, Scalar]]:
+    """Rows of ``folder``'s summary that a re-run with ``options`` may keep, by path (module doc)."""
     import pyarrow.parquet
 
     path = folder / SUMMARY
     if not path.exists():
         return {}
     table = pyarrow.parquet.read_table(path)
-    done = json.loads((table.schema.metadata or {}).get(b"imukit", b"{}")).get("job")
-    if done != job:
-        raise ParameterError(f"{folder} holds the results of job {done!r}, not {job!r}: choose another", argument="out")
+    done = json.loads((table.schema.metadata or {}).get(b"imukit", b"{}"))
+    if done.get("job") != job:
+        raise ParameterError(
+            f"{folder} holds the results of job {done.get('job')!r}, not {job!r}: choose another", argument="out"
+        )
+    now = json.loads(_metadata(job, options)[b"imukit"])
+    if (done.get("options"), done.get("imukit_version")) != (now["options"], now["imukit_version"]):
+        return {}
     return {row["path"]: row for row in table.to_pylist() if row["status"] == "ok" or not retry_failed}
 
 
@@ -244,17 +271,18 @@ def _write_rows(rows: dict[str, Any], dataset: Path, log: str, metadata: dict[by
     _write_atomically(pyarrow.table(columns).replace_schema_metadata(metadata), partition / "part-0.parquet")
 
 
-def _table(rows: list[dict[str, Scalar]], job: str, options: dict[str, Any]) -> pyarrow.Table:
+def _table(rows: list[dict[str, Scalar]], job: str, options: dict[str, Any], left_out: list[str]) -> pyarrow.Table:
     import pyarrow
 
     names = list(dict.fromkeys(name for row in rows for name in row)) or ["path", "status", "error"]
     table = pyarrow.table({name: [row.get(name) for row in rows] for name in names})
-    return table.replace_schema_metadata(_metadata(job, options))
+    return table.replace_schema_metadata(_metadata(job, options, left_out=left_out))
 
 
-def _metadata(job: str, options: dict[str, Any]) -> dict[bytes, bytes]:
-    """The schema metadata of every file a run writes: key ``imukit``, JSON."""
-    meta = {"imukit_version": __version__, "job": job, "options": options, **_CONVENTIONS}
+def _metadata(job: str, options: dict[str, Any], **more: Any) -> dict[bytes, bytes]:
+    """The schema metadata of every file a run writes: key ``imukit``, JSON (the summary's also has
+    ``left_out``)."""
+    meta = {"imukit_version": __version__, "job": job, "options": options, **_CONVENTIONS, **more}
     return {b"imukit": json.dumps(meta, default=str).encode()}
 
 
