@@ -320,13 +320,20 @@ def test_allan_recovers_the_simulated_noise(tmp_path: Path, noise_yaml: Path) ->
         folder,
     )
     png = tmp_path / "allan.png"
-    cli("allan", folder, "--out", png)
+    run = cli("allan", folder, "--out", png)
+    assert "not still" not in run.stderr
     fitted = ik.io.read_kalibr_imu(tmp_path / "allan.yaml")
     assert fitted.rate_hz == 100.0  # 60000 intervals of 10 ms, counted in integer ns
     assert fitted.noise.gyro_density == pytest.approx(NOISE.gyro_density, rel=0.05)
     assert fitted.noise.accel_density == pytest.approx(NOISE.accel_density, rel=0.05)
     assert_png(tmp_path / "allan_gyro.png")
     assert_png(tmp_path / "allan_accel.png")
+
+
+def test_allan_says_when_the_recording_moves(simulated: Path, tmp_path: Path) -> None:
+    """A moving recording's Allan deviation measures its motion: said, not only fitted."""
+    run = cli("allan", simulated, "--out", tmp_path / "allan.png")
+    assert "is not still for" in run.stderr and "measures that motion too" in run.stderr
 
 
 def test_evaluate_known_offset(tmp_path: Path) -> None:

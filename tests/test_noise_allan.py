@@ -310,3 +310,33 @@ def test_plot_without_matplotlib_says_so(gyro_3h: noise.AllanDeviation, monkeypa
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(ik.MissingDependencyError, match=r"^plot_allan: needs matplotlib"):
         noise.plot_allan(gyro_3h, "never.png")
+
+
+def test_mean_rate_counts_the_intervals_over_the_span_for_float_stamps_too() -> None:
+    """100 Hz with a 1 s dropout: 999 intervals over 10.99 s, 90.9 Hz, whatever the stamps' type;
+    float stamps gave the median rate (100 Hz) before 2026-12-07."""
+    t_ns = np.concatenate([np.arange(500), np.arange(600, 1100)]) * 10_000_000
+    rows = np.tile([0.0, 0.0, 9.81], (len(t_ns), 1))
+    exact = 999 / 10.99
+    by_ns = ik.noise.mean_rate_hz(ik.ImuData(t_ns, rows, rows))
+    by_s = ik.noise.mean_rate_hz(ik.ImuData(t_ns / 1e9, rows, rows))
+    assert by_ns == pytest.approx(exact, rel=1e-15)
+    assert by_s == pytest.approx(exact, rel=1e-12)
+    with pytest.raises(ik.ShapeError, match="^imu: "):
+        ik.noise.mean_rate_hz(ik.ImuData([0.0], rows[:1], rows[:1]))
+
+
+def test_moving_seconds_finds_the_turn_not_the_bias_or_the_noise() -> None:
+    """A still 200 Hz record (consumer-grade noise, a 0.1 rad/s bias: still) with a 5 s turn at
+    0.2 rad/s in its middle: 5 s moving, to a window either side; 0 without the turn."""
+    rng = np.random.default_rng(3)
+    n, rate = 120_000, 200.0
+    t = np.arange(n) / rate
+    gyro = 0.1 + 1e-2 * np.sqrt(rate) * rng.standard_normal((n, 3))  # N = 1e-2 rad/s/√Hz
+    accel = np.array([0.3, -0.2, 9.8]) + 2e-3 * np.sqrt(rate) * rng.standard_normal((n, 3))
+    assert ik.noise.moving_seconds(ik.ImuData(t, gyro, accel)) == 0.0
+    turning = (t >= 300.0) & (t < 305.0)
+    gyro[turning, 2] += 0.2
+    assert 4.0 <= ik.noise.moving_seconds(ik.ImuData(t, gyro, accel)) <= 6.0
+    with pytest.raises(ik.ParameterError, match="^gyro: "):
+        ik.noise.moving_seconds(ik.ImuData(t, gyro, accel), gyro=0.0)

@@ -17,6 +17,7 @@ from imukit.noise import (
     allan_deviation,
     fit_allan,
     mean_rate_hz,
+    moving_seconds,
     plot_allan,
     to_imu_noise,
 )
@@ -115,6 +116,13 @@ def run(args: argparse.Namespace) -> int:
     png = output_path(args.out, (".png",), "--out", args)
     yaml_path = output_path(args.yaml, (".yaml", ".yml"), "--yaml", args) if args.yaml else png.with_suffix(".yaml")
     imu, _ = read_imu(args)
+    moving = moving_seconds(imu)
+    if moving > 0.01 * imu.duration:
+        note(
+            f"warning: {args.path} is not still for {moving:.1f} s of its {imu.duration:.1f} s (1 s means of the "
+            "gyro 0.05 rad/s or of the accelerometer 0.5 m/s² away from their medians: imukit.noise.moving_seconds); "
+            "its Allan deviation measures that motion too, not only the noise"
+        )
     with err.status(f"Allan deviation of {len(imu)} samples"):
         rate = mean_rate_hz(imu)
         fits = allan_fits(imu, rate)

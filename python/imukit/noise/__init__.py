@@ -1,5 +1,6 @@
 """Identification of IMU noise: Allan variance (:func:`allan_deviation`, :func:`fit_allan`,
-:func:`plot_allan`, :func:`mean_rate_hz`: the rate they take) and density inflation from
+:func:`plot_allan`, :func:`mean_rate_hz`: the rate they take; :func:`moving_seconds`: whether the
+recording was still) and density inflation from
 preintegration residuals against ground truth (:func:`calibrate_from_residuals`, ``docs/noise.md``
 § Calibration from residuals).
 
@@ -26,6 +27,7 @@ from imukit.noise._allan import AllanDeviation, allan_deviation, mean_rate_hz
 from imukit.noise._calibrate import NoiseCalibration, calibrate_from_residuals
 from imukit.noise._fit import FLICKER_FACTOR, UNRESOLVED, AllanFit, fit_allan, to_imu_noise
 from imukit.noise._plot import plot_allan
+from imukit.noise._still import moving_seconds
 
 __all__ = [
     "FLICKER_FACTOR",
@@ -37,6 +39,7 @@ __all__ = [
     "calibrate_from_residuals",
     "fit_allan",
     "mean_rate_hz",
+    "moving_seconds",
     "plot_allan",
     "to_imu_noise",
 ]

@@ -155,10 +155,14 @@ def allan_deviation(
 
 
 def mean_rate_hz(imu: ImuData) -> float:
-    """Intervals per second over the recording; from integer nanoseconds when there are some, so
-    that 60000 intervals over 600 s give 100 Hz exactly."""
+    """Intervals per second over the recording, ``(N − 1) / (t_N − t_1)``; from integer nanoseconds
+    when there are some, so that 60000 intervals over 600 s give 100 Hz exactly. Float stamps too
+    (they gave the median rate, ``ImuData.rate_hz``, before 2026-12-07: KITTI's 100.02 Hz for
+    99.60, its dropouts unseen)."""
     if not isinstance(imu, ImuData):
         raise ParameterError(f"expected an imukit.ImuData, got {type(imu).__name__}", argument="imu")
+    if len(imu) < 2:
+        raise ShapeError("a single sample has no rate", argument="imu")
     if imu.t_ns is not None:
         return (len(imu) - 1) * 1e9 / float(imu.t_ns[-1] - imu.t_ns[0])
-    return imu.rate_hz
+    return (len(imu) - 1) / imu.duration
