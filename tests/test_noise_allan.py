@@ -322,7 +322,7 @@ def test_mean_rate_counts_the_intervals_over_the_span_for_float_stamps_too() -> 
     by_s = ik.noise.mean_rate_hz(ik.ImuData(t_ns / 1e9, rows, rows))
     assert by_ns == pytest.approx(exact, rel=1e-15)
     assert by_s == pytest.approx(exact, rel=1e-12)
-    with pytest.raises(ik.ShapeError, match="^imu: "):
+    with pytest.raises(ik.ShapeError, match=r"^imu: "):
         ik.noise.mean_rate_hz(ik.ImuData([0.0], rows[:1], rows[:1]))
 
 
@@ -338,5 +338,5 @@ def test_moving_seconds_finds_the_turn_not_the_bias_or_the_noise() -> None:
     turning = (t >= 300.0) & (t < 305.0)
     gyro[turning, 2] += 0.2
     assert 4.0 <= ik.noise.moving_seconds(ik.ImuData(t, gyro, accel)) <= 6.0
-    with pytest.raises(ik.ParameterError, match="^gyro: "):
+    with pytest.raises(ik.ParameterError, match=r"^gyro: "):
         ik.noise.moving_seconds(ik.ImuData(t, gyro, accel), gyro=0.0)
