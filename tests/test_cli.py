@@ -336,6 +336,28 @@ def test_allan_says_when_the_recording_moves(simulated: Path, tmp_path: Path) ->
     assert "is not still for" in run.stderr and "measures that motion too" in run.stderr
 
 
+def test_a_reader_that_leaves_does_not_cost_the_written_files(simulated: Path, tmp_path: Path) -> None:
+    """``imukit integrate … | head -1``: the pipe's reader gone before the summary lines, the command
+    ended with exit 1 and without its trajectory file (before 2026-12-07)."""
+    target = tmp_path / "x.txt"
+    read, write = os.pipe()
+    os.close(read)  # the reader has left before the first line
+    try:
+        run = subprocess.run(
+            [sys.executable, "-m", "imukit", "integrate", str(simulated), "--out", str(target)],
+            stdout=write,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=300,
+            check=False,
+        )
+    finally:
+        os.close(write)
+    assert run.returncode == 0, run.stderr
+    assert "Traceback" not in run.stderr and "Broken pipe" not in run.stderr
+    assert len(ik.io.read_tum(target)) == int(RATE) * int(DURATION) + 1
+
+
 def test_evaluate_known_offset(tmp_path: Path) -> None:
     """An estimate = truth shifted by (1, 2, 2) m: ATE 3 m without alignment, 0 after se3."""
     _, truth = ik.sim.simulate(ik.sim.FigureEight(), rate=50.0, duration=20.0)

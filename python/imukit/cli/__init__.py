@@ -9,10 +9,12 @@ shows the traceback instead.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import textwrap
 import traceback
 from collections.abc import Sequence
+from typing import Any
 
 from imukit import io
 from imukit._errors import ImukitError
@@ -72,9 +74,41 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _ReaderMayLeave:
+    """Standard output that, once its reader has gone (``imukit integrate … | head -1``), drops what is
+    printed instead of ending the command: the files it writes matter more than its lines (they were
+    never written, exit 1). The descriptor then points at ``/dev/null``, so the flush at exit is quiet."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return int(self._stream.write(text))
+        except BrokenPipeError:
+            self._leave()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._leave()
+
+    def _leave(self) -> None:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())
+        os.close(null)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; returns the exit code (0 success, 1 bad input or failure, 2 bad usage)."""
     args = build_parser().parse_args(argv)
+    stdout = sys.stdout
+    sys.stdout = _ReaderMayLeave(stdout)
     try:
         code: int = args.run(args)
     except (ImukitError, OSError, ValueError) as exc:
@@ -85,4 +119,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("imukit: interrupted", file=sys.stderr)
         return 130
+    finally:
+        sys.stdout = stdout
     return code
