@@ -96,8 +96,7 @@ def run(
     pending = []
     for item, key in todo:
         old = kept.get(item.path)
-        same = old is not None and all(old.get(k) == v for k, v in item.metadata.items())
-        if old is not None and same and (old["size_bytes"], old["mtime_ns"]) == key:
+        if old is not None and (old["size_bytes"], old["mtime_ns"]) == key and _same_columns(old, item):
             rows[item.path] = old
         else:
             pending.append((item, key))
@@ -119,6 +118,11 @@ def run(
             stacklevel=2,
         )
     return table
+
+
+def _same_columns(row: dict[str, Scalar], item: Input) -> bool:
+    """Whether a kept row has the manifest columns ``item`` has now (a per-log option among them)."""
+    return all(row.get(k) == v for k, v in item.metadata.items())
 
 
 class LeftOutWarning(UserWarning):
