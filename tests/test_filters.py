@@ -102,6 +102,9 @@ def test_ned_is_enu_relabelled() -> None:
     np.testing.assert_allclose(Rotation.from_quat(turned[0]).as_matrix(), r_ned, atol=1e-15)
     assert np.isnan(turned[1]).all()  # no truth there stays none
     np.testing.assert_array_equal(ik.filters.in_world(rows, "ENU"), rows)
+    rows[1, 0] = np.inf  # not "no truth there": a broken row, named
+    with pytest.raises(ik.NonFiniteError, match=r"^attitude: row \(1,\)"):
+        ik.filters.in_world(rows, "NED")
 
 
 BIAS = np.array([0.02, -0.03, 0.015])

@@ -862,6 +862,21 @@ def _local_level(rng: np.random.Generator) -> Any:
     return values, lambda v: ik.LocalLevel(v["latitude"], v["height"], axes, transport=moving).gravity
 
 
+@entry(
+    "noise.moving_seconds", ("noise.moving_seconds",), {**IMU_ARGS, "gyro_threshold": Arg("scalar", names=("gyro",))}
+)
+def _moving_seconds(rng: np.random.Generator) -> Any:
+    return {**imu_values(rng), "gyro_threshold": 0.05}, lambda v: noise.moving_seconds(
+        imu_of(v), gyro=v["gyro_threshold"]
+    )
+
+
+@entry("filters.in_world", ("filters.in_world",), {"attitude": Arg("batch", (4,), nan_ok=True)})
+def _in_world(rng: np.random.Generator) -> Any:
+    world = ("ENU", "NED")[int(rng.integers(2))]
+    return {"attitude": batch(rng, (4,))}, lambda v: ik.filters.in_world(v["attitude"], world)
+
+
 @entry("noise.mean_rate_hz", ("noise.mean_rate_hz",), IMU_ARGS)
 def _mean_rate(rng: np.random.Generator) -> Any:
     return imu_values(rng), lambda v: noise.mean_rate_hz(imu_of(v))

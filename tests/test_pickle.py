@@ -60,6 +60,7 @@ NOT_DATA: dict[str, str] = {
     "Registration": "a context manager that unregisters a format on exit",
     "Format": "a registry entry of functions (sniff, reader): a worker imports the same registry",
     "Head": "a lazy view of one file's first lines while it is being sniffed",
+    "LeftOutWarning": "a warning category (imukit.fleet.run's), not a value",
 }
 
 NOISE = ik.ImuNoise(1.7e-4, 2.0e-3, 1.9e-5, 3.0e-3)
@@ -251,6 +252,7 @@ FACTORIES: dict[str, Callable[[], Any]] = {
     "Input": lambda: ik.fleet.Input("logs/unit7.csv", {"unit_id": "unit-7", "km": 12.5}),
     "JobOutput": lambda: ik.fleet.JobOutput({"samples": 3, "rate_hz": 200.0, "error": None}, {"dp": np.eye(3)}),
     "RestSegment": lambda: ik.fleet.RestSegment(10, 250, 1.195),
+    "Scan": lambda: ik.fleet.Scan([ik.fleet.Input("logs/unit7.csv", {"unit_id": "unit-7"})], ["logs/notes.txt"]),
     "RestRule": lambda: ik.fleet.RestRule(0.02, 0.1, 2.0),
     "Recording": lambda: ik.fleet.Recording(*_sim(), _report()),
     # Exceptions carry their fields.

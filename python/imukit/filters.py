@@ -91,10 +91,15 @@ def in_world(attitude: Rotation | ArrayLike, world: str) -> Rotation | FloatArra
     q = as_float_array(attitude, "attitude")
     if q.shape[-1:] != (4,):
         raise ShapeError(f"expected (..., 4) xyzw quaternions, got shape {q.shape}", argument="attitude")
+    missing = np.isnan(q).all(axis=-1)  # a row with no truth there
+    bad = ~np.isfinite(q).all(axis=-1) & ~missing
+    if bad.any():
+        row = tuple(int(k) for k in np.unravel_index(int(np.argmax(bad)), bad.shape))
+        raise NonFiniteError(f"row {row} is neither a quaternion nor all NaN: {q[row]}", argument="attitude")
     if world == "ENU":
         return q.copy()
-    out, known = np.full_like(q, np.nan), np.isfinite(q).all(axis=-1)
-    out[known] = quat.multiply(_NED_FROM_ENU, q[known])
+    out = np.full_like(q, np.nan)
+    out[~missing] = quat.multiply(_NED_FROM_ENU, q[~missing])
     return out
 
 
