@@ -254,7 +254,7 @@ def test_filter_tum_output_has_zero_positions(simulated: Path, tmp_path: Path) -
     imu, _ = ik.io.read_euroc(simulated)
     written = ik.io.read_tum(out)
     assert np.array_equal(written.position, np.zeros((len(imu), 3)))
-    np.testing.assert_allclose(written.rotation.as_quat(), ik.filters.Mahony().run(imu).rotation.as_quat(), atol=1e-12)
+    np.testing.assert_allclose(written.rotation.as_quat(), ik.filters.Robust().run(imu).rotation.as_quat(), atol=1e-12)
 
 
 def test_filter_refuses_mag_without_magnetometer(simulated: Path) -> None:
@@ -300,7 +300,10 @@ def test_filter_robust_and_its_smoother_from_the_command_line(tmp_path: Path) ->
         ).rmse(degrees=True)
         assert f"Robust{' offline' if offline else ''} 9D: {len(data.imu)} samples" in result.stdout
         assert f"total {expected.total:.3f} deg" in result.stdout
-    assert_one_line_error(cli("filter", path, "--offline", code=1), "--offline", "only --method robust")
+    assert "Robust 6D:" in cli("filter", path).stdout  # the default method
+    assert_one_line_error(
+        cli("filter", path, "--method", "madgwick", "--offline", code=1), "--offline", "only --method robust"
+    )
 
 
 def test_allan_recovers_the_simulated_noise(tmp_path: Path, noise_yaml: Path) -> None:

@@ -80,7 +80,7 @@ def test_filter_a_bare_mcap_file_equals_the_library(bag: Path, tmp_path: Path) -
     (mcap,) = bag.glob("*.mcap")
     run = cli("filter", mcap, "--imu-topic", "/imu0", "--groundtruth-topic", "/gt/odom", "--out", out)
     imu, _ = ik.io.read_rosbag(mcap, imu_topic="/imu0")
-    expected = ik.filters.Mahony().run(imu)
+    expected = ik.filters.Robust().run(imu)
     rows = np.loadtxt(out, delimiter=",")
     assert rows.shape == (1201, 8)
     assert np.array_equal(rows[:, 0], imu.t)

@@ -135,7 +135,7 @@ def test_filter_does_not_score_samples_in_a_truth_gap(tmp_path: Path) -> None:
     ) in run.stdout
     reference = truth.rotation.as_quat()
     reference[1000:1600] = np.nan
-    estimate = ik.filters.Mahony().run(imu_ns).rotation
+    estimate = ik.filters.Robust().run(imu_ns).rotation
     rmse = ik.eval.attitude_error(estimate, reference, align_heading=True).rmse(degrees=True)
     assert rmse.n_samples == len(imu) - 600
     assert f"attitude error RMSE over {len(imu) - 600} samples: total {rmse.total:.3f} deg" in run.stdout
@@ -167,13 +167,13 @@ def test_filter_on_a_generic_csv_equals_the_library(tmp_path: Path) -> None:
     assert np.abs(read.gyro - imu.gyro).max() < 1e-12 and np.abs(read.accel - imu.accel).max() < 1e-12
     written = np.loadtxt(out, delimiter=",")
     # one rounding: the CLI rebuilds its Rotation from the quaternions (a renormalisation)
-    assert np.abs(written[:, 1:5] - ik.filters.Mahony().run(read).rotation.as_quat()).max() < 1e-15
+    assert np.abs(written[:, 1:5] - ik.filters.Robust().run(read).rotation.as_quat()).max() < 1e-15
     missing = cli("filter", path, "--csv-time-column", "ms", code=1)
     assert_one_line_error(missing, "imukit: error: --csv-gyro-columns: needed with --csv-time-column")
     wrong = cli("filter", path, *options[:2], "--csv-gyro-columns", "gx,gy,nope", *options[4:], code=1)
     assert_one_line_error(wrong, "imukit: error: ", "nope")
     semicolon = cli("filter", path, *options, *units, "--csv-delimiter", "semicolon").stdout
-    assert semicolon.startswith("Mahony 6D: 1001 samples")
+    assert semicolon.startswith("Robust 6D: 1001 samples")
     comma = cli("filter", path, *options, *units, "--csv-delimiter", "comma", code=1)  # the line is one field
     assert_one_line_error(comma, "imukit: error: --csv-time-column: no column named 'ms' in the header")
 
@@ -189,10 +189,10 @@ def test_filter_on_the_xio_example(tmp_path: Path) -> None:
     read = ik.io.read_imu_csv(
         XIO, time_column="Time (s)", gyro_columns=gyro, accel_columns=accel, gyro_unit="deg/s", accel_unit="g"
     )
-    assert re.search(rf"Mahony 6D: {len(read)} samples over", run.stdout)
+    assert re.search(rf"Robust 6D: {len(read)} samples over", run.stdout)
     written = np.loadtxt(out, delimiter=",")
     # one rounding: the CLI rebuilds its Rotation from the quaternions (a renormalisation)
-    assert np.abs(written[:, 1:5] - ik.filters.Mahony().run(read).rotation.as_quat()).max() < 1e-15
+    assert np.abs(written[:, 1:5] - ik.filters.Robust().run(read).rotation.as_quat()).max() < 1e-15
 
 
 @requires_euroc

@@ -133,7 +133,7 @@ def test_broad_rows_are_the_library_calls(demo: tuple[Path, dict, float]) -> Non
         imu = ik.ImuData(np.arange(len(d["imu_gyr"])) / rate, d["imu_gyr"], d["imu_acc"])
         mag, truth, movement = d["imu_mag"], d["opt_quat"], d["movement"]
     assert 11_000 < len(imu) and imu.duration == pytest.approx(40.0, abs=0.01)
-    for cls in (ik.filters.Mahony, ik.filters.Madgwick):
+    for cls in (ik.filters.Robust, ik.filters.Mahony, ik.filters.Madgwick):
         for nine in (False, True):
             est = cls().run(imu, mag=mag if nine else None).rotation
             error = ik.eval.attitude_error(est, truth, scalar_first=True, align_heading=not nine, mask=movement)

@@ -41,6 +41,15 @@ def test_filter_job_scores_against_the_truth(method: str, moving: tuple[Path, ik
     np.testing.assert_allclose(output.rows["q_xyzw"], result.rotation.as_quat(), rtol=0, atol=1e-12)
 
 
+def test_filter_job_runs_robust_by_default(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
+    """The default method is the filter docs/filters_accuracy.md ranks first, not Mahony."""
+    folder, imu, _ = moving
+    output = JOBS["filter"](folder)
+    assert output.rows is not None
+    np.testing.assert_array_equal(output.rows["q_xyzw"], ik.filters.Robust().run(imu).rotation.as_quat())
+    assert np.abs(output.rows["q_xyzw"] - ik.filters.Mahony().run(imu).rotation.as_quat()).max() > 1e-4
+
+
 def test_filter_job_scores_a_ned_estimate_in_ned(moving: tuple[Path, ik.ImuData, ik.Trajectory]) -> None:
     """The log's truth is z up: a NED estimate was scored against it unturned, 175° (before 2026-12-07)."""
     folder = moving[0]

@@ -228,9 +228,9 @@ def test_cli_filter_9d_from_a_csv_with_mag_columns(tmp_path: Path, capsys: pytes
     out = tmp_path / "q.csv"
     columns = ["--csv-time-column", "t", "--csv-gyro-columns", "gx,gy,gz", "--csv-accel-columns", "ax,ay,az"]
     code = main(["filter", str(csv), *columns, "--csv-mag-columns", "mx,my,mz", "--mag", "--out", str(out)])
-    assert code == 0 and "Mahony 9D" in capsys.readouterr().out
+    assert code == 0 and "Robust 9D" in capsys.readouterr().out
     written = np.loadtxt(out, delimiter=",", skiprows=1)
-    expected = ik.filters.Mahony().run(ik.ImuData(imu.t, imu.gyro, imu.accel, mag=mag)).rotation.as_quat()
+    expected = ik.filters.Robust().run(ik.ImuData(imu.t, imu.gyro, imu.accel, mag=mag)).rotation.as_quat()
     assert np.abs(written[:, 1:5] - expected).max() < 1e-12
     assert main(["filter", str(csv), *columns, "--mag"]) != 0  # no magnetometer without the columns
     assert "--mag:" in capsys.readouterr().err

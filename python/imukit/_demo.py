@@ -160,12 +160,12 @@ def broad_excerpt_path() -> Path:
 
 
 def broad(rows: list[Row], folder: Path) -> None:
-    """Mahony and Madgwick, 6D and 9D, on the real BROAD excerpt, scored over its movement phase."""
+    """Robust, Mahony and Madgwick, 6D and 9D, on the real BROAD excerpt, scored over its movement phase."""
     data = read_broad(broad_excerpt_path())
     assert data.truth_xyzw is not None  # a BROAD file always has its motion capture
     t = data.imu.t - data.imu.t[0]
     errors = {}
-    for cls in (filters.Mahony, filters.Madgwick):
+    for cls in (filters.Robust, filters.Mahony, filters.Madgwick):
         for nine in (False, True):
             result, seconds = _timed(partial(cls().run, data.imu, mag=nine))
             error = attitude_error(result.rotation, data.truth_xyzw, align_heading=not nine, mask=data.mask)

@@ -11,7 +11,7 @@ Run imukit on embedded data, with no download: a simulated figure-eight with EuR
 (dead reckoning with every strapdown scheme, gyro integration with every attitude scheme,
 preintegration over 0.5 s windows), the same motion noise-free at five rates (the schemes'
 convergence orders), a simulated static gyro (Allan deviation and fit), and a real 40 s excerpt of
-BROAD trial 06 shipped in the package (Mahony and Madgwick, 6D and 9D, against motion capture;
+BROAD trial 06 shipped in the package (Robust, Mahony and Madgwick, 6D and 9D, against motion capture;
 CC BY 4.0, Laidig et al. 2021).
 
 Prints: one table of errors and timings.

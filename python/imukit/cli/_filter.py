@@ -77,7 +77,12 @@ def add(commands: Any) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("path", metavar="PATH", help="the recording (EuRoC folder, bag, BROAD .mat, ...)")
-    p.add_argument("--method", choices=sorted(METHODS), default="mahony", help="the filter (default: %(default)s)")
+    p.add_argument(
+        "--method",
+        choices=sorted(METHODS),
+        default="robust",
+        help="the filter (default: %(default)s, the most accurate on BROAD)",
+    )
     p.add_argument("--offline", action="store_true", help="--method robust only: smooth the whole record (acausal)")
     p.add_argument("--mag", action="store_true", help="use the magnetometer (9D); the input must have one")
     p.add_argument("--world", choices=WORLDS, default=_DEFAULTS.world, help="world frame (default: %(default)s)")

@@ -51,7 +51,7 @@ _OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
         "--allan-min-s",
         {"type": positive, "metavar": "S", "help": "report: shortest rest segment given an Allan fit (default 60)"},
     ),
-    "method": ("--method", {"choices": tuple(FILTERS), "help": "filter: the filter (default mahony)"}),
+    "method": ("--method", {"choices": tuple(FILTERS), "help": "filter: the filter (default robust)"}),
     "world": ("--world", {"choices": ("ENU", "NED"), "help": "filter: the world frame (default ENU)"}),
     "max_dt": (
         "--max-dt",

@@ -8,8 +8,8 @@ EuRoC ``sensor.yaml`` beside the log: :func:`imukit.io.find_noise_model`) and re
 window (:func:`imukit.preint.window_arrays`; the 9×9 covariance and 9×6 bias Jacobian flattened
 row-major), for learning datasets.
 
-``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"mahony"``, ``"madgwick"`` or
-``"robust"``, default options; 9D where the log has a magnetometer, ``imukit.ImuData.mag``) over the
+``filter`` (:func:`attitude`) runs an attitude filter (``method``: ``"robust"`` (default), ``"mahony"`` or
+``"madgwick"``, default options; 9D where the log has a magnetometer, ``imukit.ImuData.mag``) over the
 log; its rows are ``t_s``, ``q_xyzw`` (``R_wb``) and ``gyro_bias_rad_s`` per sample and, where the
 log has ground truth, the errors against it (:func:`imukit.eval.attitude_error` with the truth at
 the IMU's stamps, :func:`imukit.eval.truth_at_imu`; a constant heading offset removed, as 6D filters
@@ -76,7 +76,7 @@ def preintegrate(
 def attitude(
     path: str | os.PathLike[str],
     *,
-    method: str = "mahony",
+    method: str = "robust",
     world: str = "ENU",
     max_dt: float | None = None,
     on_bad_line: OnBadLine = "skip",
