@@ -21,6 +21,7 @@ from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from rich.table import Table
+from scipy.spatial.transform import Rotation
 
 from imukit import filters, noise, sim
 from imukit.attitude import SCHEMES as ATTITUDE_SCHEMES
@@ -28,7 +29,7 @@ from imukit.attitude import integrate_attitude
 from imukit.cli._attitude_input import read_broad
 from imukit.cli._common import err, out
 from imukit.eval import attitude_error
-from imukit.imu import ImuNoise
+from imukit.imu import ImuData, ImuNoise
 from imukit.plot import attitude_error_plot, convergence_plot, trajectory_top_view
 from imukit.preint import SCHEMES as PREINT_SCHEMES
 from imukit.preint import Preintegration, PreintParams, States, predict, preintegrate_windows
@@ -159,18 +160,22 @@ def broad_excerpt_path() -> Path:
     return Path(str(resources.files("imukit") / "_data" / "broad_excerpt.npz"))
 
 
+def _attitudes(filt: filters.Robust | filters.Mahony | filters.Madgwick, imu: ImuData, nine: bool) -> Rotation:
+    return filt.run(imu, mag=nine).rotation
+
+
 def broad(rows: list[Row], folder: Path) -> None:
     """Robust, Mahony and Madgwick, 6D and 9D, on the real BROAD excerpt, scored over its movement phase."""
     data = read_broad(broad_excerpt_path())
     assert data.truth_xyzw is not None  # a BROAD file always has its motion capture
     t = data.imu.t - data.imu.t[0]
     errors = {}
-    for cls in (filters.Robust, filters.Mahony, filters.Madgwick):
+    for filt in (filters.Robust(), filters.Mahony(), filters.Madgwick()):
         for nine in (False, True):
-            result, seconds = _timed(partial(cls().run, data.imu, mag=nine))
-            error = attitude_error(result.rotation, data.truth_xyzw, align_heading=not nine, mask=data.mask)
+            estimate, seconds = _timed(partial(_attitudes, filt, data.imu, nine))
+            error = attitude_error(estimate, data.truth_xyzw, align_heading=not nine, mask=data.mask)
             rmse = error.rmse(degrees=True)
-            name = f"{cls.__name__} {'9D' if nine else '6D'}"
+            name = f"{type(filt).__name__} {'9D' if nine else '6D'}"
             label = "BROAD trial 06 excerpt (real)"
             rows.append(Row(label, name, "inclination RMSE", rmse.inclination, "deg", seconds))
             rows.append(
