@@ -83,6 +83,34 @@ def test_waypoints_pass_through_their_points_and_integrate_back() -> None:
         sim.simulate(path, rate=100.0, duration=9.0)
 
 
+def _final_position_errors(path: sim.Waypoints, scheme: str, rates: tuple[float, ...]) -> np.ndarray:
+    errors = []
+    for rate in rates:
+        imu, truth = sim.simulate(path, rate=rate, duration=10.0)
+        end = ik.integrate(imu, initial=truth.state(0), scheme=scheme).position[-1]
+        errors.append(np.linalg.norm(end - truth.position[-1]))
+    return np.array(errors)
+
+
+def test_waypoints_orders() -> None:
+    """A C² spline's readings have slopes that jump at the waypoints, so rk4 converges at order 2 on
+    them (docs/simulation.md); on the poses of one global cubic (``not-a-knot``: the spline is that
+    cubic) and a constant rate it converges at 4, which also checks the spline's derivatives."""
+    rng = np.random.default_rng(1)
+    times = np.arange(11.0)
+    jagged = sim.Waypoints(
+        times,
+        np.cumsum(rng.normal(0, 1, (11, 3)), axis=0),
+        Rotation.from_rotvec(np.cumsum(rng.normal(0, 0.5, (11, 3)), axis=0)),
+    )
+    cubic = np.stack([0.01 * times**3 - 0.1 * times**2, 0.02 * times**3, -0.005 * times**3 + times], axis=1)
+    smooth = sim.Waypoints(times, cubic, Rotation.from_rotvec(np.outer(times, [0, 0, 0.3])), bc_type="not-a-knot")
+    ratios = _final_position_errors(jagged, "rk4", (100.0, 200.0, 400.0))
+    np.testing.assert_allclose(ratios[:-1] / ratios[1:], 4.0, rtol=0.02)
+    ratios = _final_position_errors(smooth, "rk4", (50.0, 100.0, 200.0))
+    assert np.all(ratios[:-1] / ratios[1:] > 14.0)
+
+
 def test_noise_is_seeded_and_biases_are_reported() -> None:
     bias = ik.ImuBias(gyro=[0.01, 0.0, -0.02], accel=[0.1, -0.1, 0.05])
     a = sim.simulate(sim.FigureEight(), rate=200.0, duration=20.0, noise=NOISE, bias=bias, seed=11)
