@@ -464,6 +464,26 @@ def test_simulate_from_a_tum_file_passes_through_its_poses(tmp_path: Path) -> No
     assert np.abs(truth.velocity[[0, -1]]).max() < 1e-12  # clamped: at rest at both ends
 
 
+def test_simulate_from_epoch_stamps_keeps_the_rate_exact(tmp_path: Path) -> None:
+    """At epoch stamps float seconds resolve 238 ns: the start carried as seconds gave steps of
+    5,000,114 ns and 4,999,876 ns at 200 Hz (before 2026-12-07). The stamps are the file's first
+    one plus k·5 ms exactly, and the truth at the file's stamps is its poses."""
+    tum = tmp_path / "epoch.tum"
+    lines = [
+        f"{1403636579 + k}.763555527 {0.1 * k} {0.02 * k * k} 0 0 0 {np.sin(0.05 * k)} {np.cos(0.05 * k)}"
+        for k in range(11)
+    ]
+    tum.write_text("\n".join(lines) + "\n")
+    cli("simulate", tum, "--rate", "200", "--out", tmp_path / "sim")
+    imu, truth = ik.io.read_euroc(tmp_path / "sim")
+    assert imu.t_ns is not None and truth is not None and truth.t_ns is not None
+    expected = 1403636579763555527 + 5_000_000 * np.arange(2001)
+    assert np.array_equal(imu.t_ns, expected) and np.array_equal(truth.t_ns, expected)
+    poses = ik.io.read_tum(tum)
+    np.testing.assert_allclose(truth.position[::200], poses.position, atol=1e-9)
+    assert (truth.rotation[::200].inv() * poses.rotation).magnitude().max() < 1e-9
+
+
 def test_chunked_preintegration_equals_one_call(monkeypatch: pytest.MonkeyPatch) -> None:
     """The CLI's windows, computed 7 per call, are bit for bit those of one call."""
     from imukit.cli import _preintegrate

@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from imukit import sim
 from imukit.cli._common import CliError, out, positive, read_trajectory, wrote
 from imukit.imu import ImuData, ImuNoise
@@ -34,7 +36,7 @@ TRAJECTORY is a closed-form motion of imukit.sim with its default parameters
 a C2 spline through its poses (imukit.sim.Waypoints, at rest at both ends), simulated from its
 first stamp.
 Frames and units: world z up, gravity (0, 0, -9.81) m/s^2; stamps t = start + k / rate written
-as integer nanoseconds (exact when 1e9 / rate is an integer).
+as integer nanoseconds (exact when 1e9 / rate is an integer; a file's start is its first stamp, to the ns).
 The noise (--noise, a Kalibr imu.yaml: white noise and bias random walk densities) is drawn from
 --seed: the same seed gives the same files.
 
@@ -61,29 +63,41 @@ def add(commands: Any) -> argparse.ArgumentParser:
     return p
 
 
-def motion(name: str, *, skip_bad_lines: bool) -> tuple[sim.Motion, float, float | None]:
-    """The motion, its start time [s] and its span [s] (None: unbounded)."""
+def motion(name: str, *, skip_bad_lines: bool) -> tuple[sim.Motion, int, float | None]:
+    """The motion, its start time [ns] and its span [s] (None: unbounded). A file's spline runs in
+    seconds from its first stamp: at epoch stamps float seconds resolve only 238 ns."""
     if name in MOTIONS:
-        return MOTIONS[name](), 0.0, None
+        return MOTIONS[name](), 0, None
     if not Path(name).is_file():
         raise CliError(f"TRAJECTORY: {name!r} is neither a motion ({', '.join(MOTIONS)}) nor a file")
     truth: Trajectory = read_trajectory(name, skip_bad_lines=skip_bad_lines)
     if len(truth) < 2:
         raise CliError(f"TRAJECTORY: {name} has {len(truth)} pose; a spline needs at least 2")
-    span = float(truth.t[-1] - truth.t[0])
-    return sim.Waypoints(truth.t, truth.position, truth.rotation), float(truth.t[0]), span
+    stamps = truth.t_ns if truth.t_ns is not None else np.round(truth.t * 1e9).astype(np.int64)
+    seconds = (stamps - stamps[0]) / 1e9
+    return sim.Waypoints(seconds, truth.position, truth.rotation), int(stamps[0]), float(seconds[-1])
 
 
 def simulate(args: argparse.Namespace) -> tuple[ImuData, Trajectory, ImuNoise | None]:
-    """What ``imukit simulate`` writes, in memory."""
-    trajectory, start, span = motion(args.trajectory, skip_bad_lines=args.skip_bad_lines)
+    """What ``imukit simulate`` writes, in memory: stamps ``start + k / rate`` in integer ns."""
+    trajectory, start_ns, span = motion(args.trajectory, skip_bad_lines=args.skip_bad_lines)
     duration = args.duration if args.duration is not None else (span if span is not None else 60.0)
     if span is not None and duration > span:
         raise CliError(f"--duration: {duration} s is longer than the trajectory file's {span:.6g} s")
     noise = None if args.noise is None else read_kalibr_imu(args.noise).noise
     if args.seed < 0:
         raise CliError(f"--seed: expected a non-negative integer, got {args.seed}")
-    imu, truth = sim.simulate(trajectory, rate=args.rate, duration=duration, noise=noise, seed=args.seed, start=start)
+    imu, truth = sim.simulate(trajectory, rate=args.rate, duration=duration, noise=noise, seed=args.seed)
+    stamps = start_ns + np.round(imu.t * 1e9).astype(np.int64)
+    imu = ImuData(stamps, imu.gyro, imu.accel)
+    truth = Trajectory(
+        stamps,
+        truth.position,
+        truth.velocity,
+        truth.rotation,
+        gyro_bias=truth.gyro_bias,
+        accel_bias=truth.accel_bias,
+    )
     return imu, truth, noise
 
 
