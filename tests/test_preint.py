@@ -286,3 +286,31 @@ def test_windows_refuse_bad_boundaries_and_threads() -> None:
         ik.preintegrate_windows(imu, [0.1, 0.2], noise=NOISE, threads=0)
     with pytest.raises(ik.ParameterError, match="scheme"):
         ik.preintegrate_windows(imu, [0.1, 0.2], noise=NOISE, scheme="rk4")
+
+
+@pytest.mark.parametrize(
+    "keyword",
+    [
+        {"body_from_sensor": (Rotation.from_euler("ZYX", [120, -30, 45], degrees=True), [0.3, -0.1, 0.15])},
+        {"gravity": (0.0, 0.0, -1.0)},
+        {"scheme": "lie_euler"},
+        {"combined": True},
+        {"saturation_noise_factor": 4.0},
+        {"bias": ik.ImuBias([0.01, 0, 0], [0, 0, 0])},
+        {"noise": ik.ImuNoise(1e-3, 1e-2, 1e-5, 1e-4)},
+    ],
+    ids=lambda k: next(iter(k)),
+)
+def test_a_keyword_next_to_params_is_refused(keyword: dict) -> None:
+    """``preintegrate(imu, params, body_from_sensor=...)`` dropped the keyword before 2026-12-07: the
+    prediction was 543 m off for a sensor 120° turned on a 0.3 m arm, without a word."""
+    imu, _ = ik.sim.simulate(ik.sim.FigureEight(), rate=100.0, duration=2.0)
+    params = ik.PreintParams(ik.ImuNoise(1e-3, 1e-2, 1e-5, 1e-4))
+    name = next(iter(keyword))
+    calls = [lambda: ik.preintegrate(imu, params, **keyword), lambda: ik.PreintegratedImu(params, **keyword)]
+    if name != "body_from_sensor":  # not a keyword of preintegrate_windows
+        calls.append(lambda: ik.preintegrate_windows(imu, [0.0, 1.0, 2.0], params, **keyword))
+    for call in calls:
+        with pytest.raises(ik.ParameterError, match="given with params") as info:
+            call()
+        assert info.value.argument == name

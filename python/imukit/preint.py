@@ -97,10 +97,27 @@ def _params(
     saturation_noise_factor: float,
     body_from_sensor: object = None,
 ) -> PreintParams:
-    """``params``, or the one the keyword options describe."""
+    """``params``, or the one the keyword options describe; both at once is refused (a keyword next
+    to ``params`` was dropped without a word before 2026-12-07)."""
     if params is not None:
         if not isinstance(params, PreintParams):
             raise ParameterError(f"expected an imukit.PreintParams, got {type(params).__name__}", argument="params")
+        given = {
+            "noise": noise is not None,
+            "bias": bias is not None,
+            "gravity": gravity is not _DEFAULT_GRAVITY,
+            "scheme": scheme is not _DEFAULT_SCHEME,
+            "combined": combined is not False,
+            "saturation_noise_factor": saturation_noise_factor is not _DEFAULT_FACTOR,
+            "body_from_sensor": body_from_sensor is not None,
+        }
+        for name, is_given in given.items():
+            if is_given:
+                raise ParameterError(
+                    f"given with params, which already holds it: set it in PreintParams (params.{name}) "
+                    "or pass every option as a keyword without params",
+                    argument=name,
+                )
         return params
     return PreintParams(noise, bias, gravity, scheme, combined, saturation_noise_factor, body_from_sensor)  # type: ignore[arg-type]
 
@@ -617,12 +634,12 @@ def preintegrate(
 ) -> PreintegratedImu:
     """Preintegrate all samples of ``imu`` (N samples → N − 1 intervals); see :class:`PreintegratedImu`.
 
-    Options: ``params``, or the same as keywords. ``combined=True`` also tracks the 15×15
-    covariance with the bias random walk (``covariance_combined``), at about twice the cost per
-    sample. Samples that ``imu`` flags as clipped (``gyro_saturated`` / ``accel_saturated``, from
-    its ``gyro_range`` / ``accel_range``) have that sensor's white-noise density multiplied by
-    ``saturation_noise_factor`` (finite, ≥ 1; 1 ignores the flags); see the module docs for which
-    intervals that covers.
+    Options: ``params``, or the same as keywords (not both: a keyword next to ``params`` is
+    refused). ``combined=True`` also tracks the 15×15 covariance with the bias random walk
+    (``covariance_combined``), at about twice the cost per sample. Samples that ``imu`` flags as
+    clipped (``gyro_saturated`` / ``accel_saturated``, from its ``gyro_range`` / ``accel_range``)
+    have that sensor's white-noise density multiplied by ``saturation_noise_factor`` (finite, ≥ 1;
+    1 ignores the flags); see the module docs for which intervals that covers.
 
     ``body_from_sensor``: ``(R_bs, lever arm)``, the IMU's pose in the body frame (GTSAM's
     ``body_P_sensor``): the deltas, covariance and bias Jacobian are the body's (biases stay the
@@ -760,7 +777,7 @@ def preintegrate_windows(
         cores = _core_windows(imu, boundaries, p, n)
         b = np.asarray(boundaries)
         return [like._like(core, [_Window(imu, b[m], b[m + 1])], p) for m, core in enumerate(cores)]
-    params = _params(params, None, None, gravity, scheme, combined, saturation_noise_factor)
+    params = _params(params, noise, bias, gravity, scheme, combined, saturation_noise_factor)
     if engine not in ENGINES:
         raise ParameterError(f"expected one of {tuple(ENGINES)}, got {engine!r}", argument="engine")
     if has_lever_arm(params.body_from_sensor):
