@@ -65,6 +65,40 @@ def test_mag_follows_the_same_rule_as_mahony() -> None:
         f.run(imu, mag=True)
 
 
+def _stream(f: ik.filters.Robust, imu: ik.ImuData, mag: np.ndarray, has_field: np.ndarray) -> Rotation:
+    out = [f.update(imu.gyro[0], imu.accel[0], 0.0, mag[0] if has_field[0] else None)]
+    for k in range(1, len(imu)):
+        out.append(f.update(imu.gyro[k], imu.accel[k], imu.t[k] - imu.t[k - 1], mag[k] if has_field[k] else None))
+    return Rotation.concatenate(out)
+
+
+def test_streaming_with_a_slower_field_keeps_the_heading() -> None:
+    """A field on every 10th sample: the samples between kept the attitude without its heading
+    (57° off here, every time) before 2026-12-07."""
+    imu, mag, truth = _imu(20.0)
+    every_tenth = np.arange(len(imu)) % 10 == 0
+    heading = ik.eval.attitude_error(_stream(ik.filters.Robust(), imu, mag, every_tenth), truth).heading
+    assert np.degrees(np.abs(heading)).max() < 1.0
+
+
+def test_a_field_that_starts_late_gives_the_heading() -> None:
+    """The field from sample 50 on (streaming): its first sample sets the heading, as the first
+    sample's would have; before 2026-12-07 the loop took it over minutes (17° at 20 s) and drove the
+    vertical bias to its clip. Given an initial attitude, the field does not override its heading."""
+    imu, mag, truth = _imu(20.0)
+    late = np.arange(len(imu)) >= 50
+    streamed = ik.filters.Robust()
+    error = ik.eval.attitude_error(_stream(streamed, imu, mag, late), truth)
+    assert np.degrees(np.abs(error.heading[50:])).max() < 1.0
+    assert abs(streamed.get_state().gyro_bias[2] - np.radians(0.1)) < np.radians(0.05)  # true 0.1 °/s
+    f = ik.filters.Robust()
+    f.reset(Rotation.from_euler("z", 30, degrees=True) * truth[0])
+    for k in range(1, 61):
+        turned = f.update(imu.gyro[k], imu.accel[k], imu.t[k] - imu.t[k - 1], mag[k] if late[k] else None)
+    heading = ik.eval.attitude_error(Rotation.concatenate([turned]), truth[60:61]).heading[0]
+    assert np.degrees(heading) == pytest.approx(30.0, abs=1.0)
+
+
 def test_streaming_equals_batch_and_resume() -> None:
     # 50 s at 100 Hz: the batch run is fed to the core in parts of 4096 rows (robust_glue.rs).
     imu, mag, _ = _imu(50.0)

@@ -170,6 +170,9 @@ state!(
     rest: bool = ["rest"],
     /// Whether the last magnetometer sample was rejected as disturbed.
     mag_disturbed: bool = ["mag_disturbed"],
+    /// True while the attitude came from the sensors and no field sample has given its heading
+    /// yet: the first field sample sets it, even one that arrives after the first sample.
+    heading_pending: bool = ["heading_pending"],
 );
 
 impl Default for RobustState {
@@ -217,6 +220,7 @@ impl Default for RobustState {
             cand_time: 0.0,
             rest: false,
             mag_disturbed: false,
+            heading_pending: false,
         }
     }
 }

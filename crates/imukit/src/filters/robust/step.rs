@@ -201,6 +201,7 @@ pub(super) fn set_heading(s: &mut RobustState, psi: f64) {
 pub(super) fn start_heading(s: &mut RobustState, m_e: &Vector3<f64>) {
     if m_e.x != 0.0 || m_e.y != 0.0 {
         set_heading(s, m_e.x.atan2(m_e.y));
+        s.heading_pending = false;
     }
 }
 
@@ -270,6 +271,7 @@ pub(super) fn initialise(
     s.q_gyro = initial.unwrap_or_else(|| initial_attitude(World::Enu, accel, None));
     s.q_incl = UnitQuaternion::identity();
     set_heading(s, 0.0);
+    s.heading_pending = initial.is_none();
     s.bias_cov = Matrix3::identity() * p.bias_sigma_init_rad_s.powi(2);
     (s.rest_gyro, s.rest_gyro_smooth) = (*gyro, *gyro);
     (s.rest_accel, s.rest_accel_smooth) = (*accel, *accel);
@@ -349,6 +351,12 @@ pub(super) fn window_half(
     let rb = r6 * s.bias;
     let mut correction = None;
     if let Some(m) = mag {
+        if s.heading_pending {
+            // A field that starts after the gyro (streaming): its first sample gives the heading,
+            // as the first sample's would have (the loop alone took minutes and its corrections
+            // drove the vertical bias to its clip).
+            start_heading(s, &(r6 * m));
+        }
         if let Some((gain, err)) = magnetometer(p, c, s, &(r6 * m), gyro) {
             turn_heading(s, gain * err);
             correction = Some((gain, gain * err));
@@ -360,7 +368,9 @@ pub(super) fn window_half(
             heading_window(c, s, &r6, rb.z, correction);
         }
     }
-    let q = if mag.is_some() { yawed(&s.heading, q6) } else { *q6 };
+    // The heading stays applied on a sample without a field (streaming with a slower
+    // magnetometer); before any field it is zero, `yawed` the identity, skipped.
+    let q = if s.heading.y == 0.0 { *q6 } else { yawed(&s.heading, q6) };
     s.q = to_world(world, &q);
 }
 
