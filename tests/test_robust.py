@@ -99,6 +99,28 @@ def test_a_field_that_starts_late_gives_the_heading() -> None:
     assert np.degrees(heading) == pytest.approx(30.0, abs=1.0)
 
 
+@pytest.mark.parametrize("gap", [1.5, 2.0, 5.0])
+def test_a_gap_in_the_stamps_does_not_tilt_a_still_sensor(gap: float) -> None:
+    """A still, level sensor whose stamps skip ``gap`` seconds: the low passes' delay elements,
+    read with the gap's coefficients, turned the estimate upside down for 5-12 s (before
+    2026-12-07; offline from t = 0 for 5 s). Online, offline, 6D, 9D, and one streaming step."""
+    t = np.arange(0, 60, 0.01)
+    t = np.concatenate([t[t < 30], t[t >= 30 + gap]])
+    turn = Rotation.from_euler("z", 30, degrees=True)
+    n = len(t)
+    field = np.tile(turn.inv().apply([0, 22, -42]), (n, 1))
+    imu = ik.ImuData(t, np.zeros((n, 3)), np.tile(turn.inv().apply([0, 0, 9.81]), (n, 1)), mag=field)
+    for offline in (False, True):
+        for nine in (False, True):
+            estimate = ik.filters.Robust().run(imu, mag=nine, offline=offline).rotation
+            tilt = np.degrees(np.arccos(np.clip(estimate.apply([0, 0, 1])[:, 2], -1, 1)))
+            assert tilt.max() < 1e-6, (offline, nine)
+    f = ik.filters.Robust()
+    for k in range(1500):
+        up = f.update(np.zeros(3), [0, 0, 9.81], gap if k == 1000 else 0.01).apply([0, 0, 1])
+        assert up[2] > 1 - 1e-12, k
+
+
 def test_streaming_equals_batch_and_resume() -> None:
     # 50 s at 100 Hz: the batch run is fed to the core in parts of 4096 rows (robust_glue.rs).
     imu, mag, _ = _imu(50.0)

@@ -223,6 +223,7 @@ fn take_window_half(s: &mut RobustState, h: &RobustState) {
     take_window(s, h);
     s.q = h.q;
     (s.loop_rot1, s.loop_rot2, s.loop_bias1, s.loop_bias2) = (h.loop_rot1, h.loop_rot2, h.loop_bias1, h.loop_bias2);
+    s.loop_dt = h.loop_dt;
     (s.heading, s.heading_angle) = (h.heading, h.heading_angle);
     (s.loop_head_rot, s.loop_head_bias) = (h.loop_head_rot, h.loop_head_bias);
     (s.mag_ready, s.mag_norm, s.mag_dip) = (h.mag_ready, h.mag_norm, h.mag_dip);

@@ -107,6 +107,9 @@ state!(
     lp_s1: Vector3<f64> = ["lp_s1_x", "lp_s1_y", "lp_s1_z"],
     /// Second delay element of the Butterworth low pass.
     lp_s2: Vector3<f64> = ["lp_s2_x", "lp_s2_y", "lp_s2_z"],
+    /// The step \[s\] the low pass was last advanced with (0: none yet): a much longer or shorter
+    /// next step maps its delay elements (`step::Coefs::carry_from`).
+    lp_dt: f64 = ["lp_dt"],
     /// Gyro-bias estimate [rad/s].
     bias: Vector3<f64> = ["bias_x", "bias_y", "bias_z"],
     /// Bias covariance [rad²/s²] (column-major).
@@ -132,6 +135,8 @@ state!(
     loop_bias1: Vector2<f64> = ["lb1_x", "lb1_y"],
     /// Second delay elements of the same.
     loop_bias2: Vector2<f64> = ["lb2_x", "lb2_y"],
+    /// The step \[s\] the loop's model was last advanced with, as `lp_dt`.
+    loop_dt: f64 = ["loop_dt"],
     /// Heading loop's error driven by row z of `R_E'b` \[s\].
     loop_head_rot: Vector3<f64> = ["lh_x", "lh_y", "lh_z"],
     /// Heading loop's error driven by `(R_E'b b̂)_z` \[rad\].
@@ -189,6 +194,7 @@ impl Default for RobustState {
             lp_ready: false,
             lp_s1: Vector3::zeros(),
             lp_s2: Vector3::zeros(),
+            lp_dt: 0.0,
             bias: Vector3::zeros(),
             bias_cov: Matrix3::zeros(),
             rest_gyro: Vector3::zeros(),
@@ -208,6 +214,7 @@ impl Default for RobustState {
             loop_rot2: Matrix2x3::zeros(),
             loop_bias1: Vector2::zeros(),
             loop_bias2: Vector2::zeros(),
+            loop_dt: 0.0,
             loop_head_rot: Vector3::zeros(),
             loop_head_bias: 0.0,
             win_mag_time: 0.0,

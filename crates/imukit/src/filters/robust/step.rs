@@ -148,6 +148,30 @@ impl Coefs {
         }
     }
 
+    /// The map of the delay elements `(s1, s2)` from coefficients `from` to these, when the step
+    /// changed by more than a factor of 2 (a gap in the stamps, a new rate); none otherwise (jitter,
+    /// the rounding of float stamps: the elements carry over as they are).
+    ///
+    /// The direct form's elements depend on the coefficients: a 2 s gap at τ = 2 s left elements
+    /// that, read with the gap's coefficients, gave −6.6 times the input (the estimate upside down
+    /// for 7 s). The map restarts the filter at the level `L` its elements hold, in steady state
+    /// with the new coefficients: `s1 ← (1 − b0′) L`, `s2 ← (b0′ − a2′) L`, `L = s2 / (b0 − a2)`
+    /// (exact in steady state). The rest of the old elements, the transient, is dropped: at a
+    /// small step a transient of the large step's size is a slope hundreds of times too steep
+    /// (the output crossed zero 0.45 s after a 2 s gap when it was kept). Linear in `(s1, s2)`, so
+    /// it applies to the smoother's maps of the state as well.
+    #[inline(always)]
+    pub(super) fn carry_from(&self, from: &Coefs) -> Option<Carry> {
+        if from.key <= 0.0 || (self.key <= 2.0 * from.key && from.key <= 2.0 * self.key) {
+            return None;
+        }
+        let level = 1.0 / (from.b0 - from.a2);
+        Some(Carry {
+            to_s1: (1.0 - self.b0) * level,
+            to_s2: (self.b0 - self.a2) * level,
+        })
+    }
+
     /// The delay elements `(s1, s2)` of [`Coefs::butter`] in steady state for the constant input
     /// `x` (its output is then `x`: the DC gain is 1).
     pub(super) fn steady<T>(&self, x: T) -> (T, T)
@@ -156,6 +180,43 @@ impl Coefs {
     {
         let s2 = x * (self.b0 - self.a2);
         (x * (self.b1 - self.a1) + s2, s2)
+    }
+}
+
+/// [`Coefs::carry_from`]'s map: `s1 ← to_s1 · s2`, `s2 ← to_s2 · s2`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Carry {
+    to_s1: f64,
+    to_s2: f64,
+}
+
+impl Carry {
+    /// Maps the delay elements in place.
+    pub(super) fn apply<T>(&self, s1: &mut T, s2: &mut T)
+    where
+        T: Copy + Mul<f64, Output = T>,
+    {
+        *s1 = *s2 * self.to_s1;
+        *s2 = *s2 * self.to_s2;
+    }
+
+    /// A linear map of some earlier state (rows `s1`, `s2`, as [`Coefs::free_step`]'s) mapped.
+    pub(super) fn apply_map(&self, m: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+        [
+            [self.to_s1 * m[1][0], self.to_s1 * m[1][1]],
+            [self.to_s2 * m[1][0], self.to_s2 * m[1][1]],
+        ]
+    }
+}
+
+/// The map of the delay elements to coefficients `c` from the step `from_dt` \[s\] they were
+/// last advanced with (0: never, nothing to map), [`Coefs::carry_from`].
+#[inline(always)]
+fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
+    if from_dt > 0.0 && Coefs::key(from_dt) != c.key {
+        c.carry_from(&Coefs::new(p, from_dt))
+    } else {
+        None
     }
 }
 
@@ -323,6 +384,12 @@ pub(super) fn attitude_half(
         s.q_gyro = compose(&s.q_gyro, &exp_step(&((gyro - s.bias) * c.dt)));
     }
     let a_i = s.q_gyro * accel;
+    if c.dt > 0.0 {
+        if let Some(m) = carry(p, c, s.lp_dt) {
+            m.apply(&mut s.lp_s1, &mut s.lp_s2);
+        }
+        s.lp_dt = c.dt;
+    }
     if !s.lp_ready {
         // Steady state for a constant input: the low pass starts at its first sample.
         s.lp_s2 = a_i * (c.b0 - c.a2);
@@ -363,7 +430,7 @@ pub(super) fn window_half(
         }
     }
     if c.dt > 0.0 {
-        window_sums(c, s, corr, &r6, &rb);
+        window_sums(p, c, s, corr, &r6, &rb);
         if mag.is_some() {
             heading_window(c, s, &r6, rb.z, correction);
         }
@@ -574,8 +641,21 @@ pub(super) fn heading_error(p: &RobustParams, c: &Coefs, s: &mut RobustState, f:
 /// whose lag is modelled, `y = C − O`, `H = −S` (divided by the window length). `r6` is this
 /// sample's `R_E'b`, `rb = r6 b̂`.
 #[inline(always)]
-fn window_sums(c: &Coefs, s: &mut RobustState, corr: &Vector2<f64>, r6: &Matrix3<f64>, rb: &Vector3<f64>) {
+fn window_sums(
+    p: &RobustParams,
+    c: &Coefs,
+    s: &mut RobustState,
+    corr: &Vector2<f64>,
+    r6: &Matrix3<f64>,
+    rb: &Vector3<f64>,
+) {
     let dt = c.dt;
+    // The loop's model is mapped as the loop's own low pass is (`attitude_half`).
+    if let Some(m) = carry(p, c, s.loop_dt) {
+        m.apply(&mut s.loop_rot1, &mut s.loop_rot2);
+        m.apply(&mut s.loop_bias1, &mut s.loop_bias2);
+    }
+    s.loop_dt = dt;
     let rot_xy = r6.fixed_rows::<2>(0).into_owned();
     let lr = c.butter(rot_xy, &mut s.loop_rot1, &mut s.loop_rot2);
     let lb = c.butter(Vector2::new(rb.x, rb.y), &mut s.loop_bias1, &mut s.loop_bias2);
