@@ -422,6 +422,23 @@ def test_header_stamp_problems(tmp_path: Path) -> None:
         read_rosbag(path, time_source="bag")  # type: ignore[arg-type]
 
 
+def test_ros1_stamps_after_2038(tmp_path: Path) -> None:
+    """ROS 1 time is unsigned 32-bit seconds; rosbags gives them as ROS 2's int32, so a stamp from
+    2038-01-19 on read 2^32 s early (negative) before 2026-12-07. The seconds are written into the
+    serialized header (seq at bytes 0-3, sec at 4-7) as a recorder after 2038 would."""
+    import struct
+
+    bag = Bag("ros1")
+    sec0 = 2**31 + 86_400 * 30
+    messages = []
+    for k in range(4):
+        raw = bytearray(bag.store.serialize_ros1(bag.imu((0, 5_000_000 * k), (1.0, 0, 0), (0, 0, 9.81)), IMU))
+        raw[4:8] = struct.pack("<I", sec0)
+        messages.append((10**6 * (k + 1), bytes(raw)))
+    imu, _ = read_rosbag(bag.write(tmp_path / "b", {"/imu0": (IMU, messages)}))
+    assert imu.t_ns is not None and imu.t_ns.tolist() == [sec0 * 10**9 + 5_000_000 * k for k in range(4)]
+
+
 def test_non_finite_values_and_zero_quaternions(tmp_path: Path) -> None:
     bag = Bag("ros1")
     imu = [

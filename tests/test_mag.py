@@ -4,6 +4,7 @@ trip, ROS bags' ``sensor_msgs/MagneticField``, BROAD, the CLI and the filters' 9
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -235,3 +236,21 @@ def test_cli_filter_9d_from_a_csv_with_mag_columns(tmp_path: Path, capsys: pytes
     assert main(["filter", str(csv), *columns, "--mag"]) != 0  # no magnetometer without the columns
     assert "--mag:" in capsys.readouterr().err
     assert math.isfinite(float(written[-1, 1]))
+
+
+def test_a_found_magnetometer_whose_messages_are_bad_is_dropped_with_a_warning(tmp_path: Path) -> None:
+    """Its stamps all zero: the bag did not read at all before 2026-12-07 (raise: the mag's message 1;
+    skip: "no valid messages"), though the docs promise a found magnetometer that cannot be used
+    is left out, so that a bag read before still reads. Asked for by name, it is still an error."""
+    imu, _, mag = _moving(rate=100.0, duration=1.0)
+    bag = _write_bag(tmp_path / "bag", imu, np.zeros(len(imu), dtype=np.int64), mag * 1e-6)
+    with pytest.warns(UserWarning, match="magnetometer not read: .* topic /imu/mag, message 1: header stamp is zero"):
+        read, _ = ik.io.read_rosbag(bag)
+    assert read.mag is None and len(read) == len(imu)
+    with pytest.warns(UserWarning) as caught:
+        assert ik.io.read_rosbag(bag, on_bad_line="skip")[0].mag is None
+    messages = [str(w.message) for w in caught]
+    assert any(re.search(r"magnetometer not read: .*no valid messages \(all 101 skipped\)", m) for m in messages)
+    assert any(m.startswith("101 lines skipped") for m in messages)  # the mag's messages, counted
+    with pytest.raises(ik.FileFormatError, match="topic /imu/mag, message 1: header stamp is zero"):
+        ik.io.read_rosbag(bag, mag_topic="/imu/mag")

@@ -227,11 +227,13 @@ def _select(
     return next(iter(candidates), None)
 
 
-def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: str) -> _Sample:
+def _sample(reader: Any, msgtype: str, record_ns: int, raw: bytes, time_source: str, ros1: bool) -> _Sample:
     try:
         msg = reader.deserialize(raw, msgtype)
         values, problem = _DECODERS[msgtype][0](msg)
         sec, nanosec = int(msg.header.stamp.sec), int(msg.header.stamp.nanosec)
+        if ros1:  # ROS 1 time is unsigned; rosbags gives it as ROS 2's int32, negative after 2038-01-19
+            sec %= 2**32
         values = tuple(map(float, values))
     except Exception as e:  # rosbags raises several types on corrupt data, none of them ours
         return _Sample(record_ns, "record time", (), ("malformed", f"cannot decode it ({_cause(e)})"))
@@ -255,13 +257,16 @@ def _read_topic(
 ) -> tuple[NDArray[np.int64], FloatArray]:
     """Stamps [ns] and value rows of the valid messages of ``topic``, in bag order; of their stamps, the
     longest strictly increasing subsequence is kept (:func:`imukit.io._lines.in_order`, as for text files)."""
+    from rosbags.interfaces import ConnectionExtRosbag1  # imported: the bag is open
+
     samples: list[_Sample] = []
     indices: list[int] = []  # the 1-based message index of each of samples
     index = 0
     for index, (connection, record_ns, raw) in enumerate(
         reader.messages([c for c in reader.connections if c.topic == topic]), start=1
     ):
-        sample = _sample(reader, connection.msgtype, record_ns, raw, time_source)
+        ros1 = isinstance(connection.ext, ConnectionExtRosbag1)
+        sample = _sample(reader, connection.msgtype, record_ns, raw, time_source, ros1)
         problem = sample.problem
         if problem is None and not bad.skip and samples and not samples[-1].stamp_ns < sample.stamp_ns:
             # "raise": the first message not after its predecessor, as the line readers report it.
@@ -332,9 +337,9 @@ def rosbag(
         t_ns, rows = _read_topic(reader, imu_name, IMU_TYPE, time_source, where, bad)
         imu = as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:]))
         if mag_name is not None:
-            m_ns, m_rows = _read_topic(reader, mag_name, MAG_TYPE, time_source, where, bad)
             hint = "pass mag_topic=False to read the bag without its magnetometer"
             try:
+                m_ns, m_rows = _read_topic(reader, mag_name, MAG_TYPE, time_source, where, bad)
                 imu = with_mag(imu, m_ns, m_rows * TESLA_TO_MICROTESLA, f"{where}, topic {mag_name}", hint)
             except FileFormatError as e:
                 if mag_topic is not None:
