@@ -26,7 +26,8 @@
 //! across the frame). Every rotation the scheme forms is left-multiplied by `Exp(−ω τ)` for its
 //! time τ into the step (exact for constant ω), and the Coriolis acceleration `−2 ω × v` is added to
 //! `g`, evaluated at the step's start (lie_euler, exp) or at its mid-point estimate (midpoint) and
-//! inside each stage (rk4). With `ω = 0` (the default) the loops are those without these terms.
+//! inside each stage (rk4); exp's `Γ₁`, `Γ₂` take the body rate less the world's, `ω̂ − Rᵀω`
+//! (exact at rest). With `ω = 0` (the default) the loops are those without these terms.
 
 use std::ops::Range;
 
@@ -309,8 +310,16 @@ impl<'a> Stepper<'a> {
             }
             EXP => {
                 let phi = w0 * h;
-                let dv = quat::rotate_unit(&q, &(so3::left_jacobian(&phi) * a0)) * h;
-                let dp = quat::rotate_unit(&q, &(so3::exp_double_integral(&phi) * a0)) * (h * h);
+                // The specific force turns in the world at the body rate less the world's own
+                // (`Exp(−ωτ) R Exp(ω̂τ) = R Exp((ω̂ − Rᵀω)τ)` to O(τ² |ω| |ω̂|)): with `ω̂` alone a sensor
+                // at rest on the Earth read a spurious `½ h ω × f` (113 m in 1 h at 10 Hz, 60° N).
+                let relative = if E {
+                    (w0 - quat::rotate_unit(&q.inverse(), &omega)) * h
+                } else {
+                    phi
+                };
+                let dv = quat::rotate_unit(&q, &(so3::left_jacobian(&relative) * a0)) * h;
+                let dp = quat::rotate_unit(&q, &(so3::exp_double_integral(&relative) * a0)) * (h * h);
                 NavState {
                     position: p + v * h + dp + g * (0.5 * h * h),
                     velocity: v + dv + g * h,
