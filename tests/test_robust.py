@@ -121,6 +121,18 @@ def test_a_gap_in_the_stamps_does_not_tilt_a_still_sensor(gap: float) -> None:
         assert up[2] > 1 - 1e-12, k
 
 
+def test_6d_starts_at_yaw_0_in_either_world() -> None:
+    """``yaw 0`` is the world's own (Mahony's and Madgwick's rule): in NED Robust started at yaw 90°
+    (the internal ENU yaw 0) before 2026-12-07, online and offline."""
+    imu, _, _ = _imu(5.0)
+    for world in ("ENU", "NED"):
+        for offline in (False, True):
+            first = ik.filters.Robust(world=world).run(imu, offline=offline).rotation[0]
+            # offline: the smoothed first sample, 1e-4 rad from the start (the bug: π/2)
+            assert abs(first.as_euler("ZYX")[0]) < (1e-3 if offline else 1e-9), (world, offline)
+        assert abs(ik.filters.Mahony(world=world).run(imu).rotation[0].as_euler("ZYX")[0]) < 1e-12
+
+
 def test_streaming_equals_batch_and_resume() -> None:
     # 50 s at 100 Hz: the batch run is fed to the core in parts of 4096 rows (robust_glue.rs).
     imu, mag, _ = _imu(50.0)

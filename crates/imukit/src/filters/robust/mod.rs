@@ -191,6 +191,7 @@ impl Robust {
         let mut s = RobustState::default();
         step::initialise(
             &self.params,
+            self.world,
             &mut s,
             Some(step::from_world(self.world, q)),
             &Vector3::zeros(),

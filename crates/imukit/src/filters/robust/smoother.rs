@@ -173,7 +173,7 @@ impl Robust {
         let q0 = if start.initialized {
             from_world(self.world, &start.q)
         } else {
-            initial_attitude(World::Enu, &row(&inputs.accel[0]), None)
+            from_world(self.world, &initial_attitude(self.world, &row(&inputs.accel[0]), None))
         };
         // The backward track is dead once fused: its two rows of 24 B per sample are the second
         // stage's scratch, pages already mapped (fresh ones fault on first write, `pages`).

@@ -321,15 +321,17 @@ pub(super) fn yawed(h: &Vector2<f64>, q: &UnitQuaternion<f64>) -> UnitQuaternion
 }
 
 /// Sets up `s` at the first sample: attitude from `initial` (internal ENU) or from the
-/// accelerometer (yaw 0), heading from the field when there is one and no initial attitude.
+/// accelerometer (yaw 0 in `world`, as Mahony's and Madgwick's), heading from the field when there
+/// is one and no initial attitude.
 pub(super) fn initialise(
     p: &RobustParams,
+    world: World,
     s: &mut RobustState,
     initial: Option<UnitQuaternion<f64>>,
     gyro: &Vector3<f64>,
     accel: &Vector3<f64>,
 ) {
-    s.q_gyro = initial.unwrap_or_else(|| initial_attitude(World::Enu, accel, None));
+    s.q_gyro = initial.unwrap_or_else(|| from_world(world, &initial_attitude(world, accel, None)));
     s.q_incl = UnitQuaternion::identity();
     set_heading(s, 0.0);
     s.heading_pending = initial.is_none();
@@ -357,7 +359,7 @@ pub(super) fn step(
     mag: Option<&Vector3<f64>>,
 ) {
     if !s.initialized {
-        initialise(p, s, None, gyro, accel);
+        initialise(p, world, s, None, gyro, accel);
         if let Some(m) = mag {
             start_heading(s, &(s.q_gyro * m));
         }
