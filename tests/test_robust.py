@@ -133,6 +133,25 @@ def test_6d_starts_at_yaw_0_in_either_world() -> None:
         assert abs(ik.filters.Mahony(world=world).run(imu).rotation[0].as_euler("ZYX")[0]) < 1e-12
 
 
+def test_an_initial_attitude_off_in_tilt_is_not_learned_as_bias() -> None:
+    """``initial=`` 5° off in tilt on exact readings of a turning sensor (true bias 0): the first
+    sample's alignment with the accelerometer counted in the bias window and was learned as a bias
+    (0.063 rad/s, then 9.4° of tilt, before 2026-12-07). Now it runs as from the exact initial."""
+    t = np.arange(0, 60, 0.01)
+    w = np.stack([0.4 * np.sin(2 * np.pi * 0.2 * t), 0.4 * np.cos(2 * np.pi * 0.13 * t), 0.3 + 0 * t], 1)
+    steps = Rotation.from_rotvec(w[1:] * 0.01)
+    q = [Rotation.identity()]
+    for step in steps:
+        q.append(q[-1] * step)
+    truth = Rotation.concatenate(q)
+    imu = ik.ImuData(t, w, truth.inv().apply([0, 0, 9.81]))
+    exact = ik.filters.Robust().run(imu, initial=truth[0])
+    off = ik.filters.Robust().run(imu, initial=Rotation.from_euler("x", 5, degrees=True) * truth[0])
+    tilt = np.degrees(np.abs(ik.eval.attitude_error(off.rotation, truth).inclination))
+    assert tilt[1:].max() < 0.01
+    assert np.abs(off.gyro_bias).max() < 1e-4 and np.abs(exact.gyro_bias).max() < 1e-4
+
+
 def test_streaming_equals_batch_and_resume() -> None:
     # 50 s at 100 Hz: the batch run is fed to the core in parts of 4096 rows (robust_glue.rs).
     imu, mag, _ = _imu(50.0)
