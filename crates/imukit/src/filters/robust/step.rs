@@ -210,10 +210,12 @@ impl Carry {
 }
 
 /// The map of the delay elements to coefficients `c` from the step `from_dt` \[s\] they were
-/// last advanced with (0: never, nothing to map), [`Coefs::carry_from`].
+/// last advanced with (0: never, nothing to map), [`Coefs::carry_from`]. The steps are compared
+/// first: float stamps alternate between keys on most steps, and the old coefficients cost a
+/// tangent and four exponentials.
 #[inline(always)]
 fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
-    if from_dt > 0.0 && Coefs::key(from_dt) != c.key {
+    if from_dt > 0.0 && (c.dt > 2.0 * from_dt || from_dt > 2.0 * c.dt) {
         c.carry_from(&Coefs::new(p, from_dt))
     } else {
         None
