@@ -439,6 +439,22 @@ def test_ros1_stamps_after_2038(tmp_path: Path) -> None:
     assert imu.t_ns is not None and imu.t_ns.tolist() == [sec0 * 10**9 + 5_000_000 * k for k in range(4)]
 
 
+def test_two_publishers_on_one_ros1_topic_are_named(tmp_path: Path) -> None:
+    """Two IMUs publishing on one topic read as one stream alternating between them (gyro +0.1,
+    -0.1, ...) without a word before 2026-12-07; the bag's connection records name the publishers."""
+    bag = Bag("ros1")
+    path = tmp_path / "two.bag"
+    with Writer1(path) as writer:
+        ends = [writer.add_connection("/imu", IMU, typestore=bag.store, callerid=c) for c in ("/a", "/b")]
+        for k in range(10):
+            for j, connection in enumerate(ends):
+                msg = bag.imu((5, 10_000_000 * k + 5_000_000 * j), ((-1.0) ** j, 0, 0), (0, 0, 9.81))
+                writer.write(connection, 10**6 * (2 * k + j + 1), bag.store.serialize_ros1(msg, IMU))
+    with pytest.warns(UserWarning, match=r"topic /imu: 2 publishers \(/a, /b\); their messages are read as one"):
+        imu, _ = read_rosbag(path)
+    assert imu.gyro[:4, 0].tolist() == [1.0, -1.0, 1.0, -1.0]
+
+
 def test_non_finite_values_and_zero_quaternions(tmp_path: Path) -> None:
     bag = Bag("ros1")
     imu = [

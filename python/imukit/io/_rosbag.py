@@ -259,12 +259,19 @@ def _read_topic(
     longest strictly increasing subsequence is kept (:func:`imukit.io._lines.in_order`, as for text files)."""
     from rosbags.interfaces import ConnectionExtRosbag1  # imported: the bag is open
 
+    connections = [c for c in reader.connections if c.topic == topic]
+    publishers = sorted({c.ext.callerid for c in connections if isinstance(c.ext, ConnectionExtRosbag1)})
+    if len(publishers) > 1:
+        # Two sensors on one topic would read as one stream alternating between them.
+        warnings.warn(
+            f"{where}, topic {topic}: {len(publishers)} publishers ({', '.join(publishers)}); their messages "
+            "are read as one stream",
+            stacklevel=4,
+        )
     samples: list[_Sample] = []
     indices: list[int] = []  # the 1-based message index of each of samples
     index = 0
-    for index, (connection, record_ns, raw) in enumerate(
-        reader.messages([c for c in reader.connections if c.topic == topic]), start=1
-    ):
+    for index, (connection, record_ns, raw) in enumerate(reader.messages(connections), start=1):
         ros1 = isinstance(connection.ext, ConnectionExtRosbag1)
         sample = _sample(reader, connection.msgtype, record_ns, raw, time_source, ros1)
         problem = sample.problem
