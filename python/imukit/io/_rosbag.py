@@ -260,7 +260,7 @@ def _read_topic(
     from rosbags.interfaces import ConnectionExtRosbag1  # imported: the bag is open
 
     connections = [c for c in reader.connections if c.topic == topic]
-    publishers = sorted({c.ext.callerid for c in connections if isinstance(c.ext, ConnectionExtRosbag1)})
+    publishers = sorted({str(c.ext.callerid) for c in connections if isinstance(c.ext, ConnectionExtRosbag1)})
     if len(publishers) > 1:
         # Two sensors on one topic would read as one stream alternating between them.
         warnings.warn(
