@@ -41,8 +41,8 @@ use std::ops::Range;
 use nalgebra::{Quaternion, UnitQuaternion, Vector2, Vector3};
 
 use super::step::{
-    compose, from_world, heading_error, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap, yawed,
-    Coefs, CoefsCache, Field,
+    carry, compose, from_world, heading_error, set_heading, start_heading, to_up, to_world, turn, turn_heading, wrap,
+    yawed, Coefs, CoefsCache, Field,
 };
 use super::{Outputs, Robust, RobustParams, RobustState, Track};
 use crate::filters::{initial_attitude, row, Inputs, World};
@@ -433,18 +433,18 @@ crate::simd_dispatch! {
         };
         let mut map = [[1.0, 0.0], [0.0, 1.0]];
         // The late half continues the early half's last step (one pass over the record, split).
-        let mut prev = Coefs::new(p, step_dt(inputs, first.saturating_sub(1).max(1).min(n - 1)));
+        let mut prev_dt = step_dt(inputs, first.saturating_sub(1).max(1).min(n - 1));
         for (j, (a, o)) in a_i.iter_mut().zip(out.iter_mut()).enumerate() {
             let k = first + j;
             if k > 0 {
                 let dt = step_dt(inputs, k);
                 q = compose(&q, &exp_step(&((row(&inputs.gyro[k]) - row(&bias[k])) * dt)));
                 coefs = cache.for_dt(p, dt);
-                if let Some(m) = coefs.carry_from(&prev) {
+                if let Some(m) = carry(p, &coefs, prev_dt) {
                     m.apply(&mut s1, &mut s2);
                     map = m.apply_map(map);
                 }
-                prev = coefs;
+                prev_dt = dt;
             }
             *o = q.coords.into();
             *a = coefs.butter(q * row(&inputs.accel[k]), &mut s1, &mut s2).into();
@@ -493,14 +493,15 @@ crate::simd_dispatch! {
     ) -> () {
         let last = a_i.len() - 1;
         let mut cache = back_cache(p, inputs, last);
-        let mut prev = back_coefs(p, inputs, &mut cache, last);
-        let (mut s1, mut s2) = prev.steady(row(&a_i[last]));
+        let start = back_coefs(p, inputs, &mut cache, last);
+        let (mut s1, mut s2) = start.steady(row(&a_i[last]));
+        let mut prev_dt = start.dt;
         for (k, (a, o)) in a_i.iter().zip(out.iter_mut()).enumerate().rev() {
             let coefs = back_coefs(p, inputs, &mut cache, k);
-            if let Some(m) = coefs.carry_from(&prev) {
+            if let Some(m) = carry(p, &coefs, prev_dt) {
                 m.apply(&mut s1, &mut s2);
             }
-            prev = coefs;
+            prev_dt = coefs.dt;
             tilted(&coefs.butter(row(a), &mut s1, &mut s2), o, world);
         }
     }
@@ -524,14 +525,14 @@ crate::simd_dispatch! {
         let (mut s1, mut s2) = c.steady(row(&a_i[last]));
         // The two entries of Φ_k as one two-lane channel.
         let (mut g1, mut g2) = c.steady(Vector2::new(phi[last][0], phi[last][1]));
-        let mut prev = c;
+        let mut prev_dt = c.dt;
         for (j, (a, m)) in a_i.iter_mut().zip(phi.iter_mut()).enumerate().rev() {
             let coefs = back_coefs(p, inputs, &mut cache, first + j);
-            if let Some(carry) = coefs.carry_from(&prev) {
-                carry.apply(&mut s1, &mut s2);
-                carry.apply(&mut g1, &mut g2);
+            if let Some(map) = carry(p, &coefs, prev_dt) {
+                map.apply(&mut s1, &mut s2);
+                map.apply(&mut g1, &mut g2);
             }
-            prev = coefs;
+            prev_dt = coefs.dt;
             *a = coefs.butter(row(a), &mut s1, &mut s2).into();
             let g = coefs.butter(Vector2::new(m[0], m[1]), &mut g1, &mut g2);
             *m = [g.x, g.y, 0.0];
@@ -554,14 +555,14 @@ crate::simd_dispatch! {
         let (mut s1, mut s2) = (Vector3::zeros(), Vector3::zeros());
         let mut psi = [[1.0, 0.0], [0.0, 1.0]];
         // The late half's first row (`a_i.len()`) was the step before this half's last.
-        let mut prev = Coefs::new(p, step_dt(inputs, (a_i.len() + 1).min(inputs.t.len() - 1)));
+        let mut prev_dt = step_dt(inputs, (a_i.len() + 1).min(inputs.t.len() - 1));
         for (k, (a, f)) in a_i.iter_mut().zip(free.iter_mut()).enumerate().rev() {
             let coefs = back_coefs(p, inputs, &mut cache, k);
-            if let Some(m) = coefs.carry_from(&prev) {
+            if let Some(m) = carry(p, &coefs, prev_dt) {
                 m.apply(&mut s1, &mut s2);
                 psi = m.apply_map(psi);
             }
-            prev = coefs;
+            prev_dt = coefs.dt;
             *f = [psi[0][0], psi[0][1], 0.0];
             *a = coefs.butter(row(a), &mut s1, &mut s2).into();
             psi = coefs.free_step(psi);

@@ -214,7 +214,7 @@ impl Carry {
 /// first: float stamps alternate between keys on most steps, and the old coefficients cost a
 /// tangent and four exponentials.
 #[inline(always)]
-fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
+pub(super) fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
     if from_dt > 0.0 && (c.dt > 2.0 * from_dt || from_dt > 2.0 * c.dt) {
         c.carry_from(&Coefs::new(p, from_dt))
     } else {
