@@ -148,9 +148,8 @@ impl Coefs {
         }
     }
 
-    /// The map of the delay elements `(s1, s2)` from coefficients `from` to these, when the step
-    /// changed by more than a factor of 2 (a gap in the stamps, a new rate); none otherwise (jitter,
-    /// the rounding of float stamps: the elements carry over as they are).
+    /// The map of the delay elements `(s1, s2)` from coefficients `from` to these, for a step that
+    /// changed by more than a factor of 2 (a gap in the stamps, a new rate; [`carry`] decides).
     ///
     /// The direct form's elements depend on the coefficients: a 2 s gap at τ = 2 s left elements
     /// that, read with the gap's coefficients, gave −6.6 times the input (the estimate upside down
@@ -160,16 +159,12 @@ impl Coefs {
     /// small step a transient of the large step's size is a slope hundreds of times too steep
     /// (the output crossed zero 0.45 s after a 2 s gap when it was kept). Linear in `(s1, s2)`, so
     /// it applies to the smoother's maps of the state as well.
-    #[inline(always)]
-    pub(super) fn carry_from(&self, from: &Coefs) -> Option<Carry> {
-        if from.key <= 0.0 || (self.key <= 2.0 * from.key && from.key <= 2.0 * self.key) {
-            return None;
-        }
+    fn carry_from(&self, from: &Coefs) -> Carry {
         let level = 1.0 / (from.b0 - from.a2);
-        Some(Carry {
+        Carry {
             to_s1: (1.0 - self.b0) * level,
             to_s2: (self.b0 - self.a2) * level,
-        })
+        }
     }
 
     /// The delay elements `(s1, s2)` of [`Coefs::butter`] in steady state for the constant input
@@ -210,13 +205,14 @@ impl Carry {
 }
 
 /// The map of the delay elements to coefficients `c` from the step `from_dt` \[s\] they were
-/// last advanced with (0: never, nothing to map), [`Coefs::carry_from`]. The steps are compared
-/// first: float stamps alternate between keys on most steps, and the old coefficients cost a
-/// tangent and four exponentials.
+/// last advanced with, [`Coefs::carry_from`], when the step changed by more than a factor of 2;
+/// none otherwise (0: never advanced; jitter and the rounding of float stamps: the elements carry
+/// over as they are). The steps are compared before the old coefficients, a tangent and four
+/// exponentials, are built.
 #[inline(always)]
 pub(super) fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
     if from_dt > 0.0 && (c.dt > 2.0 * from_dt || from_dt > 2.0 * c.dt) {
-        c.carry_from(&Coefs::new(p, from_dt))
+        Some(c.carry_from(&Coefs::new(p, from_dt)))
     } else {
         None
     }
