@@ -4,6 +4,7 @@ and NED, gyro-bias estimation, acceleration rejection, streaming = batch, save/r
 from __future__ import annotations
 
 import itertools
+import pickle
 import re
 from collections.abc import Callable
 
@@ -390,6 +391,69 @@ def test_split_save_restore(cls: type[Mahony], nine: bool, moving: tuple[ik.ImuD
     run2 = [f.update(imu.gyro[k], imu.accel[k], dts[k]).as_quat() for k in range(cut, cut + 300)]
     assert np.array_equal(np.array(run1), np.array(run2))
     assert state.initialized and state.values.flags.writeable is False
+
+
+@pytest.mark.parametrize("cls", FILTERS)
+def test_a_state_continues_in_the_other_world(cls: type[Mahony], moving: tuple[ik.ImuData, np.ndarray]) -> None:
+    """A NED filter's state continued by an ENU filter is turned into ENU (it was read as ENU: 180° off)."""
+    imu, mag = moving
+    cut = 1500
+    a = ik.ImuData(imu.t[:cut], imu.gyro[:cut], imu.accel[:cut])
+    b = ik.ImuData(imu.t[cut:], imu.gyro[cut:], imu.accel[cut:])
+    first = cls(world="NED").run(a, mag=mag[:cut])
+    assert first.state.world == "NED"
+    enu = cls(world="ENU").run(b, mag=mag[cut:], initial=first.state)
+    ned = cls(world="NED").run(b, mag=mag[cut:], initial=first.state)
+    # ENU from NED: x and y swapped, z flipped.
+    turn = Rotation.from_matrix([[0, 1, 0], [1, 0, 0], [0, 0, -1]])
+    err = np.degrees((enu.rotation * (turn * ned.rotation).inv()).magnitude())
+    # The same to rounding at first; later the two worlds' roundings part by a few hundredths of a
+    # degree through the gates' thresholds on this noisy record.
+    assert err[:100].max() < 1e-9 and err.max() < 0.1, err.max()
+    assert enu.state.world == "ENU"
+    f = cls(world="ENU")
+    f.set_state(first.state)
+    r = f.update(b.gyro[0], b.accel[0], float(imu.seconds[cut] - imu.seconds[cut - 1]), mag=mag[cut])
+    assert np.degrees((r * (turn * ned.rotation[0]).inv()).magnitude()) < 1e-6
+    # Stored with the world; a state stored before (no world) is the taking filter's own.
+    assert pickle.loads(pickle.dumps(first.state)).world == "NED"
+    old = first.state.fields()
+    del old["world"]
+    legacy = ik.filters.FilterState(**old)
+    assert legacy.world is None
+    same = cls(world="NED").run(b, mag=mag[cut:], initial=legacy)
+    assert np.array_equal(same.rotation.as_quat(), ned.rotation.as_quat())
+
+
+@pytest.mark.parametrize("cls", FILTERS)
+def test_a_slower_streamed_field_keeps_the_heading_gain(cls: type[Mahony]) -> None:
+    """`update(..., mag=None)` between the samples of a 10 Hz field: the heading converges as with a
+    field on every sample (the field's samples alone gave a tenth of the gain: 21° left of 30°)."""
+    rate, n = 0.5, 1001
+    t = np.arange(n) * 0.01
+    truth = Rotation.from_rotvec(np.outer(0.3 + rate * t, [0, 0, 1]))
+    field = truth.inv().apply(FIELD["ENU"])
+    start = Rotation.from_rotvec([0, 0, np.radians(30)]) * truth[0]
+
+    def heading_error(every: int) -> float:
+        f = cls()
+        f.set_state(cls().run(ik.ImuData(t[:1], np.zeros((1, 3)), [[0, 0, 9.81]]), initial=start).state)
+        for k in range(1, n):
+            f.update([0, 0, rate], [0, 0, 9.81], 0.01, mag=field[k] if k % every == 0 else None)
+        return float(np.degrees((f.get_state().rotation * truth[-1].inv()).magnitude()))
+
+    full, slow = heading_error(1), heading_error(10)
+    assert full < 1.0
+    assert abs(slow - full) < 0.25 * full, (slow, full)
+    f = cls()
+    f.update([0, 0, 0], [0, 0, 9.81], 0.0, mag=FIELD["ENU"])
+    f.update([0, 0, 0.1], [0, 0, 9.81], 0.01)
+    state = f.get_state()
+    assert state.mag_held_s == pytest.approx(0.01)
+    np.testing.assert_allclose(
+        state.mag_held, Rotation.from_rotvec([0, 0, 0.001]).inv().apply(FIELD["ENU"]), atol=1e-12
+    )
+    assert pickle.loads(pickle.dumps(state)) == state
 
 
 def test_bad_input_names_argument() -> None:

@@ -181,12 +181,14 @@ def test_deprecated_flat_layout_still_works(moving: tuple[ik.ImuData, np.ndarray
     with pytest.warns(DeprecationWarning, match="deprecated"):
         rebuilt = FilterState(values)
     # the flat layout predates the accelerometer low pass, rest detection's means and the drift
-    # rule's clock: they restart at the next sample
-    lp = ("acc_lp1", "acc_lp2", "gyro_lp", "rest_gyro_ms", "rest_accel_lp", "rest_accel_ms", "accel_calm")
+    # rule's clock: they restart at the next sample; and the world and the held field, which the
+    # flat layout never had (no world: the taking filter's own; no held field: none)
+    lp = ("acc_lp1", "acc_lp2", "gyro_lp", "rest_gyro_ms", "rest_accel_lp", "rest_accel_ms", "accel_calm", "world")
     assert {k: v for k, v in rebuilt.fields().items() if k not in lp} == {
         k: v for k, v in state.fields().items() if k not in lp
     }
     assert not rebuilt.acc_lp2.any() and state.acc_lp2.any()
+    assert rebuilt.world is None and state.world == "ENU"
     np.testing.assert_array_equal(values[:4], state.quaternion)
     assert values[8] == state.time
     with pytest.warns(DeprecationWarning), pytest.raises(ik.ShapeError, match=r"^state: "):

@@ -273,7 +273,7 @@ impl PyFilterState {
     /// sample's state: through its fields by name it took 6 µs). The fields up to `mag_dip_cos`
     /// are required without `state`.
     #[new]
-    #[pyo3(signature = (state=None, /, *, quaternion=None, gyro_bias=None, initialized=None, time=None, ramp_elapsed=None, accel_rejected=None, mag_rejected=None, rest=None, mag_norm=None, mag_dip_sin=None, mag_dip_cos=None, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], gyro_lp=[0.0; 3], rest_gyro_ms=0.0, rest_accel_lp=[0.0; 3], rest_accel_ms=0.0, accel_calm=0.0, accel_drift=false, extra=None))]
+    #[pyo3(signature = (state=None, /, *, quaternion=None, gyro_bias=None, initialized=None, time=None, ramp_elapsed=None, accel_rejected=None, mag_rejected=None, rest=None, mag_norm=None, mag_dip_sin=None, mag_dip_cos=None, acc_lp1=[0.0; 3], acc_lp2=[0.0; 3], gyro_lp=[0.0; 3], rest_gyro_ms=0.0, rest_accel_lp=[0.0; 3], rest_accel_ms=0.0, accel_calm=0.0, accel_drift=false, mag_held=[0.0; 3], mag_held_s=0.0, world=None, extra=None))]
     #[allow(clippy::too_many_arguments)] // one keyword per field of the state
     fn new(
         py: Python<'_>,
@@ -297,6 +297,9 @@ impl PyFilterState {
         rest_accel_ms: f64,
         accel_calm: f64,
         accel_drift: bool,
+        mag_held: [f64; 3],
+        mag_held_s: f64,
+        world: Option<Name<World>>,
         extra: Option<Vec<(String, f64)>>,
     ) -> PyResult<Self> {
         let required = [
@@ -313,7 +316,11 @@ impl PyFilterState {
             mag_dip_cos.is_some(),
         ];
         if let Some(state) = state {
-            return state_copy(py, &*state, required.contains(&true) || extra.is_some());
+            return state_copy(
+                py,
+                &*state,
+                required.contains(&true) || extra.is_some() || world.is_some(),
+            );
         }
         let missing = || {
             raise(
@@ -342,6 +349,9 @@ impl PyFilterState {
             rest_accel_ms,
             accel_calm,
             accel_drift,
+            mag_held: Vector3::from(mag_held),
+            mag_held_s,
+            world: world.map(|w| w.0),
             ..CommonState::default()
         }
         .restored(quaternion.ok_or_else(missing)?)
@@ -399,6 +409,9 @@ impl PyFilterState {
             0.0,
             0.0,
             false,
+            [0.0; 3],
+            0.0,
+            None,
             None,
         )
     }
@@ -440,6 +453,9 @@ impl PyFilterState {
         d.set_item("rest_accel_ms", s.rest_accel_ms)?;
         d.set_item("accel_calm", s.accel_calm)?;
         d.set_item("accel_drift", s.accel_drift)?;
+        d.set_item("mag_held", <[f64; 3]>::from(s.mag_held))?;
+        d.set_item("mag_held_s", s.mag_held_s)?;
+        d.set_item("world", s.world.map(World::name))?;
         d.set_item("extra", self.extra.clone())?;
         Ok(d)
     }
@@ -560,6 +576,24 @@ impl PyFilterState {
     #[getter]
     fn accel_drift(&self) -> bool {
         self.common.accel_drift
+    }
+
+    /// The last streamed field sample in the last sample's body axes (zero: none).
+    #[getter]
+    fn mag_held<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.common.mag_held.as_slice())
+    }
+
+    /// Seconds since that field sample.
+    #[getter]
+    fn mag_held_s(&self) -> f64 {
+        self.common.mag_held_s
+    }
+
+    /// The world the attitude is in (`"ENU"` / `"NED"`; None: that of the filter that takes it).
+    #[getter]
+    fn world(&self) -> Option<&'static str> {
+        self.common.world.map(World::name)
     }
 
     /// The law's own state by field name (empty for Mahony and Madgwick).

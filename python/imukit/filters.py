@@ -112,7 +112,12 @@ class FilterState(_core.FilterState):
     the sum of the ``dt`` of ``update`` calls), the gate and rest clocks ``ramp_elapsed``,
     ``accel_rejected``, ``mag_rejected``, ``rest`` [s], the magnetometer reference ``mag_norm``,
     ``mag_dip_sin``, ``mag_dip_cos``, and ``extra``, the law's own fields (none for Mahony and
-    Madgwick). A state of one filter continues another (the law's own fields restart).
+    Madgwick), ``mag_held`` / ``mag_held_s`` (the last streamed field sample in the last sample's
+    body axes and its age: ``update(..., mag=None)`` uses it, turned by the gyro, for up to 1 s),
+    and ``world`` (``"ENU"`` / ``"NED"``, the frame of ``quaternion``; None in a state
+    stored before it was recorded: the world of the filter that takes it). A state of one filter
+    continues another (the law's own fields restart); a filter of the other world turns the
+    attitude into its own.
 
     Deprecated: ``FilterState(values)`` from the former ``(16,)`` layout and ``.values`` still work
     (with a DeprecationWarning); keep the object, or pickle it, instead.
@@ -135,7 +140,10 @@ class FilterState(_core.FilterState):
 
     def __repr__(self) -> str:
         q, b = self.quaternion.tolist(), self.gyro_bias.tolist()
-        return f"FilterState(quaternion={q!r}, gyro_bias={b!r}, time={self.time!r}, initialized={self.initialized!r})"
+        return (
+            f"FilterState(quaternion={q!r}, gyro_bias={b!r}, time={self.time!r}, "
+            f"initialized={self.initialized!r}, world={self.world!r})"
+        )
 
     @property
     def rotation(self) -> Rotation:

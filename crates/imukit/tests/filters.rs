@@ -266,6 +266,109 @@ fn streaming_equals_batch_and_restore_resumes_identically() {
     }
 }
 
+/// A state saved by the filter of one world and continued by the filter of the other: the
+/// attitude turned into the new world, not read as if it were already in it (180° off before).
+fn continued_in_the_other_world<L: Law>(ned: &Filter<L>, enu: &Filter<L>) {
+    let n = 2000;
+    let cut = 700;
+    let (t, gyro, accel, mag) = moving(n);
+    let part = |r: std::ops::Range<usize>| Inputs {
+        t: &t[r.clone()],
+        gyro: &gyro[r.clone()],
+        accel: &accel[r.clone()],
+        mag: Some(&mag[r]),
+    };
+    let out = |m: usize| (vec![[0.0; 4]; m], vec![[0.0; 3]; m]);
+    let mut s = State::default();
+    let (mut q, mut b) = out(cut);
+    ned.run(&mut s, &part(0..cut), false, &mut q, &mut b).unwrap();
+    let saved = s;
+    let (mut q_enu, mut b_enu) = out(n - cut);
+    enu.run(&mut s, &part(cut..n), true, &mut q_enu, &mut b_enu).unwrap();
+    assert_eq!(s.common.world, Some(World::Enu));
+
+    // The reference: the NED filter carries on, and its attitudes are turned into ENU.
+    let mut r = saved;
+    let (mut q_ned, mut b_ned) = out(n - cut);
+    ned.run(&mut r, &part(cut..n), true, &mut q_ned, &mut b_ned).unwrap();
+    // ENU from NED: x ↔ y, z flipped.
+    let turn = Rotation3::from_matrix_unchecked(Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0));
+    let turn = UnitQuaternion::from_rotation_matrix(&turn);
+    for k in [0, 1, 500, n - cut - 1] {
+        let want = turn * quaternion(&q_ned[k]);
+        let angle = quaternion(&q_enu[k]).angle_to(&want);
+        assert!(angle < 1e-6, "sample {k}: {angle} rad from the NED run turned into ENU");
+    }
+    // Streaming takes a state of the other world the same way.
+    let mut u = saved;
+    let k = cut;
+    let dt = t[k] - t[k - 1];
+    enu.update(
+        &mut u,
+        &Vector3::from(gyro[k]),
+        &Vector3::from(accel[k]),
+        Some(&Vector3::from(mag[k])),
+        dt,
+    )
+    .unwrap();
+    assert_eq!(u.common.q.coords.as_slice(), &q_enu[0]);
+}
+
+#[test]
+fn a_state_of_the_other_world_is_turned_into_the_filters() {
+    let ned = Filter::new(Mahony::default(), options(World::Ned)).unwrap();
+    let enu = Filter::new(Mahony::default(), options(World::Enu)).unwrap();
+    continued_in_the_other_world(&ned, &enu);
+    let ned = Filter::new(Madgwick::default(), options(World::Ned)).unwrap();
+    let enu = Filter::new(Madgwick::default(), options(World::Enu)).unwrap();
+    continued_in_the_other_world(&ned, &enu);
+}
+
+/// Heading error [rad] after 10 s of a level sensor turning at 0.5 rad/s about up, started 30° off
+/// in heading, streamed with the field on every `every`-th sample (`mag = None` between).
+fn heading_error_with_field_every<L: Law>(f: &Filter<L>, every: usize) -> f64 {
+    let (rate, dt, n) = (0.5, 0.01, 1001);
+    let truth = |k: usize| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.3 + rate * k as f64 * dt);
+    let field = Vector3::new(0.0, 22.0, -42.0);
+    let start = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 30f64.to_radians()) * truth(0);
+    let mut s = State::at(start, Vector3::zeros(), 0.0);
+    for k in 1..n {
+        let m = (k % every == 0).then(|| truth(k).inverse_transform_vector(&field));
+        let (gyro, accel) = (Vector3::new(0.0, 0.0, rate), Vector3::new(0.0, 0.0, G));
+        f.update(&mut s, &gyro, &accel, m.as_ref(), dt).unwrap();
+    }
+    s.common.q.angle_to(&truth(n - 1))
+}
+
+/// A field slower than the gyro (`mag = None` between its samples) corrects the heading at the
+/// rate a field on every sample does: the last field sample, turned by the gyro, stands in
+/// between. Scaled by the gyro's step instead, a 10 Hz field had a tenth of the gain (30° → 21°
+/// in 10 s where every sample's field leaves 1.4°).
+#[test]
+fn a_field_slower_than_the_gyro_keeps_the_heading_gain() {
+    let laws: [&dyn Fn(usize) -> f64; 2] = [
+        &|every| heading_error_with_field_every(&Filter::new(Mahony::default(), options(World::Enu)).unwrap(), every),
+        &|every| heading_error_with_field_every(&Filter::new(Madgwick::default(), options(World::Enu)).unwrap(), every),
+    ];
+    for (law, heading) in ["Mahony", "Madgwick"].iter().zip(laws) {
+        let full = heading(1);
+        for every in [4, 10, 50] {
+            let slow = heading(every);
+            eprintln!(
+                "{law}: field on every sample {:.3}°, every {every}th {:.3}°",
+                full.to_degrees(),
+                slow.to_degrees()
+            );
+            assert!(
+                (slow - full).abs() < 0.25 * full + 1e-3,
+                "{law}, field every {every}th sample: {:.2}° after 10 s, {:.2}° with the field on every sample",
+                slow.to_degrees(),
+                full.to_degrees()
+            );
+        }
+    }
+}
+
 #[test]
 fn errors_name_input_and_sample() {
     let n = 10;

@@ -12,8 +12,9 @@
 //! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k` |
 //! | first sample | initialises the attitude ([`initial_attitude`]: tilt from the accelerometer, heading from the magnetometer, else ZYX yaw 0) unless an initial state is given; it is output as is |
 //! | bias output | per sample: the estimate after that sample |
+//! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`CommonState::held_field`]); [`Filter::run`] takes one field row per sample |
 //! | ramp, rejection, rest | [`GainRamp`], [`AccelRejection`], [`MagRejection`], [`RestDetection`] in [`Options`]; the accept / reject / recover rule of both sensors in [`gate`] |
-//! | state | [`State<L>`]: [`CommonState`] plus the law's own [`Law::Extra`], `Copy`: save by copying, restore by assigning |
+//! | state | [`State<L>`]: [`CommonState`] plus the law's own [`Law::Extra`], `Copy`: save by copying, restore by assigning; it records its world, and a filter of the other world turns the attitude into its own ([`CommonState::express_in`]) |
 //!
 //! The seam: a law is a `Copy` value (its gains) implementing [`Law`]: [`Law::validate`] its gains
 //! and [`Law::correct`], which sees one gated sample ([`Step`]: the predicted and the accepted
@@ -73,6 +74,11 @@ pub use world::{initial_attitude, World};
 use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::quat::{exp_step, multiply_exp_step};
+
+/// Seconds a streamed field sample stands for the samples after it that have none
+/// ([`CommonState::held_field`]): a field at 1 Hz or faster corrects the heading at its full
+/// gain; the gyro's turn over a second moves the held field by the bias error times a second.
+pub const MAG_HOLD_S: f64 = 1.0;
 use crate::{Cancel, Error, Result};
 use gate::Gates;
 
@@ -277,9 +283,17 @@ impl<L: Law> Filter<L> {
                 got: format!("{dt}"),
             });
         }
+        state.common.express_in(self.options.world);
+        let held = match mag {
+            Some(m) => {
+                state.common.hold_field(Some(m));
+                None
+            }
+            None => state.common.held_field(gyro, dt),
+        };
         // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
         let stepping = state.common.initialized;
-        self.step(state, gyro, accel, mag, dt, self.options.world);
+        self.step(state, gyro, accel, mag.or(held.as_ref()), dt, self.options.world);
         if stepping {
             state.common.time += dt;
         }
@@ -455,7 +469,13 @@ impl<L: Law> Filter<L> {
                 got: "an uninitialised state".into(),
             });
         }
-        run_batch(self, state, inputs, continued, (out_q, out_bias), cancel)
+        state.common.express_in(self.options.world);
+        let result = run_batch(self, state, inputs, continued, (out_q, out_bias), cancel);
+        // The field a streamed continuation holds: that of the last row the state has taken.
+        let done = result.as_ref().err().map_or(n, |e| e.index().unwrap_or(0));
+        let last = inputs.mag.zip(done.checked_sub(1)).map(|(m, k)| Vector3::from(m[k]));
+        state.common.hold_field(last.as_ref());
+        result
     }
 
     /// The batch loop for one sensor set (checked inputs), compiled per law.

@@ -4,13 +4,17 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::Law;
+use super::{Law, World};
+use crate::quat::exp_step;
 
 /// The part of the state every law has.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CommonState {
     /// Attitude `q_wb` in the chosen world frame.
     pub q: UnitQuaternion<f64>,
+    /// The world `q` is in: a filter of the other world turns it into its own before the next
+    /// sample. `None` (a state stored without it): the world of the filter that takes it.
+    pub world: Option<World>,
     /// Gyro-bias estimate [rad/s], subtracted from the gyro.
     pub bias: Vector3<f64>,
     /// False until the first sample has initialised the attitude.
@@ -47,12 +51,18 @@ pub struct CommonState {
     pub rest_accel_lp: Vector3<f64>,
     /// Rest detection's mean square of `‖a − ā‖` [m²/s⁴].
     pub rest_accel_ms: f64,
+    /// The last field sample of a streamed run, in the body axes of the last sample (turned by
+    /// the gyro on the samples without one); zero: none (see [`super::MAG_HOLD_S`]).
+    pub mag_held: Vector3<f64>,
+    /// Seconds since that field sample.
+    pub mag_held_s: f64,
 }
 
 impl Default for CommonState {
     fn default() -> Self {
         Self {
             q: UnitQuaternion::identity(),
+            world: None,
             bias: Vector3::zeros(),
             initialized: false,
             time: 0.0,
@@ -71,6 +81,8 @@ impl Default for CommonState {
             rest_gyro_ms: 0.0,
             rest_accel_lp: Vector3::zeros(),
             rest_accel_ms: 0.0,
+            mag_held: Vector3::zeros(),
+            mag_held_s: 0.0,
         }
     }
 }
@@ -103,6 +115,7 @@ impl CommonState {
             self.mag_dip_cos,
             self.rest_gyro_ms,
             self.rest_accel_ms,
+            self.mag_held_s,
         ];
         let finite = xyzw
             .iter()
@@ -111,6 +124,7 @@ impl CommonState {
             .chain(self.acc_lp2.iter())
             .chain(self.gyro_lp.iter())
             .chain(self.rest_accel_lp.iter())
+            .chain(self.mag_held.iter())
             .chain(&scalars)
             .all(|x| x.is_finite());
         if !finite {
@@ -123,6 +137,39 @@ impl CommonState {
             crate::quat::normalize(&raw).map_err(|e| e.in_argument("state"))?
         };
         Ok(self)
+    }
+
+    /// This state as the filter of `world` continues it: the attitude turned into `world` when
+    /// the state says it is in the other one.
+    pub fn express_in(&mut self, world: World) {
+        if let Some(from) = self.world {
+            self.q = world.attitude_in(from, &self.q);
+        }
+        self.world = Some(world);
+    }
+
+    /// The field of a streamed sample without one: the last field sample turned into this
+    /// sample's body axes by its bias-corrected gyro step, while it is at most
+    /// [`super::MAG_HOLD_S`] old. A field slower than the gyro then corrects the heading at the
+    /// rate of one on every sample (the correction is a rate: on its own samples only, a 10 Hz
+    /// field beside a 100 Hz gyro had a tenth of the gain) and its gate counts seconds.
+    pub fn held_field(&mut self, gyro: &Vector3<f64>, dt: f64) -> Option<Vector3<f64>> {
+        if !self.initialized || self.mag_held == Vector3::zeros() {
+            return None;
+        }
+        self.mag_held_s += dt;
+        if self.mag_held_s > super::MAG_HOLD_S {
+            self.mag_held = Vector3::zeros();
+            return None;
+        }
+        self.mag_held = exp_step(&((gyro - self.bias) * dt)).inverse_transform_vector(&self.mag_held);
+        Some(self.mag_held)
+    }
+
+    /// Keeps `mag` (a field sample, or none) as the one [`CommonState::held_field`] turns.
+    pub fn hold_field(&mut self, mag: Option<&Vector3<f64>>) {
+        self.mag_held = mag.copied().unwrap_or_else(Vector3::zeros);
+        self.mag_held_s = 0.0;
     }
 }
 

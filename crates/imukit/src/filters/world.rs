@@ -1,6 +1,8 @@
 //! The world frame (ENU or NED) and the attitude a filter starts from.
 
-use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+
+use crate::quat::multiply;
 
 /// World frame of the estimate `R_wb`. The vertical axis is z in both.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +59,17 @@ impl World {
             World::Enu => (row1, row0, row2),
             World::Ned => (row0, row1, -row2),
         }
+    }
+
+    /// The attitude `q_wb` given in world `from`, in this world. ENU to NED and back is one
+    /// rotation, its own inverse: 180° about `(1, 1, 0)/√2` (swaps x and y, flips z).
+    #[inline(always)]
+    pub fn attitude_in(self, from: World, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+        if self == from {
+            return *q;
+        }
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        UnitQuaternion::new_unchecked(multiply(&Quaternion::new(0.0, h, h, 0.0), q.quaternion()))
     }
 
     /// The `R_wb` whose body directions of "up" and "north" are `up_b` and `north_b` (unit,

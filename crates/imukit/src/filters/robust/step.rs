@@ -218,25 +218,15 @@ pub(super) fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> 
     }
 }
 
-/// `q_wb` of NED from that of ENU (and back: the rotation is its own inverse): 180° about
-/// `(1, 1, 0)/√2` swaps x and y and flips z.
-fn enu_ned(q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    UnitQuaternion::new_unchecked(multiply(&Quaternion::new(0.0, h, h, 0.0), q.quaternion()))
-}
-
 /// The attitude in `world` from the internal ENU one.
 #[inline(always)]
 pub(super) fn to_world(world: World, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
-    match world {
-        World::Enu => *q,
-        World::Ned => enu_ned(q),
-    }
+    world.attitude_in(World::Enu, q)
 }
 
 /// The internal ENU attitude from one in `world`.
 pub(super) fn from_world(world: World, q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
-    to_world(world, q)
+    World::Enu.attitude_in(world, q)
 }
 
 /// `q ⊗ r` renormalised by one Newton step (both unit: the product is unit to rounding, this
