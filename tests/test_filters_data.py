@@ -170,6 +170,12 @@ def test_a_state_copies_a_state_and_refuses_a_state_with_fields(moving: tuple[ik
     del fields["mag_norm"]
     with pytest.raises(ik.ParameterError, match=r"^state: expected a state, or the fields"):
         FilterState(**fields)
+    # A held field is used as a field: one whose squared norm overflows is refused like one given
+    # to `update`; the world is one of the two.
+    with pytest.raises(ik.NonFiniteError, match=r"^state: "):
+        FilterState(**{**state.fields(), "mag_held": [1e200, 0.0, 0.0]})
+    with pytest.raises(ik.ParameterError, match=r"^world: "):
+        FilterState(**{**state.fields(), "world": "NWU"})
 
 
 def test_deprecated_flat_layout_still_works(moving: tuple[ik.ImuData, np.ndarray]) -> None:

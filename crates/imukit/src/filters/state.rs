@@ -130,6 +130,10 @@ impl CommonState {
         if !finite {
             return Err(crate::Error::NonFinite { index: 0 }.in_argument("state"));
         }
+        // As `update` refuses a field whose squared norm overflows: the held one is used as a field.
+        if !self.mag_held.norm_squared().is_finite() {
+            return Err(crate::Error::Overflow { index: 0 }.in_argument("state"));
+        }
         let raw = Quaternion::new(xyzw[3], xyzw[0], xyzw[1], xyzw[2]);
         self.q = if (raw.norm_squared() - 1.0).abs() < 1e-12 {
             UnitQuaternion::new_unchecked(raw)
