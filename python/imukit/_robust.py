@@ -165,7 +165,8 @@ class Robust:
         ``mag``: as ``Mahony.run``'s: None → ``imu.mag`` when there is one (9D); ``False`` → 6D;
         ``True`` → ``imu.mag``, which must be there; an ``(N, 3)`` array → those samples.
         ``initial``: None (the first sample initialises), a ``Rotation`` (the attitude at
-        ``imu.t[0]``), or a :class:`RobustState` to continue from (online only; the first sample is
+        ``imu.t[0]``; in 9D its heading lasts until the field's first sample after it gives the
+        field's, north being the field's), or a :class:`RobustState` to continue from (online only; the first sample is
         a step of ``imu.t[0] − state.time``). The result's ``state`` is the forward pass's last.
         """
         if not isinstance(imu, ImuData):

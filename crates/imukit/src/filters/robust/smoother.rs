@@ -649,8 +649,11 @@ crate::simd_dispatch! {
                 let (k, other) = reached(i);
                 if !s.initialized {
                     set_heading(&mut s, 0.0);
-                    start_heading(&mut s, &(quat(&base[k]) * row(&mags[k])));
                     s.initialized = true;
+                    s.heading_pending = true;
+                }
+                if s.heading_pending {
+                    start_heading(&mut s, &(quat(&base[k]) * row(&mags[k])));
                 }
                 let coefs = cache.for_dt(p, (inputs.t[k] - inputs.t[other]).abs());
                 if let Some((gain, err)) = heading_error(p, &coefs, &mut s, f) {

@@ -175,8 +175,8 @@ state!(
     rest: bool = ["rest"],
     /// Whether the last magnetometer sample was rejected as disturbed.
     mag_disturbed: bool = ["mag_disturbed"],
-    /// True while the attitude came from the sensors and no field sample has given its heading
-    /// yet: the first field sample sets it, even one that arrives after the first sample.
+    /// True until a field sample has given the heading (from the first sample on, with an
+    /// initial attitude too): the first field sample sets it, even one that arrives late.
     heading_pending: bool = ["heading_pending"],
 );
 
