@@ -345,13 +345,17 @@ def rosbag(
         imu = as_file_error(where, lambda: ImuData(t_ns, rows[:, :3], rows[:, 3:]))
         if mag_name is not None:
             hint = "pass mag_topic=False to read the bag without its magnetometer"
+            mark = len(bad.records)
             try:
                 m_ns, m_rows = _read_topic(reader, mag_name, MAG_TYPE, time_source, where, bad)
                 imu = with_mag(imu, m_ns, m_rows * TESLA_TO_MICROTESLA, f"{where}, topic {mag_name}", hint)
             except FileFormatError as e:
                 if mag_topic is not None:
                     raise
-                # Found, not asked for: the IMU (and ground truth) read as before this reader knew magnetometers.
+                # Found, not asked for: the IMU (and ground truth) read as before this reader knew
+                # magnetometers; the report is of what was read, so the topic's skipped messages
+                # leave it (the warning counts them).
+                del bad.records[mark:]
                 warnings.warn(f"magnetometer not read: {e.message}", stacklevel=3)
         truth = None
         if truth_name is not None:
