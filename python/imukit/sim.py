@@ -327,23 +327,44 @@ class SensorErrors:
         return (whole + (1.0 if steps - whole >= 0.5 else 0.0)) * step
 
 
+# Fourth-order first-derivative stencils on nodes t + jδ: central (j = −2…2) and, within 2δ of the
+# end of a motion with a span (Waypoints), one-sided (j = 0…4 forward, −4…0 backward; Fornberg 1988,
+# the weights of the derivative on five equispaced nodes).
+_STENCILS = {
+    "central": (range(-2, 3), (1.0, -8.0, 0.0, 8.0, -1.0)),
+    "forward": (range(0, 5), (-25.0, 48.0, -36.0, 16.0, -3.0)),
+    "backward": (range(-4, 1), (3.0, -16.0, 36.0, -48.0, 25.0)),
+}
+
+
 def _angular_acceleration(
     trajectory: Motion, t: FloatArray, g: FloatArray, count: int | None, rotating: list[float] | None
 ) -> FloatArray:
-    """The body's angular acceleration in body axes at ``t``: the fourth-order central stencil
-    ``(ω(t−2δ) − 8ω(t−δ) + 8ω(t+δ) − ω(t+2δ)) / 12δ``, δ = 1 ms, on the ideal gyro readings
-    (the rotating world's rate included when ``rotating`` is given)."""
+    """The body's angular acceleration in body axes at ``t``: a fourth-order stencil over
+    δ = 1 ms, central (``(ω(t−2δ) − 8ω(t−δ) + 8ω(t+δ) − ω(t+2δ)) / 12δ``) or, within 2δ of a
+    waypoint span's ends, one-sided, on the ideal gyro readings (the rotating world's rate included
+    when ``rotating`` is given)."""
     delta = 1e-3
 
-    def rate(shift: float) -> FloatArray:
-        _, velocity, quat, gyro, accel = trajectory._truth(t + shift, g, count)
+    def rate(at: FloatArray) -> FloatArray:
+        _, velocity, quat, gyro, accel = trajectory._truth(at, g, count)
         if rotating is not None:
             _core.sim_rotating_world(rotating, quat, velocity, gyro, accel)
         return gyro
 
-    return np.ascontiguousarray(
-        (rate(-2 * delta) - 8 * rate(-delta) + 8 * rate(delta) - rate(2 * delta)) / (12 * delta)
-    )
+    lo, hi = (trajectory.times[0], trajectory.times[-1]) if isinstance(trajectory, Waypoints) else (-np.inf, np.inf)
+    forward, backward = t - 2 * delta < lo, t + 2 * delta > hi
+    alpha = np.empty((len(t), 3))
+    for name, rows in (
+        ("central", ~(forward | backward)),
+        ("forward", forward),
+        ("backward", backward & ~forward),
+    ):
+        if rows.any():
+            nodes, weights = _STENCILS[name]
+            at = t[rows]
+            alpha[rows] = sum(w * rate(at + j * delta) for j, w in zip(nodes, weights) if w != 0.0) / (12 * delta)
+    return alpha
 
 
 def simulate(
@@ -385,8 +406,9 @@ def simulate(
     :func:`imukit.integrate`): the readings are those of a sensor at that pose on the simulated
     body, ``ω_s = R_bsᵀ ω_b``, ``f_s = R_bsᵀ (f_b + α × r + ω × (ω × r))``, with the body's angular
     acceleration ``α`` from the trajectory's closed-form rate (the frame's rate included) by the
-    fourth-order central stencil over ±1 ms, ±2 ms (truncation ~1e-13 rad/s² for rates that vary on
-    second scales); the truth stays the body's. Not with a frame that follows the vehicle.
+    fourth-order central stencil over ±1 ms, ±2 ms (one-sided within 2 ms of a ``Waypoints``
+    span's ends; truncation ~1e-13 rad/s² for rates that vary on second scales); the truth stays
+    the body's. Not with a frame that follows the vehicle.
 
     ``threads``: threads for this call (None: :func:`imukit.set_num_threads`'s setting), see :mod:`imukit.threads`.
     """
