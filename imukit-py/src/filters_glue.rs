@@ -13,8 +13,8 @@
 //! not one is a `ParameterError` here, where the conversion fails.
 
 use imukit::filters::{
-    AccelLowPass, AccelRejection, CommonState, Fields, Filter, GainRamp, Law, Madgwick, MagRejection, Mahony, Options,
-    RestDetection, State, World,
+    AccelLowPass, AccelRejection, CommonState, FieldHold, Fields, Filter, GainRamp, Law, Madgwick, MagRejection,
+    Mahony, Options, RestDetection, State, World,
 };
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -349,8 +349,10 @@ impl PyFilterState {
             rest_accel_ms,
             accel_calm,
             accel_drift,
-            mag_held: Vector3::from(mag_held),
-            mag_held_s,
+            mag_hold: FieldHold {
+                field: Vector3::from(mag_held),
+                age_s: mag_held_s,
+            },
             world: world.map(|w| w.0),
             ..CommonState::default()
         }
@@ -453,8 +455,8 @@ impl PyFilterState {
         d.set_item("rest_accel_ms", s.rest_accel_ms)?;
         d.set_item("accel_calm", s.accel_calm)?;
         d.set_item("accel_drift", s.accel_drift)?;
-        d.set_item("mag_held", <[f64; 3]>::from(s.mag_held))?;
-        d.set_item("mag_held_s", s.mag_held_s)?;
+        d.set_item("mag_held", <[f64; 3]>::from(s.mag_hold.field))?;
+        d.set_item("mag_held_s", s.mag_hold.age_s)?;
         d.set_item("world", s.world.map(World::name))?;
         d.set_item("extra", self.extra.clone())?;
         Ok(d)
@@ -581,13 +583,13 @@ impl PyFilterState {
     /// The last streamed field sample in the last sample's body axes (zero: none).
     #[getter]
     fn mag_held<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.common.mag_held.as_slice())
+        PyArray1::from_slice(py, self.common.mag_hold.field.as_slice())
     }
 
     /// Seconds since that field sample.
     #[getter]
     fn mag_held_s(&self) -> f64 {
-        self.common.mag_held_s
+        self.common.mag_hold.age_s
     }
 
     /// The world the attitude is in (`"ENU"` / `"NED"`; None: that of the filter that takes it).

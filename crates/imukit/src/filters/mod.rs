@@ -12,7 +12,7 @@
 //! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k` |
 //! | first sample | initialises the attitude ([`initial_attitude`]: tilt from the accelerometer, heading from the magnetometer, else ZYX yaw 0) unless an initial state is given; it is output as is |
 //! | bias output | per sample: the estimate after that sample |
-//! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`CommonState::held_field`]); [`Filter::run`] takes one field row per sample |
+//! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`FieldHold`]); [`Filter::run`] takes one field row per sample |
 //! | ramp, rejection, rest | [`GainRamp`], [`AccelRejection`], [`MagRejection`], [`RestDetection`] in [`Options`]; the accept / reject / recover rule of both sensors in [`gate`] |
 //! | state | [`State<L>`]: [`CommonState`] plus the law's own [`Law::Extra`], `Copy`: save by copying, restore by assigning; it records its world, and a filter of the other world turns the attitude into its own ([`CommonState::express_in`]) |
 //!
@@ -68,7 +68,7 @@ pub use madgwick::Madgwick;
 pub use mahony::Mahony;
 pub use options::{check, AccelLowPass, AccelRejection, GainRamp, MagRejection, Options, RestDetection};
 pub use robust::{Outputs as RobustOutputs, Robust, RobustParams, RobustState, Track as RobustTrack};
-pub use state::{CommonState, Fields, State};
+pub use state::{CommonState, FieldHold, Fields, State};
 pub use world::{initial_attitude, World};
 
 use nalgebra::{UnitQuaternion, Vector3};
@@ -76,7 +76,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use crate::quat::{exp_step, multiply_exp_step};
 
 /// Seconds a streamed field sample stands for the samples after it that have none
-/// ([`CommonState::held_field`]): a field at 1 Hz or faster corrects the heading at its full
+/// ([`FieldHold`]): a field at 1 Hz or faster corrects the heading at its full
 /// gain; the gyro's turn over a second moves the held field by the bias error times a second.
 pub const MAG_HOLD_S: f64 = 1.0;
 use crate::{Cancel, Error, Result};
@@ -286,10 +286,14 @@ impl<L: Law> Filter<L> {
         state.common.express_in(self.options.world);
         let held = match mag {
             Some(m) => {
-                state.common.hold_field(Some(m));
+                state.common.mag_hold.keep(Some(m));
                 None
             }
-            None => state.common.held_field(gyro, dt),
+            None if state.common.initialized => {
+                let turn = (gyro - state.common.bias) * dt;
+                state.common.mag_hold.next(&turn, dt)
+            }
+            None => None,
         };
         // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
         let stepping = state.common.initialized;
@@ -474,7 +478,7 @@ impl<L: Law> Filter<L> {
         // The field a streamed continuation holds: that of the last row the state has taken.
         let done = result.as_ref().err().map_or(n, |e| e.index().unwrap_or(0));
         let last = inputs.mag.zip(done.checked_sub(1)).map(|(m, k)| Vector3::from(m[k]));
-        state.common.hold_field(last.as_ref());
+        state.common.mag_hold.keep(last.as_ref());
         result
     }
 

@@ -51,11 +51,49 @@ pub struct CommonState {
     pub rest_accel_lp: Vector3<f64>,
     /// Rest detection's mean square of `‖a − ā‖` [m²/s⁴].
     pub rest_accel_ms: f64,
-    /// The last field sample of a streamed run, in the body axes of the last sample (turned by
-    /// the gyro on the samples without one); zero: none (see [`super::MAG_HOLD_S`]).
-    pub mag_held: Vector3<f64>,
-    /// Seconds since that field sample.
-    pub mag_held_s: f64,
+    /// The last field sample of a streamed run, for the samples after it without one.
+    pub mag_hold: FieldHold,
+}
+
+/// The last field sample of a streamed run, in the body axes of the last sample: on a sample
+/// without a field it stands in, turned into that sample's axes by its bias-corrected gyro step,
+/// while it is at most [`super::MAG_HOLD_S`] old. A field slower than the gyro then corrects the
+/// heading at the rate of one on every sample (a correction is a rate: on its own samples only, a
+/// 10 Hz field beside a 100 Hz gyro had a tenth of the gain) and its gate counts seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FieldHold {
+    /// The field in the last sample's body axes (zero: none).
+    pub field: Vector3<f64>,
+    /// Seconds since it was sampled.
+    pub age_s: f64,
+}
+
+impl FieldHold {
+    /// Holds `mag` (a field sample, or none), sampled now.
+    pub fn keep(&mut self, mag: Option<&Vector3<f64>>) {
+        self.field = mag.copied().unwrap_or_else(Vector3::zeros);
+        self.age_s = 0.0;
+    }
+
+    /// The held field on a sample without one, `dt` \[s\] after the last, the body having turned
+    /// by `turn = (ω − b̂) dt` \[rad\]; None when there is none or it grew too old.
+    pub fn next(&mut self, turn: &Vector3<f64>, dt: f64) -> Option<Vector3<f64>> {
+        if self.field == Vector3::zeros() {
+            return None;
+        }
+        self.age_s += dt;
+        if self.age_s > super::MAG_HOLD_S {
+            self.field = Vector3::zeros();
+            return None;
+        }
+        self.field = exp_step(turn).inverse_transform_vector(&self.field);
+        Some(self.field)
+    }
+
+    /// Finite, with a squared norm that does not overflow (a held field is used as a field).
+    pub fn valid(&self) -> bool {
+        self.age_s.is_finite() && self.field.norm_squared().is_finite()
+    }
 }
 
 impl Default for CommonState {
@@ -81,8 +119,7 @@ impl Default for CommonState {
             rest_gyro_ms: 0.0,
             rest_accel_lp: Vector3::zeros(),
             rest_accel_ms: 0.0,
-            mag_held: Vector3::zeros(),
-            mag_held_s: 0.0,
+            mag_hold: FieldHold::default(),
         }
     }
 }
@@ -115,7 +152,6 @@ impl CommonState {
             self.mag_dip_cos,
             self.rest_gyro_ms,
             self.rest_accel_ms,
-            self.mag_held_s,
         ];
         let finite = xyzw
             .iter()
@@ -124,14 +160,13 @@ impl CommonState {
             .chain(self.acc_lp2.iter())
             .chain(self.gyro_lp.iter())
             .chain(self.rest_accel_lp.iter())
-            .chain(self.mag_held.iter())
             .chain(&scalars)
             .all(|x| x.is_finite());
         if !finite {
             return Err(crate::Error::NonFinite { index: 0 }.in_argument("state"));
         }
         // As `update` refuses a field whose squared norm overflows: the held one is used as a field.
-        if !self.mag_held.norm_squared().is_finite() {
+        if !self.mag_hold.valid() {
             return Err(crate::Error::Overflow { index: 0 }.in_argument("state"));
         }
         let raw = Quaternion::new(xyzw[3], xyzw[0], xyzw[1], xyzw[2]);
@@ -150,30 +185,6 @@ impl CommonState {
             self.q = world.attitude_in(from, &self.q);
         }
         self.world = Some(world);
-    }
-
-    /// The field of a streamed sample without one: the last field sample turned into this
-    /// sample's body axes by its bias-corrected gyro step, while it is at most
-    /// [`super::MAG_HOLD_S`] old. A field slower than the gyro then corrects the heading at the
-    /// rate of one on every sample (the correction is a rate: on its own samples only, a 10 Hz
-    /// field beside a 100 Hz gyro had a tenth of the gain) and its gate counts seconds.
-    pub fn held_field(&mut self, gyro: &Vector3<f64>, dt: f64) -> Option<Vector3<f64>> {
-        if !self.initialized || self.mag_held == Vector3::zeros() {
-            return None;
-        }
-        self.mag_held_s += dt;
-        if self.mag_held_s > super::MAG_HOLD_S {
-            self.mag_held = Vector3::zeros();
-            return None;
-        }
-        self.mag_held = exp_step(&((gyro - self.bias) * dt)).inverse_transform_vector(&self.mag_held);
-        Some(self.mag_held)
-    }
-
-    /// Keeps `mag` (a field sample, or none) as the one [`CommonState::held_field`] turns.
-    pub fn hold_field(&mut self, mag: Option<&Vector3<f64>>) {
-        self.mag_held = mag.copied().unwrap_or_else(Vector3::zeros);
-        self.mag_held_s = 0.0;
     }
 }
 

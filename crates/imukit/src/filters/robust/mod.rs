@@ -229,6 +229,14 @@ impl Robust {
         } else {
             0.0
         };
+        let held = match mag {
+            Some(m) => {
+                state.mag_hold.keep(Some(m));
+                None
+            }
+            None if state.initialized => state.mag_hold.next(&((gyro - state.bias) * dt), dt),
+            None => None,
+        };
         step::step(
             &self.params,
             self.world,
@@ -236,7 +244,7 @@ impl Robust {
             state,
             gyro,
             accel,
-            mag,
+            mag.or(held.as_ref()),
         );
         state.time += dt;
         check_overflow(state, 0)
@@ -316,10 +324,19 @@ impl Robust {
                 got: "an uninitialised state".into(),
             });
         }
-        if attitude && n >= pipeline::FROM && rayon::current_num_threads() > 1 {
-            return pipeline::run(self, state, inputs, (first, continued), out, cancel);
-        }
-        run_any(self, state, inputs, (first, continued), attitude, out, cancel)
+        let result = if attitude && n >= pipeline::FROM && rayon::current_num_threads() > 1 {
+            pipeline::run(self, state, inputs, (first, continued), out, cancel)
+        } else {
+            run_any(self, state, inputs, (first, continued), attitude, out, cancel)
+        };
+        // The field a streamed continuation holds: that of the last row the state has taken.
+        let done = result
+            .as_ref()
+            .err()
+            .map_or(n, |e| e.index().map_or(0, |k| k.saturating_sub(first)));
+        let last = inputs.mag.zip(done.checked_sub(1)).map(|(m, k)| row(&m[k]));
+        state.mag_hold.keep(last.as_ref());
+        result
     }
 
     /// The loop of [`Robust::run_part`]: `NINE` with the field `mags`, each checked sample

@@ -6,7 +6,7 @@ use nalgebra::{Matrix2x3, Matrix3, Quaternion, SMatrix, UnitQuaternion, Vector2,
 
 use std::f64::consts::{PI, TAU};
 
-use crate::filters::Fields;
+use crate::filters::{FieldHold, Fields};
 
 /// A value that flattens to numbers: how the state macro stores each field.
 trait Flat: Sized {
@@ -53,6 +53,20 @@ impl Flat for UnitQuaternion<f64> {
     fn take(it: &mut impl Iterator<Item = f64>) -> Option<Self> {
         let (x, y, z, w) = (it.next()?, it.next()?, it.next()?, it.next()?);
         Some(Self::new_unchecked(Quaternion::new(w, x, y, z)))
+    }
+}
+
+/// The held field, then its age.
+impl Flat for FieldHold {
+    fn push(&self, out: &mut Vec<f64>) {
+        Flat::push(&self.field, out);
+        out.push(self.age_s);
+    }
+    fn take(it: &mut impl Iterator<Item = f64>) -> Option<Self> {
+        Some(Self {
+            field: Flat::take(it)?,
+            age_s: it.next()?,
+        })
     }
 }
 
@@ -178,6 +192,8 @@ state!(
     /// True until a field sample has given the heading (from the first sample on, with an
     /// initial attitude too): the first field sample sets it, even one that arrives late.
     heading_pending: bool = ["heading_pending"],
+    /// The last streamed field sample, for the samples after it without one ([`FieldHold`]).
+    mag_hold: FieldHold = ["mag_held_x", "mag_held_y", "mag_held_z", "mag_held_s"],
 );
 
 impl Default for RobustState {
@@ -228,6 +244,7 @@ impl Default for RobustState {
             rest: false,
             mag_disturbed: false,
             heading_pending: false,
+            mag_hold: FieldHold::default(),
         }
     }
 }
@@ -257,11 +274,12 @@ impl RobustState {
             && unit_heading
             && s.heading_angle.abs() <= PI
             && gap.abs() < 1e-6
+            && s.mag_hold.valid()
         {
             Ok(s)
         } else {
             Err(bad(
-                "unit quaternions and heading pair, a heading angle in [−π, π] equal to the pair's within 1e-6 rad",
+                "unit quaternions and heading pair, a heading angle in [−π, π] equal to the pair's within 1e-6 rad, a held field whose squared norm is finite",
             ))
         }
     }
