@@ -435,8 +435,8 @@ def test_a_slower_streamed_field_keeps_the_heading_gain(cls: type[Mahony]) -> No
     field = truth.inv().apply(FIELD["ENU"])
     start = Rotation.from_rotvec([0, 0, np.radians(30)]) * truth[0]
 
-    def heading_error(every: int) -> float:
-        f = cls()
+    def heading_error(every: int, **options: float) -> float:
+        f = cls(**options)
         f.set_state(cls().run(ik.ImuData(t[:1], np.zeros((1, 3)), [[0, 0, 9.81]]), initial=start).state)
         for k in range(1, n):
             f.update([0, 0, rate], [0, 0, 9.81], 0.01, mag=field[k] if k % every == 0 else None)
@@ -445,6 +445,11 @@ def test_a_slower_streamed_field_keeps_the_heading_gain(cls: type[Mahony]) -> No
     full, slow = heading_error(1), heading_error(10)
     assert full < 1.0
     assert abs(slow - full) < 0.25 * full, (slow, full)
+    # mag_hold_s=0: the field's samples alone (a tenth of the gain, the former behaviour)
+    assert heading_error(10, mag_hold_s=0.0) > 10 * full
+    assert cls(mag_hold_s=0.5).mag_hold_s == 0.5 and cls().mag_hold_s == 1.0
+    with pytest.raises(ik.ParameterError, match=r"^mag_hold_s: "):
+        cls(mag_hold_s=-1.0)
     f = cls()
     f.update([0, 0, 0], [0, 0, 9.81], 0.0, mag=FIELD["ENU"])
     f.update([0, 0, 0.1], [0, 0, 9.81], 0.01)

@@ -172,8 +172,11 @@ def test_a_state_copies_a_state_and_refuses_a_state_with_fields(moving: tuple[ik
         FilterState(**fields)
     # A held field is used as a field: one whose squared norm overflows is refused like one given
     # to `update`; the world is one of the two.
-    with pytest.raises(ik.NonFiniteError, match=r"^state: "):
-        FilterState(**{**state.fields(), "mag_held": [1e200, 0.0, 0.0]})
+    for held in ({"mag_held": [1e200, 0.0, 0.0]}, {"mag_held": [np.nan, 0.0, 0.0]}, {"mag_held_s": np.inf}):
+        with pytest.raises(ik.NonFiniteError, match=r"^state: "):
+            FilterState(**{**state.fields(), **held})
+    with pytest.raises(ik.ParameterError, match=r"^state: "):  # a negative age would hold it for ever
+        FilterState(**{**state.fields(), "mag_held_s": -1.0})
     with pytest.raises(ik.ParameterError, match=r"^world: "):
         FilterState(**{**state.fields(), "world": "NWU"})
 

@@ -99,6 +99,19 @@ def test_a_slower_streamed_field_keeps_the_heading_gain() -> None:
     for every in (10, 50):
         slow = heading(every)
         assert np.abs(slow[1000:] - full[1000:]).max() < 0.05, (every, slow[3000], full[3000])
+    # mag_hold_s=0: the field's samples alone (the former behaviour)
+    off = np.degrees(
+        np.abs(
+            ik.eval.attitude_error(
+                _stream(ik.filters.Robust(mag_hold_s=0.0), turned, mag, np.arange(len(imu)) % 10 == 0), truth
+            ).heading
+        )
+    )
+    assert off[3000] > 2 * full[3000]
+    with pytest.raises(ik.ParameterError, match=r"^mag_hold_s: "):
+        ik.filters.Robust(mag_hold_s=-1.0)
+    with pytest.raises(ik.ParameterError, match=r"^state: "):
+        ik.filters.RobustState(**{**ik.filters.Robust().get_state().fields(), "mag_held_s": -1.0})
 
 
 def test_a_field_that_starts_late_gives_the_heading() -> None:

@@ -22,6 +22,7 @@ struct Input {
     accel_rejection: Option<[f64; 5]>,
     mag_rejection: Option<[f64; 3]>,
     rest: Option<[f64; 5]>,
+    mag_hold_s: f64,
     restore: Option<Restore>,
     continued: bool,
     mag: Option<Vec<f64>>,
@@ -96,6 +97,7 @@ fuzz_target!(|input: Input| {
             tau_s,
             max_bias,
         }),
+        mag_hold_s: input.mag_hold_s,
     };
     if input.madgwick {
         let [beta, full_rate_angle_rad] = input.gains;

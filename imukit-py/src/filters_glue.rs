@@ -129,12 +129,14 @@ pub(crate) struct PyFilterOptions {
     acc_rejection: Option<PyAccelRejection>,
     mag_rejection: Option<PyMagRejection>,
     rest_detection: Option<PyRestDetection>,
+    mag_hold_s: f64,
 }
 
 #[pymethods]
 impl PyFilterOptions {
+    /// `mag_hold_s` omitted (an options object pickled before it existed): the core's default.
     #[new]
-    #[pyo3(signature = (*, world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection))]
+    #[pyo3(signature = (*, world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection, mag_hold_s=None))]
     #[allow(clippy::too_many_arguments)] // one keyword per option
     fn new(
         py: Python<'_>,
@@ -145,6 +147,7 @@ impl PyFilterOptions {
         acc_rejection: Option<PyAccelRejection>,
         mag_rejection: Option<PyMagRejection>,
         rest_detection: Option<PyRestDetection>,
+        mag_hold_s: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         Ok(Self {
             world,
@@ -154,6 +157,7 @@ impl PyFilterOptions {
             acc_rejection,
             mag_rejection,
             rest_detection,
+            mag_hold_s: real(py, "mag_hold_s", mag_hold_s, Options::default().mag_hold_s)?,
         })
     }
 
@@ -169,6 +173,7 @@ impl PyFilterOptions {
             acc_rejection: o.acc_rejection.map(Into::into),
             mag_rejection: o.mag_rejection.map(Into::into),
             rest_detection: o.rest_detection.map(Into::into),
+            mag_hold_s: o.mag_hold_s,
         }
     }
 
@@ -181,6 +186,7 @@ impl PyFilterOptions {
         kwargs.set_item("acc_rejection", self.acc_rejection)?;
         kwargs.set_item("mag_rejection", self.mag_rejection)?;
         kwargs.set_item("rest_detection", self.rest_detection)?;
+        kwargs.set_item("mag_hold_s", self.mag_hold_s)?;
         Ok((PyTuple::empty(py), kwargs))
     }
 }
@@ -202,6 +208,7 @@ impl PyFilterOptions {
             acc_rejection: self.acc_rejection.map(Into::into),
             mag_rejection: self.mag_rejection.map(Into::into),
             rest_detection: self.rest_detection.map(Into::into),
+            mag_hold_s: self.mag_hold_s,
         }
     }
 }

@@ -359,6 +359,7 @@ class FilterOptions:
     acc_rejection: AccelRejection | None
     mag_rejection: MagRejection | None
     rest_detection: RestDetection | None
+    mag_hold_s: float
     def __new__(
         cls,
         *,
@@ -369,6 +370,7 @@ class FilterOptions:
         acc_rejection: AccelRejection | None,
         mag_rejection: MagRejection | None,
         rest_detection: RestDetection | None,
+        mag_hold_s: _Number | None = None,
     ) -> FilterOptions: ...
     @staticmethod
     def default() -> FilterOptions: ...

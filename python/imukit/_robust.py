@@ -113,7 +113,8 @@ class Robust:
         return str(self._core_filter.__getnewargs__()[1])
 
     def reset(self, initial: Rotation | None = None) -> None:
-        """Forget the state; the next :meth:`update` initialises (or starts at ``initial``)."""
+        """Forget the state; the next :meth:`update` initialises (or starts at ``initial``, whose
+        heading in 9D the first field sample replaces: north is the field's)."""
         self._state = RobustState(self._core_filter.initial_state(_initial_quat(initial)))
 
     def get_state(self) -> RobustState:
@@ -128,7 +129,10 @@ class Robust:
 
     def update(self, gyro: ArrayLike, accel: ArrayLike, dt: float, mag: ArrayLike | None = None) -> Rotation:
         """One streaming sample (``dt`` [s] since the previous one; ignored on the first, which
-        initialises); returns the current attitude ``R_wb``."""
+        initialises); returns the current attitude ``R_wb``. ``mag=None``: within ``mag_hold_s``
+        (default 1 s) of the last field sample, that sample turned by the gyro stands in, so the
+        heading loop and the field's gate run in seconds whatever the field's rate
+        (``mag_hold_s=0``: no field then)."""
         self._state = RobustState(
             self._core_filter.update(
                 self._state,

@@ -253,6 +253,7 @@ class _Filter:
         acc_rejection: AccelRejection | None = _OPTIONS.acc_rejection,
         mag_rejection: MagRejection | None = _OPTIONS.mag_rejection,
         rest_detection: RestDetection | None = _OPTIONS.rest_detection,
+        mag_hold_s: float = _OPTIONS.mag_hold_s,
         **unknown: Any,
     ) -> None:
         if unknown:  # as Robust refuses an unknown parameter (a TypeError named _Filter.__init__ before)
@@ -274,6 +275,7 @@ class _Filter:
             acc_rejection=_option(acc_rejection, AccelRejection, "acc_rejection"),
             mag_rejection=_option(mag_rejection, MagRejection, "mag_rejection"),
             rest_detection=_option(rest_detection, RestDetection, "rest_detection"),
+            mag_hold_s=_real(mag_hold_s, "mag_hold_s"),
         )
 
     def __getstate__(self) -> dict[str, Any]:
@@ -298,6 +300,11 @@ class _Filter:
         """Gravity magnitude [m/s²] of the rejection and rest tests."""
         return float(self.options.gravity)
 
+    @property
+    def mag_hold_s(self) -> float:
+        """Seconds a streamed field sample stands in for the samples without one."""
+        return float(self.options.mag_hold_s)
+
     def reset(self, initial: Rotation | None = None) -> None:
         """Forget the state; the next :meth:`update` initialises (or starts at ``initial``)."""
         self._state = FilterState(_core.FilterState._initial(_initial_quat(initial)))
@@ -314,8 +321,10 @@ class _Filter:
 
     def update(self, gyro: ArrayLike, accel: ArrayLike, dt: float, mag: ArrayLike | None = None) -> Rotation:
         """One streaming sample (``dt`` [s] since the previous one; ignored on the first, which
-        initialises); returns the current attitude ``R_wb``. Thread-safe: calls from several
-        threads run one after another, none lost."""
+        initialises); returns the current attitude ``R_wb``. ``mag=None``: within ``mag_hold_s``
+        (default 1 s) of the last field sample, that sample turned by the gyro stands in (a filter
+        built with ``mag_hold_s=0`` uses no field then). Thread-safe: calls from several threads
+        run one after another, none lost."""
         w, a = _vec3(gyro, "gyro"), _vec3(accel, "accel")
         step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
         m = None if mag is None else _vec3(mag, "mag")  # the core refuses a norm that overflows
@@ -416,6 +425,11 @@ class Mahony(_Filter):
     rest_detection
         :class:`RestDetection` (default on: the bias follows the gyro at rest, found from the gyro's
         and the accelerometer's deviations from their own low passes), or None for none.
+    mag_hold_s
+        Streaming (:meth:`update`) with a field slower than the gyro: on a sample with
+        ``mag=None`` the last field sample, turned into the current body axes by the gyro, stands
+        in for up to this many seconds (default 1.0), so the heading gain and the field's gate
+        run in seconds whatever the field's rate. 0: a sample without a field has none.
 
     Every default is the Rust core's (``imukit._core.MahonyGains()``, ``FilterOptions.default()``).
     """
@@ -450,7 +464,7 @@ class Madgwick(_Filter):
         about ``θ₀`` and Madgwick's full rate ``2β`` above; applied when the step has no field term
         (6D, or the field rejected). 0 is the textbook normalised step, which lets a sustained
         acceleration tilt the estimate by 5.5° where the default holds 1.7° (docs/filters.md).
-    world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection
+    world, gravity, gain_ramp, acc_lowpass, acc_rejection, mag_rejection, rest_detection, mag_hold_s
         As for :class:`Mahony`.
     """
 

@@ -849,3 +849,19 @@ fn bias_is_estimated_in_motion_without_rest() {
         }
     }
 }
+
+/// A streamed field whose squared norm overflows is refused (as Mahony's and Madgwick's `update`
+/// refuse it): held as it was, it made a state that `RobustState::restored` refuses.
+#[test]
+fn update_refuses_a_field_whose_norm_overflows() {
+    let f = filter();
+    let mut s = RobustState::default();
+    let (gyro, accel) = (Vector3::zeros(), Vector3::new(0.0, 0.0, 9.81));
+    f.update(&mut s, &gyro, &accel, Some(&Vector3::new(0.0, 20.0, -40.0)), 0.0)
+        .unwrap();
+    let before = s;
+    let huge = Vector3::new(1e200, 0.0, 0.0);
+    let e = f.update(&mut s, &gyro, &accel, Some(&huge), 0.01).unwrap_err();
+    assert_eq!(e, imukit::Error::Overflow { index: 0 }.in_argument("mag"));
+    assert_eq!(s, before);
+}

@@ -354,7 +354,7 @@ def rosbag(
                     raise
                 # Found, not asked for: the IMU (and ground truth) read as before this reader knew
                 # magnetometers; the report is of what was read, so the topic's skipped messages
-                # leave it (the warning counts them).
+                # leave it.
                 del bad.records[mark:]
                 warnings.warn(f"magnetometer not read: {e.message}", stacklevel=3)
         truth = None

@@ -75,9 +75,10 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::quat::{exp_step, multiply_exp_step};
 
-/// Seconds a streamed field sample stands for the samples after it that have none
-/// ([`FieldHold`]): a field at 1 Hz or faster corrects the heading at its full
-/// gain; the gyro's turn over a second moves the held field by the bias error times a second.
+/// The default of [`Options::mag_hold_s`] and [`RobustParams::mag_hold_s`]: seconds a streamed
+/// field sample stands for the samples after it that have none ([`FieldHold`]). A field at 1 Hz
+/// or faster corrects the heading at its full gain; the gyro's turn over a second moves the held
+/// field by the bias error times a second.
 pub const MAG_HOLD_S: f64 = 1.0;
 use crate::{Cancel, Error, Result};
 use gate::Gates;
@@ -253,7 +254,9 @@ impl<L: Law> Filter<L> {
     }
 
     /// One sample. An uninitialised `state` is initialised from `accel` (and `mag`) and `dt` is
-    /// ignored; otherwise `dt` \[s\] must be positive and finite. Errors name the argument.
+    /// ignored; otherwise `dt` \[s\] must be positive and finite. Without `mag`, the last field
+    /// sample turned by the gyro stands in for up to [`Options::mag_hold_s`] ([`FieldHold`]).
+    /// Errors name the argument.
     pub fn update(
         &self,
         state: &mut State<L>,
@@ -291,7 +294,7 @@ impl<L: Law> Filter<L> {
             }
             None if state.common.initialized => {
                 let turn = (gyro - state.common.bias) * dt;
-                state.common.mag_hold.next(&turn, dt)
+                state.common.mag_hold.next(&turn, dt, self.options.mag_hold_s)
             }
             None => None,
         };
@@ -475,10 +478,15 @@ impl<L: Law> Filter<L> {
         }
         state.common.express_in(self.options.world);
         let result = run_batch(self, state, inputs, continued, (out_q, out_bias), cancel);
-        // The field a streamed continuation holds: that of the last row the state has taken.
+        // The field a streamed continuation holds: that of the last row the state has taken
+        // (none taken: the state's own).
         let done = result.as_ref().err().map_or(n, |e| e.index().unwrap_or(0));
-        let last = inputs.mag.zip(done.checked_sub(1)).map(|(m, k)| Vector3::from(m[k]));
-        state.common.mag_hold.keep(last.as_ref());
+        if let Some(k) = done.checked_sub(1) {
+            state
+                .common
+                .mag_hold
+                .keep(inputs.mag.map(|m| Vector3::from(m[k])).as_ref());
+        }
         result
     }
 

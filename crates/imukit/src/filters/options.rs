@@ -247,6 +247,9 @@ pub struct Options {
     pub mag_rejection: Option<MagRejection>,
     /// Rest detection with bias update; None: off (the bias then changes only through the law).
     pub rest_detection: Option<RestDetection>,
+    /// Streaming: a field sample stands in, turned by the gyro, for the samples without one up
+    /// to this long after it \[s\] ([`super::FieldHold`]); 0: never.
+    pub mag_hold_s: f64,
 }
 
 impl Default for Options {
@@ -259,6 +262,7 @@ impl Default for Options {
             acc_rejection: Some(AccelRejection::default()),
             mag_rejection: Some(MagRejection::default()),
             rest_detection: Some(RestDetection::default()),
+            mag_hold_s: super::MAG_HOLD_S,
         }
     }
 }
@@ -267,6 +271,7 @@ impl Options {
     /// Checks every option for its domain.
     pub fn validate(&self) -> crate::Result<()> {
         check("gravity", self.gravity, "a positive finite number", |x| x > 0.0)?;
+        check("mag_hold_s", self.mag_hold_s, "finite and ≥ 0", |x| x >= 0.0)?;
         self.gain_ramp.validate()?;
         self.acc_lowpass.as_ref().map_or(Ok(()), AccelLowPass::validate)?;
         self.acc_rejection.as_ref().map_or(Ok(()), AccelRejection::validate)?;

@@ -57,7 +57,7 @@ pub struct CommonState {
 
 /// The last field sample of a streamed run, in the body axes of the last sample: on a sample
 /// without a field it stands in, turned into that sample's axes by its bias-corrected gyro step,
-/// while it is at most [`super::MAG_HOLD_S`] old. A field slower than the gyro then corrects the
+/// while it is at most the filter's `mag_hold_s` old (default [`super::MAG_HOLD_S`]; 0: never). A field slower than the gyro then corrects the
 /// heading at the rate of one on every sample (a correction is a rate: on its own samples only, a
 /// 10 Hz field beside a 100 Hz gyro had a tenth of the gain) and its gate counts seconds.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -76,13 +76,13 @@ impl FieldHold {
     }
 
     /// The held field on a sample without one, `dt` \[s\] after the last, the body having turned
-    /// by `turn = (ω − b̂) dt` \[rad\]; None when there is none or it grew too old.
-    pub fn next(&mut self, turn: &Vector3<f64>, dt: f64) -> Option<Vector3<f64>> {
+    /// by `turn = (ω − b̂) dt` \[rad\]; None when there is none or it grew older than `limit_s`.
+    pub fn next(&mut self, turn: &Vector3<f64>, dt: f64, limit_s: f64) -> Option<Vector3<f64>> {
         if self.field == Vector3::zeros() {
             return None;
         }
         self.age_s += dt;
-        if self.age_s > super::MAG_HOLD_S {
+        if self.age_s > limit_s {
             self.field = Vector3::zeros();
             return None;
         }
@@ -90,9 +90,10 @@ impl FieldHold {
         Some(self.field)
     }
 
-    /// Finite, with a squared norm that does not overflow (a held field is used as a field).
+    /// Finite, its age ≥ 0, with a squared norm that does not overflow (a held field is used as
+    /// a field).
     pub fn valid(&self) -> bool {
-        self.age_s.is_finite() && self.field.norm_squared().is_finite()
+        self.age_s >= 0.0 && self.age_s.is_finite() && self.field.norm_squared().is_finite()
     }
 }
 
@@ -152,6 +153,7 @@ impl CommonState {
             self.mag_dip_cos,
             self.rest_gyro_ms,
             self.rest_accel_ms,
+            self.mag_hold.age_s,
         ];
         let finite = xyzw
             .iter()
@@ -160,10 +162,18 @@ impl CommonState {
             .chain(self.acc_lp2.iter())
             .chain(self.gyro_lp.iter())
             .chain(self.rest_accel_lp.iter())
+            .chain(self.mag_hold.field.iter())
             .chain(&scalars)
             .all(|x| x.is_finite());
         if !finite {
             return Err(crate::Error::NonFinite { index: 0 }.in_argument("state"));
+        }
+        if self.mag_hold.age_s < 0.0 {
+            return Err(crate::Error::Parameter {
+                name: "state",
+                expected: "a held field's age mag_held_s ≥ 0",
+                got: format!("{}", self.mag_hold.age_s),
+            });
         }
         // As `update` refuses a field whose squared norm overflows: the held one is used as a field.
         if !self.mag_hold.valid() {

@@ -186,7 +186,7 @@ impl Robust {
     }
 
     /// A state initialised at attitude `q` (`q_wb` in this filter's world) at `time`, zero bias
-    /// with the prior covariance.
+    /// with the prior covariance; in 9D the first field sample replaces its heading.
     pub fn state_at(&self, q: &UnitQuaternion<f64>, time: f64) -> RobustState {
         let mut s = RobustState::default();
         step::initialise(
@@ -203,7 +203,9 @@ impl Robust {
     }
 
     /// One streaming sample: an uninitialised `state` is initialised (and `dt` ignored);
-    /// otherwise `dt` \[s\] must be positive and finite. Errors name the argument.
+    /// otherwise `dt` \[s\] must be positive and finite. Without `mag`, the last field sample
+    /// turned by the gyro stands in for up to [`RobustParams::mag_hold_s`]
+    /// ([`crate::filters::FieldHold`]). Errors name the argument.
     pub fn update(
         &self,
         state: &mut RobustState,
@@ -216,6 +218,10 @@ impl Robust {
             if v.is_some_and(|v| !finite(v)) {
                 return Err(Error::NonFinite { index: 0 }.in_argument(name));
             }
+        }
+        // As `Filter::update`: a field whose squared norm overflows would be held as it is.
+        if mag.is_some_and(|m| !m.norm_squared().is_finite()) {
+            return Err(Error::Overflow { index: 0 }.in_argument("mag"));
         }
         let dt = if state.initialized {
             if !(dt > 0.0 && dt.is_finite()) {
@@ -234,7 +240,9 @@ impl Robust {
                 state.mag_hold.keep(Some(m));
                 None
             }
-            None if state.initialized => state.mag_hold.next(&((gyro - state.bias) * dt), dt),
+            None if state.initialized => state
+                .mag_hold
+                .next(&((gyro - state.bias) * dt), dt, self.params.mag_hold_s),
             None => None,
         };
         step::step(
@@ -329,13 +337,15 @@ impl Robust {
         } else {
             run_any(self, state, inputs, (first, continued), attitude, out, cancel)
         };
-        // The field a streamed continuation holds: that of the last row the state has taken.
+        // The field a streamed continuation holds: that of the last row the state has taken
+        // (none taken: the state's own).
         let done = result
             .as_ref()
             .err()
             .map_or(n, |e| e.index().map_or(0, |k| k.saturating_sub(first)));
-        let last = inputs.mag.zip(done.checked_sub(1)).map(|(m, k)| row(&m[k]));
-        state.mag_hold.keep(last.as_ref());
+        if let Some(k) = done.checked_sub(1) {
+            state.mag_hold.keep(inputs.mag.map(|m| row(&m[k])).as_ref());
+        }
         result
     }
 

@@ -58,6 +58,9 @@ pub struct RobustParams {
     pub mag_new_field_s: f64,
     /// Minimum rotation rate for time to count towards a new field [rad/s].
     pub mag_new_field_gyro_rad_s: f64,
+    /// Streaming: a field sample stands in, turned by the gyro, for the samples without one up
+    /// to this long after it \[s\] ([`crate::filters::FieldHold`]); 0: never.
+    pub mag_hold_s: f64,
 }
 
 impl Default for RobustParams {
@@ -84,35 +87,37 @@ impl Default for RobustParams {
             mag_slow_factor: 2.0,
             mag_new_field_s: 20.0,
             mag_new_field_gyro_rad_s: 20.0 * deg,
+            mag_hold_s: crate::filters::MAG_HOLD_S,
         }
     }
 }
 
 /// Declares the field names once: [`Fields`] (by-name construction in the bindings) and the
-/// domain check of each (every parameter is finite and positive).
+/// domain check of each (finite and positive; those after `; at_least_0:` finite and ≥ 0).
 macro_rules! named {
-    ($($field:ident),+ $(,)?) => {
+    ($($field:ident),+ ; at_least_0: $($zero:ident),+ $(,)?) => {
         impl Fields for RobustParams {
-            const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
+            const NAMES: &'static [&'static str] = &[$(stringify!($field)),+ $(, stringify!($zero))+];
 
             fn values(&self) -> Vec<f64> {
-                vec![$(self.$field),+]
+                vec![$(self.$field),+ $(, self.$zero)+]
             }
 
             fn from_values(values: &[f64]) -> Option<Self> {
                 let mut it = values.iter().copied();
-                let p = Self { $($field: it.next()?),+ };
+                let p = Self { $($field: it.next()?),+ $(, $zero: it.next()?)+ };
                 it.next().is_none().then_some(p)
             }
         }
 
         impl RobustParams {
-            /// Checks every parameter: finite and > 0; the bias σ at most 1e6 rad/s (far past any
+            /// Checks every parameter: finite and > 0 (or ≥ 0 where 0 switches it off); the bias σ at most 1e6 rad/s (far past any
             /// gyro's bias, which is clipped at `bias_clip_rad_s`: an uninformative prior or an
             /// ignored measurement; above ~1e50 the filter's covariance algebra overflows) and the
             /// bias's random walk `σ_init²/T` finite (errors name it).
             pub fn validate(&self) -> crate::Result<()> {
                 $(check(stringify!($field), self.$field, "finite and > 0", |x| x > 0.0)?;)+
+                $(check(stringify!($zero), self.$zero, "finite and ≥ 0", |x| x >= 0.0)?;)+
                 check("mag_slow_factor", self.mag_slow_factor, "finite and ≥ 1", |x| x >= 1.0)?;
                 for (name, sigma) in [
                     ("bias_sigma_init_rad_s", self.bias_sigma_init_rad_s),
@@ -153,5 +158,6 @@ named!(
     mag_max_rejection_s,
     mag_slow_factor,
     mag_new_field_s,
-    mag_new_field_gyro_rad_s,
+    mag_new_field_gyro_rad_s;
+    at_least_0: mag_hold_s,
 );
