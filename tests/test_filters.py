@@ -428,7 +428,8 @@ def test_a_state_continues_in_the_other_world(cls: type[Mahony], moving: tuple[i
 @pytest.mark.parametrize("cls", FILTERS)
 def test_a_slower_streamed_field_keeps_the_heading_gain(cls: type[Mahony]) -> None:
     """`update(..., mag=None)` between the samples of a 10 Hz field: the heading converges as with a
-    field on every sample (the field's samples alone gave a tenth of the gain: Mahony 15.3°, Madgwick 25.7° left of 30°)."""
+    field on every sample (the field's samples alone gave a tenth of the gain: Mahony 15.3°,
+    Madgwick 25.7° left of 30°)."""
     rate, n = 0.5, 1001
     t = np.arange(n) * 0.01
     truth = Rotation.from_rotvec(np.outer(0.3 + rate * t, [0, 0, 1]))
