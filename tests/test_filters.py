@@ -449,6 +449,7 @@ def test_a_slower_streamed_field_keeps_the_heading_gain(cls: type[Mahony]) -> No
     # mag_hold_s=0: the field's samples alone (a tenth of the gain, the former behaviour)
     assert heading_error(10, mag_hold_s=0.0) > 10 * full
     assert cls(mag_hold_s=0.5).mag_hold_s == 0.5 and cls().mag_hold_s == 1.0
+    assert pickle.loads(pickle.dumps(cls(mag_hold_s=0.5))).mag_hold_s == 0.5
     with pytest.raises(ik.ParameterError, match=r"^mag_hold_s: "):
         cls(mag_hold_s=-1.0)
     f = cls()
