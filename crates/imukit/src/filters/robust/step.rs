@@ -149,22 +149,39 @@ impl Coefs {
     }
 
     /// The map of the delay elements `(s1, s2)` from coefficients `from` to these, for a step that
-    /// changed by more than a factor of 2 (a gap in the stamps, a new rate; [`carry`] decides).
+    /// changed by more than a factor of 1.5 (a gap in the stamps, a new rate, a dropped sample;
+    /// [`carry`] decides).
     ///
     /// The direct form's elements depend on the coefficients: a 2 s gap at τ = 2 s left elements
     /// that, read with the gap's coefficients, gave −6.6 times the input (the estimate upside down
-    /// for 7 s). The map restarts the filter at the level `L` its elements hold, in steady state
-    /// with the new coefficients: `s1 ← (1 − b0′) L`, `s2 ← (b0′ − a2′) L`, `L = s2 / (b0 − a2)`
-    /// (exact in steady state). The rest of the old elements, the transient, is dropped: at a
-    /// small step a transient of the large step's size is a slope hundreds of times too steep
-    /// (the output crossed zero 0.45 s after a 2 s gap when it was kept). Linear in `(s1, s2)`, so
-    /// it applies to the smoother's maps of the state as well.
+    /// for 7 s). The elements are read as what they are in the steady response to a ramp, its level
+    /// `X` at the last sample and its slope `S` per second ([`Coefs::ramp`]), and written back as
+    /// the same ramp's under the new coefficients: `(s1, s2) ← R′ R⁻¹ (s1, s2)`, exact for any
+    /// ramp. Restarting at the level alone (the slope dropped, until 2026-12-07) lost the low
+    /// pass's memory of the motion at every dropped sample: 0.5 % of BROAD trial 08's samples
+    /// dropped took its online 6D inclination from 1.3° to 2.5°. Linear in `(s1, s2)`, so it
+    /// applies to the smoother's maps of the state as well.
     fn carry_from(&self, from: &Coefs) -> Carry {
-        let level = 1.0 / (from.b0 - from.a2);
+        let (to, old) = (self.ramp(), from.ramp());
+        let det = old[0][0] * old[1][1] - old[0][1] * old[1][0];
+        let inv = [[old[1][1] / det, -old[0][1] / det], [-old[1][0] / det, old[0][0] / det]];
         Carry {
-            to_s1: (1.0 - self.b0) * level,
-            to_s2: (self.b0 - self.a2) * level,
+            m: [0, 1].map(|r| [0, 1].map(|c| to[r][0] * inv[0][c] + to[r][1] * inv[1][c])),
         }
+    }
+
+    /// The delay elements after a sample in the steady response to the ramp `x_j = X + S (t_j −
+    /// t_k)` as a matrix on `(X, S)`: the output lags by `ℓ` steps, `y_j = x_j − S ℓ dt`, and
+    /// `s2 = b0 X − a2 Y`, `s1 = b1 X − a1 Y + b0 (X − S dt) − a2 (Y − S dt)` with `Y = X − S ℓ dt`
+    /// (`b2 = b0`). `ℓ = (b1 + 2 b0 − a1 − 2 a2) / (2 b0 + b1)` from `y_k = Σ b x − Σ a y` on
+    /// the ramp, the DC gain `(2 b0 + b1)/(1 + a1 + a2)` being 1.
+    fn ramp(&self) -> [[f64; 2]; 2] {
+        let (b0, b1, a1, a2, h) = (self.b0, self.b1, self.a1, self.a2, self.dt);
+        let lag = (b1 + 2.0 * b0 - a1 - 2.0 * a2) / (2.0 * b0 + b1);
+        [
+            [b1 + b0 - a1 - a2, ((a1 + a2) * lag + a2 - b0) * h],
+            [b0 - a2, a2 * lag * h],
+        ]
     }
 
     /// The delay elements `(s1, s2)` of [`Coefs::butter`] in steady state for the constant input
@@ -178,40 +195,41 @@ impl Coefs {
     }
 }
 
-/// [`Coefs::carry_from`]'s map: `s1 ← to_s1 · s2`, `s2 ← to_s2 · s2`.
+/// [`Coefs::carry_from`]'s map: `(s1, s2) ← m (s1, s2)`.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Carry {
-    to_s1: f64,
-    to_s2: f64,
+    m: [[f64; 2]; 2],
 }
 
 impl Carry {
     /// Maps the delay elements in place.
     pub(super) fn apply<T>(&self, s1: &mut T, s2: &mut T)
     where
-        T: Copy + Mul<f64, Output = T>,
+        T: Copy + Add<Output = T> + Mul<f64, Output = T>,
     {
-        *s1 = *s2 * self.to_s1;
-        *s2 = *s2 * self.to_s2;
+        let (a, b, m) = (*s1, *s2, &self.m);
+        *s1 = a * m[0][0] + b * m[0][1];
+        *s2 = a * m[1][0] + b * m[1][1];
     }
 
     /// A linear map of some earlier state (rows `s1`, `s2`, as [`Coefs::free_step`]'s) mapped.
-    pub(super) fn apply_map(&self, m: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
-        [
-            [self.to_s1 * m[1][0], self.to_s1 * m[1][1]],
-            [self.to_s2 * m[1][0], self.to_s2 * m[1][1]],
-        ]
+    pub(super) fn apply_map(&self, map: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+        let m = &self.m;
+        [0, 1].map(|r| [0, 1].map(|c| m[r][0] * map[0][c] + m[r][1] * map[1][c]))
     }
 }
 
 /// The map of the delay elements to coefficients `c` from the step `from_dt` \[s\] they were
-/// last advanced with, [`Coefs::carry_from`], when the step changed by more than a factor of 2;
-/// none otherwise (0: never advanced; jitter and the rounding of float stamps: the elements carry
-/// over as they are). The steps are compared before the old coefficients, a tangent and four
-/// exponentials, are built.
+/// last advanced with, [`Coefs::carry_from`], when the step changed by more than a factor of
+/// 1.5; none otherwise (0: never advanced; jitter and the rounding of float stamps: the elements
+/// carry over as they are). The threshold is away from the ratios a dropped sample makes (2, 3,
+/// … and their inverses): at 2 the rounding of the stamps mapped the step into a two-step gap and
+/// not the one out of it (or back), and the unmatched map took BROAD trial 08 offline 10° off
+/// over 10 s of dropped samples. The steps are compared before the old coefficients, a tangent
+/// and four exponentials, are built.
 #[inline(always)]
 pub(super) fn carry(p: &RobustParams, c: &Coefs, from_dt: f64) -> Option<Carry> {
-    if from_dt > 0.0 && (c.dt > 2.0 * from_dt || from_dt > 2.0 * c.dt) {
+    if from_dt > 0.0 && (c.dt > 1.5 * from_dt || from_dt > 1.5 * c.dt) {
         Some(c.carry_from(&Coefs::new(p, from_dt)))
     } else {
         None
@@ -837,5 +855,58 @@ mod tests {
             let up = q * n;
             assert!(up.x.abs() < 1e-15 && up.y.abs() < 1e-15, "tilt {tilt}: {up:?}");
         }
+    }
+
+    /// A ramp through the Butterworth at 200 Hz, then the step doubled or halved (a dropped
+    /// sample, a rate change) or 2 s long (a gap): carried by the ramp map, the output stays the
+    /// ramp's steady response `x − S ℓ dt` to 1e-8 m/s² (ramp 0.5 m/s² per second from 9.8, 80 s).
+    /// The level-only map it replaced dropped the slope: off by about the lag times the slope.
+    #[test]
+    fn the_carry_keeps_a_ramp_on_its_steady_response() {
+        let p = RobustParams::default();
+        let slope = 0.5;
+        let x = |t: f64| 9.8 + slope * t;
+        for new_dt in [0.01, 0.0025, 0.015, 2.0] {
+            let old = Coefs::new(&p, 0.005);
+            let mut t = 0.0;
+            let (mut s1, mut s2) = old.steady(x(0.0));
+            for _ in 0..16_000 {
+                t += 0.005;
+                old.butter(x(t), &mut s1, &mut s2);
+            }
+            let new = Coefs::new(&p, new_dt);
+            let m = carry(&p, &new, old.dt);
+            assert!(m.is_some(), "no carry from 0.005 to {new_dt}");
+            let Some(m) = m else { return };
+            // The ramp matrix is the steady state the pass reached (old coefficients).
+            let r = old.ramp();
+            let (e1, e2) = (r[0][0] * x(t) + r[0][1] * slope, r[1][0] * x(t) + r[1][1] * slope);
+            assert!(
+                (e1 - s1).abs() < 1e-8 && (e2 - s2).abs() < 1e-8,
+                "{e1} {e2} against {s1} {s2}"
+            );
+            // Mapped, then 2 s at the new step: still the steady response. Dropping the slope
+            // (the former map) leaves the output behind by about S × lag.
+            let level = s2 / (old.b0 - old.a2);
+            let (mut c1, mut c2) = (s1, s2);
+            m.apply(&mut c1, &mut c2);
+            let (mut d1, mut d2) = new.steady(level);
+            let (mut y, mut dropped) = (0.0, 0.0);
+            for _ in 0..((2.0 / new_dt).round() as usize).max(1) {
+                t += new_dt;
+                y = new.butter(x(t), &mut c1, &mut c2);
+                dropped = new.butter(x(t), &mut d1, &mut d2);
+            }
+            let lag = (new.b1 + 2.0 * new.b0 - new.a1 - 2.0 * new.a2) / (2.0 * new.b0 + new.b1) * new.dt;
+            let want = x(t) - slope * lag;
+            assert!((y - want).abs() < 1e-8, "to {new_dt} s: {y} against {want}");
+            assert!(
+                (dropped - want).abs() > 0.1,
+                "to {new_dt} s: the level map is {dropped}, {want} wanted"
+            );
+        }
+        // Jitter below the threshold carries nothing.
+        assert!(carry(&p, &Coefs::new(&p, 0.0074), 0.005).is_none());
+        assert!(carry(&p, &Coefs::new(&p, 0.0034), 0.005).is_none());
     }
 }
