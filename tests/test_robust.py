@@ -110,6 +110,11 @@ def test_a_slower_streamed_field_keeps_the_heading_gain() -> None:
     assert off[3000] > 2 * full[3000]
     with pytest.raises(ik.ParameterError, match=r"^mag_hold_s: "):
         ik.filters.Robust(mag_hold_s=-1.0)
+    # The error names what each call takes (it named FilterState, and reset takes no state).
+    with pytest.raises(ik.ParameterError, match=r"^initial: expected a single scipy Rotation, a RobustState or None"):
+        ik.filters.Robust().run(turned, initial=ik.filters.Mahony().get_state())  # type: ignore[arg-type]
+    with pytest.raises(ik.ParameterError, match=r"^initial: expected a single scipy Rotation or None, got"):
+        ik.filters.Robust().reset(ik.filters.Robust().get_state())  # type: ignore[arg-type]
     with pytest.raises(ik.ParameterError, match=r"^state: "):
         ik.filters.RobustState(**{**ik.filters.Robust().get_state().fields(), "mag_held_s": -1.0})
 

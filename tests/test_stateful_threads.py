@@ -38,8 +38,9 @@ def _together(work: Callable[[int], object]) -> list[object]:
     return out
 
 
-@pytest.mark.parametrize("cls", [ik.filters.Mahony, ik.filters.Madgwick])
+@pytest.mark.parametrize("cls", [ik.filters.Mahony, ik.filters.Madgwick, ik.filters.Robust])
 def test_filter_updates_from_four_threads_are_all_counted(cls: type) -> None:
+    """``Robust.update`` had no lock before 2026-12-07 (Mahony's and Madgwick's since issue 17)."""
     f = cls()
     steps, dt = 2000, 0.005
 

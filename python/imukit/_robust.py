@@ -18,6 +18,7 @@ Equations, literature and measured accuracy and speed: ``docs/filters_robust.md`
 
 from __future__ import annotations
 
+import threading
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -100,7 +101,17 @@ class Robust:
         self.params = _core.RobustParams(**params)
         self._core_filter = _core.RobustFilter(self.params, world)
         self._world = world
+        # update() reads, steps and replaces the state: as Mahony's, one call at a time.
+        self._lock = threading.Lock()
         self.reset()
+
+    def __getstate__(self) -> dict[str, Any]:
+        # A lock is this object's, not its data: a copy (pickle, copy, deepcopy) gets a new one.
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
 
     def __getattr__(self, name: str) -> float:
         if name in PARAMS:
@@ -133,16 +144,12 @@ class Robust:
         (default 1 s) of the last field sample, that sample turned by the gyro stands in, so the
         heading loop and the field's gate run in seconds whatever the field's rate
         (``mag_hold_s=0``: no field then)."""
-        self._state = RobustState(
-            self._core_filter.update(
-                self._state,
-                _vec3(gyro, "gyro"),
-                _vec3(accel, "accel"),
-                real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True),
-                None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist(),
-            )
-        )
-        return rotation_from_unit_quat(self._state.quaternion)
+        w, a = _vec3(gyro, "gyro"), _vec3(accel, "accel")
+        step = real_scalar(dt, "dt", what="a step in seconds", accept=lambda x: True)
+        m = None if mag is None else _check_mag_norms(np.array([_vec3(mag, "mag")]))[0].tolist()
+        with self._lock:
+            self._state = state = RobustState(self._core_filter.update(self._state, w, a, step, m))
+        return rotation_from_unit_quat(state.quaternion)
 
     def run(
         self,
@@ -186,7 +193,7 @@ class Robust:
                 raise ParameterError("the smoother starts from a Rotation or None, not a state", argument="initial")
             start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds
         else:
-            start = self._core_filter.initial_state(_initial_quat(initial))
+            start = self._core_filter.initial_state(_initial_quat(initial, "RobustState"))
         q, bias, sigma, rest, disturbed, final = self._core_filter.run(
             imu.seconds, imu.gyro, imu.accel, mags, start, continued, offline, threads
         )

@@ -369,7 +369,7 @@ class _Filter:
         if isinstance(initial, FilterState):
             start = initial._at_time(initial.time - float(imu.t[0]))  # the core's clock is imu.seconds
         else:
-            start = _core.FilterState._initial(_initial_quat(initial))
+            start = _core.FilterState._initial(_initial_quat(initial, "FilterState"))
         gyro, accel = imu.gyro, imu.accel
         if body_from_sensor is not None:
             rows, arm = sensor_pose(body_from_sensor)
@@ -384,14 +384,14 @@ class _Filter:
         return FilterResult(rotation_from_unit_quat(q), bias, FilterState(final._at_time(float(imu.t[-1]))))
 
 
-def _initial_quat(initial: Rotation | None) -> list[float] | None:
+def _initial_quat(initial: Rotation | None, state: str | None = None) -> list[float] | None:
+    """``initial`` as xyzw; ``state`` names the state class the caller also takes (for the error)."""
     if initial is None:
         return None
     if isinstance(initial, Rotation) and initial.single:
         return [float(v) for v in initial.as_quat()]
-    raise ParameterError(
-        f"expected a single scipy Rotation, a FilterState or None, got {initial!r}", argument="initial"
-    )
+    accepted = f"a single scipy Rotation, a {state} or None" if state else "a single scipy Rotation or None"
+    raise ParameterError(f"expected {accepted}, got {initial!r}", argument="initial")
 
 
 _MAHONY = _core.MahonyGains()
