@@ -124,8 +124,9 @@ class Robust:
         return str(self._core_filter.__getnewargs__()[1])
 
     def reset(self, initial: Rotation | None = None) -> None:
-        """Forget the state; the next :meth:`update` initialises (or starts at ``initial``, whose
-        heading in 9D the first field sample replaces: north is the field's)."""
+        """Forget the state; the next :meth:`update` initialises (or, from ``initial``, is a step
+        of its ``dt``, ``initial``'s heading in 9D replaced by the first field sample's: north is
+        the field's; ``run(imu, initial=R)`` instead outputs ``R`` for its first sample)."""
         self._state = RobustState(self._core_filter.initial_state(_initial_quat(initial)))
 
     def get_state(self) -> RobustState:

@@ -306,7 +306,8 @@ class _Filter:
         return float(self.options.mag_hold_s)
 
     def reset(self, initial: Rotation | None = None) -> None:
-        """Forget the state; the next :meth:`update` initialises (or starts at ``initial``)."""
+        """Forget the state; the next :meth:`update` initialises (or, from ``initial``, is a step
+        of its ``dt``; ``run(imu, initial=R)`` instead outputs ``R`` for its first sample)."""
         self._state = FilterState(_core.FilterState._initial(_initial_quat(initial)))
 
     def get_state(self) -> FilterState:
