@@ -287,20 +287,13 @@ impl<L: Law> Filter<L> {
             });
         }
         state.common.express_in(self.options.world);
-        let held = match mag {
-            Some(m) => {
-                state.common.mag_hold.keep(Some(m));
-                None
-            }
-            None if state.common.initialized => {
-                let turn = (gyro - state.common.bias) * dt;
-                state.common.mag_hold.next(&turn, dt, self.options.mag_hold_s)
-            }
-            None => None,
-        };
+        let c = &mut state.common;
+        let field = c
+            .mag_hold
+            .for_sample(mag, c.initialized, &((gyro - c.bias) * dt), dt, self.options.mag_hold_s);
         // The clock is advanced here, not in the step: the batch loop sets it to each stamp.
         let stepping = state.common.initialized;
-        self.step(state, gyro, accel, mag.or(held.as_ref()), dt, self.options.world);
+        self.step(state, gyro, accel, field.as_ref(), dt, self.options.world);
         if stepping {
             state.common.time += dt;
         }
@@ -478,15 +471,7 @@ impl<L: Law> Filter<L> {
         }
         state.common.express_in(self.options.world);
         let result = run_batch(self, state, inputs, continued, (out_q, out_bias), cancel);
-        // The field a streamed continuation holds: that of the last row the state has taken
-        // (none taken: the state's own).
-        let done = result.as_ref().err().map_or(n, |e| e.index().unwrap_or(0));
-        if let Some(k) = done.checked_sub(1) {
-            state
-                .common
-                .mag_hold
-                .keep(inputs.mag.map(|m| Vector3::from(m[k])).as_ref());
-        }
+        state.common.mag_hold.after_run(inputs.mag, n, 0, &result);
         result
     }
 

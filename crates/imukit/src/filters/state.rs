@@ -90,6 +90,40 @@ impl FieldHold {
         Some(self.field)
     }
 
+    /// The field a streamed sample uses: `mag` when it has one (then held), else the held one
+    /// turned by the body's `turn = (ω − b̂) dt` \[rad\] over `dt` \[s\] ([`FieldHold::next`]) once
+    /// the filter is `initialized`.
+    pub fn for_sample(
+        &mut self,
+        mag: Option<&Vector3<f64>>,
+        initialized: bool,
+        turn: &Vector3<f64>,
+        dt: f64,
+        limit_s: f64,
+    ) -> Option<Vector3<f64>> {
+        match mag {
+            Some(m) => {
+                self.keep(Some(m));
+                Some(*m)
+            }
+            None if initialized => self.next(turn, dt, limit_s),
+            None => None,
+        }
+    }
+
+    /// After a batch run over `mags` (None: 6D) that ended with `result` (errors name the row in
+    /// the record whose first row is `first`): the field of the last row the state has taken
+    /// (none taken: the state's own hold stays).
+    pub fn after_run<T>(&mut self, mags: Option<&[[f64; 3]]>, rows: usize, first: usize, result: &crate::Result<T>) {
+        let done = result
+            .as_ref()
+            .err()
+            .map_or(rows, |e| e.index().map_or(0, |k| k.saturating_sub(first)));
+        if let Some(k) = done.checked_sub(1) {
+            self.keep(mags.map(|m| Vector3::from(m[k])).as_ref());
+        }
+    }
+
     /// Finite, its age ≥ 0, with a squared norm that does not overflow (a held field is used as
     /// a field).
     pub fn valid(&self) -> bool {

@@ -235,16 +235,10 @@ impl Robust {
         } else {
             0.0
         };
-        let held = match mag {
-            Some(m) => {
-                state.mag_hold.keep(Some(m));
-                None
-            }
-            None if state.initialized => state
-                .mag_hold
-                .next(&((gyro - state.bias) * dt), dt, self.params.mag_hold_s),
-            None => None,
-        };
+        let turn = (gyro - state.bias) * dt;
+        let field = state
+            .mag_hold
+            .for_sample(mag, state.initialized, &turn, dt, self.params.mag_hold_s);
         step::step(
             &self.params,
             self.world,
@@ -252,7 +246,7 @@ impl Robust {
             state,
             gyro,
             accel,
-            mag.or(held.as_ref()),
+            field.as_ref(),
         );
         state.time += dt;
         check_overflow(state, 0)
@@ -337,15 +331,7 @@ impl Robust {
         } else {
             run_any(self, state, inputs, (first, continued), attitude, out, cancel)
         };
-        // The field a streamed continuation holds: that of the last row the state has taken
-        // (none taken: the state's own).
-        let done = result
-            .as_ref()
-            .err()
-            .map_or(n, |e| e.index().map_or(0, |k| k.saturating_sub(first)));
-        if let Some(k) = done.checked_sub(1) {
-            state.mag_hold.keep(inputs.mag.map(|m| row(&m[k])).as_ref());
-        }
+        state.mag_hold.after_run(inputs.mag, n, first, &result);
         result
     }
 
