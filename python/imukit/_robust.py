@@ -28,7 +28,7 @@ from scipy.spatial.transform import Rotation
 from imukit import _core
 from imukit._arrays import FloatArray, flag, real_scalar, rotation_from_unit_quat
 from imukit._errors import ParameterError
-from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _run_mag, _vec3
+from imukit.filters import WORLDS, _check_mag_norms, _initial_quat, _Locked, _run_mag, _vec3
 from imukit.imu import ImuData
 from imukit.threads import checked
 
@@ -74,7 +74,7 @@ class RobustResult(NamedTuple):
     mag_disturbed: np.ndarray
 
 
-class Robust:
+class Robust(_Locked):
     """Attitude filter that holds under sustained and short accelerations (after Laidig & Seel,
     Information Fusion 91, 2023): gyro strapdown into an almost-inertial frame, the specific force
     low-passed there (2nd-order Butterworth) corrects the inclination, a Kalman filter estimates the
@@ -101,17 +101,8 @@ class Robust:
         self.params = _core.RobustParams(**params)
         self._core_filter = _core.RobustFilter(self.params, world)
         self._world = world
-        # update() reads, steps and replaces the state: as Mahony's, one call at a time.
         self._lock = threading.Lock()
         self.reset()
-
-    def __getstate__(self) -> dict[str, Any]:
-        # A lock is this object's, not its data: a copy (pickle, copy, deepcopy) gets a new one.
-        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self._lock = threading.Lock()
 
     def __getattr__(self, name: str) -> float:
         if name in PARAMS:

@@ -236,7 +236,22 @@ def _vec3(x: ArrayLike, name: str) -> list[float]:
     return [float(e) for e in vector3(x, name)]
 
 
-class _Filter:
+class _Locked:
+    """A filter whose ``update`` reads, steps and replaces its state: from several threads at once,
+    unlocked, updates were lost (issue 17); under ``_lock`` they run one after another. A lock is
+    the object's, not its data: a copy (pickle, copy, deepcopy) gets a new one."""
+
+    _lock: threading.Lock
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
+
+class _Filter(_Locked):
     """Common front of every filter: the shared options, the state and the three ways of running.
     A law's class sets its gains and calls :meth:`_setup` with its core filter class."""
 
@@ -262,8 +277,6 @@ class _Filter:
             raise ParameterError(
                 f"unknown option of {type(self).__name__}; it takes {known}", argument=next(iter(unknown))
             )
-        # update() reads, steps and replaces the state: from several threads at once, unlocked,
-        # updates were lost (issue 17); with it they run one after another.
         self._lock = threading.Lock()
         if not isinstance(world, str):  # the core checks the name
             raise ParameterError(f"expected one of {WORLDS}, got {world!r}", argument="world")
@@ -277,14 +290,6 @@ class _Filter:
             rest_detection=_option(rest_detection, RestDetection, "rest_detection"),
             mag_hold_s=_real(mag_hold_s, "mag_hold_s"),
         )
-
-    def __getstate__(self) -> dict[str, Any]:
-        # A lock is this object's, not its data: a copy (pickle, copy, deepcopy) gets a new one.
-        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self._lock = threading.Lock()
 
     def _setup(self, core_filter: Any) -> None:
         self._core_filter = core_filter
