@@ -113,7 +113,8 @@ class FilterState(_core.FilterState):
     ``accel_rejected``, ``mag_rejected``, ``rest`` [s], the magnetometer reference ``mag_norm``,
     ``mag_dip_sin``, ``mag_dip_cos``, and ``extra``, the law's own fields (none for Mahony and
     Madgwick), ``mag_held`` / ``mag_held_s`` (the last streamed field sample in the last sample's
-    body axes and its age: ``update(..., mag=None)`` uses it, turned by the gyro, for up to 1 s),
+    body axes and its age: ``update(..., mag=None)`` uses it, turned by the gyro, for up to the
+    filter's ``mag_hold_s``),
     and ``world`` (``"ENU"`` / ``"NED"``, the frame of ``quaternion``; None in a state
     stored before it was recorded: the world of the filter that takes it). A state of one filter
     continues another (the law's own fields restart); a filter of the other world turns the
