@@ -18,6 +18,12 @@
 //! moved less; above it Madgwick's law is unchanged. The floor applies when the step has no field
 //! term: the field's heading gap ψ enters `‖d‖` as `cos δ sin ψ` (dip δ, 67° on BROAD), so a shared
 //! floor slowed the heading correction (9D mean 2.62° → 2.98° on BROAD).
+//!
+//! **Never past the measurements**: the step is at most `d/n` for `n` measurements (1 or 2), the
+//! exact solution of the normalised law over the step, which stops at the gap; such a step is
+//! compared with the estimate turned by the gyro. Without the cap a gap in the stamps turned the
+//! estimate by `2βρ` per second of it whatever the gap (141° off after a 5 s gap at rest on BROAD
+//! 01, 9D), and a gap below the step chattered about the measurement.
 
 use nalgebra::Vector3;
 
@@ -62,37 +68,89 @@ impl Law for Madgwick {
         )
     }
 
-    /// `ω_c dt = 2β ρ g/‖g‖ dt`; the bias is left to rest detection.
+    /// `ω_c dt = 2β ρ dt · d/max(‖d‖, θ₀)`, at most `d/n` (module docs); the bias is left to rest
+    /// detection.
     #[inline(always)]
-    fn correct(&self, step: &Step<'_>, _: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
+    fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
         // The field's gradient is not heading-only (it also turns the estimate's tilt): without
         // the gravity term it would tilt the estimate at the full 2β rate, so the magnetometer
         // is used only together with an accepted accelerometer sample.
         let mag_dir = if step.accel_dir.is_some() { step.mag_dir } else { None };
-        direction(
-            &step.north_pred,
-            &step.up_pred,
-            step.accel_dir.as_ref(),
-            mag_dir.as_ref(),
-            if mag_dir.is_some() {
-                0.0
-            } else {
-                self.full_rate_angle_rad * self.full_rate_angle_rad
-            },
-        ) * (2.0 * self.beta * step.gain * step.dt)
+        let floor2 = if mag_dir.is_some() {
+            0.0
+        } else {
+            self.full_rate_angle_rad * self.full_rate_angle_rad
+        };
+        let angle = 2.0 * self.beta * step.gain * step.dt;
+        let descend = |s: &Step<'_>| {
+            descent(
+                &s.north_pred,
+                &s.up_pred,
+                step.accel_dir.as_ref(),
+                mag_dir.as_ref(),
+                floor2,
+                angle,
+            )
+        };
+        match descend(step) {
+            Descent::Within(correction) => correction,
+            // As Mahony's long step, seen from the estimate turned by the gyro.
+            Descent::Capped => {
+                let (turn, at_end) = step.turned_by_gyro(bias);
+                let correction = match descend(&at_end) {
+                    Descent::Within(c) => c,
+                    Descent::Capped => capped(&at_end, step.accel_dir.as_ref(), mag_dir.as_ref()),
+                };
+                step.after_turn(&turn, &correction, bias)
+            }
+        }
     }
 }
 
-/// Unit descent direction `Σ s × v̂` (body frame), or zero. `north_pred`, `up_pred`: the world
-/// north and up in body axes. The field reference `b = n_w ‖h_horizontal‖ + u_w h_up` seen from
-/// the body is `v̂_m = n_pred ‖h_horizontal‖ + u_pred h_up`, with `h_up = m̂·u_pred`.
+/// A step of [`descent`].
+enum Descent {
+    /// The step, within the cap.
+    Within(Vector3<f64>),
+    /// The step reaches the cap: [`capped`] is it.
+    Capped,
+}
+
+/// The correction `angle · d / max(‖d‖, θ₀)` along the descent direction `d` ([`direction`]), or
+/// zero; [`Descent::Capped`] where it would turn past the measurements.
+///
+/// The cap (module docs): for a small gap `δ`, `d ≈ Σ (I − v̂ v̂ᵀ) δ`, whose largest eigenvalue is
+/// at most the number `n` of measurements, so a step of `d / n` does not overshoot (one
+/// measurement: `d` is the sine of the gap).
+#[inline(always)]
+fn descent(
+    north_pred: &Vector3<f64>,
+    up_pred: &Vector3<f64>,
+    accel_dir: Option<&Vector3<f64>>,
+    mag_dir: Option<&Vector3<f64>>,
+    floor2: f64,
+    angle: f64,
+) -> Descent {
+    let d = direction(north_pred, up_pred, accel_dir, mag_dir);
+    let n2 = d.norm_squared().max(floor2);
+    let n = measurements(accel_dir, mag_dir);
+    if angle * angle * (n * n) > n2 {
+        Descent::Capped
+    } else if n2 > 1e-24 {
+        Descent::Within(over_norm(&d, n2) * angle)
+    } else {
+        Descent::Within(Vector3::zeros())
+    }
+}
+
+/// The descent direction `d = Σ s × v̂` (body frame). `north_pred`, `up_pred`: the world north and
+/// up in body axes. The field reference `b = n_w ‖h_horizontal‖ + u_w h_up` seen from the body is
+/// `v̂_m = n_pred ‖h_horizontal‖ + u_pred h_up`, with `h_up = m̂·u_pred`.
 #[inline(always)]
 fn direction(
     north_pred: &Vector3<f64>,
     up_pred: &Vector3<f64>,
     accel_dir: Option<&Vector3<f64>>,
     mag_dir: Option<&Vector3<f64>>,
-    floor2: f64,
 ) -> Vector3<f64> {
     let mut d = Vector3::zeros();
     if let Some(s) = accel_dir {
@@ -105,10 +163,17 @@ fn direction(
         // square root instead of after it (the step's dependency chain; the same to rounding).
         d += m.cross(north_pred) * horizontal + m.cross(up_pred) * vertical;
     }
-    let n2 = d.norm_squared().max(floor2);
-    if n2 > 1e-24 {
-        over_norm(&d, n2)
-    } else {
-        Vector3::zeros()
-    }
+    d
+}
+
+/// The step at the cap, `d / n`, seen from `step`'s predictions.
+#[cold]
+fn capped(step: &Step<'_>, accel_dir: Option<&Vector3<f64>>, mag_dir: Option<&Vector3<f64>>) -> Vector3<f64> {
+    direction(&step.north_pred, &step.up_pred, accel_dir, mag_dir) / measurements(accel_dir, mag_dir)
+}
+
+/// The number of measurements in the step (the cap's `n`).
+#[inline(always)]
+fn measurements(accel_dir: Option<&Vector3<f64>>, mag_dir: Option<&Vector3<f64>>) -> f64 {
+    f64::from(u8::from(accel_dir.is_some()) + u8::from(mag_dir.is_some()))
 }

@@ -9,7 +9,7 @@
 //! | accelerometer | specific force [m/s²]: at rest `R_wbᵀ (0, 0, +g)` in ENU, `R_wbᵀ (0, 0, −g)` in NED: it points **up** |
 //! | magnetometer | any unit; `R_wbᵀ m_w`, north = +y (ENU) / +x (NED); only its direction is used, and its norm and dip for rejection |
 //! | gains | Mahony `k_P` [1/s], `k_I` [1/s²]; Madgwick `β` [1/s] (quaternion-rate norm, rotation rate 2β) |
-//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k` |
+//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k`. A step whose correction would turn past the measurement (a gap in the stamps) is capped there and compared with the estimate turned by `ω_k` ([`Step::turned_by_gyro`]) |
 //! | first sample | initialises the attitude ([`initial_attitude`]: tilt from the accelerometer, heading from the magnetometer, else ZYX yaw 0) unless an initial state is given; it is output as is |
 //! | bias output | per sample: the estimate after that sample |
 //! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`FieldHold`]); [`Filter::run`] takes one field row per sample |
@@ -29,11 +29,12 @@
 //!
 //! - Mahony (Mahony, Hamel & Pflimlin, IEEE TAC 2008, eq. 32): `ω_mes = s × v̂_g + v̂_g h_e/√(h_e² + h_n²)`
 //!   (9D; `h_e = m̂·(v̂_n × v̂_g)`, `h_n = m̂·v̂_n`: heading only), `ω_c = k_P ρ ω_mes`,
-//!   `b̂ ← b̂ − k_I ω_mes dt` (frozen during the ramp and while the accelerometer is rejected).
+//!   `b̂ ← b̂ − k_I ω_mes dt` (frozen during the ramp and while the accelerometer is rejected);
+//!   a step with `k_P ρ dt > 1` lands on the measurement, the integral over `1/(k_P ρ)`.
 //! - Madgwick (Madgwick 2010 report; ICORR 2011): the tangent-space gradient of
 //!   `½‖R̂ᵀ d − s‖²` is `v̂ × s`, so `g = s × v̂_g + m̂ × (‖h_h‖ v̂_n + h_up v̂_g)` and
 //!   `ω_c = 2β ρ g/‖g‖` (β is Madgwick's quaternion-rate gain; the field term only with an accepted
-//!   accelerometer sample, since it is not heading-only).
+//!   accelerometer sample, since it is not heading-only), at most `g/n` for `n` measurements.
 //!
 //! ```
 //! use imukit::filters::{Filter, Mahony, Options, State};
@@ -127,6 +128,37 @@ pub struct Step<'a> {
     pub gain: f64,
     /// The step \[s\].
     pub dt: f64,
+}
+
+impl Step<'_> {
+    /// The gyro's turn over the step, `Exp((ω − b̂) dt)`, and the step seen from the estimate so
+    /// turned, `R̂⁻ = R̂ Exp((ω − b̂) dt)` (its predictions `R̂⁻ᵀ n_w`, …). A law's long step
+    /// compares the measurements, taken at the end of the step, with `R̂⁻`: compared with the
+    /// estimate at its start, as a step at a normal rate is (a lag of one sample), a gap in motion
+    /// would put the whole turn over the gap into the correction.
+    pub fn turned_by_gyro(&self, bias: &Vector3<f64>) -> (UnitQuaternion<f64>, Self) {
+        let turn = UnitQuaternion::from_scaled_axis((self.gyro - bias) * self.dt);
+        let back = |v: &Vector3<f64>| turn.inverse_transform_vector(v);
+        let turned = Self {
+            north_pred: back(&self.north_pred),
+            east_pred: back(&self.east_pred),
+            up_pred: back(&self.up_pred),
+            ..*self
+        };
+        (turn, turned)
+    }
+
+    /// The law's return value (the correction beside the gyro's `(ω − b̂) dt` in the step's
+    /// exponential, `b̂` the bias the law leaves) that turns the estimate by `turn`, then by
+    /// `Exp(correction)`: `Log(turn Exp(correction)) − (ω − b̂) dt`.
+    pub fn after_turn(
+        &self,
+        turn: &UnitQuaternion<f64>,
+        correction: &Vector3<f64>,
+        bias: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        (turn * UnitQuaternion::from_scaled_axis(*correction)).scaled_axis() - (self.gyro - bias) * self.dt
+    }
 }
 
 /// A configured filter: a law's gains and the shared options. It holds no state; every call
