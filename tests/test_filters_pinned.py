@@ -8,12 +8,12 @@ the step's chain change results beyond rounding within the BROAD rule of docs/pe
 ("Filters, 2026-12-02 (filtchain): the chain"): the low pass turned by the gyro turn alone moved the
 defaults / NED outputs by up to 6.0e-4 (Mahony) and 4.5e-3 (Madgwick) in q, Mahony's bias by
 2.2e-5 rad/s; ``bare`` (no low pass) moved by rounding only (≤ 3.0e-15 in q, the reordered
-exponential and normalisations). Madgwick's outputs re-pinned once more, 2026-12-08, for a fix: its
-step capped where it would turn past the measurement (a long step, and a gap below the step, where
-the normalised step chattered), compared then with the estimate turned by the gyro (``madgwick.rs``,
-``descent``): up to 1.8e-2 in q on this input; on the 12 BROAD trials at defaults 12 of 24 Madgwick
-cells moved by at most ±0.005°, the 9D mean 2.58528° → 2.58533°. Mahony's arrays are the earlier
-pin's (its law is unchanged at a normal rate)."""
+exponential and normalisations). Madgwick's outputs re-pinned once more, 2026-12-07 (eleventh
+session), for a fix: its step capped where it would turn past the measurement (a long step, and a
+gap below the step, where the normalised step chattered), compared then with the estimate turned
+by the gyro (``madgwick.rs``, ``descent``): up to 1.8e-2 in q on this input; on the 12 BROAD trials
+at defaults 12 of 24 Madgwick cells moved by at most ±0.005°, the 9D mean 2.58528° → 2.58533°.
+Mahony's arrays are the earlier pin's (its law is unchanged at a normal rate)."""
 
 from __future__ import annotations
 

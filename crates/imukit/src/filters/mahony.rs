@@ -81,9 +81,9 @@ impl Mahony {
     /// into the heading error, `tan(dip)` per radian of tilt, which a full step would take as
     /// heading). The integral sees the time the decay takes, `1/(k_P ρ)`, not the gap's length
     /// (`∫ gap dt` over the decay). A 5 s gap at rest on BROAD 01 (9D) left the estimate 13.6°
-    /// off the uninterrupted run with the step unbounded; landing on one sample leaves that
-    /// sample's noise (5.1° there: BROAD's field is noisy in heading, the filter's averaging then
-    /// resumes).
+    /// off the uninterrupted run in the gain ramp and 7.8° after it with the step unbounded;
+    /// landing on one sample leaves that sample's noise (2.5° and 5.1°: BROAD's field is noisy in
+    /// heading, the filter's averaging then resumes).
     #[cold]
     fn long_step(&self, step: &Step<'_>, bias: &mut Vector3<f64>) -> Vector3<f64> {
         let (turn, at_end) = step.turned_by_gyro(bias);

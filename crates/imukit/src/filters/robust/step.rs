@@ -43,8 +43,12 @@ impl Coefs {
         let key = Self::key(dt);
         let dt = key;
         // Bilinear transform of the analogue 2nd-order Butterworth with cut-off 1/(2π τ), prewarped
-        // (Oppenheim & Schafer, Discrete-Time Signal Processing, 3rd ed., §7.1.2).
-        let k = (dt / (2.0 * p.tau_acc_s)).tan();
+        // (Oppenheim & Schafer, Discrete-Time Signal Processing, 3rd ed., §7.1.2). The prewarp's
+        // tangent grows without bound as the step nears π τ, where the poles reach z = −1, and
+        // wraps past it (unstable: a 30 s gap at τ = 2 s left the estimate 60° off); a step
+        // beyond π τ / 2 (the cut-off past a quarter of the step's rate, the poles at ±0.41 i)
+        // is filtered as one of π τ / 2.
+        let k = (dt / (2.0 * p.tau_acc_s)).min(std::f64::consts::FRAC_PI_4).tan();
         let n = 1.0 / (1.0 + std::f64::consts::SQRT_2 * k + k * k);
         let b0 = k * k * n;
         let first_order = |tau: f64| 1.0 - (-dt / tau).exp();
@@ -395,7 +399,14 @@ pub(super) fn attitude_half(
     }
     let a_i = s.q_gyro * accel;
     if c.dt > 0.0 {
-        if let Some(m) = carry(p, c, s.lp_dt) {
+        if s.lp_dt == 0.0 && s.lp_ready {
+            // Started on the first sample, whose coefficients are inert (no step yet): its
+            // steady state `(x, −x)` is not this step's, and read with this step's coefficients
+            // it was a transient that took the output 28% below the input over the first second
+            // (the direction kept, all axes alike), and that a ramp carry then extrapolated: a
+            // 2 s gap 0.5 s in turned the estimate upside down.
+            (s.lp_s1, s.lp_s2) = c.steady(s.lp_s1);
+        } else if let Some(m) = carry(p, c, s.lp_dt) {
             m.apply(&mut s.lp_s1, &mut s.lp_s2);
         }
         s.lp_dt = c.dt;
@@ -797,6 +808,26 @@ fn restart_window(s: &mut RobustState) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Butterworth of any step is stable (Jury: `|a2| < 1`, `|a1| < 1 + a2` for the poles of
+    /// `z² + a1 z + a2`) with a DC gain of 1. The prewarp's `tan(dt / 2τ)` wrapped past `π τ`
+    /// (6.28 s at the default τ = 2 s): `a2` = 1.09 at 6.4 s, poles outside the unit circle.
+    #[test]
+    fn every_step_gives_a_stable_low_pass() {
+        let p = RobustParams::default();
+        for dt in [1e-4, 0.01, 1.0, 3.0, 3.2, 6.2, 6.4, 10.0, 100.0, 1e6] {
+            let c = Coefs::new(&p, dt);
+            assert!(
+                c.a2.abs() < 1.0 && c.a1.abs() < 1.0 + c.a2,
+                "{dt} s: a1 {}, a2 {}",
+                c.a1,
+                c.a2
+            );
+            // 1e-6: `1 + a1 + a2` cancels to about `4 k²` at small steps
+            let dc = (2.0 * c.b0 + c.b1) / (1.0 + c.a1 + c.a2);
+            assert!((dc - 1.0).abs() < 1e-6, "{dt} s: DC gain {dc}");
+        }
+    }
 
     /// Steps as float-second stamps make them: three keys alternating, two more evicting the
     /// oldest, returns to evicted and kept ones, and steps that share a key but not their last
