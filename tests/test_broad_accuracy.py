@@ -131,7 +131,7 @@ def test_imukit_filters_hold_their_broad_accuracy(
 def test_a_gap_at_rest_does_not_throw_the_estimate(filt: str) -> None:
     """5 s of samples dropped at rest on BROAD 01: the step across the gap is capped where it lands
     on the measurement. Unbounded, it left Madgwick 20.8° and Mahony 7.8° off the uninterrupted run
-    (9D; 141° and 13.6° in the gain ramp); capped, 0.98° and 5.1° (one sample of BROAD's field,
+    (9D; 141° and 13.6° in the gain ramp); capped, 0.98° and 4.4° (one sample of BROAD's field,
     noisy in heading: the filters' averaging then resumes) and 0.07° in 6D."""
     scipy_io = pytest.importorskip("scipy.io")
     d = scipy_io.loadmat(BROAD / "01_undisturbed_slow_rotation_A.mat")
@@ -144,7 +144,7 @@ def test_a_gap_at_rest_does_not_throw_the_estimate(filt: str) -> None:
     keep = np.ones(len(t), bool)
     keep[start : start + int(5 * rate)] = False
     cls = getattr(ik.filters, filt)
-    for nine, limit in ((False, 0.3), (True, {"Mahony": 7.0, "Madgwick": 2.0}[filt])):
+    for nine, limit in ((False, 0.3), (True, {"Mahony": 6.0, "Madgwick": 2.0}[filt])):
         whole = cls().run(ik.ImuData(t, gyr, acc), mag=mag if nine else None).rotation[keep]
         gappy = cls().run(ik.ImuData(t[keep], gyr[keep], acc[keep]), mag=mag[keep] if nine else None).rotation
         off = np.degrees((gappy * whole.inv()).magnitude())

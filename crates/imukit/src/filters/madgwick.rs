@@ -19,9 +19,10 @@
 //! term: the field's heading gap ψ enters `‖d‖` as `cos δ sin ψ` (dip δ, 67° on BROAD), so a shared
 //! floor slowed the heading correction (9D mean 2.62° → 2.98° on BROAD).
 //!
-//! **Never past the measurements**: the step is at most `d/n` for `n` measurements (1 or 2), the
-//! exact solution of the normalised law over the step, which stops at the gap; such a step is
-//! compared with the estimate turned by the gyro. Without the cap a gap in the stamps turned the
+//! **Never past the measurements**: the step is at most `d/n` for `n` measurements (1 or 2): the
+//! normalised law, integrated over the step, stops at the gap, and `d/n` is at most the gap (to
+//! first order; one measurement: its sine). Such a step, and one the gyro turns by more than
+//! [`super::LONG_TURN_RAD`], is compared with the estimate turned by the gyro. Without the cap a gap in the stamps turned the
 //! estimate by `2βρ` per second of it whatever the gap (a 5 s gap at rest on BROAD 01, 9D: 141°
 //! off in the gain ramp, 20.8° after it; now 1.2° and 0.98°), and a gap below the step chattered about the measurement.
 
@@ -92,18 +93,19 @@ impl Law for Madgwick {
                 angle,
             )
         };
-        match descend(step) {
-            Descent::Within(correction) => correction,
-            // As Mahony's long step, seen from the estimate turned by the gyro.
-            Descent::Capped => {
-                let (turn, at_end) = step.turned_by_gyro(bias);
-                let correction = match descend(&at_end) {
-                    Descent::Within(c) => c,
-                    Descent::Capped => capped(&at_end, step.accel_dir.as_ref(), mag_dir.as_ref()),
-                };
-                step.after_turn(&turn, &correction, bias)
+        if step.turned.is_none() {
+            if let Descent::Within(correction) = descend(step) {
+                return correction;
             }
         }
+        // A step the gyro turns far, or one that reaches the cap: as Mahony's long step, seen
+        // from the estimate turned by the gyro.
+        let (turn, at_end) = step.at_end(bias);
+        let correction = match descend(&at_end) {
+            Descent::Within(c) => c,
+            Descent::Capped => capped(&at_end, step.accel_dir.as_ref(), mag_dir.as_ref()),
+        };
+        step.after_turn(&turn, &correction, bias)
     }
 }
 
@@ -118,9 +120,12 @@ enum Descent {
 /// The correction `angle · d / max(‖d‖, θ₀)` along the descent direction `d` ([`direction`]), or
 /// zero; [`Descent::Capped`] where it would turn past the measurements.
 ///
-/// The cap (module docs): for a small gap `δ`, `d ≈ Σ (I − v̂ v̂ᵀ) δ`, whose largest eigenvalue is
-/// at most the number `n` of measurements, so a step of `d / n` does not overshoot (one
-/// measurement: `d` is the sine of the gap).
+/// The cap (module docs): for a small gap `δ`, `d ≈ J δ` with `J` symmetric and positive
+/// semi-definite, gravity's term `I − ŝ ŝᵀ` and the field's (its reference rebuilt from the
+/// estimate) `p pᵀ` with `p ⊥ m̂` a unit vector, so `J`'s largest eigenvalue is at most the number
+/// `n` of measurements (with both, `1 + sin(dip)` about an axis in the north–up plane, tight as the
+/// dip nears 90°) and a step of `d / n` does not overshoot (one measurement: `d` is the
+/// sine of the gap).
 #[inline(always)]
 fn descent(
     north_pred: &Vector3<f64>,

@@ -11,9 +11,11 @@
 //!
 //! **Long steps**: the proportional law decays a gap at the rate `k_P ρ`, so a step with
 //! `k_P ρ dt > 1` (a gap in the stamps) would turn the estimate past the measurement. Such a step
-//! lands on the measurement instead, seen from the estimate turned by the gyro, the integral
-//! stepping over the decay's time `1/(k_P ρ)`; at a normal rate (`k_P ρ dt ≪ 1`) the law is the
-//! textbook one, bit for bit.
+//! lands on the measurement instead (to first order: `ω_mes` holds each gap's sine), the integral
+//! stepping over the decay's time `1/(k_P ρ)`. A step with `k_P ρ dt > 0.1` levels before it takes
+//! the field's heading error, and such a step, or one the gyro turns by more than
+//! [`super::LONG_TURN_RAD`], is seen from the estimate turned by the gyro. At a normal rate the
+//! law is the textbook one, bit for bit.
 
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -44,6 +46,13 @@ impl Default for Mahony {
 /// only at rest ([`super::RestDetection`]).
 const HEADING_STEP_SIN2: f64 = 0.007_596_123_493_895_969;
 
+/// The gain per step `k = k_P ρ dt` beyond which a step levels before it takes the field's heading
+/// error ([`Mahony::long_step`]): taken together, the tilt's leak into the heading error,
+/// `k tan(dip)` per radian of tilt, turns the heading past its measurement once it exceeds
+/// `(1 − k)` times the heading's gap; at a normal rate (`k` ≈ 1e-3) a transient the next steps
+/// absorb, and the textbook law is kept there bit for bit.
+const LONG_K: f64 = 0.1;
+
 impl Law for Mahony {
     type Extra = ();
 
@@ -52,13 +61,13 @@ impl Law for Mahony {
         check("ki", self.ki, "finite and ≥ 0", |x| x >= 0.0)
     }
 
-    /// `ω_c dt = k_P ρ ω_mes dt`, and `b̂ ← b̂ − k_I ω_mes dt`; where `k_P ρ dt > 1`, the long step
-    /// (module docs).
+    /// `ω_c dt = k_P ρ ω_mes dt`, and `b̂ ← b̂ − k_I ω_mes dt`; where `k_P ρ dt > 0.1`, the long
+    /// step (module docs).
     #[inline(always)]
     fn correct(&self, step: &Step<'_>, bias: &mut Vector3<f64>, _: &mut ()) -> Vector3<f64> {
         let k = self.kp * step.gain * step.dt;
-        if k > 1.0 {
-            return self.long_step(step, bias);
+        if k > LONG_K || step.turned.is_some() {
+            return self.long_step(step, bias, k);
         }
         let (e_acc, e_mag) = errors(
             &step.north_pred,
@@ -73,33 +82,39 @@ impl Law for Mahony {
 }
 
 impl Mahony {
-    /// A step with `k_P ρ dt > 1` (a gap in the stamps): the proportional law decays a gap at the
-    /// rate `k_P ρ`, so such a step would turn the estimate past the measurement (`ω_mes` is each
-    /// gap's sine). It lands on the measurement instead, seen from the estimate turned by the
-    /// gyro ([`Step::turned_by_gyro`]): levelled by `e_acc`, then turned in heading by the field's
-    /// error seen from the levelled estimate (from the tilted one, the field's vertical part leaks
-    /// into the heading error, `tan(dip)` per radian of tilt, which a full step would take as
-    /// heading). The integral sees the time the decay takes, `1/(k_P ρ)`, not the gap's length
-    /// (`∫ gap dt` over the decay). A 5 s gap at rest on BROAD 01 (9D) left the estimate 13.6°
-    /// off the uninterrupted run in the gain ramp and 7.8° after it with the step unbounded;
-    /// landing on one sample leaves that sample's noise (2.5° and 5.1°: BROAD's field is noisy in
-    /// heading, the filter's averaging then resumes).
+    /// A step with `k_P ρ dt > 0.1` ([`LONG_K`]; a gap in the stamps, a slow stream), or one the
+    /// gyro turns far ([`Step::turned`]). The proportional law decays a gap at the rate `k_P ρ`, so a step of
+    /// `k = k_P ρ dt > 1` would turn the estimate past the measurement (`ω_mes` is each gap's
+    /// sine); capped at `k = 1` it lands on the measurement to first order. The step is seen from
+    /// the estimate turned by the gyro ([`Step::at_end`]): levelled by `k e_acc`, then
+    /// turned in heading by `k` times the field's error seen from the levelled estimate (from the
+    /// tilted one the field's vertical part leaks into the heading error, `tan(dip)` per radian of
+    /// tilt, which a full step would take as heading). The integral sees the time the decay takes,
+    /// `1/(k_P ρ)`, not the gap's length (`∫ gap dt` over the decay). A 5 s gap at rest on BROAD
+    /// 01 (9D) left the estimate 13.6° off the uninterrupted run in the gain ramp and 7.8° after
+    /// it with the step unbounded; landing on one sample leaves that sample's noise (2.5° and
+    /// 4.4°: BROAD's field is noisy in heading, the filter's averaging then resumes).
     #[cold]
-    fn long_step(&self, step: &Step<'_>, bias: &mut Vector3<f64>) -> Vector3<f64> {
-        let (turn, at_end) = step.turned_by_gyro(bias);
+    fn long_step(&self, step: &Step<'_>, bias: &mut Vector3<f64>, k: f64) -> Vector3<f64> {
+        let (k, dt) = if k > 1.0 {
+            (1.0, 1.0 / (self.kp * step.gain))
+        } else {
+            (k, step.dt)
+        };
+        let (turn, at_end) = step.at_end(bias);
         let (n, e, u) = (&at_end.north_pred, &at_end.east_pred, &at_end.up_pred);
         let (e_acc, _) = errors(n, e, u, step.accel_dir.as_ref(), None);
-        let level = UnitQuaternion::from_scaled_axis(e_acc);
+        let level = UnitQuaternion::from_scaled_axis(e_acc * k);
         let (n, e, u) = (
             level.inverse_transform_vector(n),
             level.inverse_transform_vector(e),
             level.inverse_transform_vector(u),
         );
         let (_, e_mag) = errors(&n, &e, &u, None, step.mag_dir.as_ref());
-        self.integrate(step, bias, &e_acc, &e_mag, 1.0 / (self.kp * step.gain));
+        self.integrate(step, bias, &e_acc, &e_mag, dt);
         step.after_turn(
             &turn,
-            &(level * UnitQuaternion::from_scaled_axis(e_mag)).scaled_axis(),
+            &(level * UnitQuaternion::from_scaled_axis(e_mag * k)).scaled_axis(),
             bias,
         )
     }

@@ -9,7 +9,7 @@
 //! | accelerometer | specific force [m/s²]: at rest `R_wbᵀ (0, 0, +g)` in ENU, `R_wbᵀ (0, 0, −g)` in NED: it points **up** |
 //! | magnetometer | any unit; `R_wbᵀ m_w`, north = +y (ENU) / +x (NED); only its direction is used, and its norm and dip for rejection |
 //! | gains | Mahony `k_P` [1/s], `k_I` [1/s²]; Madgwick `β` [1/s] (quaternion-rate norm, rotation rate 2β) |
-//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k`. A step whose correction would turn past the measurement (a gap in the stamps) is capped there and compared with the estimate turned by `ω_k` ([`Step::turned_by_gyro`]) |
+//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k`. A step whose correction would turn past the measurement (a gap in the stamps) is capped there, and it and a step that turns by more than [`LONG_TURN_RAD`] are compared with the estimate turned by `ω_k` ([`Step::at_end`]), gates included |
 //! | first sample | initialises the attitude ([`initial_attitude`]: tilt from the accelerometer, heading from the magnetometer, else ZYX yaw 0) unless an initial state is given; it is output as is |
 //! | bias output | per sample: the estimate after that sample |
 //! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`FieldHold`]); [`Filter::run`] takes one field row per sample |
@@ -30,7 +30,8 @@
 //! - Mahony (Mahony, Hamel & Pflimlin, IEEE TAC 2008, eq. 32): `ω_mes = s × v̂_g + v̂_g h_e/√(h_e² + h_n²)`
 //!   (9D; `h_e = m̂·(v̂_n × v̂_g)`, `h_n = m̂·v̂_n`: heading only), `ω_c = k_P ρ ω_mes`,
 //!   `b̂ ← b̂ − k_I ω_mes dt` (frozen during the ramp and while the accelerometer is rejected);
-//!   a step with `k_P ρ dt > 1` lands on the measurement, the integral over `1/(k_P ρ)`.
+//!   a step with `k_P ρ dt > 1` lands on the measurement (to first order: `ω_mes` holds each gap's
+//!   sine), the integral over `1/(k_P ρ)`.
 //! - Madgwick (Madgwick 2010 report; ICORR 2011): the tangent-space gradient of
 //!   `½‖R̂ᵀ d − s‖²` is `v̂ × s`, so `g = s × v̂_g + m̂ × (‖h_h‖ v̂_n + h_up v̂_g)` and
 //!   `ω_c = 2β ρ g/‖g‖` (β is Madgwick's quaternion-rate gain; the field term only with an accepted
@@ -128,21 +129,39 @@ pub struct Step<'a> {
     pub gain: f64,
     /// The step \[s\].
     pub dt: f64,
+    /// The gyro's turn over the step, `Exp((ω − b̂) dt)`, where it exceeds [`LONG_TURN_RAD`]: the
+    /// predictions (and the gates) are then the turned estimate's ([`Step::at_end`]).
+    pub turned: Option<UnitQuaternion<f64>>,
 }
+
+/// The gyro's turn over one step \[rad\] beyond which a law compares the measurements with the
+/// estimate turned by the gyro ([`Step::at_end`]), not with the estimate at the step's
+/// start. Compared with the latter, the correction holds the step's turn `g` as a gap, `k g` of it
+/// for a gain `k` per step: negligible at a normal rate (10 rad/s at 200 Hz turns 0.05 rad in a
+/// step, of which Mahony takes 4e-4), not across a gap in the stamps in motion (Madgwick after the
+/// ramp: 8° after a 2 s gap at 0.19 rad/s, 20° after 5 s). Below it the laws keep their one-sample
+/// lag, bit for bit and without the second rotation.
+pub const LONG_TURN_RAD: f64 = 0.1;
 
 impl Step<'_> {
     /// The gyro's turn over the step, `Exp((ω − b̂) dt)`, and the step seen from the estimate so
-    /// turned, `R̂⁻ = R̂ Exp((ω − b̂) dt)` (its predictions `R̂⁻ᵀ n_w`, …). A law's long step
-    /// compares the measurements, taken at the end of the step, with `R̂⁻`: compared with the
-    /// estimate at its start, as a step at a normal rate is (a lag of one sample), a gap in motion
-    /// would put the whole turn over the gap into the correction.
-    pub fn turned_by_gyro(&self, bias: &Vector3<f64>) -> (UnitQuaternion<f64>, Self) {
+    /// turned, `R̂⁻ = R̂ Exp((ω − b̂) dt)` (its predictions `R̂⁻ᵀ n_w`, …): itself where the shared
+    /// step turned it already ([`Step::turned`]). A law's long step compares the measurements,
+    /// taken at the end of the step, with `R̂⁻`: compared with the estimate at its start, as a
+    /// step at a normal rate is (a lag of one sample), a gap in motion would put the whole turn
+    /// over the gap into the correction.
+    pub fn at_end(&self, bias: &Vector3<f64>) -> (UnitQuaternion<f64>, Self) {
+        if let Some(turn) = self.turned {
+            return (turn, *self);
+        }
         let turn = UnitQuaternion::from_scaled_axis((self.gyro - bias) * self.dt);
-        let back = |v: &Vector3<f64>| turn.inverse_transform_vector(v);
+        let (north_pred, east_pred, up_pred) =
+            turned_predictions(&turn, (&self.north_pred, &self.east_pred, &self.up_pred));
         let turned = Self {
-            north_pred: back(&self.north_pred),
-            east_pred: back(&self.east_pred),
-            up_pred: back(&self.up_pred),
+            north_pred,
+            east_pred,
+            up_pred,
+            turned: Some(turn),
             ..*self
         };
         (turn, turned)
@@ -159,6 +178,16 @@ impl Step<'_> {
     ) -> Vector3<f64> {
         (turn * UnitQuaternion::from_scaled_axis(*correction)).scaled_axis() - (self.gyro - bias) * self.dt
     }
+}
+
+/// The predictions (world north, east, up in body axes) of the estimate turned by `turn`.
+#[cold]
+fn turned_predictions(
+    turn: &UnitQuaternion<f64>,
+    (north, east, up): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
+) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+    let back = |v: &Vector3<f64>| turn.inverse_transform_vector(v);
+    (back(north), back(east), back(up))
 }
 
 /// A configured filter: a law's gains and the shared options. It holds no state; every call
@@ -363,7 +392,14 @@ impl<L: Law> Filter<L> {
         let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
-        let (north_pred, east_pred, up_pred) = world.predicted(&s.q);
+        let (mut north_pred, mut east_pred, mut up_pred) = world.predicted(&s.q);
+        // A step the gyro turns far is seen, gates included, from the estimate so turned.
+        let g = (gyro - s.bias) * dt;
+        let turned = (g.norm_squared() > LONG_TURN_RAD * LONG_TURN_RAD).then(|| {
+            let turn = UnitQuaternion::from_scaled_axis(g);
+            (north_pred, east_pred, up_pred) = turned_predictions(&turn, (&north_pred, &east_pred, &up_pred));
+            turn
+        });
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
@@ -424,6 +460,7 @@ impl<L: Law> Filter<L> {
             drifting: s.accel_drift,
             gain,
             dt,
+            turned,
         };
         let mut bias = s.bias;
         let correction_dt = self.law.correct(&step, &mut bias, &mut state.extra);

@@ -399,12 +399,13 @@ pub(super) fn attitude_half(
     }
     let a_i = s.q_gyro * accel;
     if c.dt > 0.0 {
-        if s.lp_dt == 0.0 && s.lp_ready {
+        if s.lp_dt == 0.0 && s.lp_ready && s.lp_s2 == -s.lp_s1 {
             // Started on the first sample, whose coefficients are inert (no step yet): its
             // steady state `(x, −x)` is not this step's, and read with this step's coefficients
             // it was a transient that took the output 28% below the input over the first second
             // (the direction kept, all axes alike), and that a ramp carry then extrapolated: a
-            // 2 s gap 0.5 s in turned the estimate upside down.
+            // 2 s gap 0.5 s in turned the estimate upside down. (A state from before `lp_dt` was
+            // recorded restores it as 0 with elements that are not `(x, −x)`: carried as is.)
             (s.lp_s1, s.lp_s2) = c.steady(s.lp_s1);
         } else if let Some(m) = carry(p, c, s.lp_dt) {
             m.apply(&mut s.lp_s1, &mut s.lp_s2);
