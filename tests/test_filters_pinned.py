@@ -11,8 +11,9 @@ defaults / NED outputs by up to 6.0e-4 (Mahony) and 4.5e-3 (Madgwick) in q, Maho
 exponential and normalisations). Madgwick's outputs re-pinned once more, 2026-12-07 (eleventh
 session), for a fix: its step capped where it would turn past the measurement (a long step, and a
 gap below the step, where the normalised step chattered), compared then with the estimate turned
-by the gyro (``madgwick.rs``, ``descent``): up to 1.8e-2 in q on this input; on the 12 BROAD trials
-at defaults 12 of 24 Madgwick cells moved by at most ±0.005°, the 9D mean 2.58528° → 2.58533°.
+by the gyro where the gyro turns it by more than 0.1 rad (``madgwick.rs``, ``descent``): up to
+7.3e-3 in q on this input; on the 12 BROAD trials at defaults 12 of 24 Madgwick cells moved by at
+most ±0.0044°, the 9D mean 2.58528° → 2.58543°.
 Mahony's arrays are the earlier pin's (its law is unchanged at a normal rate)."""
 
 from __future__ import annotations

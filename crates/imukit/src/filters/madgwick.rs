@@ -21,8 +21,8 @@
 //!
 //! **Never past the measurements**: the step is at most `d/n` for `n` measurements (1 or 2): the
 //! normalised law, integrated over the step, stops at the gap, and `d/n` is at most the gap (to
-//! first order; one measurement: its sine). Such a step, and one the gyro turns by more than
-//! [`super::LONG_TURN_RAD`], is compared with the estimate turned by the gyro. Without the cap a gap in the stamps turned the
+//! first order; one measurement: its sine). A step the gyro turns by more than
+//! [`super::LONG_TURN_RAD`] is compared with the estimate turned by the gyro. Without the cap a gap in the stamps turned the
 //! estimate by `2βρ` per second of it whatever the gap (a 5 s gap at rest on BROAD 01, 9D: 141°
 //! off in the gain ramp, 20.8° after it; now 1.2° and 0.98°), and a gap below the step chattered about the measurement.
 
@@ -83,29 +83,16 @@ impl Law for Madgwick {
             self.full_rate_angle_rad * self.full_rate_angle_rad
         };
         let angle = 2.0 * self.beta * step.gain * step.dt;
-        let descend = |s: &Step<'_>| {
-            descent(
-                &s.north_pred,
-                &s.up_pred,
-                step.accel_dir.as_ref(),
-                mag_dir.as_ref(),
-                floor2,
-                angle,
-            )
-        };
-        if step.turned.is_none() {
-            if let Descent::Within(correction) = descend(step) {
-                return correction;
-            }
-        }
-        // A step the gyro turns far, or one that reaches the cap: as Mahony's long step, seen
-        // from the estimate turned by the gyro.
-        let (turn, at_end) = step.at_end(bias);
-        let correction = match descend(&at_end) {
+        let (accel_dir, mag_dir) = (step.accel_dir.as_ref(), mag_dir.as_ref());
+        let correction = match descent(&step.north_pred, &step.up_pred, accel_dir, mag_dir, floor2, angle) {
             Descent::Within(c) => c,
-            Descent::Capped => capped(&at_end, step.accel_dir.as_ref(), mag_dir.as_ref()),
+            Descent::Capped => capped(step, accel_dir, mag_dir),
         };
-        step.after_turn(&turn, &correction, bias)
+        if step.turned.is_some() {
+            step.from_predictions(correction, bias, bias)
+        } else {
+            correction
+        }
     }
 }
 
@@ -173,6 +160,7 @@ fn direction(
 
 /// The step at the cap, `d / n`, seen from `step`'s predictions.
 #[cold]
+#[inline(never)]
 fn capped(step: &Step<'_>, accel_dir: Option<&Vector3<f64>>, mag_dir: Option<&Vector3<f64>>) -> Vector3<f64> {
     direction(&step.north_pred, &step.up_pred, accel_dir, mag_dir) / measurements(accel_dir, mag_dir)
 }

@@ -13,9 +13,8 @@
 //! `k_P ρ dt > 1` (a gap in the stamps) would turn the estimate past the measurement. Such a step
 //! lands on the measurement instead (to first order: `ω_mes` holds each gap's sine), the integral
 //! stepping over the decay's time `1/(k_P ρ)`. A step with `k_P ρ dt > 0.1` levels before it takes
-//! the field's heading error, and such a step, or one the gyro turns by more than
-//! [`super::LONG_TURN_RAD`], is seen from the estimate turned by the gyro. At a normal rate the
-//! law is the textbook one, bit for bit.
+//! the field's heading error; a step the gyro turns by more than [`super::LONG_TURN_RAD`] is seen
+//! from the estimate turned by the gyro. At a normal rate the law is the textbook one, bit for bit.
 
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -83,26 +82,26 @@ impl Law for Mahony {
 
 impl Mahony {
     /// A step with `k_P ρ dt > 0.1` ([`LONG_K`]; a gap in the stamps, a slow stream), or one the
-    /// gyro turns far ([`Step::turned`]). The proportional law decays a gap at the rate `k_P ρ`, so a step of
-    /// `k = k_P ρ dt > 1` would turn the estimate past the measurement (`ω_mes` is each gap's
-    /// sine); capped at `k = 1` it lands on the measurement to first order. The step is seen from
-    /// the estimate turned by the gyro ([`Step::at_end`]): levelled by `k e_acc`, then
-    /// turned in heading by `k` times the field's error seen from the levelled estimate (from the
-    /// tilted one the field's vertical part leaks into the heading error, `tan(dip)` per radian of
-    /// tilt, which a full step would take as heading). The integral sees the time the decay takes,
+    /// gyro turns far ([`Step::turned`]: its predictions are then the turned estimate's). The
+    /// proportional law decays a gap at the rate `k_P ρ`, so a step of `k = k_P ρ dt > 1` would
+    /// turn the estimate past the measurement (`ω_mes` is each gap's sine); capped at `k = 1` it
+    /// lands on the measurement to first order. The step levels by `k e_acc`, then turns in
+    /// heading by `k` times the field's error seen from the levelled estimate (from the tilted one
+    /// the field's vertical part leaks into the heading error, `tan(dip)` per radian of tilt,
+    /// which a full step would take as heading). The integral sees the time the decay takes,
     /// `1/(k_P ρ)`, not the gap's length (`∫ gap dt` over the decay). A 5 s gap at rest on BROAD
     /// 01 (9D) left the estimate 13.6° off the uninterrupted run in the gain ramp and 7.8° after
     /// it with the step unbounded; landing on one sample leaves that sample's noise (2.5° and
     /// 4.4°: BROAD's field is noisy in heading, the filter's averaging then resumes).
     #[cold]
+    #[inline(never)]
     fn long_step(&self, step: &Step<'_>, bias: &mut Vector3<f64>, k: f64) -> Vector3<f64> {
         let (k, dt) = if k > 1.0 {
             (1.0, 1.0 / (self.kp * step.gain))
         } else {
             (k, step.dt)
         };
-        let (turn, at_end) = step.at_end(bias);
-        let (n, e, u) = (&at_end.north_pred, &at_end.east_pred, &at_end.up_pred);
+        let (n, e, u) = (&step.north_pred, &step.east_pred, &step.up_pred);
         let (e_acc, _) = errors(n, e, u, step.accel_dir.as_ref(), None);
         let level = UnitQuaternion::from_scaled_axis(e_acc * k);
         let (n, e, u) = (
@@ -111,10 +110,11 @@ impl Mahony {
             level.inverse_transform_vector(u),
         );
         let (_, e_mag) = errors(&n, &e, &u, None, step.mag_dir.as_ref());
+        let before = *bias;
         self.integrate(step, bias, &e_acc, &e_mag, dt);
-        step.after_turn(
-            &turn,
-            &(level * UnitQuaternion::from_scaled_axis(e_mag * k)).scaled_axis(),
+        step.from_predictions(
+            (level * UnitQuaternion::from_scaled_axis(e_mag * k)).scaled_axis(),
+            &before,
             bias,
         )
     }

@@ -9,7 +9,7 @@
 //! | accelerometer | specific force [m/s²]: at rest `R_wbᵀ (0, 0, +g)` in ENU, `R_wbᵀ (0, 0, −g)` in NED: it points **up** |
 //! | magnetometer | any unit; `R_wbᵀ m_w`, north = +y (ENU) / +x (NED); only its direction is used, and its norm and dip for rejection |
 //! | gains | Mahony `k_P` [1/s], `k_I` [1/s²]; Madgwick `β` [1/s] (quaternion-rate norm, rotation rate 2β) |
-//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k`. A step whose correction would turn past the measurement (a gap in the stamps) is capped there, and it and a step that turns by more than [`LONG_TURN_RAD`] are compared with the estimate turned by `ω_k` ([`Step::at_end`]), gates included |
+//! | step `k` | the correction `ω_c` is computed from the estimate after sample `k−1` and the measurements of sample `k`; then the exponential step over `dt = t_k − t_{k−1}` with `ω_k`. A step whose correction would turn past the measurement (a gap in the stamps) is capped there; a step the gyro turns by more than [`LONG_TURN_RAD`] is compared, gates included, with the estimate turned by `ω_k` ([`Step::turned`]) |
 //! | first sample | initialises the attitude ([`initial_attitude`]: tilt from the accelerometer, heading from the magnetometer, else ZYX yaw 0) unless an initial state is given; it is output as is |
 //! | bias output | per sample: the estimate after that sample |
 //! | a field slower than the gyro | [`Filter::update`] without a field uses the last field sample turned by the gyro, for up to [`MAG_HOLD_S`] ([`FieldHold`]); [`Filter::run`] takes one field row per sample |
@@ -130,12 +130,13 @@ pub struct Step<'a> {
     /// The step \[s\].
     pub dt: f64,
     /// The gyro's turn over the step, `Exp((ω − b̂) dt)`, where it exceeds [`LONG_TURN_RAD`]: the
-    /// predictions (and the gates) are then the turned estimate's ([`Step::at_end`]).
+    /// predictions (and the gates) are then the turned estimate's, and a law returns its
+    /// correction through [`Step::from_predictions`].
     pub turned: Option<UnitQuaternion<f64>>,
 }
 
 /// The gyro's turn over one step \[rad\] beyond which a law compares the measurements with the
-/// estimate turned by the gyro ([`Step::at_end`]), not with the estimate at the step's
+/// estimate turned by the gyro ([`Step::turned`]), not with the estimate at the step's
 /// start. Compared with the latter, the correction holds the step's turn `g` as a gap, `k g` of it
 /// for a gain `k` per step: negligible at a normal rate (10 rad/s at 200 Hz turns 0.05 rad in a
 /// step, of which Mahony takes 4e-4), not across a gap in the stamps in motion (Madgwick after the
@@ -144,50 +145,45 @@ pub struct Step<'a> {
 pub const LONG_TURN_RAD: f64 = 0.1;
 
 impl Step<'_> {
-    /// The gyro's turn over the step, `Exp((ω − b̂) dt)`, and the step seen from the estimate so
-    /// turned, `R̂⁻ = R̂ Exp((ω − b̂) dt)` (its predictions `R̂⁻ᵀ n_w`, …): itself where the shared
-    /// step turned it already ([`Step::turned`]). A law's long step compares the measurements,
-    /// taken at the end of the step, with `R̂⁻`: compared with the estimate at its start, as a
-    /// step at a normal rate is (a lag of one sample), a gap in motion would put the whole turn
-    /// over the gap into the correction.
-    pub fn at_end(&self, bias: &Vector3<f64>) -> (UnitQuaternion<f64>, Self) {
-        if let Some(turn) = self.turned {
-            return (turn, *self);
-        }
-        let turn = UnitQuaternion::from_scaled_axis((self.gyro - bias) * self.dt);
-        let (north_pred, east_pred, up_pred) =
-            turned_predictions(&turn, (&self.north_pred, &self.east_pred, &self.up_pred));
-        let turned = Self {
-            north_pred,
-            east_pred,
-            up_pred,
-            turned: Some(turn),
-            ..*self
-        };
-        (turn, turned)
-    }
-
-    /// The law's return value (the correction beside the gyro's `(ω − b̂) dt` in the step's
-    /// exponential, `b̂` the bias the law leaves) that turns the estimate by `turn`, then by
-    /// `Exp(correction)`: `Log(turn Exp(correction)) − (ω − b̂) dt`.
-    pub fn after_turn(
+    /// The law's return value for `correction`, a rotation of the estimate the step's predictions
+    /// are of, with the bias `before` the law's update and the bias it leaves: the correction
+    /// beside the gyro's `(ω − b̂) dt` in the step's exponential that turns the estimate by
+    /// `(ω − b̂_before) dt` (as [`Step::turned`], if the step is seen from the turned estimate),
+    /// then by `Exp(correction)`: the bias the law changed does not turn the estimate over this
+    /// step (after a 5 s step Mahony's integral took a sixth of the gap that way).
+    #[inline(always)]
+    pub fn from_predictions(
         &self,
-        turn: &UnitQuaternion<f64>,
-        correction: &Vector3<f64>,
+        correction: Vector3<f64>,
+        before: &Vector3<f64>,
         bias: &Vector3<f64>,
     ) -> Vector3<f64> {
-        (turn * UnitQuaternion::from_scaled_axis(*correction)).scaled_axis() - (self.gyro - bias) * self.dt
+        match self.turned {
+            Some(turn) => after_turn(&turn, &correction, &((self.gyro - bias) * self.dt)),
+            None => correction + (bias - before) * self.dt,
+        }
     }
 }
 
-/// The predictions (world north, east, up in body axes) of the estimate turned by `turn`.
+/// `Log(turn Exp(correction)) − g`.
 #[cold]
+#[inline(never)]
+fn after_turn(turn: &UnitQuaternion<f64>, correction: &Vector3<f64>, g: &Vector3<f64>) -> Vector3<f64> {
+    (turn * UnitQuaternion::from_scaled_axis(*correction)).scaled_axis() - g
+}
+
+/// World north, east and up in body axes.
+type Predictions = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
+
+/// The turn `Exp(g)` and the predictions (world north, east, up in body axes) of the estimate so
+/// turned.
 fn turned_predictions(
-    turn: &UnitQuaternion<f64>,
+    g: &Vector3<f64>,
     (north, east, up): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
-) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+) -> (UnitQuaternion<f64>, Predictions) {
+    let turn = UnitQuaternion::from_scaled_axis(*g);
     let back = |v: &Vector3<f64>| turn.inverse_transform_vector(v);
-    (back(north), back(east), back(up))
+    (turn, (back(north), back(east), back(up)))
 }
 
 /// A configured filter: a law's gains and the shared options. It holds no state; every call
@@ -374,7 +370,6 @@ impl<L: Law> Filter<L> {
         dt: f64,
         world: World,
     ) {
-        let o = &self.options;
         let s = &mut state.common;
         if !s.initialized {
             s.q = initial_attitude(world, accel, mag);
@@ -389,17 +384,53 @@ impl<L: Law> Filter<L> {
             }
             return;
         }
+        if ((gyro - s.bias) * dt).norm_squared() > LONG_TURN_RAD * LONG_TURN_RAD {
+            self.step_turned(state, gyro, accel, mag, dt, world);
+        } else {
+            self.advance::<false>(state, gyro, accel, mag, dt, world);
+        }
+    }
+
+    /// [`Filter::advance`] for a step the gyro turns by more than [`LONG_TURN_RAD`]: out of line,
+    /// so that the hot loop keeps only the test.
+    #[cold]
+    #[inline(never)]
+    fn step_turned(
+        &self,
+        state: &mut State<L>,
+        gyro: &Vector3<f64>,
+        accel: &Vector3<f64>,
+        mag: Option<&Vector3<f64>>,
+        dt: f64,
+        world: World,
+    ) {
+        self.advance::<true>(state, gyro, accel, mag, dt, world);
+    }
+
+    /// A step of an initialised state: gate, correct and integrate; with `TURNED`, every
+    /// prediction (the gates' and the law's) is the estimate's turned by the gyro over the step.
+    #[inline(always)]
+    fn advance<const TURNED: bool>(
+        &self,
+        state: &mut State<L>,
+        gyro: &Vector3<f64>,
+        accel: &Vector3<f64>,
+        mag: Option<&Vector3<f64>>,
+        dt: f64,
+        world: World,
+    ) {
+        let o = &self.options;
+        let s = &mut state.common;
         let rates = Rates::at(self.taus, dt);
         let ramping = s.ramp_elapsed < o.gain_ramp.duration_s;
         let gain = o.ramp_gain(s.ramp_elapsed);
-        let (mut north_pred, mut east_pred, mut up_pred) = world.predicted(&s.q);
-        // A step the gyro turns far is seen, gates included, from the estimate so turned.
-        let g = (gyro - s.bias) * dt;
-        let turned = (g.norm_squared() > LONG_TURN_RAD * LONG_TURN_RAD).then(|| {
-            let turn = UnitQuaternion::from_scaled_axis(g);
-            (north_pred, east_pred, up_pred) = turned_predictions(&turn, (&north_pred, &east_pred, &up_pred));
-            turn
-        });
+        let predicted = world.predicted(&s.q);
+        let (turned, (north_pred, east_pred, up_pred)) = if TURNED {
+            let (turn, p) = turned_predictions(&((gyro - s.bias) * dt), (&predicted.0, &predicted.1, &predicted.2));
+            (Some(turn), p)
+        } else {
+            (None, predicted)
+        };
         let raw_sq = accel.norm_squared();
         let accel_dir = if o.acc_lowpass.is_some() {
             let f = low_pass(s, accel, rates.low_pass);
