@@ -18,7 +18,7 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::{check, over_norm, Law, Step};
+use super::{check, over_norm, turned_predictions, Law, Step};
 use crate::Result;
 
 /// Gains of the Mahony filter.
@@ -103,12 +103,7 @@ impl Mahony {
         };
         let (n, e, u) = (&step.north_pred, &step.east_pred, &step.up_pred);
         let (e_acc, _) = errors(n, e, u, step.accel_dir.as_ref(), None);
-        let level = UnitQuaternion::from_scaled_axis(e_acc * k);
-        let (n, e, u) = (
-            level.inverse_transform_vector(n),
-            level.inverse_transform_vector(e),
-            level.inverse_transform_vector(u),
-        );
+        let (level, (n, e, u)) = turned_predictions(&(e_acc * k), (n, e, u));
         let (_, e_mag) = errors(&n, &e, &u, None, step.mag_dir.as_ref());
         let before = *bias;
         self.integrate(step, bias, &e_acc, &e_mag, dt);

@@ -177,7 +177,7 @@ type Predictions = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
 /// The turn `Exp(g)` and the predictions (world north, east, up in body axes) of the estimate so
 /// turned.
-fn turned_predictions(
+pub(crate) fn turned_predictions(
     g: &Vector3<f64>,
     (north, east, up): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
 ) -> (UnitQuaternion<f64>, Predictions) {
